@@ -1,0 +1,689 @@
+!> Reads a case from a namelist file and validates it. Every error names the file, the line
+!> of the group, the group and the key. The keys, their defaults, units and ranges are
+!> documented here, where they are declared, and in doc/input.md.
+module dem_input
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error, dem_err_input
+    use dem_namelist_scan, only: nml_file_t, nml_block_t, nml_scan, nml_items, nml_location
+    use dem_case, only: case_t, time_scales_t, case_time_scales
+    use dem_mesh, only: mesh_add_plane
+    use dem_integrate, only: integrator_euler, integrator_verlet
+    implicit none
+    private
+    public :: read_case, input_groups
+
+    real(wp), parameter :: unset = huge(1.0_wp)
+    integer, parameter :: name_len = 32
+
+    !> The groups a case file may hold, and the keys of each (doc/input.md).
+    character(len=*), parameter :: input_groups(7) = [character(len=120) :: &
+        'run: dt t_end integrator gravity expected_speed skin allow_unstable', &
+        'output: dir interval trace_id', &
+        'contact_model: tangential_stiffness_factor tangential_damping clamp_normal', &
+        'material: name density youngs_modulus poisson_ratio rigid', &
+        'pair: materials restitution friction', &
+        'particle: id material radius position velocity angular_velocity', &
+        'wall_plane: material point normal half_width divisions']
+
+    abstract interface
+        subroutine block_reader(text, ios, msg)
+            character(len=*), intent(in) :: text
+            integer, intent(out) :: ios
+            character(len=*), intent(inout) :: msg
+        end subroutine block_reader
+    end interface
+
+contains
+
+    !> Read and validate the case in `path`. On error `c` is incomplete and must not be run.
+    subroutine read_case(path, c, err)
+        character(len=*), intent(in) :: path
+        type(case_t), intent(out) :: c
+        type(error_t), intent(inout) :: err
+        type(nml_file_t) :: nf
+        integer :: k, g
+        logical :: known
+
+        c%source = path
+        call nml_scan(path, nf, err)
+        if (err%failed()) return
+        do k = 1, size(nf%blocks)
+            known = .false.
+            do g = 1, size(input_groups)
+                known = known .or. nf%blocks(k)%group == group_of(input_groups(g))
+            end do
+            if (.not. known) then
+                call fail(nml_location(nf, nf%blocks(k)) // ': unknown namelist group ' // &
+                          '(accepted: ' // accepted_groups() // ')')
+                return
+            end if
+        end do
+        if (count_blocks(nf, 'run') /= 1) then
+            call fail(path // ': exactly one &run group is required (dt and t_end)')
+            return
+        end if
+        call read_materials(nf, c, err)
+        if (err%failed()) return
+        call read_pairs(nf, c, err)
+        if (err%failed()) return
+        call read_contact_model(nf, c, err)
+        if (err%failed()) return
+        call read_particles(nf, c, err)
+        if (err%failed()) return
+        call read_walls(nf, c, err)
+        if (err%failed()) return
+        call check_pairs_used(nf, c, err)
+        if (err%failed()) return
+        call read_run(nf, c, err)
+        if (err%failed()) return
+        call read_output(nf, c, err)
+    contains
+        subroutine fail(msg)
+            character(len=*), intent(in) :: msg
+            call set_error(err, dem_err_input, msg)
+        end subroutine fail
+    end subroutine read_case
+
+    !> &run: time stepping and global physics.
+    subroutine read_run(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        real(wp) :: dt              ! time step [s], > 0, required
+        real(wp) :: t_end           ! end time [s], > 0, required
+        character(len=name_len) :: integrator  ! 'symplectic_euler' (default) | 'velocity_verlet'
+        real(wp) :: gravity(3)      ! [m/s^2], default (0, 0, -9.81)
+        real(wp) :: expected_speed  ! largest impact speed expected [m/s], >= 0, default 0
+                                    ! (the largest initial particle speed is used if larger)
+        real(wp) :: skin            ! neighbour-list skin [m], > 0, default 0.4 min radius
+        logical :: allow_unstable   ! run although dt exceeds the stability bound, default F
+        namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable
+        type(nml_block_t) :: b
+        type(time_scales_t) :: ts
+        character(len=:), allocatable :: at
+        character(len=32) :: s1, s2
+
+        dt = unset
+        t_end = unset
+        integrator = 'symplectic_euler'
+        gravity = [0.0_wp, 0.0_wp, -9.81_wp]
+        expected_speed = 0.0_wp
+        skin = unset
+        allow_unstable = .false.
+        b = nf%blocks(block_index(nf, 'run', 1))
+        call read_block(nf, b, reader, err)
+        if (err%failed()) return
+        at = nml_location(nf, b)
+        if (.not. positive(dt, 'dt', '[s]')) return
+        if (.not. positive(t_end, 't_end', '[s]')) return
+        select case (integrator)
+        case ('symplectic_euler')
+            c%integrator = integrator_euler
+        case ('velocity_verlet')
+            c%integrator = integrator_verlet
+        case default
+            call set_error(err, dem_err_input, at // ": key 'integrator': '" // &
+                trim(integrator) // "' is not known (accepted: symplectic_euler, " // &
+                "velocity_verlet)")
+            return
+        end select
+        if (expected_speed < 0.0_wp .or. expected_speed /= expected_speed) then
+            call set_error(err, dem_err_input, at // ": key 'expected_speed': must be >= 0 [m/s]")
+            return
+        end if
+        if (skin == unset) skin = 0.4_wp * minval(c%radius(1:c%n_particles))
+        if (.not. positive(skin, 'skin', '[m]')) return
+        c%dt = dt
+        c%t_end = t_end
+        c%gravity = gravity
+        c%expected_speed = expected_speed
+        c%skin = skin
+        c%allow_unstable = allow_unstable
+
+        call case_time_scales(c, ts)
+        if (dt > ts%bound .and. .not. allow_unstable) then
+            write(s1, '(es10.3)') dt
+            write(s2, '(es10.3)') ts%bound
+            call set_error(err, dem_err_input, at // ": key 'dt': " // trim(adjustl(s1)) // &
+                ' s exceeds the stability bound ' // trim(adjustl(s2)) // ' s, ' // &
+                ts%bound_name // ' (dem --check prints the time scales; ' // &
+                'allow_unstable = .true. runs anyway)')
+        end if
+    contains
+        subroutine reader(text, ios, msg)
+            character(len=*), intent(in) :: text
+            integer, intent(out) :: ios
+            character(len=*), intent(inout) :: msg
+            read(text, nml=run, iostat=ios, iomsg=msg)
+        end subroutine reader
+        logical function positive(val, key, unit)
+            real(wp), intent(in) :: val
+            character(len=*), intent(in) :: key, unit
+            positive = check_positive(at, val, key, unit, err)
+        end function positive
+    end subroutine read_run
+
+    !> &output: where and how often results are written.
+    subroutine read_output(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=512) :: dir   ! output directory, default 'output/<file stem>'
+        real(wp) :: interval        ! series.csv interval [s], > 0, default t_end/100
+        integer(i8) :: trace_id     ! id of a particle whose contact is written every step
+                                    ! to contact.csv; 0 (default): none
+        namelist /output/ dir, interval, trace_id
+        type(nml_block_t) :: b
+        character(len=:), allocatable :: at
+
+        dir = 'output/' // file_stem(nf%path)
+        interval = c%t_end / 100.0_wp
+        trace_id = 0
+        select case (count_blocks(nf, 'output'))
+        case (0)
+        case (1)
+            b = nf%blocks(block_index(nf, 'output', 1))
+            call read_block(nf, b, reader, err)
+            if (err%failed()) return
+            at = nml_location(nf, b)
+            if (.not. check_positive(at, interval, 'interval', '[s]', err)) return
+            if (len_trim(dir) == 0) then
+                call set_error(err, dem_err_input, at // ": key 'dir': must not be empty")
+                return
+            end if
+            if (trace_id /= 0 .and. .not. any(c%gid(1:c%n_particles) == trace_id)) then
+                call set_error(err, dem_err_input, at // ": key 'trace_id': no particle " // &
+                               'has this id')
+                return
+            end if
+        case default
+            call set_error(err, dem_err_input, nf%path // ': more than one &output group')
+            return
+        end select
+        c%output_dir = trim(dir)
+        c%output_interval = interval
+        c%trace_id = trace_id
+    contains
+        subroutine reader(text, ios, msg)
+            character(len=*), intent(in) :: text
+            integer, intent(out) :: ios
+            character(len=*), intent(inout) :: msg
+            read(text, nml=output, iostat=ios, iomsg=msg)
+        end subroutine reader
+    end subroutine read_output
+
+    !> &contact_model: variants of Hertz-Mindlin that imitate other codes (doc/theory.md).
+    subroutine read_contact_model(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        real(wp) :: tangential_stiffness_factor  ! k_t = factor 8 G* sqrt(R* d), > 0, default 1
+                                                  ! (MercuryDPM: 2/3)
+        logical :: tangential_damping  ! damp the tangential spring, default T (MercuryDPM: F)
+        logical :: clamp_normal        ! no attractive normal force, default F (Yade: T)
+        namelist /contact_model/ tangential_stiffness_factor, tangential_damping, clamp_normal
+        type(nml_block_t) :: b
+
+        tangential_stiffness_factor = c%opts%tangential_stiffness_factor
+        tangential_damping = c%opts%tangential_damping
+        clamp_normal = c%opts%clamp_normal
+        select case (count_blocks(nf, 'contact_model'))
+        case (0)
+            return
+        case (1)
+            b = nf%blocks(block_index(nf, 'contact_model', 1))
+            call read_block(nf, b, reader, err)
+            if (err%failed()) return
+            if (.not. check_positive(nml_location(nf, b), tangential_stiffness_factor, &
+                                     'tangential_stiffness_factor', '[-]', err)) return
+        case default
+            call set_error(err, dem_err_input, nf%path // ': more than one &contact_model group')
+            return
+        end select
+        c%opts%tangential_stiffness_factor = tangential_stiffness_factor
+        c%opts%tangential_damping = tangential_damping
+        c%opts%clamp_normal = clamp_normal
+    contains
+        subroutine reader(text, ios, msg)
+            character(len=*), intent(in) :: text
+            integer, intent(out) :: ios
+            character(len=*), intent(inout) :: msg
+            read(text, nml=contact_model, iostat=ios, iomsg=msg)
+        end subroutine reader
+    end subroutine read_contact_model
+
+    !> &material (one per material).
+    subroutine read_materials(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=name_len) :: name  ! unique name, required
+        real(wp) :: density         ! [kg/m^3], > 0, required unless rigid
+        real(wp) :: youngs_modulus  ! [Pa], > 0, required unless rigid
+        real(wp) :: poisson_ratio   ! [-], in (-1, 0.5), required unless rigid
+        logical :: rigid            ! infinitely stiff wall material, default F
+        namelist /material/ name, density, youngs_modulus, poisson_ratio, rigid
+        type(nml_block_t) :: b
+        character(len=:), allocatable :: at
+        integer :: k, n
+
+        n = count_blocks(nf, 'material')
+        if (n == 0) then
+            call set_error(err, dem_err_input, nf%path // ': no &material group')
+            return
+        end if
+        associate (m => c%mats)
+            m%n = n
+            allocate(m%name(n), m%density(n), m%youngs(n), m%poisson(n), m%rigid(n))
+            allocate(m%restitution(n, n), m%friction(n, n), m%pair_defined(n, n))
+            m%restitution = 0.0_wp
+            m%friction = 0.0_wp
+            m%pair_defined = .false.
+            do k = 1, n
+                name = ''
+                density = unset
+                youngs_modulus = unset
+                poisson_ratio = unset
+                rigid = .false.
+                b = nf%blocks(block_index(nf, 'material', k))
+                call read_block(nf, b, reader, err)
+                if (err%failed()) return
+                at = nml_location(nf, b)
+                if (len_trim(name) == 0) then
+                    call set_error(err, dem_err_input, at // ": key 'name' is required")
+                    return
+                end if
+                if (k > 1) then
+                    if (any(m%name(1:k - 1) == name)) then
+                        call set_error(err, dem_err_input, at // ": key 'name': material '" // &
+                                       trim(name) // "' is defined twice")
+                        return
+                    end if
+                end if
+                if (.not. rigid) then
+                    if (.not. check_positive(at, density, 'density', '[kg/m^3]', err)) return
+                    if (.not. check_positive(at, youngs_modulus, 'youngs_modulus', '[Pa]', &
+                                             err)) return
+                    if (poisson_ratio == unset) then
+                        call set_error(err, dem_err_input, at // ": key 'poisson_ratio' " // &
+                                       'is required')
+                        return
+                    end if
+                    if (.not. (poisson_ratio > -1.0_wp .and. poisson_ratio < 0.5_wp)) then
+                        call set_error(err, dem_err_input, at // ": key 'poisson_ratio': " // &
+                                       'must lie in (-1, 0.5)')
+                        return
+                    end if
+                end if
+                m%name(k) = name
+                m%density(k) = density
+                m%youngs(k) = youngs_modulus
+                m%poisson(k) = poisson_ratio
+                m%rigid(k) = rigid
+            end do
+        end associate
+    contains
+        subroutine reader(text, ios, msg)
+            character(len=*), intent(in) :: text
+            integer, intent(out) :: ios
+            character(len=*), intent(inout) :: msg
+            read(text, nml=material, iostat=ios, iomsg=msg)
+        end subroutine reader
+    end subroutine read_materials
+
+    !> &pair (one per material pair that can touch).
+    subroutine read_pairs(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=name_len) :: materials(2)  ! the two material names, required
+        real(wp) :: restitution  ! coefficient of restitution, in (0, 1], required
+        real(wp) :: friction     ! sliding friction coefficient, >= 0, required
+        namelist /pair/ materials, restitution, friction
+        type(nml_block_t) :: b
+        character(len=:), allocatable :: at
+        integer :: k, ia, ib
+
+        do k = 1, count_blocks(nf, 'pair')
+            materials = ''
+            restitution = unset
+            friction = unset
+            b = nf%blocks(block_index(nf, 'pair', k))
+            call read_block(nf, b, reader, err)
+            if (err%failed()) return
+            at = nml_location(nf, b)
+            ia = material_index(c, materials(1))
+            ib = material_index(c, materials(2))
+            if (ia == 0 .or. ib == 0) then
+                call set_error(err, dem_err_input, at // ": key 'materials': needs two " // &
+                    "defined material names (got '" // trim(materials(1)) // "', '" // &
+                    trim(materials(2)) // "')")
+                return
+            end if
+            if (c%mats%pair_defined(ia, ib)) then
+                call set_error(err, dem_err_input, at // ": key 'materials': the pair '" // &
+                    trim(materials(1)) // "', '" // trim(materials(2)) // "' is defined twice")
+                return
+            end if
+            if (restitution == unset) then
+                call set_error(err, dem_err_input, at // ": key 'restitution' is required")
+                return
+            end if
+            if (.not. (restitution > 0.0_wp .and. restitution <= 1.0_wp)) then
+                call set_error(err, dem_err_input, at // ": key 'restitution': must lie " // &
+                               'in (0, 1]')
+                return
+            end if
+            if (friction == unset) then
+                call set_error(err, dem_err_input, at // ": key 'friction' is required")
+                return
+            end if
+            if (.not. (friction >= 0.0_wp)) then
+                call set_error(err, dem_err_input, at // ": key 'friction': must be >= 0")
+                return
+            end if
+            c%mats%restitution(ia, ib) = restitution
+            c%mats%restitution(ib, ia) = restitution
+            c%mats%friction(ia, ib) = friction
+            c%mats%friction(ib, ia) = friction
+            c%mats%pair_defined(ia, ib) = .true.
+            c%mats%pair_defined(ib, ia) = .true.
+        end do
+    contains
+        subroutine reader(text, ios, msg)
+            character(len=*), intent(in) :: text
+            integer, intent(out) :: ios
+            character(len=*), intent(inout) :: msg
+            read(text, nml=pair, iostat=ios, iomsg=msg)
+        end subroutine reader
+    end subroutine read_pairs
+
+    !> &particle (one per sphere).
+    subroutine read_particles(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        integer(i8) :: id                  ! global id, > 0, unique, default: the group's rank
+        character(len=name_len) :: material  ! material name, required, not rigid
+        real(wp) :: radius                 ! [m], > 0, required
+        real(wp) :: position(3)            ! centre [m], required
+        real(wp) :: velocity(3)            ! [m/s], default 0
+        real(wp) :: angular_velocity(3)    ! [rad/s], default 0
+        namelist /particle/ id, material, radius, position, velocity, angular_velocity
+        type(nml_block_t) :: b
+        character(len=:), allocatable :: at
+        integer :: k, n, im
+
+        n = count_blocks(nf, 'particle')
+        if (n == 0) then
+            call set_error(err, dem_err_input, nf%path // ': no &particle group')
+            return
+        end if
+        c%n_particles = n
+        allocate(c%gid(n), c%mat(n), c%radius(n), c%x(3, n), c%v(3, n), c%w(3, n))
+        do k = 1, n
+            id = k
+            material = ''
+            radius = unset
+            position = unset
+            velocity = 0.0_wp
+            angular_velocity = 0.0_wp
+            b = nf%blocks(block_index(nf, 'particle', k))
+            call read_block(nf, b, reader, err)
+            if (err%failed()) return
+            at = nml_location(nf, b)
+            im = material_index(c, material)
+            if (im == 0) then
+                call set_error(err, dem_err_input, at // ": key 'material': '" // &
+                               trim(material) // "' is not a defined material")
+                return
+            end if
+            if (c%mats%rigid(im)) then
+                call set_error(err, dem_err_input, at // ": key 'material': '" // &
+                               trim(material) // "' is rigid (walls only)")
+                return
+            end if
+            if (.not. check_positive(at, radius, 'radius', '[m]', err)) return
+            if (any(position == unset)) then
+                call set_error(err, dem_err_input, at // ": key 'position' is required " // &
+                               '(three coordinates)')
+                return
+            end if
+            if (id <= 0 .or. any(c%gid(1:k - 1) == id)) then
+                call set_error(err, dem_err_input, at // ": key 'id': must be > 0 and unique")
+                return
+            end if
+            if (.not. all(abs([velocity, angular_velocity]) < unset)) then
+                call set_error(err, dem_err_input, at // ": key 'velocity' or " // &
+                               "'angular_velocity': must be finite")
+                return
+            end if
+            c%gid(k) = id
+            c%mat(k) = im
+            c%radius(k) = radius
+            c%x(:, k) = position
+            c%v(:, k) = velocity
+            c%w(:, k) = angular_velocity
+        end do
+    contains
+        subroutine reader(text, ios, msg)
+            character(len=*), intent(in) :: text
+            integer, intent(out) :: ios
+            character(len=*), intent(inout) :: msg
+            read(text, nml=particle, iostat=ios, iomsg=msg)
+        end subroutine reader
+    end subroutine read_particles
+
+    !> &wall_plane (one per flat square wall made of triangles).
+    subroutine read_walls(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=name_len) :: material  ! material name, required
+        real(wp) :: point(3)       ! centre of the square [m], required
+        real(wp) :: normal(3)      ! side the wall faces, non-zero, required
+        real(wp) :: half_width     ! half the side of the square [m], > 0, required
+        integer :: divisions       ! squares along a side (2 triangles each), >= 1, default 1
+        namelist /wall_plane/ material, point, normal, half_width, divisions
+        type(nml_block_t) :: b
+        character(len=:), allocatable :: at
+        integer :: k, im
+
+        do k = 1, count_blocks(nf, 'wall_plane')
+            material = ''
+            point = unset
+            normal = unset
+            half_width = unset
+            divisions = 1
+            b = nf%blocks(block_index(nf, 'wall_plane', k))
+            call read_block(nf, b, reader, err)
+            if (err%failed()) return
+            at = nml_location(nf, b)
+            im = material_index(c, material)
+            if (im == 0) then
+                call set_error(err, dem_err_input, at // ": key 'material': '" // &
+                               trim(material) // "' is not a defined material")
+                return
+            end if
+            if (any(point == unset)) then
+                call set_error(err, dem_err_input, at // ": key 'point' is required")
+                return
+            end if
+            if (any(normal == unset) .or. all(normal == 0.0_wp)) then
+                call set_error(err, dem_err_input, at // ": key 'normal': a non-zero vector " // &
+                               'is required')
+                return
+            end if
+            if (.not. check_positive(at, half_width, 'half_width', '[m]', err)) return
+            if (divisions < 1) then
+                call set_error(err, dem_err_input, at // ": key 'divisions': must be >= 1")
+                return
+            end if
+            call mesh_add_plane(c%mesh, point, normal, half_width, divisions, im)
+        end do
+    contains
+        subroutine reader(text, ios, msg)
+            character(len=*), intent(in) :: text
+            integer, intent(out) :: ios
+            character(len=*), intent(inout) :: msg
+            read(text, nml=wall_plane, iostat=ios, iomsg=msg)
+        end subroutine reader
+    end subroutine read_walls
+
+    !> Every pair of materials that can touch must have a &pair group.
+    subroutine check_pairs_used(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        logical :: used(c%mats%n), wall(c%mats%n)
+        integer :: a, b
+        used = .false.
+        wall = .false.
+        used(c%mat(1:c%n_particles)) = .true.
+        if (c%mesh%n_tri > 0) wall(c%mesh%mat(1:c%mesh%n_tri)) = .true.
+        do a = 1, c%mats%n
+            if (.not. used(a)) cycle
+            do b = 1, c%mats%n
+                if (.not. (used(b) .or. wall(b))) cycle
+                if (c%mats%pair_defined(a, b)) cycle
+                call set_error(err, dem_err_input, nf%path // ': &pair: no pair is defined ' // &
+                    "for materials '" // trim(c%mats%name(a)) // "' and '" // &
+                    trim(c%mats%name(b)) // "', which can touch (add &pair materials = '" // &
+                    trim(c%mats%name(a)) // "', '" // trim(c%mats%name(b)) // &
+                    "', restitution = ..., friction = ... /)")
+                return
+            end do
+        end do
+    end subroutine check_pairs_used
+
+    !> Read one group; on failure find the key that caused it.
+    subroutine read_block(nf, b, reader, err)
+        type(nml_file_t), intent(in) :: nf
+        type(nml_block_t), intent(in) :: b
+        procedure(block_reader) :: reader
+        type(error_t), intent(inout) :: err
+        integer, allocatable :: starts(:)
+        character(len=32), allocatable :: keys(:)
+        character(len=512) :: msg
+        character(len=:), allocatable :: item, at
+        integer :: ios, k, last
+
+        msg = ''
+        call reader(b%text, ios, msg)
+        if (ios == 0) return
+        at = nml_location(nf, b)
+        call nml_items(b%text, starts, keys)
+        do k = 1, size(keys)
+            if (index(' ' // group_keys(b%group) // ' ', ' ' // trim(keys(k)) // ' ') == 0) then
+                call set_error(err, dem_err_input, at // ": unknown key '" // trim(keys(k)) // &
+                               "' (accepted: " // group_keys(b%group) // ')')
+                return
+            end if
+        end do
+        do k = 1, size(keys)
+            if (k < size(keys)) then
+                last = starts(k + 1) - 1
+            else
+                last = len(b%text) - 1      ! before the closing '/'
+            end if
+            item = trim(b%text(starts(k):last))
+            if (item(len(item):len(item)) == ',') item = item(1:len(item) - 1)
+            msg = ''
+            call reader('&' // b%group // ' ' // item // ' /', ios, msg)
+            if (ios /= 0) then
+                call set_error(err, dem_err_input, at // ": key '" // trim(keys(k)) // &
+                               "': cannot read '" // item // "' (" // trim(msg) // ')')
+                return
+            end if
+        end do
+        call set_error(err, dem_err_input, at // ': cannot read the group (' // trim(msg) // ')')
+    end subroutine read_block
+
+    !> The keys of a group, blank-separated.
+    function group_keys(group) result(keys)
+        character(len=*), intent(in) :: group
+        character(len=:), allocatable :: keys
+        integer :: g
+        keys = ''
+        do g = 1, size(input_groups)
+            if (group_of(input_groups(g)) == group) then
+                keys = trim(input_groups(g)(index(input_groups(g), ':') + 2:))
+            end if
+        end do
+    end function group_keys
+
+    pure function group_of(entry) result(group)
+        character(len=*), intent(in) :: entry
+        character(len=:), allocatable :: group
+        group = entry(1:index(entry, ':') - 1)
+    end function group_of
+
+    function accepted_groups() result(s)
+        character(len=:), allocatable :: s
+        integer :: g
+        s = ''
+        do g = 1, size(input_groups)
+            if (g > 1) s = s // ', '
+            s = s // '&' // group_of(input_groups(g))
+        end do
+    end function accepted_groups
+
+    integer function count_blocks(nf, group) result(n)
+        type(nml_file_t), intent(in) :: nf
+        character(len=*), intent(in) :: group
+        integer :: k
+        n = 0
+        do k = 1, size(nf%blocks)
+            if (nf%blocks(k)%group == group) n = n + 1
+        end do
+    end function count_blocks
+
+    !> Index in nf%blocks of the k-th occurrence of a group.
+    integer function block_index(nf, group, k) result(idx)
+        type(nml_file_t), intent(in) :: nf
+        character(len=*), intent(in) :: group
+        integer, intent(in) :: k
+        integer :: seen
+        seen = 0
+        do idx = 1, size(nf%blocks)
+            if (nf%blocks(idx)%group == group) seen = seen + 1
+            if (seen == k) return
+        end do
+        idx = 0
+    end function block_index
+
+    integer function material_index(c, name) result(idx)
+        type(case_t), intent(in) :: c
+        character(len=*), intent(in) :: name
+        do idx = 1, c%mats%n
+            if (c%mats%name(idx) == name) return
+        end do
+        idx = 0
+    end function material_index
+
+    !> Check that a required real key was given and is > 0.
+    logical function check_positive(at, val, key, unit, err) result(ok)
+        character(len=*), intent(in) :: at, key, unit
+        real(wp), intent(in) :: val
+        type(error_t), intent(inout) :: err
+        ok = .false.
+        if (val == unset) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "' is required " // unit)
+        else if (.not. (val > 0.0_wp .and. val < unset)) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': must be > 0 " // unit)
+        else
+            ok = .true.
+        end if
+    end function check_positive
+
+    !> The file name without directory and extension.
+    function file_stem(path) result(stem)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: stem
+        integer :: a, e
+        a = index(path, '/', back=.true.) + 1
+        e = index(path, '.', back=.true.) - 1
+        if (e < a) e = len(path)
+        stem = path(a:e)
+    end function file_stem
+end module dem_input

@@ -1,0 +1,130 @@
+!> Text outputs of a run, in its output directory: series.csv (one row per output
+!> interval), contact.csv (the traced particle's contact, every step) and final.csv (the
+!> particles at the end, in the particle-file columns). Rows are flushed as written, so a
+!> run that stops loses nothing already written.
+module dem_output
+    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error, dem_err_io
+    implicit none
+    private
+    public :: output_t, output_open, output_series, output_contact, output_final, &
+              output_close, make_directory
+
+    character(len=*), parameter :: series_header = &
+        'time,step,particles,contacts_pp,contacts_pw,kinetic_translational,' // &
+        'kinetic_rotational,potential_gravity,max_speed'
+    character(len=*), parameter :: contact_header = &
+        'time,overlap,normal_force,tangential_force,x,y,z,vx,vy,vz,wx,wy,wz'
+    character(len=*), parameter :: final_header = &
+        'id,material,radius,x,y,z,vx,vy,vz,wx,wy,wz'
+    character(len=*), parameter :: real_fmt = 'es25.17e3'
+
+    !> Open files of a run.
+    type :: output_t
+        character(len=:), allocatable :: dir
+        integer :: series = -1
+        integer :: contact = -1
+    end type output_t
+
+    interface
+        integer(c_int) function c_mkdir(path, mode) bind(C, name='mkdir')
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: path(*)
+            integer(c_int), value :: mode
+        end function c_mkdir
+    end interface
+
+contains
+
+    !> Create a directory and its parents (like mkdir -p).
+    subroutine make_directory(path, err)
+        character(len=*), intent(in) :: path
+        type(error_t), intent(inout) :: err
+        integer :: k, rc
+        logical :: exists
+        do k = 2, len(path) + 1
+            if (k <= len(path)) then
+                if (path(k:k) /= '/') cycle
+            end if
+            rc = c_mkdir(path(1:k - 1) // c_null_char, int(o'755', c_int))
+        end do
+        inquire(file=path // '/.', exist=exists)
+        if (.not. exists) call set_error(err, dem_err_io, path // ': cannot create the ' // &
+                                         'output directory')
+    end subroutine make_directory
+
+    !> Create the output directory and open series.csv (and contact.csv when tracing).
+    subroutine output_open(out, dir, trace, err)
+        type(output_t), intent(out) :: out
+        character(len=*), intent(in) :: dir
+        logical, intent(in) :: trace
+        type(error_t), intent(inout) :: err
+        out%dir = dir
+        call make_directory(dir, err)
+        if (err%failed()) return
+        call open_csv(dir // '/series.csv', series_header, out%series, err)
+        if (err%failed()) return
+        if (trace) call open_csv(dir // '/contact.csv', contact_header, out%contact, err)
+    end subroutine output_open
+
+    !> One row of series.csv.
+    subroutine output_series(out, time, step, n, n_pp, n_pw, ke_t, ke_r, pe, vmax)
+        type(output_t), intent(in) :: out
+        real(wp), intent(in) :: time, ke_t, ke_r, pe, vmax  !! [s], [J], [J], [J], [m/s]
+        integer(i8), intent(in) :: step
+        integer(ip), intent(in) :: n, n_pp, n_pw
+        write(out%series, '(' // real_fmt // ',3(",",i0),",",i0,4(",",' // real_fmt // '))') &
+            time, step, n, n_pp, n_pw, ke_t, ke_r, pe, vmax
+        flush(out%series)
+    end subroutine output_series
+
+    !> One row of contact.csv.
+    subroutine output_contact(out, time, overlap, fn, ft, x, v, w)
+        type(output_t), intent(in) :: out
+        real(wp), intent(in) :: time, overlap, fn, ft  !! [s], [m], [N], [N]
+        real(wp), intent(in) :: x(3), v(3), w(3)       !! [m], [m/s], [rad/s]
+        write(out%contact, '(' // real_fmt // ',12(",",' // real_fmt // '))') &
+            time, overlap, fn, ft, x, v, w
+    end subroutine output_contact
+
+    !> final.csv: every owned particle, one row each.
+    subroutine output_final(out, n, gid, mat, radius, x, v, w, err)
+        type(output_t), intent(in) :: out
+        integer(ip), intent(in) :: n
+        integer(i8), intent(in) :: gid(:)
+        integer(ip), intent(in) :: mat(:)
+        real(wp), intent(in) :: radius(:), x(:, :), v(:, :), w(:, :)
+        type(error_t), intent(inout) :: err
+        integer :: u, i
+        call open_csv(out%dir // '/final.csv', final_header, u, err)
+        if (err%failed()) return
+        do i = 1, n
+            write(u, '(i0,",",i0,10(",",' // real_fmt // '))') gid(i), mat(i), radius(i), &
+                x(:, i), v(:, i), w(:, i)
+        end do
+        close(u)
+    end subroutine output_final
+
+    !> Close the open files.
+    subroutine output_close(out)
+        type(output_t), intent(inout) :: out
+        if (out%series /= -1) close(out%series)
+        if (out%contact /= -1) close(out%contact)
+        out%series = -1
+        out%contact = -1
+    end subroutine output_close
+
+    subroutine open_csv(path, header, u, err)
+        character(len=*), intent(in) :: path, header
+        integer, intent(out) :: u
+        type(error_t), intent(inout) :: err
+        integer :: ios
+        open(newunit=u, file=path, status='replace', action='write', iostat=ios)
+        if (ios /= 0) then
+            call set_error(err, dem_err_io, path // ': cannot write')
+            return
+        end if
+        write(u, '(a)') header
+    end subroutine open_csv
+end module dem_output

@@ -1,0 +1,114 @@
+"""Analytical expectations for the Chung & Ooi (2011) tests 1-4 and the quantities measured
+from the solver's outputs. Used by the test suite, the figure script and the dt sweep.
+Nothing here comes from the solver: the formulas are Hertz theory (Johnson, Contact
+Mechanics, 1985, section 11.1) and the rigid-body impulse limits of Chung & Ooi."""
+import csv
+import math
+
+import numpy as np
+
+# Table 3 of the benchmark paper (Dosta et al. 2024)
+TEST1 = dict(E=48e9, nu=0.2, rho=2800.0, R=0.01, v=10.0, mu=0.35)
+TEST2 = dict(E=70e9, nu=0.3, rho=2699.0, R=0.1, v=0.2, mu=0.0)
+TEST3 = dict(E=380e9, nu=0.23, rho=4000.0, R=2.5e-3, v=3.9, mu=0.0,
+             restitutions=[0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0])
+TEST4 = dict(E=70e9, nu=0.33, rho=2700.0, R=2.5e-3, v=3.9, mu=0.092, e=0.98,
+             angles=list(range(5, 86)))
+
+
+def sphere_mass(rho, r):
+    return 4.0 / 3.0 * math.pi * r**3 * rho
+
+
+def hertz(mstar, rstar, estar, v):
+    """Undamped Hertz impact at relative normal speed v: maximum overlap, maximum force,
+    contact duration (Johnson 1985, eqs. 11.22-11.24)."""
+    dmax = (15.0 * mstar * v**2 / (16.0 * estar * math.sqrt(rstar)))**0.4
+    fmax = 4.0 / 3.0 * estar * math.sqrt(rstar) * dmax**1.5
+    # t_c = 2 (dmax / v) * integral_0^1 dx / sqrt(1 - x^(5/2))
+    integral = math.gamma(1.4) * math.gamma(0.5) / math.gamma(0.9)
+    return dmax, fmax, 2.0 * integral * dmax / v
+
+
+def test1_theory():
+    p = TEST1
+    m = sphere_mass(p["rho"], p["R"])
+    estar = p["E"] / (2.0 * (1.0 - p["nu"]**2))
+    return hertz(m / 2.0, p["R"] / 2.0, estar, 2.0 * p["v"])
+
+
+def test2_theory():
+    p = TEST2
+    m = sphere_mass(p["rho"], p["R"])
+    estar = p["E"] / (1.0 - p["nu"]**2)       # rigid plane
+    return hertz(m, p["R"], estar, p["v"])
+
+
+def hertz_curve(mstar, rstar, estar, v, n=200):
+    """Force against overlap on loading, (4/3) E* sqrt(R*) d^(3/2), up to d_max."""
+    dmax, _, _ = hertz(mstar, rstar, estar, v)
+    d = np.linspace(0.0, dmax, n)
+    return d, 4.0 / 3.0 * estar * math.sqrt(rstar) * d**1.5
+
+
+def test4_limits(theta_deg):
+    """Gross-sliding limits from |F_t| <= mu F_n (Chung & Ooi 2011, eqs. 30-31): the least
+    tangential restitution, the largest spin magnitude, the least rebound angle."""
+    p = TEST4
+    t = np.radians(np.asarray(theta_deg, dtype=float))
+    mu, e, v, r = p["mu"], p["e"], p["v"], p["R"]
+    et_min = 1.0 - mu * (1.0 + e) / np.tan(t)
+    spin_max = 5.0 * mu * (1.0 + e) * v * np.cos(t) / (2.0 * r)
+    rebound_min = np.degrees(np.arctan((np.tan(t) - 3.5 * mu * (1.0 + e)) / e))
+    return et_min, spin_max, rebound_min
+
+
+def sliding_threshold_deg():
+    """Incident angle above which the sphere slides through the whole impact:
+    tan(theta) = 3.5 mu (1 + e)."""
+    p = TEST4
+    return math.degrees(math.atan(3.5 * p["mu"] * (1.0 + p["e"])))
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    header = [h.strip() for h in rows[0]]
+    data = np.array([[float(x) for x in r] for r in rows[1:]])
+    return {h: data[:, k] for k, h in enumerate(header)}
+
+
+def contact_metrics(contact_csv):
+    """Maximum overlap, maximum normal force and contact duration from contact.csv. The
+    start and end of contact are where the signed overlap crosses zero, interpolated
+    linearly between steps."""
+    c = read_csv(contact_csv)
+    t, d, fn = c["time"], c["overlap"], c["normal_force"]
+    inside = np.nonzero(d > 0.0)[0]
+    k0, k1 = inside[0], inside[-1]
+
+    def crossing(a, b):
+        return t[a] + (0.0 - d[a]) * (t[b] - t[a]) / (d[b] - d[a])
+
+    duration = crossing(k1, k1 + 1) - crossing(k0 - 1, k0)
+    return d.max(), fn.max(), duration
+
+
+def restitutions(final_csv, v_in):
+    """Achieved normal restitution -v_z'/v_z of every particle in final.csv."""
+    f = read_csv(final_csv)
+    return f["vz"] / v_in
+
+
+def oblique_results(final_csv):
+    """Tangential restitution, spin (positive in the sense friction produces) and rebound
+    angle at the contact point, for spheres sliding along +x on a plane facing +z."""
+    p = TEST4
+    f = read_csv(final_csv)
+    t = np.radians(np.asarray(p["angles"], dtype=float))
+    vt, vn = p["v"] * np.sin(t), p["v"] * np.cos(t)
+    et = f["vx"] / vt
+    spin = f["wy"]
+    v_contact = f["vx"] - p["R"] * spin
+    rebound = np.degrees(np.arctan2(v_contact, f["vz"]))
+    return et, spin, rebound, f["vz"] / vn

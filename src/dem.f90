@@ -1,0 +1,13 @@
+!> The public Fortran API in one module: read a case, set up a run, run it.
+module dem
+    use dem_kinds, only: wp, ip, i8
+    use dem_version, only: dem_version_string
+    use dem_error, only: error_t
+    use dem_case, only: case_t, time_scales_t, case_time_scales, case_total_mass
+    use dem_input, only: read_case
+    use dem_solver, only: solver_t, solver_init, solver_run
+    implicit none
+    private
+    public :: wp, ip, i8, dem_version_string, error_t, case_t, time_scales_t, &
+              case_time_scales, case_total_mass, read_case, solver_t, solver_init, solver_run
+end module dem

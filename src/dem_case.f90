@@ -1,0 +1,120 @@
+!> The description of a run, as read from a namelist file, and the time scales derived
+!> from it (the quantities `dem --check` prints and the stability bound on dt).
+module dem_case
+    use dem_kinds, only: wp, ip, i8
+    use dem_materials, only: materials_t, contact_options_t, effective_moduli
+    use dem_mesh, only: mesh_t
+    use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt
+    implicit none
+    private
+    public :: case_t, time_scales_t, case_time_scales, case_total_mass
+
+    !> Everything a run needs to start.
+    type :: case_t
+        character(len=:), allocatable :: source       !< the namelist file
+        real(wp) :: dt = 0.0_wp                       !< time step [s]
+        real(wp) :: t_end = 0.0_wp                    !< end time [s]
+        integer(ip) :: integrator = 1                 !< dem_integrate's integrator_*
+        real(wp) :: gravity(3) = 0.0_wp               !< [m/s^2]
+        real(wp) :: expected_speed = 0.0_wp           !< largest impact speed expected [m/s]
+        real(wp) :: skin = 0.0_wp                     !< neighbour-list skin [m]
+        logical :: allow_unstable = .false.           !< run even above the stability bound
+        character(len=:), allocatable :: output_dir
+        real(wp) :: output_interval = 0.0_wp          !< series.csv interval [s]
+        integer(i8) :: trace_id = 0                   !< particle whose contact is traced
+        type(materials_t) :: mats
+        type(contact_options_t) :: opts
+        integer(ip) :: n_particles = 0
+        integer(i8), allocatable :: gid(:)
+        integer(ip), allocatable :: mat(:)
+        real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :)
+        type(mesh_t) :: mesh
+    end type case_t
+
+    !> Time scales of a case and the bound they put on dt.
+    type :: time_scales_t
+        real(wp) :: rayleigh = huge(1.0_wp)     !< Rayleigh time of the smallest particle [s]
+        real(wp) :: rayleigh_radius = 0.0_wp    !< that particle's radius [m]
+        integer(ip) :: rayleigh_mat = 0         !< and material
+        real(wp) :: speed = 0.0_wp              !< largest expected impact speed [m/s]
+        real(wp) :: contact = huge(1.0_wp)      !< shortest Hertz contact time at that speed [s]
+        real(wp) :: critical = huge(1.0_wp)     !< 2/omega at the stiffest point of it [s]
+        real(wp) :: bound = huge(1.0_wp)        !< min(rayleigh, critical) [s]
+        character(len=:), allocatable :: bound_name  !< what sets the bound
+    end type time_scales_t
+
+contains
+
+    !> Total particle mass [kg].
+    real(wp) function case_total_mass(c) result(mass)
+        type(case_t), intent(in) :: c
+        real(wp), parameter :: pi = acos(-1.0_wp)
+        integer(ip) :: i
+        mass = 0.0_wp
+        do i = 1, c%n_particles
+            mass = mass + 4.0_wp / 3.0_wp * pi * c%radius(i)**3 * c%mats%density(c%mat(i))
+        end do
+    end function case_total_mass
+
+    !> Rayleigh time of the smallest particle, shortest Hertz contact time over the material
+    !> pairs present (smallest radius of each material; particle pairs meet at twice the
+    !> expected speed, particles hit walls at it), and the stability bound on dt.
+    subroutine case_time_scales(c, ts)
+        type(case_t), intent(in) :: c
+        type(time_scales_t), intent(out) :: ts
+        real(wp), parameter :: pi = acos(-1.0_wp)
+        real(wp) :: rmin(c%mats%n), tr, estar, gstar, ma, mb, mstar, rstar
+        logical :: wall_mat(c%mats%n)
+        integer(ip) :: i, a, b
+
+        rmin = huge(1.0_wp)
+        ts%speed = c%expected_speed
+        do i = 1, c%n_particles
+            a = c%mat(i)
+            rmin(a) = min(rmin(a), c%radius(i))
+            ts%speed = max(ts%speed, norm2(c%v(:, i)))
+            tr = rayleigh_time(c%radius(i), c%mats%density(a), c%mats%youngs(a), &
+                               c%mats%poisson(a))
+            if (tr < ts%rayleigh) then
+                ts%rayleigh = tr
+                ts%rayleigh_radius = c%radius(i)
+                ts%rayleigh_mat = a
+            end if
+        end do
+        wall_mat = .false.
+        if (c%mesh%n_tri > 0) wall_mat(c%mesh%mat(1:c%mesh%n_tri)) = .true.
+
+        if (ts%speed > 0.0_wp) then
+            do a = 1, c%mats%n
+                if (rmin(a) == huge(1.0_wp)) cycle
+                ma = 4.0_wp / 3.0_wp * pi * rmin(a)**3 * c%mats%density(a)
+                do b = 1, c%mats%n
+                    if (rmin(b) < huge(1.0_wp) .and. c%mats%pair_defined(a, b)) then
+                        call effective_moduli(c%mats, a, b, estar, gstar)
+                        mb = 4.0_wp / 3.0_wp * pi * rmin(b)**3 * c%mats%density(b)
+                        mstar = ma * mb / (ma + mb)
+                        rstar = rmin(a) * rmin(b) / (rmin(a) + rmin(b))
+                        call update(mstar, rstar, estar, 2.0_wp * ts%speed)
+                    end if
+                    if (wall_mat(b) .and. c%mats%pair_defined(a, b)) then
+                        call effective_moduli(c%mats, a, b, estar, gstar)
+                        call update(ma, rmin(a), estar, ts%speed)
+                    end if
+                end do
+            end do
+        end if
+
+        ts%bound = min(ts%rayleigh, ts%critical)
+        if (ts%rayleigh <= ts%critical) then
+            ts%bound_name = 'the Rayleigh time of the smallest particle'
+        else
+            ts%bound_name = '2/omega of the stiffest Hertz contact at the expected speed'
+        end if
+    contains
+        subroutine update(mstar_, rstar_, estar_, speed_)
+            real(wp), intent(in) :: mstar_, rstar_, estar_, speed_
+            ts%contact = min(ts%contact, hertz_contact_time(mstar_, rstar_, estar_, speed_))
+            ts%critical = min(ts%critical, hertz_critical_dt(mstar_, rstar_, estar_, speed_))
+        end subroutine update
+    end subroutine case_time_scales
+end module dem_case

@@ -1,0 +1,61 @@
+!> The no-slip Hertz-Mindlin contact law for one contact (doc/theory.md, section 2).
+!> Pure and free of I/O, so that host loops and OpenACC device loops share it.
+module dem_contact_hm
+    use dem_kinds, only: wp
+    implicit none
+    private
+    public :: hm_force
+
+contains
+
+    !> Force of one contact on body i. The normal `nrm` points from i to its partner; `vrel`
+    !> is the velocity of i minus that of the partner at the contact point. The tangential
+    !> displacement `xi` (of i relative to the partner) is turned into the current tangent
+    !> plane keeping its length, advanced by vt dt, and rescaled when the Coulomb limit is hit.
+    pure subroutine hm_force(overlap, nrm, vrel, rstar, mstar, kn, sn, st, cn, ct, mu, &
+                             clamp_normal, dt, xi, fn, ft)
+        !$acc routine seq
+        real(wp), intent(in) :: overlap   !! d_n > 0 [m]
+        real(wp), intent(in) :: nrm(3)    !! unit normal from i to the partner
+        real(wp), intent(in) :: vrel(3)   !! v_i - v_partner at the contact point [m/s]
+        real(wp), intent(in) :: rstar     !! effective radius [m]
+        real(wp), intent(in) :: mstar     !! effective mass [kg]
+        real(wp), intent(in) :: kn        !! (4/3) E* [Pa]
+        real(wp), intent(in) :: sn        !! 2 E* [Pa]
+        real(wp), intent(in) :: st        !! 8 G* (times the stiffness factor) [Pa]
+        real(wp), intent(in) :: cn        !! normal damping factor -2 sqrt(5/6) beta [-]
+        real(wp), intent(in) :: ct        !! tangential damping factor [-]
+        real(wp), intent(in) :: mu        !! sliding friction [-]
+        logical, intent(in) :: clamp_normal  !! no attractive normal force (Yade)
+        real(wp), intent(in) :: dt        !! time step [s]
+        real(wp), intent(inout) :: xi(3)  !! tangential spring displacement [m]
+        real(wp), intent(out) :: fn       !! normal force, repulsive > 0 [N]
+        real(wp), intent(out) :: ft(3)    !! tangential force on i [N]
+        real(wp) :: root, vn, vt(3), kt, len_old, len_new, ft_mag, ft_max
+
+        root = sqrt(rstar * overlap)
+        vn = dot_product(vrel, nrm)
+        fn = kn * overlap * root + cn * sqrt(sn * root * mstar) * vn
+        if (clamp_normal) fn = max(fn, 0.0_wp)
+
+        vt = vrel - vn * nrm
+        len_old = dot_product(xi, xi)
+        xi = xi - dot_product(xi, nrm) * nrm
+        len_new = dot_product(xi, xi)
+        if (len_new > 0.0_wp) then
+            xi = xi * sqrt(len_old / len_new)
+        else
+            xi = 0.0_wp
+        end if
+        xi = xi + vt * dt
+
+        kt = st * root
+        ft = -kt * xi - ct * sqrt(kt * mstar) * vt
+        ft_mag = sqrt(dot_product(ft, ft))
+        ft_max = mu * abs(fn)
+        if (ft_mag > ft_max) then
+            ft = ft * (ft_max / ft_mag)
+            xi = -ft / kt
+        end if
+    end subroutine hm_force
+end module dem_contact_hm

@@ -1,0 +1,68 @@
+!> Particle-particle contact forces over the full neighbour list: each owned particle sums
+!> the forces of its own contacts, in list order, without atomics (doc/theory.md, section 2).
+module dem_contacts_pp
+    use dem_kinds, only: wp, ip
+    use dem_contact_hm, only: hm_force
+    use dem_vector, only: cross
+    implicit none
+    private
+    public :: pp_forces
+
+contains
+
+    !> Add the contact force and torque of every listed overlapping pair to particle i.
+    !> Entries not in contact have their tangential history reset.
+    subroutine pp_forces(n_own, n_all, n_entries, nm, x, v, w, radius, mass, mat, start, &
+                         list, kn, sn, st, cn, ct, mu, clamp_normal, dt, xi, f, t)
+        integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
+        integer(ip), intent(in) :: n_entries      !! length of the neighbour list
+        integer(ip), intent(in) :: nm             !! number of materials
+        real(wp), intent(in) :: x(3, n_all), v(3, n_all), w(3, n_all)  !! [m], [m/s], [rad/s]
+        real(wp), intent(in) :: radius(n_all), mass(n_all)  !! [m], [kg]
+        integer(ip), intent(in) :: mat(n_all)
+        integer(ip), intent(in) :: start(n_own + 1), list(n_entries)
+        real(wp), intent(in) :: kn(nm, nm), sn(nm, nm), st(nm, nm)  !! [Pa]
+        real(wp), intent(in) :: cn(nm, nm), ct(nm, nm), mu(nm, nm)  !! [-]
+        logical, intent(in) :: clamp_normal
+        real(wp), intent(in) :: dt                   !! [s]
+        real(wp), intent(inout) :: xi(3, n_entries)  !! tangential history [m]
+        real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m]
+        integer(ip) :: i, j, k, a, b
+        real(wp) :: d(3), dist2, dist, rsum, overlap, nrm(3), vrel(3), rstar, mstar
+        real(wp) :: fn, ft(3), fi(3), ti(3), xik(3)
+
+        !$acc parallel loop gang vector default(present) &
+        !$acc private(j, k, a, b, dist2, dist, rsum, overlap, rstar, mstar, fn) &
+        !$acc private(d, nrm, vrel, ft, fi, ti, xik)
+        do i = 1, n_own
+            fi = 0.0_wp
+            ti = 0.0_wp
+            a = mat(i)
+            do k = start(i), start(i + 1) - 1
+                j = list(k)
+                d = x(:, j) - x(:, i)
+                dist2 = d(1)**2 + d(2)**2 + d(3)**2
+                rsum = radius(i) + radius(j)
+                if (dist2 >= rsum**2) then
+                    xi(:, k) = 0.0_wp
+                    cycle
+                end if
+                dist = sqrt(dist2)
+                nrm = d / dist
+                overlap = rsum - dist
+                rstar = radius(i) * radius(j) / rsum
+                mstar = mass(i) * mass(j) / (mass(i) + mass(j))
+                vrel = v(:, i) - v(:, j) + cross(radius(i) * w(:, i) + radius(j) * w(:, j), nrm)
+                b = mat(j)
+                xik = xi(:, k)
+                call hm_force(overlap, nrm, vrel, rstar, mstar, kn(a, b), sn(a, b), st(a, b), &
+                              cn(a, b), ct(a, b), mu(a, b), clamp_normal, dt, xik, fn, ft)
+                xi(:, k) = xik
+                fi = fi - fn * nrm + ft
+                ti = ti + radius(i) * cross(nrm, ft)
+            end do
+            f(:, i) = f(:, i) + fi
+            t(:, i) = t(:, i) + ti
+        end do
+    end subroutine pp_forces
+end module dem_contacts_pp

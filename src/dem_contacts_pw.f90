@@ -1,0 +1,170 @@
+!> Particle-wall contact forces. A sphere's contacts with the triangles near it are reduced
+!> to the local minima of its distance to the surface they form, so that a flat surface of
+!> many triangles acts as one plane over faces, shared edges and shared vertices
+!> (doc/theory.md, section 4). Tangential history is kept per particle, keyed by triangle.
+module dem_contacts_pw
+    use dem_kinds, only: wp, ip
+    use dem_contact_hm, only: hm_force
+    use dem_mesh, only: closest_point_triangle, feature_face
+    use dem_vector, only: cross
+    implicit none
+    private
+    public :: wall_contacts_t, wall_contacts_init, pw_forces, wall_contact_select, &
+              max_wall_contacts, max_wall_candidates
+
+    integer(ip), parameter :: max_wall_contacts = 8     !< per particle
+    integer(ip), parameter :: max_wall_candidates = 16  !< touching triangles per particle
+
+    !> Per-particle wall contact history: triangle (0: free slot) and tangential displacement.
+    type :: wall_contacts_t
+        integer(ip), allocatable :: tri(:, :)    !< (slot, particle)
+        real(wp), allocatable :: xi(:, :, :)     !< (xyz, slot, particle) [m]
+    end type wall_contacts_t
+
+contains
+
+    !> Empty history for `capacity` particles.
+    subroutine wall_contacts_init(wc, capacity)
+        type(wall_contacts_t), intent(out) :: wc
+        integer(ip), intent(in) :: capacity
+        allocate(wc%tri(max_wall_contacts, capacity), wc%xi(3, max_wall_contacts, capacity))
+        wc%tri = 0
+        wc%xi = 0.0_wp
+    end subroutine wall_contacts_init
+
+    !> Of the nc triangles touching a sphere (closest points q, squared distances dist2,
+    !> features), keep those whose closest point is a local minimum of the distance to their
+    !> union: faces always; an edge or vertex point only if no triangle containing that point
+    !> is closer, and only once when several triangles share it.
+    pure subroutine wall_contact_select(nc, q, dist2, feature, tri_vert, tol, keep)
+        !$acc routine seq
+        integer(ip), intent(in) :: nc
+        real(wp), intent(in) :: q(3, nc), dist2(nc)  !! [m], [m^2]
+        integer(ip), intent(in) :: feature(nc)
+        real(wp), intent(in) :: tri_vert(3, 3, nc)   !! the candidates' corners [m]
+        real(wp), intent(in) :: tol                  !! length tolerance [m]
+        logical, intent(out) :: keep(nc)
+        integer(ip) :: k, m, fm
+        real(wp) :: qm(3), dk, dm
+
+        keep = .true.
+        do k = 1, nc
+            if (feature(k) == feature_face) cycle
+            dk = sqrt(dist2(k))
+            do m = 1, nc
+                if (m == k) cycle
+                call closest_point_triangle(q(:, k), tri_vert(:, 1, m), tri_vert(:, 2, m), &
+                                            tri_vert(:, 3, m), qm, fm)
+                if (sum((qm - q(:, k))**2) > tol**2) cycle   ! triangle m does not hold q_k
+                dm = sqrt(dist2(m))
+                if (dm < dk - tol) then
+                    keep(k) = .false.          ! a neighbour is closer: not a local minimum
+                    exit
+                end if
+            end do
+        end do
+        do k = 1, nc
+            if (.not. keep(k) .or. feature(k) == feature_face) cycle
+            do m = 1, nc
+                if (m == k .or. .not. keep(m)) cycle
+                if (feature(m) /= feature_face .and. m > k) cycle
+                if (sum((q(:, m) - q(:, k))**2) <= tol**2) then
+                    keep(k) = .false.          ! the same point is already a contact
+                    exit
+                end if
+            end do
+        end do
+    end subroutine wall_contact_select
+
+    !> Add the wall contact forces and torques to every owned particle. `overflow` counts
+    !> particles with more touching triangles or contacts than the fixed limits.
+    subroutine pw_forces(n_own, n_cand, n_tri, nm, x, v, w, radius, mass, mat, wstart, wlist, &
+                         vert, tmat, kn, sn, st, cn, ct, mu, clamp_normal, dt, wtri, wxi, &
+                         f, t, overflow)
+        integer(ip), intent(in) :: n_own, n_cand, n_tri, nm
+        real(wp), intent(in) :: x(3, n_own), v(3, n_own), w(3, n_own)  !! [m], [m/s], [rad/s]
+        real(wp), intent(in) :: radius(n_own), mass(n_own)             !! [m], [kg]
+        integer(ip), intent(in) :: mat(n_own)
+        integer(ip), intent(in) :: wstart(n_own + 1), wlist(n_cand)    !! candidate triangles
+        real(wp), intent(in) :: vert(3, 3, n_tri)                      !! [m]
+        integer(ip), intent(in) :: tmat(n_tri)
+        real(wp), intent(in) :: kn(nm, nm), sn(nm, nm), st(nm, nm)   !! [Pa]
+        real(wp), intent(in) :: cn(nm, nm), ct(nm, nm), mu(nm, nm)   !! [-]
+        logical, intent(in) :: clamp_normal
+        real(wp), intent(in) :: dt                                    !! [s]
+        integer(ip), intent(inout) :: wtri(max_wall_contacts, n_own)
+        real(wp), intent(inout) :: wxi(3, max_wall_contacts, n_own)   !! [m]
+        real(wp), intent(inout) :: f(3, n_own), t(3, n_own)           !! [N], [N m]
+        integer(ip), intent(out) :: overflow
+        integer(ip) :: i, k, c, nc, s, ns, a, b, tri, feat(max_wall_candidates)
+        integer(ip) :: new_tri(max_wall_contacts), ctri(max_wall_candidates), fk
+        real(wp) :: q(3, max_wall_candidates), d2(max_wall_candidates), qk(3), d2k
+        real(wp) :: cv(3, 3, max_wall_candidates), new_xi(3, max_wall_contacts)
+        real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r
+        logical :: keep(max_wall_candidates)
+
+        overflow = 0
+        !$acc parallel loop gang vector default(present) reduction(+:overflow) &
+        !$acc private(k, c, nc, s, ns, a, b, tri, feat, new_tri, ctri, fk, q, d2, qk, d2k) &
+        !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, keep)
+        do i = 1, n_own
+            r = radius(i)
+            nc = 0
+            do k = wstart(i), wstart(i + 1) - 1
+                tri = wlist(k)
+                call closest_point_triangle(x(:, i), vert(:, 1, tri), vert(:, 2, tri), &
+                                            vert(:, 3, tri), qk, fk)
+                d2k = sum((qk - x(:, i))**2)
+                if (d2k >= r**2) cycle
+                if (nc == max_wall_candidates) then
+                    overflow = overflow + 1
+                    exit
+                end if
+                nc = nc + 1
+                q(:, nc) = qk
+                d2(nc) = d2k
+                feat(nc) = fk
+                ctri(nc) = tri
+                cv(:, :, nc) = vert(:, :, tri)
+            end do
+            call wall_contact_select(nc, q(:, 1:nc), d2(1:nc), feat(1:nc), cv(:, :, 1:nc), &
+                                     1.0e-10_wp * r, keep(1:nc))
+            fi = 0.0_wp
+            ti = 0.0_wp
+            ns = 0
+            a = mat(i)
+            do c = 1, nc
+                if (.not. keep(c)) cycle
+                if (ns == max_wall_contacts) then
+                    overflow = overflow + 1
+                    exit
+                end if
+                tri = ctri(c)
+                xik = 0.0_wp
+                do s = 1, max_wall_contacts
+                    if (wtri(s, i) == tri) then
+                        xik = wxi(:, s, i)
+                        exit
+                    end if
+                end do
+                dist = sqrt(d2(c))
+                nrm = (q(:, c) - x(:, i)) / dist
+                vrel = v(:, i) + cross(r * w(:, i), nrm)
+                b = tmat(tri)
+                call hm_force(r - dist, nrm, vrel, r, mass(i), kn(a, b), sn(a, b), st(a, b), &
+                              cn(a, b), ct(a, b), mu(a, b), clamp_normal, dt, xik, fn, ft)
+                ns = ns + 1
+                new_tri(ns) = tri
+                new_xi(:, ns) = xik
+                fi = fi - fn * nrm + ft
+                ti = ti + r * cross(nrm, ft)
+            end do
+            wtri(:, i) = 0
+            wxi(:, :, i) = 0.0_wp
+            wtri(1:ns, i) = new_tri(1:ns)
+            wxi(:, 1:ns, i) = new_xi(:, 1:ns)
+            f(:, i) = f(:, i) + fi
+            t(:, i) = t(:, i) + ti
+        end do
+    end subroutine pw_forces
+end module dem_contacts_pw

@@ -1,0 +1,104 @@
+!> Whole-system quantities written to series.csv, the contact trace of one particle, and the
+!> check that the state is finite. Host-side; called at output times only (and every step
+!> for the trace, which is a diagnostic for single-contact tests).
+module dem_diagnostics
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use dem_kinds, only: wp, ip, i8
+    use dem_mesh, only: mesh_t, closest_point_triangle
+    implicit none
+    private
+    public :: energies, count_pp_contacts, first_nonfinite, contact_trace
+
+contains
+
+    !> Kinetic (translational, rotational) and gravitational potential energy [J], and the
+    !> largest speed [m/s], of the owned particles.
+    subroutine energies(n, mass, inv_inertia, x, v, w, gravity, ke_t, ke_r, pe, vmax)
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: mass(:), inv_inertia(:), x(:, :), v(:, :), w(:, :)
+        real(wp), intent(in) :: gravity(3)
+        real(wp), intent(out) :: ke_t, ke_r, pe, vmax
+        integer(ip) :: i
+        ke_t = 0.0_wp
+        ke_r = 0.0_wp
+        pe = 0.0_wp
+        vmax = 0.0_wp
+        do i = 1, n
+            ke_t = ke_t + 0.5_wp * mass(i) * dot_product(v(:, i), v(:, i))
+            ke_r = ke_r + 0.5_wp * dot_product(w(:, i), w(:, i)) / inv_inertia(i)
+            pe = pe - mass(i) * dot_product(gravity, x(:, i))
+            vmax = max(vmax, norm2(v(:, i)))
+        end do
+    end subroutine energies
+
+    !> Number of overlapping particle pairs among the owned particles' list entries
+    !> (each pair counted once).
+    integer(ip) function count_pp_contacts(n_own, x, radius, start, list) result(n_pairs)
+        integer(ip), intent(in) :: n_own
+        real(wp), intent(in) :: x(:, :), radius(:)
+        integer(ip), intent(in) :: start(:), list(:)
+        integer(ip) :: i, k, j, twice
+        twice = 0
+        do i = 1, n_own
+            do k = start(i), start(i + 1) - 1
+                j = list(k)
+                if (sum((x(:, j) - x(:, i))**2) < (radius(i) + radius(j))**2) twice = twice + 1
+            end do
+        end do
+        n_pairs = twice / 2
+    end function count_pp_contacts
+
+    !> Index of the first owned particle with a non-finite position, velocity or angular
+    !> velocity; 0 if all are finite.
+    integer(ip) function first_nonfinite(n, x, v, w) result(bad)
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: x(:, :), v(:, :), w(:, :)
+        integer(ip) :: i
+        do i = 1, n
+            if (.not. all(ieee_is_finite(x(:, i)) .and. ieee_is_finite(v(:, i)) .and. &
+                          ieee_is_finite(w(:, i)))) then
+                bad = i
+                return
+            end if
+        end do
+        bad = 0
+    end function first_nonfinite
+
+    !> The contact of particle i with its nearest partner (particle or triangle): signed
+    !> overlap (negative: gap), and the normal and tangential parts of the contact force,
+    !> the total force less gravity. Meant for a particle with one contact at a time.
+    subroutine contact_trace(i, n_all, x, radius, mass, f, gravity, mesh, overlap, fn, ft)
+        integer(ip), intent(in) :: i, n_all
+        real(wp), intent(in) :: x(:, :), radius(:), mass(:), f(:, :), gravity(3)
+        type(mesh_t), intent(in) :: mesh
+        real(wp), intent(out) :: overlap  !! [m]
+        real(wp), intent(out) :: fn       !! repulsive > 0 [N]
+        real(wp), intent(out) :: ft       !! magnitude [N]
+        real(wp) :: nrm(3), d(3), s, q(3), fc(3)
+        integer(ip) :: j, tri, feature
+        overlap = -huge(1.0_wp)
+        nrm = 0.0_wp
+        do j = 1, n_all
+            if (j == i) cycle
+            d = x(:, j) - x(:, i)
+            s = radius(i) + radius(j) - norm2(d)
+            if (s > overlap) then
+                overlap = s
+                nrm = d / norm2(d)
+            end if
+        end do
+        do tri = 1, mesh%n_tri
+            call closest_point_triangle(x(:, i), mesh%vert(:, 1, tri), mesh%vert(:, 2, tri), &
+                                        mesh%vert(:, 3, tri), q, feature)
+            d = q - x(:, i)
+            s = radius(i) - norm2(d)
+            if (s > overlap) then
+                overlap = s
+                nrm = d / norm2(d)
+            end if
+        end do
+        fc = f(:, i) - mass(i) * gravity
+        fn = -dot_product(fc, nrm)
+        ft = norm2(fc + fn * nrm)
+    end subroutine contact_trace
+end module dem_diagnostics

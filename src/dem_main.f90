@@ -1,0 +1,128 @@
+!> The `dem` program: run a case, check it, or print the version or the usage.
+program dem_main
+    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+    use dem, only: wp, dem_version_string, error_t, case_t, time_scales_t, case_time_scales, &
+                   case_total_mass, read_case, solver_t, solver_init, solver_run
+    use dem_comm, only: comm_t, comm_init, comm_free
+    implicit none
+    type(comm_t) :: comm
+    type(case_t) :: c
+    type(solver_t) :: s
+    type(error_t) :: err
+    character(len=:), allocatable :: arg1, path
+    logical :: check_only
+    integer :: nargs
+
+    call comm_init(comm)
+    nargs = command_argument_count()
+    if (nargs < 1) call usage_error('no case file given')
+    arg1 = argument(1)
+    check_only = .false.
+    select case (arg1)
+    case ('--version')
+        if (comm%rank == 0) write(output_unit, '(a)') 'dem ' // dem_version_string
+        call finish(0)
+    case ('--help', '-h')
+        if (comm%rank == 0) call print_help()
+        call finish(0)
+    case ('--check')
+        if (nargs /= 2) call usage_error('--check takes one case file')
+        check_only = .true.
+        path = argument(2)
+    case default
+        if (arg1(1:1) == '-') call usage_error('unknown option ' // arg1)
+        if (nargs /= 1) call usage_error('one case file at a time')
+        path = arg1
+    end select
+    if (comm%size > 1) then
+        if (comm%rank == 0) write(error_unit, '(a)') 'dem: error: this version runs on ' // &
+                                                      'one MPI rank'
+        call comm%abort(2)
+    end if
+
+    call read_case(path, c, err)
+    if (err%failed()) call fail(err)
+    call print_check(c)
+    if (check_only) call finish(0)
+    call solver_init(s, c)
+    call solver_run(s, c, err)
+    if (err%failed()) call fail(err)
+    write(output_unit, '(a)') 'dem: done; outputs in ' // c%output_dir
+    call finish(0)
+
+contains
+
+    function argument(k) result(a)
+        integer, intent(in) :: k
+        character(len=:), allocatable :: a
+        integer :: n
+        call get_command_argument(k, length=n)
+        allocate(character(len=n) :: a)
+        call get_command_argument(k, a)
+    end function argument
+
+    subroutine print_help()
+        write(output_unit, '(a)') &
+            'usage: dem CASE.nml          run the case described by the namelist file', &
+            '       dem --check CASE.nml  validate the case and print its derived quantities', &
+            '       dem --version         print the version', &
+            '       dem --help            print this help', &
+            '', &
+            'Outputs go to the directory set by &output dir (default output/<case name>):', &
+            'series.csv, final.csv and, with &output trace_id, contact.csv.', &
+            'The namelist groups and keys are described in doc/input.md.'
+    end subroutine print_help
+
+    !> The derived quantities of a case (dem --check, and the start of every run).
+    subroutine print_check(c)
+        type(case_t), intent(in) :: c
+        type(time_scales_t) :: ts
+        real(wp) :: mem
+        call case_time_scales(c, ts)
+        mem = (850.0_wp * c%n_particles + 80.0_wp * c%mesh%n_tri) / 2.0_wp**20
+        write(output_unit, '(a)') 'case ' // c%source
+        write(output_unit, '(a,i0,a,i0,a)') '  particles            ', c%n_particles, &
+            ' (wall triangles ', c%mesh%n_tri, ')'
+        write(output_unit, '(a,es12.5,a)') '  total mass           ', case_total_mass(c), ' kg'
+        write(output_unit, '(a,es12.5,a,es10.3,a)') '  Rayleigh time        ', ts%rayleigh, &
+            ' s (smallest particle, radius ', ts%rayleigh_radius, ' m)'
+        if (ts%speed > 0.0_wp) then
+            write(output_unit, '(a,es12.5,a,es10.3,a)') '  Hertz contact time   ', ts%contact, &
+                ' s (at the largest expected speed, ', ts%speed, ' m/s)'
+        else
+            write(output_unit, '(a)') '  Hertz contact time   n/a (nothing moves; set ' // &
+                '&run expected_speed)'
+        end if
+        write(output_unit, '(a,es12.5,a,i0,a)') '  dt                   ', c%dt, ' s (', &
+            ceiling(c%t_end / c%dt - 1.0e-9_wp), ' steps)'
+        write(output_unit, '(a,f10.4)') '  dt / Rayleigh time   ', c%dt / ts%rayleigh
+        if (ts%speed > 0.0_wp) write(output_unit, '(a,f10.4)') '  dt / contact time    ', &
+            c%dt / ts%contact
+        write(output_unit, '(a,es12.5,a)') '  stability bound      ', ts%bound, &
+            ' s (' // ts%bound_name // ')'
+        write(output_unit, '(a,f10.3,a)') '  estimated memory     ', mem, ' MiB'
+        write(output_unit, '(a)') '  output directory     ' // c%output_dir
+        if (c%dt > ts%bound) write(output_unit, '(a)') '  warning: dt exceeds the ' // &
+            'stability bound (allow_unstable = .true.)'
+    end subroutine print_check
+
+    subroutine usage_error(msg)
+        character(len=*), intent(in) :: msg
+        if (comm%rank == 0) write(error_unit, '(a)') 'dem: error: ' // msg // &
+                                                      ' (dem --help for usage)'
+        call finish(2)
+    end subroutine usage_error
+
+    subroutine fail(e)
+        type(error_t), intent(in) :: e
+        if (comm%rank == 0) write(error_unit, '(a)') 'dem: error: ' // e%message
+        call finish(e%code)
+    end subroutine fail
+
+    subroutine finish(code)
+        integer, intent(in) :: code
+        call comm_free(comm)
+        if (code /= 0) error stop code, quiet=.true.
+        stop
+    end subroutine finish
+end program dem_main

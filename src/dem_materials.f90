@@ -1,0 +1,106 @@
+!> Materials, the per-pair table (restitution, friction) and the constants the contact kernel
+!> needs, precomputed per material pair (doc/theory.md, sections 1 and 2).
+module dem_materials
+    use dem_kinds, only: wp, ip
+    implicit none
+    private
+    public :: materials_t, pair_constants_t, contact_options_t, effective_moduli, &
+              damping_ratio, pair_constants_build
+
+    !> Material properties; a rigid material has zero elastic compliance (Chung & Ooi walls).
+    type :: materials_t
+        integer(ip) :: n = 0
+        character(len=32), allocatable :: name(:)
+        real(wp), allocatable :: density(:)   !< [kg/m^3]
+        real(wp), allocatable :: youngs(:)    !< Young's modulus [Pa]
+        real(wp), allocatable :: poisson(:)   !< Poisson ratio [-]
+        logical, allocatable :: rigid(:)      !< infinitely stiff (walls only)
+        real(wp), allocatable :: restitution(:, :)  !< per pair, symmetric [-]
+        real(wp), allocatable :: friction(:, :)     !< sliding friction per pair [-]
+        logical, allocatable :: pair_defined(:, :)  !< the input named this pair
+    end type materials_t
+
+    !> Variants of the Hertz-Mindlin law used by other codes (doc/theory.md, section 3).
+    type :: contact_options_t
+        real(wp) :: tangential_stiffness_factor = 1.0_wp  !< 2/3 imitates MercuryDPM
+        logical :: tangential_damping = .true.            !< .false. imitates MercuryDPM
+        logical :: clamp_normal = .false.                 !< .true. imitates Yade
+    end type contact_options_t
+
+    !> Kernel constants per material pair (i, j), symmetric.
+    type :: pair_constants_t
+        real(wp), allocatable :: kn(:, :)     !< (4/3) E* [Pa]
+        real(wp), allocatable :: sn(:, :)     !< 2 E*: S_n = sn sqrt(R* d) [Pa]
+        real(wp), allocatable :: st(:, :)     !< 8 G* times the stiffness factor [Pa]
+        real(wp), allocatable :: cn(:, :)     !< -2 sqrt(5/6) beta (>= 0) [-]
+        real(wp), allocatable :: ct(:, :)     !< cn, or 0 without tangential damping [-]
+        real(wp), allocatable :: mu(:, :)     !< sliding friction [-]
+        logical :: clamp_normal = .false.
+    end type pair_constants_t
+
+contains
+
+    !> Effective Young's and shear moduli of a contact between materials a and b.
+    pure subroutine effective_moduli(mats, a, b, estar, gstar)
+        type(materials_t), intent(in) :: mats
+        integer(ip), intent(in) :: a, b
+        real(wp), intent(out) :: estar  !! 1/E* = sum (1-nu^2)/E [Pa]
+        real(wp), intent(out) :: gstar  !! 1/G* = sum 2(2-nu)(1+nu)/E [Pa]
+        real(wp) :: ce, cg
+        ce = compliance_e(a) + compliance_e(b)
+        cg = compliance_g(a) + compliance_g(b)
+        estar = 1.0_wp / ce
+        gstar = 1.0_wp / cg
+    contains
+        pure real(wp) function compliance_e(m)
+            integer(ip), intent(in) :: m
+            compliance_e = 0.0_wp
+            if (.not. mats%rigid(m)) compliance_e = (1.0_wp - mats%poisson(m)**2) / mats%youngs(m)
+        end function compliance_e
+        pure real(wp) function compliance_g(m)
+            integer(ip), intent(in) :: m
+            compliance_g = 0.0_wp
+            if (.not. mats%rigid(m)) compliance_g = 2.0_wp * (2.0_wp - mats%poisson(m)) &
+                                       * (1.0_wp + mats%poisson(m)) / mats%youngs(m)
+        end function compliance_g
+    end subroutine effective_moduli
+
+    !> beta = ln(e) / sqrt(ln(e)^2 + pi^2); 0 for e = 1.
+    elemental real(wp) function damping_ratio(e) result(beta)
+        real(wp), intent(in) :: e  !! coefficient of restitution, 0 < e <= 1
+        real(wp), parameter :: pi = acos(-1.0_wp)
+        beta = log(e) / sqrt(log(e)**2 + pi**2)
+    end function damping_ratio
+
+    !> Precompute the kernel constants of every defined material pair.
+    subroutine pair_constants_build(mats, opts, pc)
+        type(materials_t), intent(in) :: mats
+        type(contact_options_t), intent(in) :: opts
+        type(pair_constants_t), intent(out) :: pc
+        integer(ip) :: a, b, n
+        real(wp) :: estar, gstar
+        n = mats%n
+        allocate(pc%kn(n, n), pc%sn(n, n), pc%st(n, n), pc%cn(n, n), pc%ct(n, n), pc%mu(n, n))
+        pc%kn = 0.0_wp
+        pc%sn = 0.0_wp
+        pc%st = 0.0_wp
+        pc%cn = 0.0_wp
+        pc%ct = 0.0_wp
+        pc%mu = 0.0_wp
+        pc%clamp_normal = opts%clamp_normal
+        do b = 1, n
+            do a = 1, n
+                if (.not. mats%pair_defined(a, b)) cycle
+                if (mats%rigid(a) .and. mats%rigid(b)) cycle
+                call effective_moduli(mats, a, b, estar, gstar)
+                pc%kn(a, b) = 4.0_wp / 3.0_wp * estar
+                pc%sn(a, b) = 2.0_wp * estar
+                pc%st(a, b) = 8.0_wp * gstar * opts%tangential_stiffness_factor
+                pc%cn(a, b) = -2.0_wp * sqrt(5.0_wp / 6.0_wp) &
+                              * damping_ratio(mats%restitution(a, b))
+                if (opts%tangential_damping) pc%ct(a, b) = pc%cn(a, b)
+                pc%mu(a, b) = mats%friction(a, b)
+            end do
+        end do
+    end subroutine pair_constants_build
+end module dem_materials

@@ -1,0 +1,68 @@
+!> The particle store: one array per field, owned particles first (1..n_own), then ghosts
+!> (n_own+1..n_own+n_ghost), no holes. Vectors are stored as (3, n).
+module dem_particles
+    use dem_kinds, only: wp, ip, i8
+    implicit none
+    private
+    public :: particles_t, particles_init, particles_add, particles_free
+
+    !> Structure of arrays for spheres. Kernels receive the arrays, never the type.
+    type :: particles_t
+        integer(ip) :: n_own = 0     !< particles owned by this rank
+        integer(ip) :: n_ghost = 0   !< copies of other ranks' particles, after the owned ones
+        integer(i8), allocatable :: gid(:)        !< global id, never changes
+        integer(ip), allocatable :: mat(:)        !< material index
+        real(wp), allocatable :: radius(:)        !< [m]
+        real(wp), allocatable :: mass(:)          !< [kg]
+        real(wp), allocatable :: inv_mass(:)      !< [1/kg]
+        real(wp), allocatable :: inv_inertia(:)   !< 1/(2/5 m R^2) [1/(kg m^2)]
+        real(wp), allocatable :: x(:, :)          !< position [m]
+        real(wp), allocatable :: v(:, :)          !< velocity [m/s]
+        real(wp), allocatable :: w(:, :)          !< angular velocity [rad/s]
+        real(wp), allocatable :: f(:, :)          !< force [N]
+        real(wp), allocatable :: t(:, :)          !< torque [N m]
+    end type particles_t
+
+contains
+
+    !> Allocate room for `capacity` particles; the store starts empty.
+    subroutine particles_init(p, capacity)
+        type(particles_t), intent(out) :: p  !! the store
+        integer(ip), intent(in) :: capacity   !! number of particles it can hold
+        allocate(p%gid(capacity), p%mat(capacity), p%radius(capacity), p%mass(capacity), &
+                 p%inv_mass(capacity), p%inv_inertia(capacity))
+        allocate(p%x(3, capacity), p%v(3, capacity), p%w(3, capacity), p%f(3, capacity), &
+                 p%t(3, capacity))
+        p%f = 0.0_wp
+        p%t = 0.0_wp
+    end subroutine particles_init
+
+    !> Append an owned sphere (there are no ghosts while particles are added).
+    subroutine particles_add(p, gid, mat, radius, density, x, v, w)
+        type(particles_t), intent(inout) :: p
+        integer(i8), intent(in) :: gid          !! global id
+        integer(ip), intent(in) :: mat          !! material index
+        real(wp), intent(in) :: radius          !! [m]
+        real(wp), intent(in) :: density         !! [kg/m^3]
+        real(wp), intent(in) :: x(3), v(3), w(3)  !! position [m], velocity [m/s], [rad/s]
+        real(wp), parameter :: pi = acos(-1.0_wp)
+        integer(ip) :: i
+        i = p%n_own + 1
+        p%n_own = i
+        p%gid(i) = gid
+        p%mat(i) = mat
+        p%radius(i) = radius
+        p%mass(i) = 4.0_wp / 3.0_wp * pi * radius**3 * density
+        p%inv_mass(i) = 1.0_wp / p%mass(i)
+        p%inv_inertia(i) = 1.0_wp / (0.4_wp * p%mass(i) * radius**2)
+        p%x(:, i) = x
+        p%v(:, i) = v
+        p%w(:, i) = w
+    end subroutine particles_add
+
+    !> Release the store.
+    subroutine particles_free(p)
+        type(particles_t), intent(inout) :: p
+        p = particles_t()
+    end subroutine particles_free
+end module dem_particles

@@ -1,0 +1,268 @@
+!> The time loop: what runs in which order, and nothing else (doc/theory.md, section 5).
+module dem_solver
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error, dem_err_runtime
+    use dem_case, only: case_t, time_scales_t, case_time_scales
+    use dem_particles, only: particles_t, particles_init, particles_add
+    use dem_materials, only: pair_constants_t, pair_constants_build
+    use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale
+    use dem_contacts_pp, only: pp_forces
+    use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, pw_forces
+    use dem_forces, only: body_forces
+    use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
+    use dem_diagnostics, only: energies, count_pp_contacts, first_nonfinite, contact_trace
+    use dem_output, only: output_t, output_open, output_series, output_contact, &
+                          output_final, output_close
+    use dem_acc, only: acc_copyin, acc_delete, acc_update_host
+    implicit none
+    private
+    public :: solver_t, solver_init, solver_run
+
+    !> The state of a run.
+    type :: solver_t
+        type(particles_t) :: p
+        type(neighbors_t) :: nb
+        type(wall_contacts_t) :: wc
+        type(pair_constants_t) :: pc
+        integer(i8) :: step = 0        !< steps done; the time is step * dt
+        integer(ip) :: trace = 0       !< local index of the traced particle, 0: none
+    end type solver_t
+
+contains
+
+    !> Set up the state of a case at t = 0.
+    subroutine solver_init(s, c)
+        type(solver_t), intent(out) :: s
+        type(case_t), intent(in) :: c
+        integer(ip) :: i
+        call particles_init(s%p, c%n_particles)
+        do i = 1, c%n_particles
+            call particles_add(s%p, c%gid(i), c%mat(i), c%radius(i), &
+                               c%mats%density(c%mat(i)), c%x(:, i), c%v(:, i), c%w(:, i))
+            if (c%gid(i) == c%trace_id) s%trace = i
+        end do
+        call pair_constants_build(c%mats, c%opts, s%pc)
+        call wall_contacts_init(s%wc, c%n_particles)
+        s%nb%skin = c%skin
+        s%step = 0
+    end subroutine solver_init
+
+    !> Run to t_end, writing series.csv, contact.csv (when tracing) and final.csv.
+    subroutine solver_run(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        type(output_t) :: out
+        integer(i8) :: n_steps, every
+        real(wp) :: dt
+
+        dt = c%dt
+        n_steps = ceiling(c%t_end / dt - 1.0e-9_wp, i8)
+        every = max(1_i8, nint(c%output_interval / dt, i8))
+        call output_open(out, c%output_dir, s%trace > 0, err)
+        if (err%failed()) return
+        call device_enter(s, c)
+
+        if (c%integrator == integrator_verlet) call compute_forces(s, c, err)
+        if (.not. err%failed()) call write_series(s, c, out, err)
+        do while (s%step < n_steps .and. .not. err%failed())
+            associate (p => s%p, n => s%p%n_own)
+                if (c%integrator == integrator_verlet) then
+                    call kick(n, 0.5_wp * dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
+                    call drift(n, dt, p%v, p%x)
+                end if
+                call compute_forces(s, c, err)
+                if (err%failed()) exit
+                if (c%integrator == integrator_euler) then
+                    call write_trace(s, c, out, real(s%step, wp) * dt)
+                    call kick(n, dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
+                    call drift(n, dt, p%v, p%x)
+                else
+                    call kick(n, 0.5_wp * dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
+                    call write_trace(s, c, out, real(s%step + 1, wp) * dt)
+                end if
+            end associate
+            s%step = s%step + 1
+            if (mod(s%step, every) == 0 .or. s%step == n_steps) call write_series(s, c, out, err)
+        end do
+
+        call device_to_host(s)
+        if (.not. err%failed()) call output_final(out, s%p%n_own, s%p%gid, s%p%mat, &
+                                                  s%p%radius, s%p%x, s%p%v, s%p%w, err)
+        call output_close(out)
+        call device_exit(s, c)
+    end subroutine solver_run
+
+    !> Gravity, then particle and wall contacts; rebuild the lists first if they are stale.
+    subroutine compute_forces(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        integer(ip) :: overflow
+        if (neighbors_stale(s%nb, s%p%n_own, s%p%x)) call rebuild(s, c)
+        associate (p => s%p, nb => s%nb, pc => s%pc, m => c%mesh, n => s%p%n_own)
+            call body_forces(n, p%mass, c%gravity, p%f, p%t)
+            call pp_forces(n, n + p%n_ghost, size(nb%list), c%mats%n, p%x, p%v, p%w, p%radius, &
+                           p%mass, p%mat, nb%start, nb%list, pc%kn, pc%sn, pc%st, pc%cn, &
+                           pc%ct, pc%mu, pc%clamp_normal, c%dt, nb%xi, p%f, p%t)
+            if (m%n_tri == 0) return
+            call pw_forces(n, size(nb%wlist), m%n_tri, c%mats%n, p%x, p%v, p%w, p%radius, &
+                           p%mass, p%mat, nb%wstart, nb%wlist, m%vert, m%mat, pc%kn, pc%sn, &
+                           pc%st, pc%cn, pc%ct, pc%mu, pc%clamp_normal, c%dt, s%wc%tri, &
+                           s%wc%xi, p%f, p%t, overflow)
+        end associate
+        if (overflow > 0) call set_error(err, dem_err_runtime, 'a particle touches more ' // &
+            'wall triangles than the contact store holds; the walls overlap or are too fine')
+    end subroutine compute_forces
+
+    !> Rebuild the neighbour lists on the host and put the new ones on the device.
+    subroutine rebuild(s, c)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        logical :: first
+        first = .not. allocated(s%nb%start)
+        call acc_update_host(s%p%x)
+        if (.not. first) then
+            call acc_update_host(s%nb%xi)
+            call lists_delete(s%nb)
+        end if
+        call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
+                             s%p%radius, c%mesh)
+        call acc_copyin(s%nb%start)
+        call acc_copyin(s%nb%list)
+        call acc_copyin(s%nb%xi)
+        call acc_copyin(s%nb%wstart)
+        call acc_copyin(s%nb%wlist)
+        call acc_copyin(s%nb%x_ref)
+    end subroutine rebuild
+
+    subroutine lists_delete(nb)
+        type(neighbors_t), intent(inout) :: nb
+        call acc_delete(nb%start)
+        call acc_delete(nb%list)
+        call acc_delete(nb%xi)
+        call acc_delete(nb%wstart)
+        call acc_delete(nb%wlist)
+        call acc_delete(nb%x_ref)
+    end subroutine lists_delete
+
+    !> One row of series.csv; stops the run if the state is no longer finite.
+    subroutine write_series(s, c, out, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(output_t), intent(in) :: out
+        type(error_t), intent(inout) :: err
+        real(wp) :: ke_t, ke_r, pe, vmax
+        integer(ip) :: bad, n_pp
+        type(time_scales_t) :: ts
+        character(len=200) :: msg
+        call device_to_host(s)
+        associate (p => s%p)
+            bad = first_nonfinite(p%n_own, p%x, p%v, p%w)
+            if (bad > 0) then
+                call case_time_scales(c, ts)
+                write(msg, '(a,i0,a,es10.3,a,f6.3,a)') 'particle ', p%gid(bad), &
+                    ' has a non-finite state at t = ', real(s%step, wp) * c%dt, &
+                    ' s; dt is ', c%dt / ts%rayleigh, ' of the Rayleigh time: reduce dt'
+                call set_error(err, dem_err_runtime, trim(msg))
+                return
+            end if
+            call energies(p%n_own, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, &
+                          ke_t, ke_r, pe, vmax)
+            n_pp = 0
+            if (allocated(s%nb%start)) n_pp = count_pp_contacts(p%n_own, p%x, p%radius, &
+                                                                 s%nb%start, s%nb%list)
+            call output_series(out, real(s%step, wp) * c%dt, s%step, p%n_own, n_pp, &
+                               count(s%wc%tri(:, 1:p%n_own) > 0), ke_t, ke_r, pe, vmax)
+        end associate
+    end subroutine write_series
+
+    !> One row of contact.csv for the traced particle.
+    subroutine write_trace(s, c, out, time)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(output_t), intent(in) :: out
+        real(wp), intent(in) :: time
+        real(wp) :: overlap, fn, ft
+        integer(ip) :: i
+        if (s%trace == 0) return
+        call device_to_host(s)
+        i = s%trace
+        associate (p => s%p)
+            call contact_trace(i, p%n_own + p%n_ghost, p%x, p%radius, p%mass, p%f, c%gravity, &
+                               c%mesh, overlap, fn, ft)
+            call output_contact(out, time, overlap, fn, ft, p%x(:, i), p%v(:, i), p%w(:, i))
+        end associate
+    end subroutine write_trace
+
+    !> Put the state on the device for the whole run.
+    subroutine device_enter(s, c)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        associate (p => s%p)
+            call acc_copyin(p%mat)
+            call acc_copyin(p%radius)
+            call acc_copyin(p%mass)
+            call acc_copyin(p%inv_mass)
+            call acc_copyin(p%inv_inertia)
+            call acc_copyin(p%x)
+            call acc_copyin(p%v)
+            call acc_copyin(p%w)
+            call acc_copyin(p%f)
+            call acc_copyin(p%t)
+        end associate
+        call acc_copyin(s%wc%tri)
+        call acc_copyin(s%wc%xi)
+        call acc_copyin(s%pc%kn)
+        call acc_copyin(s%pc%sn)
+        call acc_copyin(s%pc%st)
+        call acc_copyin(s%pc%cn)
+        call acc_copyin(s%pc%ct)
+        call acc_copyin(s%pc%mu)
+        if (c%mesh%n_tri > 0) then
+            call acc_copyin(c%mesh%vert)
+            call acc_copyin(c%mesh%mat)
+        end if
+    end subroutine device_enter
+
+    !> Bring the particle state and wall contacts back to the host (output).
+    subroutine device_to_host(s)
+        type(solver_t), intent(inout) :: s
+        call acc_update_host(s%p%x)
+        call acc_update_host(s%p%v)
+        call acc_update_host(s%p%w)
+        call acc_update_host(s%p%f)
+        call acc_update_host(s%wc%tri)
+    end subroutine device_to_host
+
+    !> Release the device copies.
+    subroutine device_exit(s, c)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        associate (p => s%p)
+            call acc_delete(p%mat)
+            call acc_delete(p%radius)
+            call acc_delete(p%mass)
+            call acc_delete(p%inv_mass)
+            call acc_delete(p%inv_inertia)
+            call acc_delete(p%x)
+            call acc_delete(p%v)
+            call acc_delete(p%w)
+            call acc_delete(p%f)
+            call acc_delete(p%t)
+        end associate
+        call acc_delete(s%wc%tri)
+        call acc_delete(s%wc%xi)
+        call acc_delete(s%pc%kn)
+        call acc_delete(s%pc%sn)
+        call acc_delete(s%pc%st)
+        call acc_delete(s%pc%cn)
+        call acc_delete(s%pc%ct)
+        call acc_delete(s%pc%mu)
+        if (c%mesh%n_tri > 0) then
+            call acc_delete(c%mesh%vert)
+            call acc_delete(c%mesh%mat)
+        end if
+        if (allocated(s%nb%start)) call lists_delete(s%nb)
+    end subroutine device_exit
+end module dem_solver

@@ -1,0 +1,41 @@
+"""Shared helpers of the regression tests: run the solver on a case, check expectations
+and report failures with a non-zero exit code."""
+import os
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+
+failures = []
+checks = 0
+
+
+def check(condition, what):
+    global checks
+    checks += 1
+    if not condition:
+        failures.append(what)
+        print("FAILED:", what)
+
+
+def check_close(actual, expected, rtol, what):
+    check(abs(actual - expected) <= rtol * abs(expected),
+          f"{what}: got {actual:.9g}, expected {expected:.9g} (rtol {rtol:g})")
+
+
+def run_dem(dem, case, workdir, expect_rc=0):
+    """Run `dem case` in workdir; return (returncode, stdout, stderr)."""
+    os.makedirs(workdir, exist_ok=True)
+    r = subprocess.run([dem, os.path.abspath(case)], cwd=workdir, capture_output=True,
+                       text=True, timeout=600)
+    if expect_rc is not None and r.returncode != expect_rc:
+        print(r.stdout, r.stderr)
+        check(False, f"dem {case} exited with {r.returncode}, expected {expect_rc}")
+    return r.returncode, r.stdout, r.stderr
+
+
+def finish():
+    print(f"{checks} checks, {len(failures)} failed")
+    sys.exit(1 if failures else 0)

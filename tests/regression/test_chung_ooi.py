@@ -1,0 +1,66 @@
+"""Chung & Ooi verification tests 1-4 (cases/verification) against Hertz theory and the
+Coulomb limits, computed in scripts/chung_ooi.py independently of the solver.
+usage: test_chung_ooi.py DEM WORKDIR"""
+import os
+import sys
+
+import numpy as np
+
+from regression_util import ROOT, check, check_close, finish, run_dem
+import chung_ooi as co
+
+dem, work = sys.argv[1], sys.argv[2]
+cases = os.path.join(ROOT, "cases", "verification")
+
+
+def out(stem, name):
+    return os.path.join(work, "output", stem, name)
+
+
+# Tests 1 and 2: maximum overlap, maximum force, contact duration within 0.5 %
+for stem, theory in (("test1_sphere_sphere", co.test1_theory()),
+                     ("test2_sphere_wall", co.test2_theory())):
+    run_dem(dem, os.path.join(cases, stem + ".nml"), work)
+    dmax, fmax, tc = co.contact_metrics(out(stem, "contact.csv"))
+    check_close(dmax, theory[0], 5e-3, f"{stem}: maximum overlap")
+    check_close(fmax, theory[1], 5e-3, f"{stem}: maximum normal force")
+    check_close(tc, theory[2], 5e-3, f"{stem}: contact duration")
+
+# Test 3: achieved restitution within 1 % of the input, for every value
+stem = "test3_restitution"
+run_dem(dem, os.path.join(cases, stem + ".nml"), work)
+achieved = co.restitutions(out(stem, "final.csv"), co.TEST3["v"])
+check(len(achieved) == len(co.TEST3["restitutions"]), "test 3: one sphere per restitution")
+for e_in, e_out in zip(co.TEST3["restitutions"], achieved):
+    check_close(e_out, e_in, 1e-2, f"test 3: restitution {e_in}")
+
+# Test 4: the Coulomb limits hold at every angle; above the sliding threshold the sphere
+# slides throughout and meets them; well below it, it does not.
+stem = "test4_oblique"
+run_dem(dem, os.path.join(cases, stem + ".nml"), work)
+et, spin, rebound, en = co.oblique_results(out(stem, "final.csv"))
+angles = np.array(co.TEST4["angles"], dtype=float)
+et_min, spin_max, rebound_min = co.test4_limits(angles)
+threshold = co.sliding_threshold_deg()
+for k, a in enumerate(angles):
+    # |F_t| <= mu |F_n| at every step bounds the tangential impulse; the 1e-3 allows for
+    # the brief attractive normal force at the end of a damped contact (theory.md, 2.2)
+    check(spin[k] <= spin_max[k] * (1 + 1e-3), f"test 4, {a} deg: spin {spin[k]:.2f} "
+          f"above the limit {spin_max[k]:.2f}")
+    check(et[k] >= et_min[k] - 1e-3, f"test 4, {a} deg: tangential restitution {et[k]:.4f} "
+          f"below the limit {et_min[k]:.4f}")
+    check(rebound[k] >= rebound_min[k] - 0.05, f"test 4, {a} deg: rebound angle "
+          f"{rebound[k]:.3f} below the limit {rebound_min[k]:.3f}")
+    check_close(en[k], co.TEST4["e"], 1e-2, f"test 4, {a} deg: normal restitution")
+    if a >= threshold + 0.5:
+        check_close(spin[k], spin_max[k], 1e-3, f"test 4, {a} deg: gross sliding spin")
+        check(abs(rebound[k] - rebound_min[k]) < 0.05, f"test 4, {a} deg: gross sliding "
+              f"rebound angle {rebound[k]:.3f} vs {rebound_min[k]:.3f}")
+    if a <= threshold - 7.5:
+        check(spin[k] < 0.95 * spin_max[k], f"test 4, {a} deg: sticks or micro-slips, "
+              f"spin {spin[k]:.2f} should stay below the sliding value {spin_max[k]:.2f}")
+# where the spin first reaches the gross-sliding value (within 0.1 %)
+first = angles[np.argmax(spin >= 0.999 * spin_max)]
+check(abs(first - threshold) <= 3.0, f"test 4: sliding starts at {first} deg, theory "
+      f"{threshold:.2f} deg")
+finish()
