@@ -104,7 +104,7 @@ contains
         close(u)
         if (in_group) then
             write(num, '(i0)') start_line
-            call set_error(err, dem_err_input, path // ':' // trim(num) // ': group ' // &
+            call set_error(err, dem_err_input, path // ':' // trim(num) // ': group &' // &
                            group_name(body) // " is not closed with '/'")
         end if
     contains

@@ -122,7 +122,7 @@ contains
     subroutine finish(code)
         integer, intent(in) :: code
         call comm_free(comm)
-        if (code /= 0) error stop code, quiet=.true.
+        if (code /= 0) stop code, quiet=.true.
         stop
     end subroutine finish
 end program dem_main

@@ -1,0 +1,27 @@
+"""An OpenACC build gives the same results as the plain build: the same cases, run with both
+executables, write identical files (every digit of every number).
+usage: test_builds_agree.py DEM WORKDIR REFERENCE_DEM"""
+import filecmp
+import os
+import sys
+
+from regression_util import HERE, ROOT, check, finish, run_dem
+
+dem, work, reference = sys.argv[1], sys.argv[2], sys.argv[3]
+cases = [os.path.join(ROOT, "cases", "verification", name + ".nml")
+         for name in ("test1_sphere_sphere", "test2_sphere_wall", "test3_restitution",
+                      "test4_oblique")]
+cases.append(os.path.join(HERE, "cases", "head_on_100.nml"))
+for case in cases:
+    stem = os.path.splitext(os.path.basename(case))[0]
+    outputs = []
+    for label, exe in (("tested", dem), ("reference", reference)):
+        run_dem(exe, case, os.path.join(work, label))
+        outputs.append(os.path.join(work, label, "output", stem))
+    names = sorted(os.listdir(outputs[1]))
+    check(names == sorted(os.listdir(outputs[0])), f"{stem}: different output files")
+    for name in names:
+        same = filecmp.cmp(os.path.join(outputs[0], name), os.path.join(outputs[1], name),
+                           shallow=False)
+        check(same, f"{stem}/{name}: differs between {dem} and {reference}")
+finish()

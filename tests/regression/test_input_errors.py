@@ -1,0 +1,125 @@
+"""Bad input gets a clear error that names the file, the namelist group and the key, exit
+code 2, and leaves no output behind. Also the command line: --version, --help, --check.
+usage: test_input_errors.py DEM WORKDIR"""
+import os
+import shutil
+import subprocess
+import sys
+
+from regression_util import check, finish
+
+dem, work = sys.argv[1], os.path.abspath(sys.argv[2])
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+
+GOOD = """&run dt = 1e-7, t_end = 1e-5, gravity = 0, 0, 0 /
+&output interval = 1e-6 /
+&material name = 'glass', density = 2800.0, youngs_modulus = 48.0e9, poisson_ratio = 0.2 /
+&material name = 'steel', density = 7200.0, youngs_modulus = 210.0e9, poisson_ratio = 0.2 /
+&pair materials = 'glass', 'glass', restitution = 0.5, friction = 0.3 /
+&pair materials = 'glass', 'steel', restitution = 0.5, friction = 0.3 /
+&particle material = 'glass', radius = 0.01, position = 0, 0, 0.011, velocity = 0, 0, -1 /
+&wall_plane material = 'steel', point = 0, 0, 0, normal = 0, 0, 1, half_width = 0.1 /
+"""
+
+
+def run(args, name):
+    d = os.path.join(work, name)
+    os.makedirs(d)
+    r = subprocess.run([dem] + args, cwd=d, capture_output=True, text=True, timeout=60)
+    return r, d
+
+
+def bad(name, text, group, key, extra=""):
+    """A case whose text is `text` must fail naming the file, &group and key."""
+    path = os.path.join(work, name + ".nml")
+    with open(path, "w") as f:
+        f.write(text)
+    for args in (["--check", path], [path]):
+        r, d = run(args, name + ("_check" if args[0] == "--check" else "_run"))
+        msg = r.stderr
+        check(r.returncode == 2, f"{name}: exit code {r.returncode}, expected 2 ({msg.strip()})")
+        check(path in msg, f"{name}: message does not name the file: {msg.strip()}")
+        if group:
+            check("&" + group in msg, f"{name}: message does not name &{group}: {msg.strip()}")
+        if key:
+            check(f"'{key}'" in msg, f"{name}: message does not name key '{key}': {msg.strip()}")
+        if extra:
+            check(extra in msg, f"{name}: message lacks '{extra}': {msg.strip()}")
+        check("Traceback" not in msg and "Error termination" not in msg
+              and "Backtrace" not in msg, f"{name}: crashed: {msg.strip()}")
+        check(os.listdir(d) == [], f"{name}: left output behind: {os.listdir(d)}")
+
+
+def sub(old, new):
+    assert old in GOOD, old
+    return GOOD.replace(old, new)
+
+
+# the good case is good
+path = os.path.join(work, "good.nml")
+with open(path, "w") as f:
+    f.write(GOOD)
+r, d = run(["--check", path], "good_check")
+check(r.returncode == 0, f"good case: --check failed: {r.stderr}")
+for quantity in ("particles", "total mass", "Rayleigh time", "Hertz contact time",
+                 "dt / Rayleigh time", "dt / contact time", "stability bound",
+                 "estimated memory"):
+    check(quantity in r.stdout, f"--check does not print {quantity}")
+check(os.listdir(d) == [], "--check wrote output")
+
+# missing file
+r, d = run(["--check", os.path.join(work, "nowhere.nml")], "missing")
+check(r.returncode == 2 and "nowhere.nml" in r.stderr, f"missing file: {r.stderr}")
+
+# unknown key, wrong type, missing key
+bad("unknown_key", sub("density = 2800.0", "densty = 2800.0"), "material", "densty")
+bad("wrong_type_real", sub("density = 2800.0", "density = 'heavy'"), "material", "density")
+bad("wrong_type_logical", sub("&output interval = 1e-6 /", "&output interval = 1e-6, "
+    "trace_id = .true. /"), "output", "trace_id")
+bad("wrong_type_vector", sub("position = 0, 0, 0.011", "position = 0, 'up', 0.011"),
+    "particle", "position")
+bad("missing_dt", sub("dt = 1e-7, ", ""), "run", "dt")
+bad("missing_radius", sub("radius = 0.01, ", ""), "particle", "radius")
+# values out of range
+bad("negative_radius", sub("radius = 0.01", "radius = -0.01"), "particle", "radius")
+bad("zero_radius", sub("radius = 0.01", "radius = 0"), "particle", "radius")
+bad("zero_density", sub("density = 2800.0", "density = 0"), "material", "density")
+bad("negative_density", sub("density = 2800.0", "density = -2800.0"), "material", "density")
+bad("negative_modulus", sub("youngs_modulus = 48.0e9", "youngs_modulus = -48.0e9"),
+    "material", "youngs_modulus")
+bad("zero_modulus", sub("youngs_modulus = 48.0e9", "youngs_modulus = 0"), "material",
+    "youngs_modulus")
+for nu in ("0.5", "-1.0", "0.7"):
+    bad("poisson_" + nu, sub("48.0e9, poisson_ratio = 0.2", "48.0e9, poisson_ratio = " + nu),
+        "material", "poisson_ratio")
+for e in ("0.0", "1.5", "-0.5"):
+    bad("restitution_" + e, sub("'glass', 'glass', restitution = 0.5",
+                                "'glass', 'glass', restitution = " + e), "pair", "restitution")
+bad("negative_friction", sub("'glass', 'glass', restitution = 0.5, friction = 0.3",
+                             "'glass', 'glass', restitution = 0.5, friction = -0.1"),
+    "pair", "friction")
+bad("undefined_pair", sub("&pair materials = 'glass', 'steel', restitution = 0.5, "
+                          "friction = 0.3 /\n", ""), "pair", None, "'glass' and 'steel'")
+bad("unknown_material", sub("&particle material = 'glass'", "&particle material = 'gold'"),
+    "particle", "material")
+bad("dt_unstable", sub("dt = 1e-7", "dt = 1e-4"), "run", "dt", "stability bound")
+bad("bad_integrator", sub("t_end = 1e-5,", "t_end = 1e-5, integrator = 'rk4',"), "run",
+    "integrator")
+bad("zero_normal", sub("normal = 0, 0, 1", "normal = 0, 0, 0"), "wall_plane", "normal")
+bad("unknown_group", GOOD + "&gravity g = 9.81 /\n", "gravity", None, "unknown namelist group")
+bad("unclosed_group", GOOD + "&particle material = 'glass', radius = 0.01\n", "particle",
+    None, "not closed")
+bad("text_outside", "hello\n" + GOOD, None, None, "outside a namelist group")
+bad("two_run_groups", GOOD + "&run dt = 1e-7, t_end = 1e-5 /\n", "run", None)
+
+# command line
+r, _ = run(["--version"], "version")
+check(r.returncode == 0 and r.stdout.startswith("dem "), f"--version: {r.stdout} {r.stderr}")
+r, _ = run(["--help"], "help")
+check(r.returncode == 0 and "usage" in r.stdout, "--help")
+r, _ = run([], "noargs")
+check(r.returncode == 2 and "usage" in r.stderr.lower() + "--help", "no arguments")
+r, _ = run(["--frobnicate"], "badoption")
+check(r.returncode == 2 and "unknown option" in r.stderr, "unknown option")
+finish()

@@ -1,0 +1,94 @@
+"""Numerical stability on hard cases, for both integrators.
+
+1. An elastic, frictionless sphere bouncing on a rigid plane for about 100 bounces keeps
+   its energy (kinetic + gravitational, measured in free flight). The bounds are derived in
+   doc/theory.md, section 5: between contacts the integrator conserves a modified energy,
+   off the true one by at most
+     symplectic Euler (first order):  B = h m g v_imp
+     velocity Verlet (second order):  B = h^2 (S_max v_imp^2 / 12 + F_max^2 / (24 m))
+   (v_imp = sqrt(2 g h_drop); F_max, S_max = 2 E* sqrt(R d_max): Hertz peak force and
+   stiffness at v_imp). The Hertz force is not smooth where contact begins and ends; there a
+   step can gain or lose at most the elastic energy of one step's travel,
+   U_h = (8/15) E* sqrt(R) (v_imp h)^(5/2), so each bounce changes the energy by at most
+   2 U_h + 2 B, and N bounces by at most 2 N U_h + B. These per-bounce changes have no
+   preferred sign (no drift): by Hoeffding's inequality their mean over N bounces stays
+   within 2 U_h sqrt(2 ln(2/p) / N) with probability 1 - p; we take p = 1e-6.
+2. Two spheres meeting head-on at +-100 m/s: the state stays finite, the largest overlap
+   is Hertz theory's, and the motion stays exactly mirror-symmetric.
+usage: test_stability.py DEM WORKDIR"""
+import math
+import os
+import sys
+
+import numpy as np
+
+from regression_util import HERE, check, check_close, finish, run_dem
+import chung_ooi as co
+
+dem, work = sys.argv[1], sys.argv[2]
+os.makedirs(work, exist_ok=True)
+
+
+def variant(case, integrator):
+    """Copy of a case in WORKDIR with another integrator and its own output directory."""
+    stem = os.path.splitext(os.path.basename(case))[0] + "_" + integrator
+    text = open(case).read().replace("'symplectic_euler'", f"'{integrator}'")
+    path = os.path.join(work, stem + ".nml")
+    with open(path, "w") as f:
+        f.write(text)
+    return path, os.path.join(work, "output", stem)
+
+
+# 1. elastic bouncing
+R, rho, E, nu, g, drop = 1.0e-3, 2800.0, 48.0e9, 0.2, 9.81, 1.0e-4
+m = co.sphere_mass(rho, R)
+estar = E / (1.0 - nu**2)
+v_imp = math.sqrt(2.0 * g * drop)
+dmax, fmax, tc = co.hertz(m, R, estar, v_imp)
+smax = 2.0 * estar * math.sqrt(R * dmax)
+h = 5.0e-7
+u_h = 8.0 / 15.0 * estar * math.sqrt(R) * (v_imp * h)**2.5
+smooth = {"symplectic_euler": h * m * g * v_imp,
+          "velocity_verlet": h**2 * (smax * v_imp**2 / 12.0 + fmax**2 / (24.0 * m))}
+for integrator, b in smooth.items():
+    case, outdir = variant(os.path.join(HERE, "cases", "bounce_elastic.nml"), integrator)
+    run_dem(dem, case, work)
+    s = co.read_csv(os.path.join(outdir, "series.csv"))
+    z = s["potential_gravity"] / (m * g)
+    free = z > R                       # the sphere is off the plane (at z = 0)
+    energy = s["kinetic_translational"] + s["kinetic_rotational"] + s["potential_gravity"]
+    # one energy per flight: the median of its samples
+    edges = np.flatnonzero(np.diff(free.astype(int)))
+    flights = [seg for seg in np.split(np.arange(len(free)), edges + 1) if free[seg[0]]]
+    e_flight = np.array([np.median(energy[seg]) for seg in flights])
+    n = len(flights) - 1
+    steps = np.diff(e_flight)
+    total = np.abs(energy[free] - energy[0]).max()
+    drift = abs(steps.mean())
+    drift_bound = 2.0 * u_h * math.sqrt(2.0 * math.log(2.0 / 1e-6) / n)
+    print(f"{integrator}: {n} bounces; max |E - E0| = {total:.3e} J (bound "
+          f"{2 * n * u_h + b:.3e}); largest change in a bounce {np.abs(steps).max():.3e} J "
+          f"(bound {2 * u_h + 2 * b:.3e}); mean change {drift:.3e} J (bound {drift_bound:.3e})")
+    check(n >= 95, f"{integrator}: only {n} bounces")
+    check(total <= 2 * n * u_h + b, f"{integrator}: energy error {total:.3e} J over the run")
+    check(np.abs(steps).max() <= 2 * u_h + 2 * b, f"{integrator}: energy change in one bounce")
+    check(drift <= drift_bound, f"{integrator}: energy drifts by {drift:.3e} J per bounce")
+
+# 2. head-on at 100 m/s
+m1 = co.sphere_mass(2800.0, 0.01)
+for integrator in ("symplectic_euler", "velocity_verlet"):
+    case, outdir = variant(os.path.join(HERE, "cases", "head_on_100.nml"), integrator)
+    run_dem(dem, case, work)
+    f = co.read_csv(os.path.join(outdir, "final.csv"))
+    c = co.read_csv(os.path.join(outdir, "contact.csv"))
+    check(np.all(np.isfinite(c["overlap"])), f"{integrator}: non-finite state")
+    dmax_theory = co.hertz(m1 / 2.0, 0.005, 48.0e9 / (2.0 * (1.0 - 0.2**2)), 200.0)[0]
+    check_close(c["overlap"].max(), dmax_theory, 1e-2, f"{integrator}: maximum overlap")
+    check(c["overlap"][-1] < 0.0, f"{integrator}: the spheres did not separate")
+    for key in ("x", "vx"):
+        check(f[key][0] == -f[key][1], f"{integrator}: {key} not mirror-symmetric: "
+              f"{f[key][0]!r} vs {f[key][1]!r}")
+    for key in ("y", "z", "vy", "vz", "wx", "wy", "wz"):
+        check(np.all(f[key] == 0.0), f"{integrator}: {key} left the axis of symmetry")
+    check_close(f["vx"][1], 100.0, 1e-3, f"{integrator}: elastic rebound speed")
+finish()
