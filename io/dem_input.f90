@@ -25,13 +25,6 @@ module dem_input
         'particle: id material radius position velocity angular_velocity', &
         'wall_plane: material point normal half_width divisions']
 
-    abstract interface
-        subroutine block_reader(text, ios, msg)
-            character(len=*), intent(in) :: text
-            integer, intent(out) :: ios
-            character(len=*), intent(inout) :: msg
-        end subroutine block_reader
-    end interface
 
 contains
 
@@ -99,6 +92,9 @@ contains
         logical :: allow_unstable   ! run although dt exceeds the stability bound, default F
         namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable
         type(nml_block_t) :: b
+        integer :: k_item, ios
+        character(len=512) :: msg
+        character(len=:), allocatable :: text
         type(time_scales_t) :: ts
         character(len=:), allocatable :: at
         character(len=32) :: s1, s2
@@ -111,11 +107,15 @@ contains
         skin = unset
         allow_unstable = .false.
         b = nf%blocks(block_index(nf, 'run', 1))
-        call read_block(nf, b, reader, err)
+        do k_item = 0, block_item_count(b)
+            text = block_text(b, k_item)
+            read(text, nml=run, iostat=ios, iomsg=msg)
+            if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+        end do
         if (err%failed()) return
         at = nml_location(nf, b)
-        if (.not. positive(dt, 'dt', '[s]')) return
-        if (.not. positive(t_end, 't_end', '[s]')) return
+        if (.not. check_positive(at, dt, 'dt', '[s]', err)) return
+        if (.not. check_positive(at, t_end, 't_end', '[s]', err)) return
         select case (integrator)
         case ('symplectic_euler')
             c%integrator = integrator_euler
@@ -132,7 +132,7 @@ contains
             return
         end if
         if (skin == unset) skin = 0.4_wp * minval(c%radius(1:c%n_particles))
-        if (.not. positive(skin, 'skin', '[m]')) return
+        if (.not. check_positive(at, skin, 'skin', '[m]', err)) return
         c%dt = dt
         c%t_end = t_end
         c%gravity = gravity
@@ -149,18 +149,6 @@ contains
                 ts%bound_name // ' (dem --check prints the time scales; ' // &
                 'allow_unstable = .true. runs anyway)')
         end if
-    contains
-        subroutine reader(text, ios, msg)
-            character(len=*), intent(in) :: text
-            integer, intent(out) :: ios
-            character(len=*), intent(inout) :: msg
-            read(text, nml=run, iostat=ios, iomsg=msg)
-        end subroutine reader
-        logical function positive(val, key, unit)
-            real(wp), intent(in) :: val
-            character(len=*), intent(in) :: key, unit
-            positive = check_positive(at, val, key, unit, err)
-        end function positive
     end subroutine read_run
 
     !> &output: where and how often results are written.
@@ -174,6 +162,9 @@ contains
                                     ! to contact.csv; 0 (default): none
         namelist /output/ dir, interval, trace_id
         type(nml_block_t) :: b
+        integer :: k_item, ios
+        character(len=512) :: msg
+        character(len=:), allocatable :: text
         character(len=:), allocatable :: at
 
         dir = 'output/' // file_stem(nf%path)
@@ -183,7 +174,11 @@ contains
         case (0)
         case (1)
             b = nf%blocks(block_index(nf, 'output', 1))
-            call read_block(nf, b, reader, err)
+            do k_item = 0, block_item_count(b)
+                text = block_text(b, k_item)
+                read(text, nml=output, iostat=ios, iomsg=msg)
+                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            end do
             if (err%failed()) return
             at = nml_location(nf, b)
             if (.not. check_positive(at, interval, 'interval', '[s]', err)) return
@@ -203,13 +198,6 @@ contains
         c%output_dir = trim(dir)
         c%output_interval = interval
         c%trace_id = trace_id
-    contains
-        subroutine reader(text, ios, msg)
-            character(len=*), intent(in) :: text
-            integer, intent(out) :: ios
-            character(len=*), intent(inout) :: msg
-            read(text, nml=output, iostat=ios, iomsg=msg)
-        end subroutine reader
     end subroutine read_output
 
     !> &contact_model: variants of Hertz-Mindlin that imitate other codes (doc/theory.md).
@@ -223,6 +211,9 @@ contains
         logical :: clamp_normal        ! no attractive normal force, default F (Yade: T)
         namelist /contact_model/ tangential_stiffness_factor, tangential_damping, clamp_normal
         type(nml_block_t) :: b
+        integer :: k_item, ios
+        character(len=512) :: msg
+        character(len=:), allocatable :: text
 
         tangential_stiffness_factor = c%opts%tangential_stiffness_factor
         tangential_damping = c%opts%tangential_damping
@@ -232,7 +223,11 @@ contains
             return
         case (1)
             b = nf%blocks(block_index(nf, 'contact_model', 1))
-            call read_block(nf, b, reader, err)
+            do k_item = 0, block_item_count(b)
+                text = block_text(b, k_item)
+                read(text, nml=contact_model, iostat=ios, iomsg=msg)
+                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            end do
             if (err%failed()) return
             if (.not. check_positive(nml_location(nf, b), tangential_stiffness_factor, &
                                      'tangential_stiffness_factor', '[-]', err)) return
@@ -243,13 +238,6 @@ contains
         c%opts%tangential_stiffness_factor = tangential_stiffness_factor
         c%opts%tangential_damping = tangential_damping
         c%opts%clamp_normal = clamp_normal
-    contains
-        subroutine reader(text, ios, msg)
-            character(len=*), intent(in) :: text
-            integer, intent(out) :: ios
-            character(len=*), intent(inout) :: msg
-            read(text, nml=contact_model, iostat=ios, iomsg=msg)
-        end subroutine reader
     end subroutine read_contact_model
 
     !> &material (one per material).
@@ -264,6 +252,9 @@ contains
         logical :: rigid            ! infinitely stiff wall material, default F
         namelist /material/ name, density, youngs_modulus, poisson_ratio, rigid
         type(nml_block_t) :: b
+        integer :: k_item, ios
+        character(len=512) :: msg
+        character(len=:), allocatable :: text
         character(len=:), allocatable :: at
         integer :: k, n
 
@@ -286,7 +277,11 @@ contains
                 poisson_ratio = unset
                 rigid = .false.
                 b = nf%blocks(block_index(nf, 'material', k))
-                call read_block(nf, b, reader, err)
+                do k_item = 0, block_item_count(b)
+                    text = block_text(b, k_item)
+                    read(text, nml=material, iostat=ios, iomsg=msg)
+                    if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+                end do
                 if (err%failed()) return
                 at = nml_location(nf, b)
                 if (len_trim(name) == 0) then
@@ -322,13 +317,6 @@ contains
                 m%rigid(k) = rigid
             end do
         end associate
-    contains
-        subroutine reader(text, ios, msg)
-            character(len=*), intent(in) :: text
-            integer, intent(out) :: ios
-            character(len=*), intent(inout) :: msg
-            read(text, nml=material, iostat=ios, iomsg=msg)
-        end subroutine reader
     end subroutine read_materials
 
     !> &pair (one per material pair that can touch).
@@ -341,6 +329,9 @@ contains
         real(wp) :: friction     ! sliding friction coefficient, >= 0, required
         namelist /pair/ materials, restitution, friction
         type(nml_block_t) :: b
+        integer :: k_item, ios
+        character(len=512) :: msg
+        character(len=:), allocatable :: text
         character(len=:), allocatable :: at
         integer :: k, ia, ib
 
@@ -349,7 +340,11 @@ contains
             restitution = unset
             friction = unset
             b = nf%blocks(block_index(nf, 'pair', k))
-            call read_block(nf, b, reader, err)
+            do k_item = 0, block_item_count(b)
+                text = block_text(b, k_item)
+                read(text, nml=pair, iostat=ios, iomsg=msg)
+                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            end do
             if (err%failed()) return
             at = nml_location(nf, b)
             ia = material_index(c, materials(1))
@@ -389,13 +384,6 @@ contains
             c%mats%pair_defined(ia, ib) = .true.
             c%mats%pair_defined(ib, ia) = .true.
         end do
-    contains
-        subroutine reader(text, ios, msg)
-            character(len=*), intent(in) :: text
-            integer, intent(out) :: ios
-            character(len=*), intent(inout) :: msg
-            read(text, nml=pair, iostat=ios, iomsg=msg)
-        end subroutine reader
     end subroutine read_pairs
 
     !> &particle (one per sphere).
@@ -411,6 +399,9 @@ contains
         real(wp) :: angular_velocity(3)    ! [rad/s], default 0
         namelist /particle/ id, material, radius, position, velocity, angular_velocity
         type(nml_block_t) :: b
+        integer :: k_item, ios
+        character(len=512) :: msg
+        character(len=:), allocatable :: text
         character(len=:), allocatable :: at
         integer :: k, n, im
 
@@ -429,7 +420,11 @@ contains
             velocity = 0.0_wp
             angular_velocity = 0.0_wp
             b = nf%blocks(block_index(nf, 'particle', k))
-            call read_block(nf, b, reader, err)
+            do k_item = 0, block_item_count(b)
+                text = block_text(b, k_item)
+                read(text, nml=particle, iostat=ios, iomsg=msg)
+                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            end do
             if (err%failed()) return
             at = nml_location(nf, b)
             im = material_index(c, material)
@@ -465,13 +460,6 @@ contains
             c%v(:, k) = velocity
             c%w(:, k) = angular_velocity
         end do
-    contains
-        subroutine reader(text, ios, msg)
-            character(len=*), intent(in) :: text
-            integer, intent(out) :: ios
-            character(len=*), intent(inout) :: msg
-            read(text, nml=particle, iostat=ios, iomsg=msg)
-        end subroutine reader
     end subroutine read_particles
 
     !> &wall_plane (one per flat square wall made of triangles).
@@ -486,6 +474,9 @@ contains
         integer :: divisions       ! squares along a side (2 triangles each), >= 1, default 1
         namelist /wall_plane/ material, point, normal, half_width, divisions
         type(nml_block_t) :: b
+        integer :: k_item, ios
+        character(len=512) :: msg
+        character(len=:), allocatable :: text
         character(len=:), allocatable :: at
         integer :: k, im
 
@@ -496,7 +487,11 @@ contains
             half_width = unset
             divisions = 1
             b = nf%blocks(block_index(nf, 'wall_plane', k))
-            call read_block(nf, b, reader, err)
+            do k_item = 0, block_item_count(b)
+                text = block_text(b, k_item)
+                read(text, nml=wall_plane, iostat=ios, iomsg=msg)
+                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            end do
             if (err%failed()) return
             at = nml_location(nf, b)
             im = material_index(c, material)
@@ -521,13 +516,6 @@ contains
             end if
             call mesh_add_plane(c%mesh, point, normal, half_width, divisions, im)
         end do
-    contains
-        subroutine reader(text, ios, msg)
-            character(len=*), intent(in) :: text
-            integer, intent(out) :: ios
-            character(len=*), intent(inout) :: msg
-            read(text, nml=wall_plane, iostat=ios, iomsg=msg)
-        end subroutine reader
     end subroutine read_walls
 
     !> Every pair of materials that can touch must have a &pair group.
@@ -556,48 +544,77 @@ contains
         end do
     end subroutine check_pairs_used
 
-    !> Read one group; on failure find the key that caused it.
-    subroutine read_block(nf, b, reader, err)
+    !> Number of `key = value` items in a group.
+    integer function block_item_count(b) result(n)
+        type(nml_block_t), intent(in) :: b
+        integer, allocatable :: starts(:)
+        character(len=32), allocatable :: keys(:)
+        call nml_items(b%text, starts, keys)
+        n = size(keys)
+    end function block_item_count
+
+    !> Text to read for attempt k: the whole group (k = 0), or the group with item k alone.
+    function block_text(b, k) result(text)
+        type(nml_block_t), intent(in) :: b
+        integer, intent(in) :: k
+        character(len=:), allocatable :: text
+        integer, allocatable :: starts(:)
+        character(len=32), allocatable :: keys(:)
+        integer :: last
+        if (k == 0) then
+            text = b%text
+            return
+        end if
+        call nml_items(b%text, starts, keys)
+        if (k < size(keys)) then
+            last = starts(k + 1) - 1
+        else
+            last = len(b%text) - 1      ! before the closing '/'
+        end if
+        text = trim(b%text(starts(k):last))
+        if (text(len(text):len(text)) == ',') text = text(1:len(text) - 1)
+        text = '&' // b%group // ' ' // text // ' /'
+    end function block_text
+
+    !> After reading attempt k of a group (see block_text): true when reading is over, with
+    !> `err` set if it failed. A failed read of the whole group is explained by an unknown key,
+    !> or else by reading the items one at a time until the culprit fails.
+    logical function block_read_done(nf, b, k, ios, msg, err) result(done)
         type(nml_file_t), intent(in) :: nf
         type(nml_block_t), intent(in) :: b
-        procedure(block_reader) :: reader
+        integer, intent(in) :: k, ios
+        character(len=*), intent(in) :: msg
         type(error_t), intent(inout) :: err
         integer, allocatable :: starts(:)
         character(len=32), allocatable :: keys(:)
-        character(len=512) :: msg
-        character(len=:), allocatable :: item, at
-        integer :: ios, k, last
-
-        msg = ''
-        call reader(b%text, ios, msg)
-        if (ios == 0) return
+        character(len=:), allocatable :: at, accepted, item
+        integer :: j
+        done = .true.
+        if (k == 0 .and. ios == 0) return
         at = nml_location(nf, b)
         call nml_items(b%text, starts, keys)
-        do k = 1, size(keys)
-            if (index(' ' // group_keys(b%group) // ' ', ' ' // trim(keys(k)) // ' ') == 0) then
-                call set_error(err, dem_err_input, at // ": unknown key '" // trim(keys(k)) // &
-                               "' (accepted: " // group_keys(b%group) // ')')
-                return
-            end if
-        end do
-        do k = 1, size(keys)
-            if (k < size(keys)) then
-                last = starts(k + 1) - 1
-            else
-                last = len(b%text) - 1      ! before the closing '/'
-            end if
-            item = trim(b%text(starts(k):last))
-            if (item(len(item):len(item)) == ',') item = item(1:len(item) - 1)
-            msg = ''
-            call reader('&' // b%group // ' ' // item // ' /', ios, msg)
-            if (ios /= 0) then
-                call set_error(err, dem_err_input, at // ": key '" // trim(keys(k)) // &
-                               "': cannot read '" // item // "' (" // trim(msg) // ')')
-                return
-            end if
-        end do
-        call set_error(err, dem_err_input, at // ': cannot read the group (' // trim(msg) // ')')
-    end subroutine read_block
+        if (k == 0) then
+            accepted = group_keys(b%group)
+            do j = 1, size(keys)
+                if (index(' ' // accepted // ' ', ' ' // trim(keys(j)) // ' ') == 0) then
+                    call set_error(err, dem_err_input, at // ": unknown key '" // &
+                                   trim(keys(j)) // "' (accepted: " // accepted // ')')
+                    return
+                end if
+            end do
+            done = size(keys) == 0
+        else if (ios /= 0) then
+            item = block_text(b, k)
+            item = item(len(b%group) + 3:len(item) - 2)
+            call set_error(err, dem_err_input, at // ": key '" // trim(keys(k)) // &
+                           "': cannot read '" // item // "' (" // trim(msg) // ')')
+            return
+        else
+            done = k == size(keys)
+        end if
+        if (done) call set_error(err, dem_err_input, at // ': cannot read the group (' // &
+                                 trim(msg) // ')')
+    end function block_read_done
 
     !> The keys of a group, blank-separated.
     function group_keys(group) result(keys)

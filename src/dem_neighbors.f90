@@ -39,7 +39,7 @@ contains
     !> Largest squared displacement between two sets of positions [m^2].
     real(wp) function max_displacement2(n, x, x_ref) result(d2max)
         integer(ip), intent(in) :: n
-        real(wp), intent(in) :: x(3, *), x_ref(3, n)
+        real(wp), intent(in) :: x(3, n), x_ref(3, n)
         integer(ip) :: i
         d2max = 0.0_wp
         !$acc parallel loop default(present) reduction(max:d2max)

@@ -1,7 +1,7 @@
 """The FoBiS.py build (the fobos at the source root, mode gnu) against the CMake one: the same
 version, and the same results on Chung & Ooi test 1 (contact.csv and final.csv).
 Builds into WORKDIR/build-fobis, so the source tree is left as it is.
-usage: test_fobis.py DEM SOURCE_ROOT WORKDIR   (DEM: the CMake-built dem)
+usage: test_fobis.py DEM WORKDIR   (DEM: the CMake-built dem)
 
 The files must be identical when the CMake build has the flags of mode gnu (Release, without
 DEM_NATIVE or DEM_OPENACC). With other flags (a Debug build, say) they are compared as numbers,
@@ -11,15 +11,16 @@ import shutil
 import subprocess
 import sys
 
-from regression_util import check, finish, run_dem
+from regression_util import ROOT, check, finish, run_dem
 
 MODE = "gnu"
 RTOL = 1e-12
 STEM = "test1_sphere_sphere"
 
+if len(sys.argv) != 3:
+    sys.exit("usage: test_fobis.py DEM WORKDIR")
 dem_cmake = os.path.abspath(sys.argv[1])
-root = os.path.abspath(sys.argv[2])
-work = os.path.abspath(sys.argv[3])
+root, work = ROOT, os.path.abspath(sys.argv[2])
 
 
 def fail(what):
@@ -75,10 +76,11 @@ def read_rows(path):
 
 def compare_numbers(a_path, b_path, what):
     """Same header, shape and non-numeric fields; numbers within RTOL of each other, relative
-    to the value or, for values near zero, to the largest magnitude in their column."""
+    to the value or, for values near zero, to a thousandth of the largest in their column."""
     a, b = read_rows(a_path), read_rows(b_path)
-    if not check(len(a) == len(b) and len(a) > 0,
-                 f"{what}: {len(a)} lines from CMake, {len(b)} from FoBiS"):
+    same_length = len(a) == len(b) and len(a) > 0
+    check(same_length, f"{what}: {len(a)} lines from CMake, {len(b)} from FoBiS")
+    if not same_length:
         return
     check(a[0] == b[0], f"{what}: headers differ: {a[0]} vs {b[0]}")
     values = []  # per row, per field: float or the text
@@ -117,6 +119,22 @@ def compare_numbers(a_path, b_path, what):
         print("   ", line)
     check(not bad, f"{what}: {len(bad)} values differ by more than rtol {RTOL:g} "
           f"(largest relative difference {worst:.3g})")
+    if not bad:
+        print(f"{what}: equal within rtol {RTOL:g} (largest relative difference {worst:.3g})")
+
+
+def show_differences(a_path, b_path, what, most=5):
+    """Print the first lines that differ between two text files."""
+    with open(a_path) as fa, open(b_path) as fb:
+        a, b = fa.read().splitlines(), fb.read().splitlines()
+    if len(a) != len(b):
+        print(f"    {what}: {len(a)} lines from CMake, {len(b)} from FoBiS")
+    shown = 0
+    for i, (la, lb) in enumerate(zip(a, b), start=1):
+        if la != lb and shown < most:
+            print(f"    line {i}, CMake: {la[:100]}")
+            print(f"    line {i}, FoBiS: {lb[:100]}")
+            shown += 1
 
 
 # --- build with FoBiS into the work directory --------------------------------------------------
@@ -129,7 +147,7 @@ dem_fobis = os.path.join(build_dir, "dem")
 if os.path.exists(dem_fobis):
     os.remove(dem_fobis)  # so an old executable cannot pass for this build's
 command = [fobis, "build", "-f", os.path.join(root, "fobos"), "-mode", MODE,
-           "--build-dir", build_dir, "-j", str(min(os.cpu_count() or 1, 8))]
+           "--build-dir", build_dir, "-q", "-j", str(min(os.cpu_count() or 1, 8))]
 print("building:", " ".join(command))
 # fobos paths (src, include) are relative to the source root: FoBiS runs there
 r = subprocess.run(command, cwd=root, capture_output=True, text=True, timeout=1800)
@@ -162,14 +180,15 @@ else:
 for fname in ("contact.csv", "final.csv"):
     a = os.path.join(outputs["cmake"], fname)
     b = os.path.join(outputs["fobis"], fname)
-    if not check(os.path.isfile(a) and os.path.isfile(b),
-                 f"{STEM}/{fname}: missing from the CMake run ({a}) or the FoBiS run ({b})"):
+    present = os.path.isfile(a) and os.path.isfile(b)
+    check(present, f"{STEM}/{fname}: missing from the CMake run ({a}) or the FoBiS run ({b})")
+    if not present:
         continue
     with open(a, "rb") as fa, open(b, "rb") as fb:
         identical = fa.read() == fb.read()
     if strict:
         if not identical:
-            compare_numbers(a, b, f"{STEM}/{fname}")  # prints where they differ
+            show_differences(a, b, f"{STEM}/{fname}")
         check(identical, f"{STEM}/{fname}: the FoBiS and CMake builds (same flags) wrote "
               "different files")
     elif identical:
