@@ -1,0 +1,66 @@
+!> Closest point on a triangle against brute-force sampling of the triangle, its feature
+!> classification, and the flat wall made of triangles (area, orientation).
+program test_mesh
+    use dem_kinds, only: wp, ip
+    use dem_mesh, only: mesh_t, mesh_add_plane, closest_point_triangle, feature_face, &
+                        feature_edge, feature_vertex
+    use dem_vector, only: cross
+    use dem_assert, only: assert_true, assert_close, assert_finish
+    implicit none
+    real(wp) :: a(3), b(3), c(3), p(3), q(3), s, t, best, d, n(3), area
+    integer(ip) :: feature, trial, i, j, k
+    integer, parameter :: ns = 400
+    type(mesh_t) :: m
+
+    a = [0.1_wp, -0.2_wp, 0.05_wp]
+    b = [1.2_wp, 0.1_wp, -0.3_wp]
+    c = [0.3_wp, 0.9_wp, 0.4_wp]
+    call random_seed()
+    do trial = 1, 200
+        call random_number(p)
+        p = 3.0_wp * p - 1.0_wp
+        call closest_point_triangle(p, a, b, c, q, feature)
+        ! brute force over a barycentric grid
+        best = huge(1.0_wp)
+        do i = 0, ns
+            do j = 0, ns - i
+                s = real(i, wp) / ns
+                t = real(j, wp) / ns
+                best = min(best, norm2(p - (a + s * (b - a) + t * (c - a))))
+            end do
+        end do
+        d = norm2(p - q)
+        call assert_true(d <= best + 1e-12_wp, 'closest point is no farther than any sample')
+        call assert_true(d >= best - 3.0_wp / ns, 'closest point is near the best sample')
+    end do
+
+    ! features: above the interior, beyond an edge, beyond a vertex
+    n = cross(b - a, c - a)
+    n = n / norm2(n)
+    call closest_point_triangle((a + b + c) / 3.0_wp + 0.5_wp * n, a, b, c, q, feature)
+    call assert_true(feature == feature_face, 'face')
+    call assert_close(norm2(q - (a + b + c) / 3.0_wp), 0.0_wp, 0.0_wp, 'face point', 1e-14_wp)
+    call closest_point_triangle((a + b) / 2.0_wp - 0.3_wp * (c - (a + b) / 2.0_wp), a, b, c, q, &
+                                feature)
+    call assert_true(feature == feature_edge, 'edge')
+    call closest_point_triangle(a + 0.5_wp * (a - (b + c) / 2.0_wp), a, b, c, q, feature)
+    call assert_true(feature == feature_vertex .and. all(q == a), 'vertex')
+
+    ! a flat square wall: 2 d^2 triangles covering (2 h)^2, all facing the given normal
+    n = [1.0_wp, 2.0_wp, 2.0_wp] / 3.0_wp
+    call mesh_add_plane(m, [0.0_wp, 0.0_wp, 1.0_wp], 3.0_wp * n, 0.5_wp, 7_ip, 2_ip)
+    call mesh_add_plane(m, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.25_wp, 1_ip, 1_ip)
+    call assert_true(m%n_tri == 2 * 49 + 2 .and. m%n_wall == 2, 'triangle and wall counts')
+    area = 0.0_wp
+    do k = 1, 98
+        q = cross(m%vert(:, 2, k) - m%vert(:, 1, k), m%vert(:, 3, k) - m%vert(:, 1, k))
+        area = area + 0.5_wp * norm2(q)
+        call assert_close(dot_product(q / norm2(q), n), 1.0_wp, 1e-14_wp, 'faces the normal')
+        call assert_close(dot_product(m%vert(:, 1, k) - [0.0_wp, 0.0_wp, 1.0_wp], n), 0.0_wp, &
+                          0.0_wp, 'lies in the plane', 1e-15_wp)
+    end do
+    call assert_close(area, 1.0_wp, 1e-13_wp, 'area of the square')
+    call assert_true(all(m%mat(1:98) == 2) .and. all(m%mat(99:100) == 1) .and. &
+                     all(m%wall(1:98) == 1) .and. all(m%wall(99:100) == 2), 'materials, walls')
+    call assert_finish()
+end program test_mesh

@@ -1,0 +1,39 @@
+!> Hertz impact scales against the values of the Chung & Ooi tests 1 and 2 (Hertz theory,
+!> evaluated independently in the project's case definitions), the critical step against
+!> its closed form, and the Rayleigh time against a hand-evaluated example.
+program test_timestep
+    use dem_kinds, only: wp
+    use dem_timestep, only: rayleigh_time, hertz_max_overlap, hertz_max_force, &
+                            hertz_contact_time, hertz_critical_dt
+    use dem_assert, only: assert_close, assert_finish
+    implicit none
+    real(wp), parameter :: pi = acos(-1.0_wp)
+    real(wp) :: m, estar, tc
+
+    ! test 1: two glass spheres, R = 10 mm, E = 48 GPa, nu = 0.2, rho = 2800, +-10 m/s
+    m = 4.0_wp / 3.0_wp * pi * 0.01_wp**3 * 2800.0_wp
+    estar = 48.0e9_wp / (2.0_wp * (1.0_wp - 0.2_wp**2))
+    call assert_close(hertz_max_overlap(m / 2, 0.005_wp, estar, 20.0_wp), 274.1e-6_wp, 2e-4_wp, &
+                      'test 1 maximum overlap')
+    call assert_close(hertz_max_force(m / 2, 0.005_wp, estar, 20.0_wp), 10.697e3_wp, 2e-4_wp, &
+                      'test 1 maximum force')
+    call assert_close(hertz_contact_time(m / 2, 0.005_wp, estar, 20.0_wp), 40.34e-6_wp, 2e-4_wp, &
+                      'test 1 contact time')
+    ! test 2: Al alloy, R = 0.1 m, rho = 2699, E = 70 GPa, nu = 0.3, 0.2 m/s on a rigid plane
+    m = 4.0_wp / 3.0_wp * pi * 0.1_wp**3 * 2699.0_wp
+    estar = 70.0e9_wp / (1.0_wp - 0.3_wp**2)
+    call assert_close(hertz_max_overlap(m, 0.1_wp, estar, 0.2_wp), 49.72e-6_wp, 2e-4_wp, &
+                      'test 2 maximum overlap')
+    call assert_close(hertz_max_force(m, 0.1_wp, estar, 0.2_wp), 11.370e3_wp, 2e-4_wp, &
+                      'test 2 maximum force')
+    tc = hertz_contact_time(m, 0.1_wp, estar, 0.2_wp)
+    call assert_close(tc, 731.7e-6_wp, 2e-4_wp, 'test 2 contact time')
+    ! 2/omega_max = t_c * 2 / (2.94328 sqrt(15/8)) (doc/theory.md, section 6)
+    call assert_close(hertz_critical_dt(m, 0.1_wp, estar, 0.2_wp), &
+                      tc * 2.0_wp / (2.0_wp * gamma(1.4_wp) * sqrt(pi) / gamma(0.9_wp) &
+                      * sqrt(15.0_wp / 8.0_wp)), 1e-12_wp, 'critical step')
+    ! glass, R = 10 mm: G = 20 GPa, pi 0.01 sqrt(2800 / 2e10) / 0.90922 = 1.29284e-5 s
+    call assert_close(rayleigh_time(0.01_wp, 2800.0_wp, 48.0e9_wp, 0.2_wp), 1.29284e-5_wp, &
+                      1e-5_wp, 'Rayleigh time')
+    call assert_finish()
+end program test_timestep
