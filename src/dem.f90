@@ -6,8 +6,10 @@ module dem
     use dem_case, only: case_t, time_scales_t, case_time_scales, case_total_mass
     use dem_input, only: read_case
     use dem_solver, only: solver_t, solver_init, solver_run
+    use dem_timers, only: n_phases, phase_names, timer_seconds
     implicit none
     private
     public :: wp, ip, i8, dem_version_string, error_t, case_t, time_scales_t, &
-              case_time_scales, case_total_mass, read_case, solver_t, solver_init, solver_run
+              case_time_scales, case_total_mass, read_case, solver_t, solver_init, solver_run, &
+              n_phases, phase_names, timer_seconds
 end module dem

@@ -2,9 +2,10 @@
 !> from it (the quantities `dem --check` prints and the stability bound on dt).
 module dem_case
     use dem_kinds, only: wp, ip, i8
-    use dem_materials, only: materials_t, contact_options_t, effective_moduli
+    use dem_materials, only: materials_t, contact_options_t, effective_moduli, damping_ratio
     use dem_mesh, only: mesh_t
-    use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt
+    use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt, &
+                            tangential_critical_dt
     implicit none
     private
     public :: case_t, time_scales_t, case_time_scales, case_total_mass
@@ -38,7 +39,7 @@ module dem_case
         integer(ip) :: rayleigh_mat = 0         !< and material
         real(wp) :: speed = 0.0_wp              !< largest expected impact speed [m/s]
         real(wp) :: contact = huge(1.0_wp)      !< shortest Hertz contact time at that speed [s]
-        real(wp) :: critical = huge(1.0_wp)     !< 2/omega at the stiffest point of it [s]
+        real(wp) :: critical = huge(1.0_wp)     !< step limit of its normal and tangential modes [s]
         real(wp) :: bound = huge(1.0_wp)        !< min(rayleigh, critical) [s]
         character(len=:), allocatable :: bound_name  !< what sets the bound
     end type time_scales_t
@@ -94,11 +95,11 @@ contains
                         mb = 4.0_wp / 3.0_wp * pi * rmin(b)**3 * c%mats%density(b)
                         mstar = ma * mb / (ma + mb)
                         rstar = rmin(a) * rmin(b) / (rmin(a) + rmin(b))
-                        call update(mstar, rstar, estar, 2.0_wp * ts%speed)
+                        call update(a, b, mstar, rstar, estar, gstar, 2.0_wp * ts%speed)
                     end if
                     if (wall_mat(b) .and. c%mats%pair_defined(a, b)) then
                         call effective_moduli(c%mats, a, b, estar, gstar)
-                        call update(ma, rmin(a), estar, ts%speed)
+                        call update(a, b, ma, rmin(a), estar, gstar, ts%speed)
                     end if
                 end do
             end do
@@ -108,13 +109,24 @@ contains
         if (ts%rayleigh <= ts%critical) then
             ts%bound_name = 'the Rayleigh time of the smallest particle'
         else
-            ts%bound_name = '2/omega of the stiffest Hertz contact at the expected speed'
+            ts%bound_name = 'the step limit of the stiffest Hertz contact at the expected speed'
         end if
     contains
-        subroutine update(mstar_, rstar_, estar_, speed_)
-            real(wp), intent(in) :: mstar_, rstar_, estar_, speed_
+        !> Contact time and step limits of material pair (a_, b_); the tangential mode counts
+        !> only where there is friction.
+        subroutine update(a_, b_, mstar_, rstar_, estar_, gstar_, speed_)
+            integer(ip), intent(in) :: a_, b_
+            real(wp), intent(in) :: mstar_, rstar_, estar_, gstar_, speed_
+            real(wp) :: zeta
+            zeta = sqrt(5.0_wp / 6.0_wp) * abs(damping_ratio(c%mats%restitution(a_, b_)))
             ts%contact = min(ts%contact, hertz_contact_time(mstar_, rstar_, estar_, speed_))
-            ts%critical = min(ts%critical, hertz_critical_dt(mstar_, rstar_, estar_, speed_))
+            ts%critical = min(ts%critical, hertz_critical_dt(mstar_, rstar_, estar_, speed_, zeta))
+            if (c%mats%friction(a_, b_) > 0.0_wp) then
+                if (.not. c%opts%tangential_damping) zeta = 0.0_wp
+                ts%critical = min(ts%critical, tangential_critical_dt(mstar_, rstar_, estar_, &
+                    8.0_wp * gstar_ * c%opts%tangential_stiffness_factor, speed_, &
+                    zeta * sqrt(3.5_wp)))
+            end if
         end subroutine update
     end subroutine case_time_scales
 end module dem_case

@@ -11,7 +11,9 @@ contains
     !> Force of one contact on body i. The normal `nrm` points from i to its partner; `vrel`
     !> is the velocity of i minus that of the partner at the contact point. The tangential
     !> displacement `xi` (of i relative to the partner) is turned into the current tangent
-    !> plane keeping its length, advanced by vt dt, and rescaled when the Coulomb limit is hit.
+    !> plane keeping its length and advanced by vt dt. When the spring force exceeds the Coulomb
+    !> limit mu |F_n| the contact slides: the spring is rescaled to the limit and the tangential
+    !> damping is dropped (as LIGGGHTS, MUSEN, MercuryDPM and Yade do).
     pure subroutine hm_force(overlap, nrm, vrel, rstar, mstar, kn, sn, st, cn, ct, mu, &
                              clamp_normal, dt, xi, fn, ft)
         !$acc routine seq
@@ -50,12 +52,14 @@ contains
         xi = xi + vt * dt
 
         kt = st * root
-        ft = -kt * xi - ct * sqrt(kt * mstar) * vt
+        ft = -kt * xi
         ft_mag = sqrt(dot_product(ft, ft))
         ft_max = mu * abs(fn)
-        if (ft_mag > ft_max) then
+        if (ft_mag > ft_max) then          ! sliding: spring rescaled to the limit, no damping
             ft = ft * (ft_max / ft_mag)
             xi = -ft / kt
+        else
+            ft = ft - ct * sqrt(kt * mstar) * vt
         end if
     end subroutine hm_force
 end module dem_contact_hm

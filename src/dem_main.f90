@@ -2,7 +2,8 @@
 program dem_main
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use dem, only: wp, dem_version_string, error_t, case_t, time_scales_t, case_time_scales, &
-                   case_total_mass, read_case, solver_t, solver_init, solver_run
+                   case_total_mass, read_case, solver_t, solver_init, solver_run, n_phases, &
+                   phase_names, timer_seconds
     use dem_comm, only: comm_t, comm_init, comm_free
     implicit none
     type(comm_t) :: comm
@@ -47,6 +48,7 @@ program dem_main
     call solver_init(s, c)
     call solver_run(s, c, err)
     if (err%failed()) call fail(err)
+    call print_timing(s)
     write(output_unit, '(a)') 'dem: done; outputs in ' // c%output_dir
     call finish(0)
 
@@ -105,6 +107,23 @@ contains
         if (c%dt > ts%bound) write(output_unit, '(a)') '  warning: dt exceeds the ' // &
             'stability bound (allow_unstable = .true.)'
     end subroutine print_check
+
+    !> Steps, time per particle-step and time per phase of the run.
+    subroutine print_timing(s)
+        type(solver_t), intent(in) :: s
+        real(wp) :: total, ns
+        integer :: k
+        total = sum([(timer_seconds(s%timers, k), k = 1, n_phases)])
+        ns = 1.0e9_wp * total / max(1.0_wp, real(s%steps_run, wp) * s%p%n_own)
+        write(output_unit, '(a,i0,a,i0,a,es11.4,a,f10.1,a)') 'timing: ', s%steps_run, &
+            ' steps of ', s%p%n_own, ' particles in ', total, ' s, ', ns, &
+            ' ns per particle-step'
+        do k = 1, n_phases
+            write(output_unit, '(a,a12,es11.4,a,f6.1,a)') 'timing:   ', phase_names(k), &
+                timer_seconds(s%timers, k), ' s ', &
+                100.0_wp * timer_seconds(s%timers, k) / max(total, tiny(1.0_wp)), ' %'
+        end do
+    end subroutine print_timing
 
     subroutine usage_error(msg)
         character(len=*), intent(in) :: msg

@@ -14,6 +14,8 @@ module dem_solver
     use dem_output, only: output_t, output_open, output_series, output_contact, &
                           output_final, output_close
     use dem_acc, only: acc_copyin, acc_delete, acc_update_host
+    use dem_timers, only: timers_t, timer_start, timer_stop, phase_neighbors, &
+                          phase_contacts_pp, phase_contacts_pw, phase_integrate, phase_output
     implicit none
     private
     public :: solver_t, solver_init, solver_run
@@ -26,6 +28,8 @@ module dem_solver
         type(pair_constants_t) :: pc
         integer(i8) :: step = 0        !< steps done; the time is step * dt
         integer(ip) :: trace = 0       !< local index of the traced particle, 0: none
+        integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
+        type(timers_t) :: timers       !< time per phase of those steps
     end type solver_t
 
 contains
@@ -63,27 +67,39 @@ contains
         if (err%failed()) return
         call device_enter(s, c)
 
-        if (c%integrator == integrator_verlet) call compute_forces(s, c, err)
+        if (c%integrator == integrator_verlet) then
+            call compute_forces(s, c, err)
+            call write_trace(s, c, out, 0.0_wp)
+        end if
         if (.not. err%failed()) call write_series(s, c, out, err)
+        s%steps_run = 0
+        s%timers = timers_t()
+        call timer_start(s%timers)
         do while (s%step < n_steps .and. .not. err%failed())
             associate (p => s%p, n => s%p%n_own)
                 if (c%integrator == integrator_verlet) then
                     call kick(n, 0.5_wp * dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
                     call drift(n, dt, p%v, p%x)
+                    call timer_stop(s%timers, phase_integrate)
                 end if
                 call compute_forces(s, c, err)
                 if (err%failed()) exit
                 if (c%integrator == integrator_euler) then
                     call write_trace(s, c, out, real(s%step, wp) * dt)
+                    call timer_stop(s%timers, phase_output)
                     call kick(n, dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
                     call drift(n, dt, p%v, p%x)
+                    call timer_stop(s%timers, phase_integrate)
                 else
                     call kick(n, 0.5_wp * dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
+                    call timer_stop(s%timers, phase_integrate)
                     call write_trace(s, c, out, real(s%step + 1, wp) * dt)
                 end if
             end associate
             s%step = s%step + 1
+            s%steps_run = s%steps_run + 1
             if (mod(s%step, every) == 0 .or. s%step == n_steps) call write_series(s, c, out, err)
+            call timer_stop(s%timers, phase_output)
         end do
 
         call device_to_host(s)
@@ -100,16 +116,19 @@ contains
         type(error_t), intent(inout) :: err
         integer(ip) :: overflow
         if (neighbors_stale(s%nb, s%p%n_own, s%p%x)) call rebuild(s, c)
+        call timer_stop(s%timers, phase_neighbors)
         associate (p => s%p, nb => s%nb, pc => s%pc, m => c%mesh, n => s%p%n_own)
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
             call pp_forces(n, n + p%n_ghost, size(nb%list), c%mats%n, p%x, p%v, p%w, p%radius, &
                            p%mass, p%mat, nb%start, nb%list, pc%kn, pc%sn, pc%st, pc%cn, &
                            pc%ct, pc%mu, pc%clamp_normal, c%dt, nb%xi, p%f, p%t)
+            call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
             call pw_forces(n, size(nb%wlist), m%n_tri, c%mats%n, p%x, p%v, p%w, p%radius, &
                            p%mass, p%mat, nb%wstart, nb%wlist, m%vert, m%mat, pc%kn, pc%sn, &
                            pc%st, pc%cn, pc%ct, pc%mu, pc%clamp_normal, c%dt, s%wc%tri, &
                            s%wc%xi, p%f, p%t, overflow)
+            call timer_stop(s%timers, phase_contacts_pw)
         end associate
         if (overflow > 0) call set_error(err, dem_err_runtime, 'a particle touches more ' // &
             'wall triangles than the contact store holds; the walls overlap or are too fine')

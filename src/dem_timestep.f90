@@ -4,7 +4,7 @@ module dem_timestep
     implicit none
     private
     public :: rayleigh_time, hertz_max_overlap, hertz_max_force, hertz_contact_time, &
-              hertz_critical_dt
+              hertz_critical_dt, tangential_critical_dt, step_limit
 
     real(wp), parameter :: pi = acos(-1.0_wp)
 
@@ -40,11 +40,33 @@ contains
              * hertz_max_overlap(mstar, rstar, estar, speed) / speed
     end function hertz_contact_time
 
-    !> Stability limit 2/omega of an explicit step at the stiffest point of a Hertz impact,
-    !> omega^2 = S_n(d_max)/m* with S_n = 2 E* sqrt(R* d); about 0.496 of the contact time [s].
-    elemental real(wp) function hertz_critical_dt(mstar, rstar, estar, speed) result(dtc)
+    !> Largest stable step of symplectic Euler for a damped oscillator x'' + 2 zeta omega x'
+    !> + omega^2 x = 0: omega h <= 2 (sqrt(1 + zeta^2) - zeta) [s].
+    elemental real(wp) function step_limit(omega, zeta) result(h)
+        real(wp), intent(in) :: omega   !! [rad/s]
+        real(wp), intent(in) :: zeta    !! damping ratio [-]
+        h = 2.0_wp * (sqrt(1.0_wp + zeta**2) - zeta) / omega
+    end function step_limit
+
+    !> Step limit of the normal mode at the stiffest point of a Hertz impact,
+    !> omega^2 = S_n(d_max)/m* with S_n = 2 E* sqrt(R* d); without damping about 0.496 of
+    !> the contact time [s].
+    elemental real(wp) function hertz_critical_dt(mstar, rstar, estar, speed, zeta) result(dtc)
         real(wp), intent(in) :: mstar, rstar, estar, speed
-        dtc = 2.0_wp * sqrt(mstar / (2.0_wp * estar &
-              * sqrt(rstar * hertz_max_overlap(mstar, rstar, estar, speed))))
+        real(wp), intent(in) :: zeta    !! normal damping ratio sqrt(5/6) |beta| [-]
+        dtc = step_limit(sqrt(2.0_wp * estar * sqrt(rstar &
+              * hertz_max_overlap(mstar, rstar, estar, speed)) / mstar), zeta)
     end function hertz_critical_dt
+
+    !> Step limit of the tangential mode of a sticking contact at the same point: spring
+    !> S_t = st sqrt(R* d_max) on the effective tangential mass 2 m*/7 of two rolling spheres
+    !> (or a sphere on a wall) [s].
+    elemental real(wp) function tangential_critical_dt(mstar, rstar, estar, st, speed, zeta) &
+            result(dtc)
+        real(wp), intent(in) :: mstar, rstar, estar, speed
+        real(wp), intent(in) :: st      !! 8 G* times the stiffness factor [Pa]
+        real(wp), intent(in) :: zeta    !! tangential damping ratio [-]
+        dtc = step_limit(sqrt(3.5_wp * st * sqrt(rstar &
+              * hertz_max_overlap(mstar, rstar, estar, speed)) / mstar), zeta)
+    end function tangential_critical_dt
 end module dem_timestep

@@ -62,10 +62,16 @@ program test_contact_hm
     call assert_close(xi(2), 1.0e-3_wp * dt, 1e-12_wp, 'history grows by v_t dt')
     call assert_true(sqrt(sum(ft**2)) < mu * fn, 'below the Coulomb limit')
 
-    ! beyond the Coulomb limit: |F_t| = mu |F_n|, opposite to xi, spring rescaled to give it
+    ! beyond the Coulomb limit: |F_t| = mu |F_n|, opposite to xi, spring rescaled to give it,
+    ! tangential damping dropped
     xi = [1.0e-5_wp, 2.0e-5_wp, 0.0_wp]
     call hm_force(d, n, [0.0_wp, 0.0_wp, 0.0_wp], rstar, mstar, kn, sn, st, cn, cn, mu, &
                   .false., dt, xi, fn, ft)
+    fn0 = fn
+    xi_b = [1.0e-5_wp, 2.0e-5_wp, 0.0_wp]
+    call hm_force(d, n, [1.0_wp, 2.0_wp, 0.0_wp] * 1.0e-12_wp, rstar, mstar, kn, sn, st, cn, &
+                  cn, mu, .false., dt, xi_b, fn_b, ft_b)
+    call assert_close(sqrt(sum(ft_b**2)), mu * fn_b, 1e-14_wp, 'no damping while sliding')
     call assert_close(sqrt(sum(ft**2)), mu * fn, 1e-14_wp, 'Coulomb limit')
     call assert_close(k * sqrt(sum(xi**2)), mu * fn, 1e-12_wp, 'spring rescaled to the limit')
     call assert_close(ft(2) / ft(1), 2.0_wp, 1e-12_wp, 'friction opposes the displacement')
