@@ -32,44 +32,33 @@ contains
         wc%xi = 0.0_wp
     end subroutine wall_contacts_init
 
-    !> Of the nc triangles touching a sphere (closest points q, squared distances dist2,
-    !> features), keep those whose closest point is a local minimum of the distance to their
-    !> union: faces always; an edge or vertex point only if no triangle containing that point
-    !> is closer, and only once when several triangles share it.
-    pure subroutine wall_contact_select(nc, q, dist2, feature, tri_vert, tol, keep)
+    !> Of the nc triangles touching a sphere (closest points q, features), keep those whose
+    !> closest point is a local minimum of the distance to their union: faces always; an edge
+    !> or vertex point q_k only if no other triangle holding q_k has a closest point elsewhere
+    !> (which would be nearer, as a convex set's closest point is unique), and only once when
+    !> several triangles share it (a face then stands for it, else the first of them).
+    pure subroutine wall_contact_select(nc, q, feature, tri_vert, tol, keep)
         !$acc routine seq
         integer(ip), intent(in) :: nc
-        real(wp), intent(in) :: q(3, nc), dist2(nc)  !! [m], [m^2]
+        real(wp), intent(in) :: q(3, nc)             !! closest points [m]
         integer(ip), intent(in) :: feature(nc)
         real(wp), intent(in) :: tri_vert(3, 3, nc)   !! the candidates' corners [m]
-        real(wp), intent(in) :: tol                  !! length tolerance [m]
+        real(wp), intent(in) :: tol                  !! points closer than this coincide [m]
         logical, intent(out) :: keep(nc)
         integer(ip) :: k, m, fm
-        real(wp) :: qm(3), dk, dm
+        real(wp) :: qm(3)
 
         keep = .true.
         do k = 1, nc
             if (feature(k) == feature_face) cycle
-            dk = sqrt(dist2(k))
             do m = 1, nc
                 if (m == k) cycle
                 call closest_point_triangle(q(:, k), tri_vert(:, 1, m), tri_vert(:, 2, m), &
                                             tri_vert(:, 3, m), qm, fm)
                 if (sum((qm - q(:, k))**2) > tol**2) cycle   ! triangle m does not hold q_k
-                dm = sqrt(dist2(m))
-                if (dm < dk - tol) then
-                    keep(k) = .false.          ! a neighbour is closer: not a local minimum
-                    exit
-                end if
-            end do
-        end do
-        do k = 1, nc
-            if (.not. keep(k) .or. feature(k) == feature_face) cycle
-            do m = 1, nc
-                if (m == k .or. .not. keep(m)) cycle
-                if (feature(m) /= feature_face .and. m > k) cycle
-                if (sum((q(:, m) - q(:, k))**2) <= tol**2) then
-                    keep(k) = .false.          ! the same point is already a contact
+                if (sum((q(:, m) - q(:, k))**2) > tol**2 .or. feature(m) == feature_face &
+                    .or. m < k) then
+                    keep(k) = .false.
                     exit
                 end if
             end do
@@ -127,7 +116,7 @@ contains
                 ctri(nc) = tri
                 cv(:, :, nc) = vert(:, :, tri)
             end do
-            call wall_contact_select(nc, q(:, 1:nc), d2(1:nc), feat(1:nc), cv(:, :, 1:nc), &
+            call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), cv(:, :, 1:nc), &
                                      1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i))), &
                                      keep(1:nc))
             fi = 0.0_wp

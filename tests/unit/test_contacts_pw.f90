@@ -37,6 +37,10 @@ program test_contacts_pw
         call press(pos, 'sliding across edges')
     end do
     call press([0.0_wp, 0.0_wp] + 1.0e-13_wp, 'vertex, off by round-off')
+    ! just beside an edge: the neighbour's edge point is farther by only (offset)^2 / 2R
+    call press([1.0e-9_wp, 0.37_wp], 'beside an edge, 1e-11 m')
+    call press([1.0e-6_wp, 0.37_wp], 'beside an edge, 1e-8 m')
+    call press([0.25_wp + 1.0e-7_wp, 0.25_wp], 'beside a diagonal edge')
 
     ! a second wall at x = -0.02 facing +x: in the corner the sphere has two contacts
     call mesh_add_plane(m, [-0.02_wp, 0.0_wp, 0.05_wp], [1.0_wp, 0.0_wp, 0.0_wp], 0.05_wp, 4_ip, &
