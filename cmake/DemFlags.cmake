@@ -32,5 +32,8 @@ function(dem_set_flags target)
     $<$<COMPILE_LANGUAGE:Fortran>:${DEM_OPENACC_FLAGS}>)
   if(DEM_OPENACC)
     target_link_options(${target} PRIVATE ${DEM_OPENACC_FLAGS})
+    # the offload table that mkoffload appends to the link needs libgomp even where no object
+    # before it calls libgomp, so libgomp must not be dropped as unneeded
+    target_link_libraries(${target} PRIVATE -Wl,--no-as-needed gomp)
   endif()
 endfunction()

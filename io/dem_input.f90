@@ -10,7 +10,7 @@ module dem_input
     use dem_integrate, only: integrator_euler, integrator_verlet
     implicit none
     private
-    public :: read_case, input_groups
+    public :: read_case
 
     real(wp), parameter :: unset = huge(1.0_wp)
     integer, parameter :: name_len = 32

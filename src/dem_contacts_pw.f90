@@ -9,8 +9,7 @@ module dem_contacts_pw
     use dem_vector, only: cross
     implicit none
     private
-    public :: wall_contacts_t, wall_contacts_init, pw_forces, wall_contact_select, &
-              max_wall_contacts, max_wall_candidates
+    public :: wall_contacts_t, wall_contacts_init, pw_forces, max_wall_contacts
 
     integer(ip), parameter :: max_wall_contacts = 8     !< per particle
     integer(ip), parameter :: max_wall_candidates = 16  !< touching triangles per particle

@@ -58,11 +58,10 @@ contains
         real(wp), intent(in) :: x(:, :)        !! positions [m]
         real(wp), intent(in) :: radius(:)      !! [m]
         type(mesh_t), intent(in) :: mesh
-        integer(ip), allocatable :: old_start(:), cnt(:), list(:)
+        integer(ip), allocatable :: old_start(:)
         integer(i8), allocatable :: old_partner(:)
         real(wp), allocatable :: old_xi(:, :)
-        integer(ip) :: i, j, k, kold, t, feature
-        real(wp) :: reach, q(3)
+        integer(ip) :: i, j, k, kold, t
         logical :: keep_history
 
         keep_history = allocated(nb%start)
@@ -72,24 +71,24 @@ contains
             call move_alloc(nb%partner, old_partner)
             call move_alloc(nb%xi, old_xi)
         end if
+        if (allocated(nb%start)) deallocate(nb%start, nb%partner, nb%xi)
+        if (allocated(nb%list)) deallocate(nb%list)
 
-        ! particle pairs within R_i + R_j + skin
-        allocate(cnt(n_own), list(0))
+        ! particle pairs within R_i + R_j + skin: count, then fill
         allocate(nb%start(n_own + 1))
         nb%start(1) = 1
         do i = 1, n_own
-            cnt(i) = 0
-            do j = 1, n_all
-                if (j == i) cycle
-                reach = radius(i) + radius(j) + nb%skin
-                if (sum((x(:, j) - x(:, i))**2) < reach**2) then
-                    list = [list, j]
-                    cnt(i) = cnt(i) + 1
-                end if
-            end do
-            nb%start(i + 1) = nb%start(i) + cnt(i)
+            nb%start(i + 1) = nb%start(i) + count(within([(j, j = 1, n_all)], i))
         end do
-        call move_alloc(list, nb%list)
+        allocate(nb%list(nb%start(n_own + 1) - 1))
+        do i = 1, n_own
+            k = nb%start(i)
+            do j = 1, n_all
+                if (.not. within(j, i)) cycle
+                nb%list(k) = j
+                k = k + 1
+            end do
+        end do
         allocate(nb%partner(size(nb%list)), nb%xi(3, size(nb%list)))
         nb%partner = gid(nb%list)
         nb%xi = 0.0_wp
@@ -108,24 +107,38 @@ contains
 
         ! wall triangles within R_i + skin
         if (allocated(nb%wstart)) deallocate(nb%wstart, nb%wlist)
-        allocate(nb%wstart(n_own + 1), list(0))
+        allocate(nb%wstart(n_own + 1))
         nb%wstart(1) = 1
         do i = 1, n_own
-            cnt(i) = 0
-            reach = radius(i) + nb%skin
-            do t = 1, mesh%n_tri
-                call closest_point_triangle(x(:, i), mesh%vert(:, 1, t), mesh%vert(:, 2, t), &
-                                            mesh%vert(:, 3, t), q, feature)
-                if (sum((q - x(:, i))**2) < reach**2) then
-                    list = [list, t]
-                    cnt(i) = cnt(i) + 1
-                end if
-            end do
-            nb%wstart(i + 1) = nb%wstart(i) + cnt(i)
+            nb%wstart(i + 1) = nb%wstart(i) + count(near_wall([(t, t = 1, mesh%n_tri)], i))
         end do
-        call move_alloc(list, nb%wlist)
+        allocate(nb%wlist(nb%wstart(n_own + 1) - 1))
+        do i = 1, n_own
+            k = nb%wstart(i)
+            do t = 1, mesh%n_tri
+                if (.not. near_wall(t, i)) cycle
+                nb%wlist(k) = t
+                k = k + 1
+            end do
+        end do
 
         nb%x_ref = x(:, 1:n_own)
         nb%n_builds = nb%n_builds + 1
+    contains
+        !> Particle j is within reach of particle i (and is not i).
+        elemental logical function within(j_, i_)
+            integer(ip), intent(in) :: j_, i_
+            within = j_ /= i_ .and. sum((x(:, j_) - x(:, i_))**2) &
+                                    < (radius(i_) + radius(j_) + nb%skin)**2
+        end function within
+        !> Triangle t_ is within reach of particle i_.
+        elemental logical function near_wall(t_, i_)
+            integer(ip), intent(in) :: t_, i_
+            real(wp) :: q_(3)
+            integer(ip) :: feature_
+            call closest_point_triangle(x(:, i_), mesh%vert(:, 1, t_), mesh%vert(:, 2, t_), &
+                                        mesh%vert(:, 3, t_), q_, feature_)
+            near_wall = sum((q_ - x(:, i_))**2) < (radius(i_) + nb%skin)**2
+        end function near_wall
     end subroutine neighbors_build
 end module dem_neighbors

@@ -4,7 +4,7 @@ module dem_particles
     use dem_kinds, only: wp, ip, i8
     implicit none
     private
-    public :: particles_t, particles_init, particles_add, particles_free
+    public :: particles_t, particles_init, particles_add
 
     !> Structure of arrays for spheres. Kernels receive the arrays, never the type.
     type :: particles_t
@@ -59,10 +59,4 @@ contains
         p%v(:, i) = v
         p%w(:, i) = w
     end subroutine particles_add
-
-    !> Release the store.
-    subroutine particles_free(p)
-        type(particles_t), intent(inout) :: p
-        p = particles_t()
-    end subroutine particles_free
 end module dem_particles

@@ -67,6 +67,7 @@ contains
         if (err%failed()) return
         call device_enter(s, c)
 
+        call rebuild(s, c)
         if (c%integrator == integrator_verlet) then
             call compute_forces(s, c, err)
             call write_trace(s, c, out, 0.0_wp)
