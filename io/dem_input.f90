@@ -2,6 +2,7 @@
 !> of the group, the group and the key. The keys, their defaults, units and ranges are
 !> documented here, where they are declared, and in doc/input.md.
 module dem_input
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_namelist_scan, only: nml_file_t, nml_block_t, nml_scan, nml_items, nml_location
@@ -127,7 +128,8 @@ contains
                 "velocity_verlet)")
             return
         end select
-        if (expected_speed < 0.0_wp .or. expected_speed /= expected_speed) then
+        if (.not. check_vector(at, gravity, 'gravity', .false., err)) return
+        if (.not. (expected_speed >= 0.0_wp .and. expected_speed < unset)) then
             call set_error(err, dem_err_input, at // ": key 'expected_speed': must be >= 0 [m/s]")
             return
         end if
@@ -403,7 +405,8 @@ contains
         character(len=512) :: msg
         character(len=:), allocatable :: text
         character(len=:), allocatable :: at
-        integer :: k, n, im
+        character(len=24) :: other
+        integer :: k, n, im, j
 
         n = count_blocks(nf, 'particle')
         if (n == 0) then
@@ -439,20 +442,23 @@ contains
                 return
             end if
             if (.not. check_positive(at, radius, 'radius', '[m]', err)) return
-            if (any(position == unset)) then
-                call set_error(err, dem_err_input, at // ": key 'position' is required " // &
-                               '(three coordinates)')
-                return
-            end if
+            if (.not. check_vector(at, position, 'position', .true., err)) return
+            if (.not. check_vector(at, velocity, 'velocity', .false., err)) return
+            if (.not. check_vector(at, angular_velocity, 'angular_velocity', .false., err)) return
             if (id <= 0 .or. any(c%gid(1:k - 1) == id)) then
                 call set_error(err, dem_err_input, at // ": key 'id': must be > 0 and unique")
                 return
             end if
-            if (.not. all(abs([velocity, angular_velocity]) < unset)) then
-                call set_error(err, dem_err_input, at // ": key 'velocity' or " // &
-                               "'angular_velocity': must be finite")
-                return
-            end if
+            do j = 1, k - 1
+                if (norm2(position - c%x(:, j)) < c%radius(j) + radius &
+                    - 0.5_wp * min(radius, c%radius(j))) then
+                    write(other, '(i0)') c%gid(j)
+                    call set_error(err, dem_err_input, at // ": key 'position': the sphere " // &
+                        'overlaps particle ' // trim(other) // ' by more than half the ' // &
+                        'smaller radius')
+                    return
+                end if
+            end do
             c%gid(k) = id
             c%mat(k) = im
             c%radius(k) = radius
@@ -500,11 +506,9 @@ contains
                                trim(material) // "' is not a defined material")
                 return
             end if
-            if (any(point == unset)) then
-                call set_error(err, dem_err_input, at // ": key 'point' is required")
-                return
-            end if
-            if (any(normal == unset) .or. all(normal == 0.0_wp)) then
+            if (.not. check_vector(at, point, 'point', .true., err)) return
+            if (.not. check_vector(at, normal, 'normal', .true., err)) return
+            if (all(normal == 0.0_wp)) then
                 call set_error(err, dem_err_input, at // ": key 'normal': a non-zero vector " // &
                                'is required')
                 return
@@ -692,6 +696,23 @@ contains
             ok = .true.
         end if
     end function check_positive
+
+    !> Check that a vector key is finite and, if required, was given.
+    logical function check_vector(at, val, key, required, err) result(ok)
+        character(len=*), intent(in) :: at, key
+        real(wp), intent(in) :: val(:)
+        logical, intent(in) :: required
+        type(error_t), intent(inout) :: err
+        ok = .false.
+        if (required .and. any(val == unset)) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "' is required (" // &
+                           'three components)')
+        else if (.not. all(ieee_is_finite(val) .and. abs(val) < unset)) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': must be finite")
+        else
+            ok = .true.
+        end if
+    end function check_vector
 
     !> The file name without directory and extension.
     function file_stem(path) result(stem)

@@ -77,6 +77,7 @@ contains
         write(out%series, '(' // real_fmt // ',3(",",i0),",",i0,4(",",' // real_fmt // '))') &
             time, step, n, n_pp, n_pw, ke_t, ke_r, pe, vmax
         flush(out%series)
+        if (out%contact /= -1) flush(out%contact)
     end subroutine output_series
 
     !> One row of contact.csv.

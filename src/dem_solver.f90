@@ -70,7 +70,7 @@ contains
         call rebuild(s, c)
         if (c%integrator == integrator_verlet) then
             call compute_forces(s, c, err)
-            call write_trace(s, c, out, 0.0_wp)
+            call write_trace(s, c, out, 0.0_wp, err)
         end if
         if (.not. err%failed()) call write_series(s, c, out, err)
         s%steps_run = 0
@@ -86,7 +86,7 @@ contains
                 call compute_forces(s, c, err)
                 if (err%failed()) exit
                 if (c%integrator == integrator_euler) then
-                    call write_trace(s, c, out, real(s%step, wp) * dt)
+                    call write_trace(s, c, out, real(s%step, wp) * dt, err)
                     call timer_stop(s%timers, phase_output)
                     call kick(n, dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
                     call drift(n, dt, p%v, p%x)
@@ -94,7 +94,7 @@ contains
                 else
                     call kick(n, 0.5_wp * dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
                     call timer_stop(s%timers, phase_integrate)
-                    call write_trace(s, c, out, real(s%step + 1, wp) * dt)
+                    call write_trace(s, c, out, real(s%step + 1, wp) * dt, err)
                 end if
             end associate
             s%step = s%step + 1
@@ -173,47 +173,57 @@ contains
         type(output_t), intent(in) :: out
         type(error_t), intent(inout) :: err
         real(wp) :: ke_t, ke_r, pe, vmax
-        integer(ip) :: bad, n_pp
-        type(time_scales_t) :: ts
-        character(len=200) :: msg
+        integer(ip) :: n_pp
         call device_to_host(s)
         associate (p => s%p)
-            bad = first_nonfinite(p%n_own, p%x, p%v, p%w)
-            if (bad > 0) then
-                call case_time_scales(c, ts)
-                write(msg, '(a,i0,a,es10.3,a,f6.3,a)') 'particle ', p%gid(bad), &
-                    ' has a non-finite state at t = ', real(s%step, wp) * c%dt, &
-                    ' s; dt is ', c%dt / ts%rayleigh, ' of the Rayleigh time: reduce dt'
-                call set_error(err, dem_err_runtime, trim(msg))
-                return
-            end if
+            call check_finite(s, c, first_nonfinite(p%n_own, p%x, p%v, p%w), err)
+            if (err%failed()) return
             call energies(p%n_own, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, &
                           ke_t, ke_r, pe, vmax)
-            n_pp = 0
-            if (allocated(s%nb%start)) n_pp = count_pp_contacts(p%n_own, p%x, p%radius, &
-                                                                 s%nb%start, s%nb%list)
+            n_pp = count_pp_contacts(p%n_own, p%x, p%radius, s%nb%start, s%nb%list)
             call output_series(out, real(s%step, wp) * c%dt, s%step, p%n_own, n_pp, &
                                count(s%wc%tri(:, 1:p%n_own) > 0), ke_t, ke_r, pe, vmax)
         end associate
     end subroutine write_series
 
-    !> One row of contact.csv for the traced particle.
-    subroutine write_trace(s, c, out, time)
+    !> One row of contact.csv for the traced particle, if its state is finite.
+    subroutine write_trace(s, c, out, time, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
         real(wp), intent(in) :: time
+        type(error_t), intent(inout) :: err
         real(wp) :: overlap, fn, ft
         integer(ip) :: i
-        if (s%trace == 0) return
+        if (s%trace == 0 .or. err%failed()) return
         call device_to_host(s)
         i = s%trace
         associate (p => s%p)
+            call check_finite(s, c, i * first_nonfinite(1_ip, p%x(:, i:i), p%v(:, i:i), &
+                                                        p%w(:, i:i)), err)
+            if (err%failed()) return
             call contact_trace(i, p%n_own + p%n_ghost, p%x, p%radius, p%mass, p%f, c%gravity, &
                                c%mesh, overlap, fn, ft)
             call output_contact(out, time, overlap, fn, ft, p%x(:, i), p%v(:, i), p%w(:, i))
         end associate
     end subroutine write_trace
+
+    !> Stop the run, naming the particle, the time and the likely cause, if particle `bad`
+    !> (0: none) has a non-finite state.
+    subroutine check_finite(s, c, bad, err)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        integer(ip), intent(in) :: bad
+        type(error_t), intent(inout) :: err
+        type(time_scales_t) :: ts
+        character(len=200) :: msg
+        if (bad == 0) return
+        call case_time_scales(c, ts)
+        write(msg, '(a,i0,a,es10.3,a,f6.3,a)') 'particle ', s%p%gid(bad), &
+            ' has a non-finite state at t = ', real(s%step, wp) * c%dt, ' s; dt is ', &
+            c%dt / ts%rayleigh, ' of the Rayleigh time: reduce dt'
+        call set_error(err, dem_err_runtime, trim(msg))
+    end subroutine check_finite
 
     !> Put the state on the device for the whole run.
     subroutine device_enter(s, c)

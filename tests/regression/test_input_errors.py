@@ -101,6 +101,14 @@ bad("negative_friction", sub("'glass', 'glass', restitution = 0.5, friction = 0.
     "pair", "friction")
 bad("undefined_pair", sub("&pair materials = 'glass', 'steel', restitution = 0.5, "
                           "friction = 0.3 /\n", ""), "pair", None, "'glass' and 'steel'")
+bad("nan_position", sub("position = 0, 0, 0.011", "position = 0, NaN, 0.011"), "particle",
+    "position", "finite")
+bad("infinite_velocity", sub("velocity = 0, 0, -1", "velocity = 0, 0, -Inf"), "particle",
+    "velocity", "finite")
+bad("missing_position", sub("position = 0, 0, 0.011, ", ""), "particle", "position", "required")
+bad("coincident_particles", GOOD + "&particle material = 'glass', radius = 0.01, position = "
+    "0, 0, 0.012 /\n", "particle", "position", "overlaps particle 1")
+bad("nan_gravity", sub("gravity = 0, 0, 0", "gravity = 0, 0, NaN"), "run", "gravity", "finite")
 bad("unknown_material", sub("&particle material = 'glass'", "&particle material = 'gold'"),
     "particle", "material")
 bad("dt_unstable", sub("dt = 1e-7", "dt = 1e-4"), "run", "dt", "stability bound")
