@@ -430,12 +430,8 @@ contains
             end do
             if (err%failed()) return
             at = nml_location(nf, b)
-            im = material_index(c, material)
-            if (im == 0) then
-                call set_error(err, dem_err_input, at // ": key 'material': '" // &
-                               trim(material) // "' is not a defined material")
-                return
-            end if
+            im = find_material(c, material, at, err)
+            if (im == 0) return
             if (c%mats%rigid(im)) then
                 call set_error(err, dem_err_input, at // ": key 'material': '" // &
                                trim(material) // "' is rigid (walls only)")
@@ -500,12 +496,8 @@ contains
             end do
             if (err%failed()) return
             at = nml_location(nf, b)
-            im = material_index(c, material)
-            if (im == 0) then
-                call set_error(err, dem_err_input, at // ": key 'material': '" // &
-                               trim(material) // "' is not a defined material")
-                return
-            end if
+            im = find_material(c, material, at, err)
+            if (im == 0) return
             if (.not. check_vector(at, point, 'point', .true., err)) return
             if (.not. check_vector(at, normal, 'normal', .true., err)) return
             if (all(normal == 0.0_wp)) then
@@ -672,6 +664,16 @@ contains
         end do
         idx = 0
     end function block_index
+
+    !> Index of the material named by key 'material' of a group; 0, with an error, if none.
+    integer function find_material(c, name, at, err) result(idx)
+        type(case_t), intent(in) :: c
+        character(len=*), intent(in) :: name, at
+        type(error_t), intent(inout) :: err
+        idx = material_index(c, name)
+        if (idx == 0) call set_error(err, dem_err_input, at // ": key 'material': '" // &
+                                     trim(name) // "' is not a defined material")
+    end function find_material
 
     integer function material_index(c, name) result(idx)
         type(case_t), intent(in) :: c
