@@ -129,7 +129,7 @@ contains
             return
         end select
         if (.not. check_vector(at, gravity, 'gravity', .false., err)) return
-        if (.not. (expected_speed >= 0.0_wp .and. expected_speed < unset)) then
+        if (.not. in_range(expected_speed, 0.0_wp, unset, .true., .false.)) then
             call set_error(err, dem_err_input, at // ": key 'expected_speed': must be >= 0 [m/s]")
             return
         end if
@@ -306,7 +306,7 @@ contains
                                        'is required')
                         return
                     end if
-                    if (.not. (poisson_ratio > -1.0_wp .and. poisson_ratio < 0.5_wp)) then
+                    if (.not. in_range(poisson_ratio, -1.0_wp, 0.5_wp, .false., .false.)) then
                         call set_error(err, dem_err_input, at // ": key 'poisson_ratio': " // &
                                        'must lie in (-1, 0.5)')
                         return
@@ -366,7 +366,7 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'restitution' is required")
                 return
             end if
-            if (.not. (restitution > 0.0_wp .and. restitution <= 1.0_wp)) then
+            if (.not. in_range(restitution, 0.0_wp, 1.0_wp, .false., .true.)) then
                 call set_error(err, dem_err_input, at // ": key 'restitution': must lie " // &
                                'in (0, 1]')
                 return
@@ -375,7 +375,7 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'friction' is required")
                 return
             end if
-            if (.not. (friction >= 0.0_wp)) then
+            if (.not. in_range(friction, 0.0_wp, unset, .true., .false.)) then
                 call set_error(err, dem_err_input, at // ": key 'friction': must be >= 0")
                 return
             end if
@@ -692,12 +692,32 @@ contains
         ok = .false.
         if (val == unset) then
             call set_error(err, dem_err_input, at // ": key '" // key // "' is required " // unit)
-        else if (.not. (val > 0.0_wp .and. val < unset)) then
+        else if (.not. in_range(val, 0.0_wp, unset, .false., .false.)) then
             call set_error(err, dem_err_input, at // ": key '" // key // "': must be > 0 " // unit)
         else
             ok = .true.
         end if
     end function check_positive
+
+    !> True if val is finite and lies between lo and hi (each end closed or open). NaN is
+    !> tested first, so that no comparison with it traps in a Debug build.
+    logical function in_range(val, lo, hi, closed_lo, closed_hi)
+        real(wp), intent(in) :: val, lo, hi
+        logical, intent(in) :: closed_lo, closed_hi
+        in_range = .false.
+        if (.not. ieee_is_finite(val)) return
+        if (closed_lo) then
+            if (val < lo) return
+        else
+            if (val <= lo) return
+        end if
+        if (closed_hi) then
+            if (val > hi) return
+        else
+            if (val >= hi) return
+        end if
+        in_range = .true.
+    end function in_range
 
     !> Check that a vector key is finite and, if required, was given.
     logical function check_vector(at, val, key, required, err) result(ok)
@@ -709,7 +729,9 @@ contains
         if (required .and. any(val == unset)) then
             call set_error(err, dem_err_input, at // ": key '" // key // "' is required (" // &
                            'three components)')
-        else if (.not. all(ieee_is_finite(val) .and. abs(val) < unset)) then
+        else if (.not. all(ieee_is_finite(val))) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': must be finite")
+        else if (any(abs(val) >= unset)) then
             call set_error(err, dem_err_input, at // ": key '" // key // "': must be finite")
         else
             ok = .true.

@@ -89,18 +89,19 @@ contains
             time, overlap, fn, ft, x, v, w
     end subroutine output_contact
 
-    !> final.csv: every owned particle, one row each.
-    subroutine output_final(out, n, gid, mat, radius, x, v, w, err)
+    !> final.csv: every owned particle, one row each, in the given order (by id).
+    subroutine output_final(out, order, gid, mat, radius, x, v, w, err)
         type(output_t), intent(in) :: out
-        integer(ip), intent(in) :: n
+        integer(ip), intent(in) :: order(:)    !! the particles to write, in this order
         integer(i8), intent(in) :: gid(:)
         integer(ip), intent(in) :: mat(:)
         real(wp), intent(in) :: radius(:), x(:, :), v(:, :), w(:, :)
         type(error_t), intent(inout) :: err
-        integer :: u, i
+        integer :: u, k, i
         call open_csv(out%dir // '/final.csv', final_header, u, err)
         if (err%failed()) return
-        do i = 1, n
+        do k = 1, size(order)
+            i = order(k)
             write(u, '(i0,",",i0,10(",",' // real_fmt // '))') gid(i), mat(i), radius(i), &
                 x(:, i), v(:, i), w(:, i)
         end do

@@ -4,7 +4,7 @@ module dem_acc
     use dem_kinds, only: wp, ip
     implicit none
     private
-    public :: acc_copyin, acc_delete, acc_update_host
+    public :: acc_copyin, acc_delete, acc_update_host, acc_update_device
 
     !> copyin of a whole array.
     interface acc_copyin
@@ -23,6 +23,12 @@ module dem_acc
         module procedure update_host_r1, update_host_r2, update_host_r3, &
                          update_host_i1, update_host_i2
     end interface acc_update_host
+
+    !> update device of a whole array.
+    interface acc_update_device
+        module procedure update_device_r1, update_device_r2, update_device_r3, &
+                         update_device_i1, update_device_i2
+    end interface acc_update_device
 
 contains
 
@@ -101,4 +107,28 @@ contains
         !$acc update self(a)
     end subroutine update_host_i2
 
+    subroutine update_device_r1(a)
+        real(wp), intent(in) :: a(:)
+        !$acc update device(a)
+    end subroutine update_device_r1
+
+    subroutine update_device_r2(a)
+        real(wp), intent(in) :: a(:, :)
+        !$acc update device(a)
+    end subroutine update_device_r2
+
+    subroutine update_device_r3(a)
+        real(wp), intent(in) :: a(:, :, :)
+        !$acc update device(a)
+    end subroutine update_device_r3
+
+    subroutine update_device_i1(a)
+        integer(ip), intent(in) :: a(:)
+        !$acc update device(a)
+    end subroutine update_device_i1
+
+    subroutine update_device_i2(a)
+        integer(ip), intent(in) :: a(:, :)
+        !$acc update device(a)
+    end subroutine update_device_i2
 end module dem_acc

@@ -9,7 +9,8 @@ module dem_contacts_pw
     use dem_vector, only: cross
     implicit none
     private
-    public :: wall_contacts_t, wall_contacts_init, pw_forces, max_wall_contacts
+    public :: wall_contacts_t, wall_contacts_init, wall_contacts_permute, pw_forces, &
+              max_wall_contacts
 
     integer(ip), parameter :: max_wall_contacts = 8     !< per particle
     integer(ip), parameter :: max_wall_candidates = 16  !< touching triangles per particle
@@ -30,6 +31,14 @@ contains
         wc%tri = 0
         wc%xi = 0.0_wp
     end subroutine wall_contacts_init
+
+    !> Reorder the history with the particles: particle i becomes the one stored at order(i).
+    subroutine wall_contacts_permute(wc, order)
+        type(wall_contacts_t), intent(inout) :: wc
+        integer(ip), intent(in) :: order(:)
+        wc%tri(:, 1:size(order)) = wc%tri(:, order)
+        wc%xi(:, :, 1:size(order)) = wc%xi(:, :, order)
+    end subroutine wall_contacts_permute
 
     !> Of the nc triangles touching a sphere (closest points q, features), keep those whose
     !> closest point is a local minimum of the distance to their union: faces always; an edge

@@ -1,19 +1,24 @@
 !> Verlet lists with a skin: for every owned particle, the particles and wall triangles
 !> within reach (radii plus skin), rebuilt when any particle has moved more than half the
-!> skin. The particle list is a full list (each pair appears in both rows) so that every
-!> particle sums its own forces without atomics. This version finds candidates by brute
-!> force; the cell grid replaces it with the same interface.
+!> skin (doc/theory.md, section 9). The particle list is a full list (each pair appears in
+!> both rows), each row ordered by the partners' global ids, so that every particle sums its
+!> own forces without atomics and in an order that does not depend on where particles are
+!> stored. Candidates come from cell grids: one per size level (radii within a factor of two
+!> share a level, so a monodisperse scene has one grid of 27-cell stencils), and one for the
+!> wall triangles, which are entered in every cell their reach covers.
 module dem_neighbors
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t, closest_point_triangle
     implicit none
     private
-    public :: neighbors_t, neighbors_build, neighbors_stale
+    public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order
 
     !> The lists, their per-entry tangential history, and the positions they were built at.
     type :: neighbors_t
         real(wp) :: skin = 0.0_wp             !< [m]
         integer(ip) :: n_builds = 0
+        integer(ip) :: n_levels = 0           !< size levels of the last build
+        integer(i8) :: tri_tests = 0          !< closest-point tests of the last build
         integer(ip), allocatable :: start(:)  !< row i is start(i):start(i+1)-1
         integer(ip), allocatable :: list(:)   !< partner's local index
         integer(i8), allocatable :: partner(:) !< partner's global id (history key)
@@ -22,6 +27,15 @@ module dem_neighbors
         integer(ip), allocatable :: wlist(:)  !< candidate triangle
         real(wp), allocatable :: x_ref(:, :)  !< positions at the last build [m]
     end type neighbors_t
+
+    !> A uniform grid over a box, with the items of each cell (compressed rows).
+    type :: grid_t
+        real(wp) :: origin(3) = 0.0_wp
+        real(wp) :: h = 1.0_wp                !< cell size [m]
+        integer(ip) :: n(3) = 1               !< cells along x, y, z
+        integer(ip), allocatable :: start(:)  !< cell c holds item(start(c):start(c+1)-1)
+        integer(ip), allocatable :: item(:)
+    end type grid_t
 
 contains
 
@@ -49,8 +63,24 @@ contains
         end do
     end function max_displacement2
 
-    !> Rebuild both lists; the history of pairs still listed is kept (matched by global id).
-    subroutine neighbors_build(nb, n_own, n_all, gid, x, radius, mesh)
+    !> The particles 1..n in the order of the cells of a grid of size h (x fastest), for
+    !> cache locality: neighbours in space become neighbours in memory.
+    function neighbors_spatial_order(n, x, h) result(order)
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: x(:, :)     !! positions [m]
+        real(wp), intent(in) :: h           !! cell size [m]
+        integer(ip) :: order(n)
+        type(grid_t) :: g
+        integer(ip) :: i
+        if (n == 0) return
+        call grid_shape(g, minval(x(:, 1:n), dim=2), maxval(x(:, 1:n), dim=2), h, n)
+        call grid_fill(g, n, [(i, i = 1, n)], x)
+        order = g%item
+    end function neighbors_spatial_order
+
+    !> Rebuild both lists. The history of pairs still listed is kept, matched by global id;
+    !> old_index(i) is where particle i was stored at the last build (identity if absent).
+    subroutine neighbors_build(nb, n_own, n_all, gid, x, radius, mesh, old_index)
         type(neighbors_t), intent(inout) :: nb
         integer(ip), intent(in) :: n_own       !! owned particles (rows)
         integer(ip), intent(in) :: n_all       !! owned plus ghosts (partners)
@@ -58,10 +88,13 @@ contains
         real(wp), intent(in) :: x(:, :)        !! positions [m]
         real(wp), intent(in) :: radius(:)      !! [m]
         type(mesh_t), intent(in) :: mesh
-        integer(ip), allocatable :: old_start(:)
+        integer(ip), intent(in), optional :: old_index(:)
+        integer(ip), allocatable :: old_start(:), level(:)
         integer(i8), allocatable :: old_partner(:)
-        real(wp), allocatable :: old_xi(:, :)
-        integer(ip) :: i, j, k, kold, t
+        real(wp), allocatable :: old_xi(:, :), rmax(:)
+        type(grid_t), allocatable :: grids(:)
+        real(wp) :: lo(3), hi(3), rmin, margin
+        integer(ip) :: i, l, pass, k
         logical :: keep_history
 
         keep_history = allocated(nb%start)
@@ -73,72 +106,288 @@ contains
         end if
         if (allocated(nb%start)) deallocate(nb%start, nb%partner, nb%xi)
         if (allocated(nb%list)) deallocate(nb%list)
+        if (allocated(nb%wstart)) deallocate(nb%wstart, nb%wlist)
+        allocate(nb%start(n_own + 1), nb%wstart(n_own + 1))
+        nb%start(1) = 1
+        nb%wstart(1) = 1
+        nb%tri_tests = 0
+        if (n_all == 0) then
+            allocate(nb%list(0), nb%partner(0), nb%xi(3, 0), nb%wlist(0))
+            nb%x_ref = x(:, 1:n_own)
+            return
+        end if
+
+        ! size levels: radii in [rmin 2^l, rmin 2^(l+1)) share level l
+        rmin = minval(radius(1:n_all))
+        allocate(level(n_all))
+        do i = 1, n_all
+            level(i) = min(30, int(log(radius(i) / rmin) / log(2.0_wp) + 1.0e-9_wp))
+        end do
+        nb%n_levels = maxval(level) + 1
+        allocate(rmax(0:nb%n_levels - 1), grids(0:nb%n_levels - 1))
+        rmax = 0.0_wp
+        do i = 1, n_all
+            rmax(level(i)) = max(rmax(level(i)), radius(i))
+        end do
+        margin = maxval(rmax) + nb%skin
+        lo = minval(x(:, 1:n_all), dim=2) - margin
+        hi = maxval(x(:, 1:n_all), dim=2) + margin
+        do l = 0, nb%n_levels - 1
+            if (rmax(l) == 0.0_wp) cycle
+            call grid_shape(grids(l), lo, hi, 2.0_wp * rmax(l) + nb%skin, n_all)
+            call grid_fill(grids(l), count(level == l), pack([(i, i = 1, n_all)], level == l), x)
+        end do
 
         ! particle pairs within R_i + R_j + skin: count, then fill
-        allocate(nb%start(n_own + 1))
-        nb%start(1) = 1
-        do i = 1, n_own
-            nb%start(i + 1) = nb%start(i) + count(within([(j, j = 1, n_all)], i))
-        end do
-        allocate(nb%list(nb%start(n_own + 1) - 1))
-        do i = 1, n_own
-            k = nb%start(i)
-            do j = 1, n_all
-                if (.not. within(j, i)) cycle
-                nb%list(k) = j
-                k = k + 1
+        do pass = 1, 2
+            do i = 1, n_own
+                k = nb%start(i)
+                do l = 0, nb%n_levels - 1
+                    if (rmax(l) == 0.0_wp) cycle
+                    call scan_level(i, grids(l), rmax(l), pass == 2, k)
+                end do
+                if (pass == 1) nb%start(i + 1) = k
             end do
+            if (pass == 1) allocate(nb%list(nb%start(n_own + 1) - 1))
         end do
         allocate(nb%partner(size(nb%list)), nb%xi(3, size(nb%list)))
+        do i = 1, n_own
+            call sort_row(nb%list(nb%start(i):nb%start(i + 1) - 1), gid)
+        end do
         nb%partner = gid(nb%list)
         nb%xi = 0.0_wp
         if (keep_history) then
             do i = 1, n_own
-                do k = nb%start(i), nb%start(i + 1) - 1
-                    do kold = old_start(i), old_start(i + 1) - 1
-                        if (old_partner(kold) == nb%partner(k)) then
-                            nb%xi(:, k) = old_xi(:, kold)
-                            exit
-                        end if
-                    end do
-                end do
+                l = i
+                if (present(old_index)) l = old_index(i)
+                call carry_history(nb%partner(nb%start(i):nb%start(i + 1) - 1), &
+                                   nb%xi(:, nb%start(i):nb%start(i + 1) - 1), &
+                                   old_partner(old_start(l):old_start(l + 1) - 1), &
+                                   old_xi(:, old_start(l):old_start(l + 1) - 1))
             end do
         end if
 
-        ! wall triangles within R_i + skin
-        if (allocated(nb%wstart)) deallocate(nb%wstart, nb%wlist)
-        allocate(nb%wstart(n_own + 1))
-        nb%wstart(1) = 1
-        do i = 1, n_own
-            nb%wstart(i + 1) = nb%wstart(i) + count(near_wall([(t, t = 1, mesh%n_tri)], i))
-        end do
-        allocate(nb%wlist(nb%wstart(n_own + 1) - 1))
-        do i = 1, n_own
-            k = nb%wstart(i)
-            do t = 1, mesh%n_tri
-                if (.not. near_wall(t, i)) cycle
-                nb%wlist(k) = t
-                k = k + 1
-            end do
-        end do
-
+        call build_wall_list(nb, n_own, x, radius, mesh, lo, hi, &
+                             2.0_wp * rmax(0) + nb%skin, n_all)
         nb%x_ref = x(:, 1:n_own)
         nb%n_builds = nb%n_builds + 1
     contains
-        !> Particle j is within reach of particle i (and is not i).
-        elemental logical function within(j_, i_)
-            integer(ip), intent(in) :: j_, i_
-            within = j_ /= i_ .and. sum((x(:, j_) - x(:, i_))**2) &
-                                    < (radius(i_) + radius(j_) + nb%skin)**2
-        end function within
-        !> Triangle t_ is within reach of particle i_.
-        elemental logical function near_wall(t_, i_)
-            integer(ip), intent(in) :: t_, i_
-            real(wp) :: q_(3)
-            integer(ip) :: feature_
-            call closest_point_triangle(x(:, i_), mesh%vert(:, 1, t_), mesh%vert(:, 2, t_), &
-                                        mesh%vert(:, 3, t_), q_, feature_)
-            near_wall = sum((q_ - x(:, i_))**2) < (radius(i_) + nb%skin)**2
-        end function near_wall
+        !> Partners of particle i in one level's grid: count them (k advances) or also list them.
+        subroutine scan_level(i_, g, rmax_l, fill, k_)
+            integer(ip), intent(in) :: i_
+            type(grid_t), intent(in) :: g
+            real(wp), intent(in) :: rmax_l
+            logical, intent(in) :: fill
+            integer(ip), intent(inout) :: k_
+            integer(ip) :: c0(3), c1(3), cx, cy, cz, cell, m, j
+            real(wp) :: reach
+            reach = radius(i_) + rmax_l + nb%skin
+            c0 = cell_of(g, x(:, i_) - reach)
+            c1 = cell_of(g, x(:, i_) + reach)
+            do cz = c0(3), c1(3)
+                do cy = c0(2), c1(2)
+                    do cx = c0(1), c1(1)
+                        cell = 1 + cx + g%n(1) * (cy + g%n(2) * cz)
+                        do m = g%start(cell), g%start(cell + 1) - 1
+                            j = g%item(m)
+                            if (j == i_) cycle
+                            if (sum((x(:, j) - x(:, i_))**2) &
+                                >= (radius(i_) + radius(j) + nb%skin)**2) cycle
+                            if (fill) nb%list(k_) = j
+                            k_ = k_ + 1
+                        end do
+                    end do
+                end do
+            end do
+        end subroutine scan_level
     end subroutine neighbors_build
+
+    !> Wall triangles within R_i + skin of each owned particle. Each triangle is entered in
+    !> the cells of a grid (sized for the smallest particles) that its bounding box covers; a
+    !> particle tests the triangles of the cells its reach covers, each once.
+    subroutine build_wall_list(nb, n_own, x, radius, mesh, lo, hi, h, n_all)
+        type(neighbors_t), intent(inout) :: nb
+        integer(ip), intent(in) :: n_own, n_all
+        real(wp), intent(in) :: x(:, :), radius(:), lo(3), hi(3)
+        real(wp), intent(in) :: h                !! cell size [m]
+        type(mesh_t), intent(in) :: mesh
+        type(grid_t) :: g
+        integer(ip), allocatable :: cnt(:), fill(:), seen(:)
+        integer(ip) :: t, i, cell, m, pass, k, c0(3), c1(3), cx, cy, cz, feature
+        real(wp) :: q(3), reach
+
+        if (mesh%n_tri == 0) then
+            nb%wstart = 1
+            allocate(nb%wlist(0))
+            return
+        end if
+        call grid_shape(g, lo, hi, h, max(n_all, mesh%n_tri))
+        allocate(cnt(product(g%n)), g%start(product(g%n) + 1), seen(mesh%n_tri))
+        cnt = 0
+        do pass = 1, 2
+            if (pass == 2) then
+                g%start(1) = 1
+                do cell = 1, size(cnt)
+                    g%start(cell + 1) = g%start(cell) + cnt(cell)
+                end do
+                allocate(g%item(g%start(size(cnt) + 1) - 1))
+                fill = g%start(1:size(cnt))
+            end if
+            do t = 1, mesh%n_tri
+                if (any(maxval(mesh%vert(:, :, t), dim=2) < lo) .or. &
+                    any(minval(mesh%vert(:, :, t), dim=2) > hi)) cycle
+                c0 = cell_of(g, minval(mesh%vert(:, :, t), dim=2))
+                c1 = cell_of(g, maxval(mesh%vert(:, :, t), dim=2))
+                do cz = c0(3), c1(3)
+                    do cy = c0(2), c1(2)
+                        do cx = c0(1), c1(1)
+                            cell = 1 + cx + g%n(1) * (cy + g%n(2) * cz)
+                            if (pass == 1) then
+                                cnt(cell) = cnt(cell) + 1
+                            else
+                                g%item(fill(cell)) = t
+                                fill(cell) = fill(cell) + 1
+                            end if
+                        end do
+                    end do
+                end do
+            end do
+        end do
+
+        do pass = 1, 2
+            if (pass == 2) allocate(nb%wlist(nb%wstart(n_own + 1) - 1))
+            seen = 0
+            do i = 1, n_own
+                k = nb%wstart(i)
+                reach = radius(i) + nb%skin
+                c0 = cell_of(g, x(:, i) - reach)
+                c1 = cell_of(g, x(:, i) + reach)
+                do cz = c0(3), c1(3)
+                    do cy = c0(2), c1(2)
+                        do cx = c0(1), c1(1)
+                            cell = 1 + cx + g%n(1) * (cy + g%n(2) * cz)
+                            do m = g%start(cell), g%start(cell + 1) - 1
+                                t = g%item(m)
+                                if (seen(t) == i) cycle
+                                seen(t) = i
+                                call closest_point_triangle(x(:, i), mesh%vert(:, 1, t), &
+                                    mesh%vert(:, 2, t), mesh%vert(:, 3, t), q, feature)
+                                if (pass == 1) nb%tri_tests = nb%tri_tests + 1
+                                if (sum((q - x(:, i))**2) >= reach**2) cycle
+                                if (pass == 2) nb%wlist(k) = t
+                                k = k + 1
+                            end do
+                        end do
+                    end do
+                end do
+                if (pass == 1) nb%wstart(i + 1) = k
+            end do
+        end do
+        do i = 1, n_own
+            call sort_triangles(nb%wlist(nb%wstart(i):nb%wstart(i + 1) - 1))
+        end do
+    end subroutine build_wall_list
+
+    !> Order a row of triangle indices (insertion sort), so that the wall contacts of a
+    !> particle are evaluated in an order that does not depend on the grid.
+    pure subroutine sort_triangles(row)
+        integer(ip), intent(inout) :: row(:)
+        integer(ip) :: a, b, key
+        do a = 2, size(row)
+            key = row(a)
+            b = a - 1
+            do while (b >= 1)
+                if (row(b) <= key) exit
+                row(b + 1) = row(b)
+                b = b - 1
+            end do
+            row(b + 1) = key
+        end do
+    end subroutine sort_triangles
+
+    !> Order a row of partner indices by the partners' global ids (insertion sort: rows are
+    !> short and mostly ordered already).
+    subroutine sort_row(row, gid)
+        integer(ip), intent(inout) :: row(:)
+        integer(i8), intent(in) :: gid(:)
+        integer(ip) :: a, b, key
+        do a = 2, size(row)
+            key = row(a)
+            b = a - 1
+            do while (b >= 1)
+                if (gid(row(b)) <= gid(key)) exit
+                row(b + 1) = row(b)
+                b = b - 1
+            end do
+            row(b + 1) = key
+        end do
+    end subroutine sort_row
+
+    !> Copy the history of the partners a new row shares with the old one; both rows are
+    !> ordered by partner id, so one merge pass finds them.
+    subroutine carry_history(partner, xi, old_partner, old_xi)
+        integer(i8), intent(in) :: partner(:), old_partner(:)
+        real(wp), intent(inout) :: xi(:, :)
+        real(wp), intent(in) :: old_xi(:, :)
+        integer(ip) :: a, b
+        b = 1
+        do a = 1, size(partner)
+            do while (b <= size(old_partner))
+                if (old_partner(b) >= partner(a)) exit
+                b = b + 1
+            end do
+            if (b > size(old_partner)) exit
+            if (old_partner(b) == partner(a)) xi(:, a) = old_xi(:, b)
+        end do
+    end subroutine carry_history
+
+    !> Cells of size about h over the box [lo, hi]; the size grows until there are at most
+    !> max(27, 4 n_items) cells, so that sparse scenes do not allocate empty space.
+    subroutine grid_shape(g, lo, hi, h, n_items)
+        type(grid_t), intent(inout) :: g
+        real(wp), intent(in) :: lo(3), hi(3), h
+        integer(ip), intent(in) :: n_items
+        g%origin = lo
+        g%h = h
+        do
+            g%n = max(1, ceiling((hi - lo) / g%h))
+            if (real(g%n(1), wp) * g%n(2) * g%n(3) <= max(27.0_wp, 4.0_wp * n_items)) exit
+            g%h = g%h * 1.26_wp
+        end do
+    end subroutine grid_shape
+
+    !> Sort the given items into the cells of their positions (counting sort, stable).
+    subroutine grid_fill(g, n_items, items, x)
+        type(grid_t), intent(inout) :: g
+        integer(ip), intent(in) :: n_items, items(:)
+        real(wp), intent(in) :: x(:, :)
+        integer(ip), allocatable :: cell(:), fill(:)
+        integer(ip) :: k, c(3), n_cells
+        n_cells = product(g%n)
+        allocate(cell(n_items), g%start(n_cells + 1), fill(n_cells))
+        g%start = 0
+        do k = 1, n_items
+            c = cell_of(g, x(:, items(k)))
+            cell(k) = 1 + c(1) + g%n(1) * (c(2) + g%n(2) * c(3))
+            g%start(cell(k) + 1) = g%start(cell(k) + 1) + 1
+        end do
+        g%start(1) = 1
+        do k = 1, n_cells
+            g%start(k + 1) = g%start(k + 1) + g%start(k)
+        end do
+        fill = g%start(1:n_cells)
+        allocate(g%item(n_items))
+        do k = 1, n_items
+            g%item(fill(cell(k))) = items(k)
+            fill(cell(k)) = fill(cell(k)) + 1
+        end do
+    end subroutine grid_fill
+
+    !> Cell coordinates (0-based) of a point, clamped to the grid.
+    pure function cell_of(g, p) result(c)
+        type(grid_t), intent(in) :: g
+        real(wp), intent(in) :: p(3)
+        integer(ip) :: c(3)
+        c = min(g%n - 1, max(0, floor((p - g%origin) / g%h)))
+    end function cell_of
 end module dem_neighbors

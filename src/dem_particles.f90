@@ -4,7 +4,7 @@ module dem_particles
     use dem_kinds, only: wp, ip, i8
     implicit none
     private
-    public :: particles_t, particles_init, particles_add
+    public :: particles_t, particles_init, particles_add, particles_permute, order_by_id
 
     !> Structure of arrays for spheres. Kernels receive the arrays, never the type.
     type :: particles_t
@@ -59,4 +59,55 @@ contains
         p%v(:, i) = v
         p%w(:, i) = w
     end subroutine particles_add
+
+    !> Reorder the owned particles: particle i becomes the one stored at order(i).
+    subroutine particles_permute(p, order)
+        type(particles_t), intent(inout) :: p
+        integer(ip), intent(in) :: order(:)   !! a permutation of 1..n_own
+        integer(ip) :: n
+        n = p%n_own
+        p%gid(1:n) = p%gid(order)
+        p%mat(1:n) = p%mat(order)
+        p%radius(1:n) = p%radius(order)
+        p%mass(1:n) = p%mass(order)
+        p%inv_mass(1:n) = p%inv_mass(order)
+        p%inv_inertia(1:n) = p%inv_inertia(order)
+        p%x(:, 1:n) = p%x(:, order)
+        p%v(:, 1:n) = p%v(:, order)
+        p%w(:, 1:n) = p%w(:, order)
+        p%f(:, 1:n) = p%f(:, order)
+        p%t(:, 1:n) = p%t(:, order)
+    end subroutine particles_permute
+
+    !> The indices 1..size(gid) in increasing order of gid (merge sort, stable).
+    function order_by_id(gid) result(idx)
+        integer(i8), intent(in) :: gid(:)
+        integer(ip) :: idx(size(gid)), tmp(size(gid))
+        integer(ip) :: width, lo, mid, hi, a, b, k, n
+        logical :: take_a
+        n = size(gid)
+        idx = [(k, k = 1, n)]
+        width = 1
+        do while (width < n)
+            do lo = 1, n, 2 * width
+                mid = min(lo + width, n + 1)
+                hi = min(lo + 2 * width, n + 1)
+                a = lo
+                b = mid
+                do k = lo, hi - 1
+                    take_a = a < mid
+                    if (take_a .and. b < hi) take_a = gid(idx(a)) <= gid(idx(b))
+                    if (take_a) then
+                        tmp(k) = idx(a)
+                        a = a + 1
+                    else
+                        tmp(k) = idx(b)
+                        b = b + 1
+                    end if
+                end do
+            end do
+            idx = tmp
+            width = 2 * width
+        end do
+    end function order_by_id
 end module dem_particles

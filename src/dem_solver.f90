@@ -3,17 +3,20 @@ module dem_solver
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
     use dem_case, only: case_t, time_scales_t, case_time_scales
-    use dem_particles, only: particles_t, particles_init, particles_add
+    use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
+                             order_by_id
     use dem_materials, only: pair_constants_t, pair_constants_build
-    use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale
+    use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
+                             neighbors_spatial_order
     use dem_contacts_pp, only: pp_forces
-    use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, pw_forces
+    use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, wall_contacts_permute, &
+                               pw_forces
     use dem_forces, only: body_forces
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
     use dem_diagnostics, only: energies, count_pp_contacts, first_nonfinite, contact_trace
     use dem_output, only: output_t, output_open, output_series, output_contact, &
                           output_final, output_close
-    use dem_acc, only: acc_copyin, acc_delete, acc_update_host
+    use dem_acc, only: acc_copyin, acc_delete, acc_update_host, acc_update_device
     use dem_timers, only: timers_t, timer_start, timer_stop, phase_neighbors, &
                           phase_contacts_pp, phase_contacts_pw, phase_integrate, phase_output
     implicit none
@@ -28,6 +31,7 @@ module dem_solver
         type(pair_constants_t) :: pc
         integer(i8) :: step = 0        !< steps done; the time is step * dt
         integer(ip) :: trace = 0       !< local index of the traced particle, 0: none
+        real(wp) :: sort_cell = 0.0_wp !< cell size of the spatial order [m]
         integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
         type(timers_t) :: timers       !< time per phase of those steps
     end type solver_t
@@ -48,6 +52,7 @@ contains
         call pair_constants_build(c%mats, c%opts, s%pc)
         call wall_contacts_init(s%wc, c%n_particles)
         s%nb%skin = c%skin
+        s%sort_cell = 2.0_wp * minval(c%radius(1:c%n_particles)) + c%skin
         s%step = 0
     end subroutine solver_init
 
@@ -104,8 +109,9 @@ contains
         end do
 
         call device_to_host(s)
-        if (.not. err%failed()) call output_final(out, s%p%n_own, s%p%gid, s%p%mat, &
-                                                  s%p%radius, s%p%x, s%p%v, s%p%w, err)
+        if (.not. err%failed()) call output_final(out, order_by_id(s%p%gid(1:s%p%n_own)), &
+                                                  s%p%gid, s%p%mat, s%p%radius, s%p%x, &
+                                                  s%p%v, s%p%w, err)
         call output_close(out)
         call device_exit(s, c)
     end subroutine solver_run
@@ -135,19 +141,24 @@ contains
             'wall triangles than the contact store holds; the walls overlap or are too fine')
     end subroutine compute_forces
 
-    !> Rebuild the neighbour lists on the host and put the new ones on the device.
+    !> Re-sort the particles in space and rebuild the neighbour lists, on the host; the
+    !> history follows the particles, and the new state and lists go to the device.
     subroutine rebuild(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        logical :: first
-        first = .not. allocated(s%nb%start)
-        call acc_update_host(s%p%x)
-        if (.not. first) then
+        integer(ip), allocatable :: order(:)
+        call device_to_host(s)
+        if (allocated(s%nb%start)) then
             call acc_update_host(s%nb%xi)
             call lists_delete(s%nb)
         end if
+        order = neighbors_spatial_order(s%p%n_own, s%p%x, s%sort_cell)
+        call particles_permute(s%p, order)
+        call wall_contacts_permute(s%wc, order)
+        call particles_to_device(s)
+        if (c%trace_id /= 0) s%trace = findloc(s%p%gid(1:s%p%n_own), c%trace_id, dim=1)
         call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
-                             s%p%radius, c%mesh)
+                             s%p%radius, c%mesh, old_index=order)
         call acc_copyin(s%nb%start)
         call acc_copyin(s%nb%list)
         call acc_copyin(s%nb%xi)
@@ -255,15 +266,34 @@ contains
         end if
     end subroutine device_enter
 
-    !> Bring the particle state and wall contacts back to the host (output).
+    !> Bring the particle state and wall contacts back to the host.
     subroutine device_to_host(s)
         type(solver_t), intent(inout) :: s
         call acc_update_host(s%p%x)
         call acc_update_host(s%p%v)
         call acc_update_host(s%p%w)
         call acc_update_host(s%p%f)
+        call acc_update_host(s%p%t)
         call acc_update_host(s%wc%tri)
+        call acc_update_host(s%wc%xi)
     end subroutine device_to_host
+
+    !> Send every particle array and the wall contacts to the device (after a re-sort).
+    subroutine particles_to_device(s)
+        type(solver_t), intent(inout) :: s
+        call acc_update_device(s%p%mat)
+        call acc_update_device(s%p%radius)
+        call acc_update_device(s%p%mass)
+        call acc_update_device(s%p%inv_mass)
+        call acc_update_device(s%p%inv_inertia)
+        call acc_update_device(s%p%x)
+        call acc_update_device(s%p%v)
+        call acc_update_device(s%p%w)
+        call acc_update_device(s%p%f)
+        call acc_update_device(s%p%t)
+        call acc_update_device(s%wc%tri)
+        call acc_update_device(s%wc%xi)
+    end subroutine particles_to_device
 
     !> Release the device copies.
     subroutine device_exit(s, c)

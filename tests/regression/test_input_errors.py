@@ -108,6 +108,11 @@ bad("infinite_velocity", sub("velocity = 0, 0, -1", "velocity = 0, 0, -Inf"), "p
 bad("missing_position", sub("position = 0, 0, 0.011, ", ""), "particle", "position", "required")
 bad("coincident_particles", GOOD + "&particle material = 'glass', radius = 0.01, position = "
     "0, 0, 0.012 /\n", "particle", "position", "overlaps particle 1")
+bad("nan_poisson", sub("48.0e9, poisson_ratio = 0.2", "48.0e9, poisson_ratio = NaN"),
+    "material", "poisson_ratio")
+bad("nan_radius", sub("radius = 0.01", "radius = NaN"), "particle", "radius")
+bad("nan_restitution", sub("'glass', 'glass', restitution = 0.5", "'glass', 'glass', "
+    "restitution = NaN"), "pair", "restitution")
 bad("nan_gravity", sub("gravity = 0, 0, 0", "gravity = 0, 0, NaN"), "run", "gravity", "finite")
 bad("unknown_material", sub("&particle material = 'glass'", "&particle material = 'gold'"),
     "particle", "material")

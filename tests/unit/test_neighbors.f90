@@ -1,23 +1,32 @@
-!> Verlet lists against brute force for random polydisperse spheres (size ratios 1 to 20):
-!> every pair within R_i + R_j + skin is listed in both rows and no other; the tangential
-!> history of pairs still listed survives a rebuild; the rebuild criterion is skin/2.
+!> Verlet lists against brute force for random polydisperse spheres (size ratios 1 to 20),
+!> near the edges of the domain too: every pair within R_i + R_j + skin is listed in both
+!> rows and no other, rows ordered by partner id; the wall list holds exactly the triangles
+!> within R_i + skin, found with far fewer tests than particles x triangles; the tangential
+!> history of pairs still listed survives a rebuild and a spatial re-sort of the particles;
+!> the rebuild criterion is skin/2.
 program test_neighbors
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t, mesh_add_plane
-    use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale
+    use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
+                             neighbors_spatial_order
+    use dem_mesh, only: closest_point_triangle
     use dem_assert, only: assert_true, assert_finish
     implicit none
     integer(ip), parameter :: n = 300
     type(neighbors_t) :: nb
     type(mesh_t) :: m
-    real(wp) :: x(3, n), r(n), u, ratio
+    real(wp) :: x(3, n), r(n), u, ratio, q(3)
     integer(i8) :: gid(n)
-    integer(ip) :: i, j, k, found, case_no
+    integer(ip) :: i, j, k, found, case_no, t, feature, order(n)
+    integer(ip), allocatable :: expected(:)
     real(wp), parameter :: ratios(4) = [1.0_wp, 2.0_wp, 10.0_wp, 20.0_wp]
     logical :: ok
 
     call random_seed()
-    call mesh_add_plane(m, [0.5_wp, 0.5_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.5_wp, 3_ip, 1_ip)
+    ! 9800 triangles on the floor, 200 on a side wall
+    call mesh_add_plane(m, [0.5_wp, 0.5_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.5_wp, 70_ip, 1_ip)
+    call mesh_add_plane(m, [1.0_wp, 0.5_wp, 0.5_wp], [-1.0_wp, 0.0_wp, 0.0_wp], 0.5_wp, 10_ip, &
+                        1_ip)
     gid = [(int(1000 + 7 * i, i8), i = 1, n)]
     do case_no = 1, size(ratios)
         ratio = ratios(case_no)
@@ -39,14 +48,15 @@ program test_neighbors
                     ok = ok .and. found == 0
                 end if
             end do
-            ! wall candidates: triangles within R + skin of the centre (the plane z = 0)
-            if (x(3, i) < r(i) + nb%skin) then
-                ok = ok .and. nb%wstart(i + 1) - nb%wstart(i) > 0
-            else
-                ok = ok .and. nb%wstart(i + 1) == nb%wstart(i)
-            end if
+            ok = ok .and. all(nb%partner(nb%start(i) + 1:nb%start(i + 1) - 1) &
+                              > nb%partner(nb%start(i):nb%start(i + 1) - 2))
+            ! wall candidates: exactly the triangles within R + skin
+            expected = pack([(t, t = 1, m%n_tri)], [(near(t, i), t = 1, m%n_tri)])
+            ok = ok .and. size(expected) == nb%wstart(i + 1) - nb%wstart(i)
+            if (ok) ok = all(expected == nb%wlist(nb%wstart(i):nb%wstart(i + 1) - 1))
         end do
-        call assert_true(ok, 'list equals brute force')
+        call assert_true(ok, 'lists equal brute force, rows ordered by partner id')
+        call assert_true(nb%tri_tests < n * m%n_tri / 100, 'wall search tests few triangles')
         call assert_true(all(nb%partner == gid(nb%list)), 'partners carry global ids')
 
         ! history: give each entry a value made of its pair's ids, move a little, rebuild
@@ -73,6 +83,35 @@ program test_neighbors
         call assert_true(ok, 'history follows its pair through a rebuild')
         call assert_true(count(nb%xi(1, :) /= 0.0_wp) >= size(nb%list) - 4 * n / 10, &
                          'most pairs kept their history')
+
+        ! re-sort the particles in space and rebuild: the history follows the pairs
+        order = neighbors_spatial_order(n, x, 0.03_wp)
+        call assert_true(all(order(2:) /= order(1:n - 1)) .and. minval(order) == 1 .and. &
+                         maxval(order) == n, 'spatial order is a permutation')
+        x = x(:, order)
+        r = r(order)
+        gid = gid(order)
+        call neighbors_build(nb, n, n, gid, x, r, m, old_index=order)
+        ok = .true.
+        do i = 1, n
+            do k = nb%start(i), nb%start(i + 1) - 1
+                j = nb%list(k)
+                if (all(nb%xi(:, k) == 0.0_wp)) cycle
+                ok = ok .and. all(nb%xi(:, k) == real(gid(i) * 100000 + gid(j), wp))
+            end do
+        end do
+        call assert_true(ok, 'history follows its pair through a re-sort')
+        call assert_true(count(nb%xi(1, :) /= 0.0_wp) >= size(nb%list) - 4 * n / 10, &
+                         'the pairs kept their history through the re-sort')
     end do
     call assert_finish()
+
+contains
+
+    logical function near(t_, i_)
+        integer(ip), intent(in) :: t_, i_
+        call closest_point_triangle(x(:, i_), m%vert(:, 1, t_), m%vert(:, 2, t_), &
+                                    m%vert(:, 3, t_), q, feature)
+        near = sum((q - x(:, i_))**2) < (r(i_) + nb%skin)**2
+    end function near
 end program test_neighbors
