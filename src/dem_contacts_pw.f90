@@ -1,7 +1,8 @@
 !> Particle-wall contact forces. A sphere's contacts with the triangles near it are reduced
 !> to the local minima of its distance to the surface they form, so that a flat surface of
 !> many triangles acts as one plane over faces, shared edges and shared vertices
-!> (doc/theory.md, section 4). Tangential history is kept per particle, keyed by triangle.
+!> (doc/theory.md, section 4). Tangential history is kept per particle, keyed by triangle,
+!> and follows a contact onto the neighbouring triangle of the same wall.
 module dem_contacts_pw
     use dem_kinds, only: wp, ip
     use dem_contact_hm, only: hm_force
@@ -73,18 +74,65 @@ contains
         end do
     end subroutine wall_contact_select
 
+    !> The history slot each kept contact continues: the slot of its own triangle, or else,
+    !> for a contact that has moved onto a neighbouring triangle, the unclaimed slot of the
+    !> same wall whose triangle is nearest to the contact point (0: a new contact).
+    pure subroutine history_slots(nc, keep, ctri, q, stri, n_tri, vert, twall, slot)
+        !$acc routine seq
+        integer(ip), intent(in) :: nc, n_tri
+        logical, intent(in) :: keep(nc)
+        integer(ip), intent(in) :: ctri(nc)                  !! triangles of the candidates
+        real(wp), intent(in) :: q(3, nc)                     !! their contact points [m]
+        integer(ip), intent(in) :: stri(max_wall_contacts)   !! triangles of the slots
+        real(wp), intent(in) :: vert(3, 3, n_tri)            !! [m]
+        integer(ip), intent(in) :: twall(n_tri)
+        integer(ip), intent(out) :: slot(nc)
+        logical :: claimed(max_wall_contacts)
+        integer(ip) :: c, s, fs
+        real(wp) :: qs(3), d2, best
+        slot = 0
+        claimed = .false.
+        do c = 1, nc
+            if (.not. keep(c)) cycle
+            do s = 1, max_wall_contacts
+                if (stri(s) == ctri(c)) then
+                    slot(c) = s
+                    claimed(s) = .true.
+                    exit
+                end if
+            end do
+        end do
+        do c = 1, nc
+            if (.not. keep(c) .or. slot(c) > 0) cycle
+            best = huge(1.0_wp)
+            do s = 1, max_wall_contacts
+                if (claimed(s) .or. stri(s) == 0) cycle
+                if (twall(stri(s)) /= twall(ctri(c))) cycle
+                call closest_point_triangle(q(:, c), vert(:, 1, stri(s)), vert(:, 2, stri(s)), &
+                                            vert(:, 3, stri(s)), qs, fs)
+                d2 = sum((qs - q(:, c))**2)
+                if (d2 < best) then
+                    best = d2
+                    slot(c) = s
+                end if
+            end do
+            if (slot(c) > 0) claimed(slot(c)) = .true.
+        end do
+    end subroutine history_slots
+
     !> Add the wall contact forces and torques to every owned particle. `overflow` counts
     !> particles with more touching triangles or contacts than the fixed limits.
     subroutine pw_forces(n_own, n_cand, n_tri, nm, x, v, w, radius, mass, mat, wstart, wlist, &
-                         vert, tmat, kn, sn, st, cn, ct, mu, clamp_normal, dt, wtri, wxi, &
-                         f, t, overflow)
+                         vert, tmat, twall, kn, sn, st, cn, ct, mu, clamp_normal, dt, wtri, &
+                         wxi, f, t, overflow)
         integer(ip), intent(in) :: n_own, n_cand, n_tri, nm
         real(wp), intent(in) :: x(3, n_own), v(3, n_own), w(3, n_own)  !! [m], [m/s], [rad/s]
         real(wp), intent(in) :: radius(n_own), mass(n_own)             !! [m], [kg]
         integer(ip), intent(in) :: mat(n_own)
         integer(ip), intent(in) :: wstart(n_own + 1), wlist(n_cand)    !! candidate triangles
         real(wp), intent(in) :: vert(3, 3, n_tri)                      !! [m]
-        integer(ip), intent(in) :: tmat(n_tri)
+        integer(ip), intent(in) :: tmat(n_tri)                         !! material of a triangle
+        integer(ip), intent(in) :: twall(n_tri)                        !! wall of a triangle
         real(wp), intent(in) :: kn(nm, nm), sn(nm, nm), st(nm, nm)   !! [Pa]
         real(wp), intent(in) :: cn(nm, nm), ct(nm, nm), mu(nm, nm)   !! [-]
         logical, intent(in) :: clamp_normal
@@ -93,8 +141,9 @@ contains
         real(wp), intent(inout) :: wxi(3, max_wall_contacts, n_own)   !! [m]
         real(wp), intent(inout) :: f(3, n_own), t(3, n_own)           !! [N], [N m]
         integer(ip), intent(out) :: overflow
-        integer(ip) :: i, k, c, nc, s, ns, a, b, tri, feat(max_wall_candidates)
+        integer(ip) :: i, k, c, nc, ns, a, b, tri, feat(max_wall_candidates)
         integer(ip) :: new_tri(max_wall_contacts), ctri(max_wall_candidates), fk
+        integer(ip) :: slot(max_wall_candidates)
         real(wp) :: q(3, max_wall_candidates), d2(max_wall_candidates), qk(3), d2k
         real(wp) :: cv(3, 3, max_wall_candidates), new_xi(3, max_wall_contacts)
         real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r
@@ -102,8 +151,8 @@ contains
 
         overflow = 0
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
-        !$acc private(k, c, nc, s, ns, a, b, tri, feat, new_tri, ctri, fk, q, d2, qk, d2k) &
-        !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, keep)
+        !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, d2, qk, d2k) &
+        !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, keep, slot)
         do i = 1, n_own
             r = radius(i)
             nc = 0
@@ -127,6 +176,8 @@ contains
             call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), cv(:, :, 1:nc), &
                                      1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i))), &
                                      keep(1:nc))
+            call history_slots(nc, keep(1:nc), ctri(1:nc), q(:, 1:nc), wtri(:, i), n_tri, &
+                               vert, twall, slot(1:nc))
             fi = 0.0_wp
             ti = 0.0_wp
             ns = 0
@@ -139,12 +190,7 @@ contains
                 end if
                 tri = ctri(c)
                 xik = 0.0_wp
-                do s = 1, max_wall_contacts
-                    if (wtri(s, i) == tri) then
-                        xik = wxi(:, s, i)
-                        exit
-                    end if
-                end do
+                if (slot(c) > 0) xik = wxi(:, slot(c), i)
                 dist = sqrt(d2(c))
                 nrm = (q(:, c) - x(:, i)) / dist
                 vrel = v(:, i) + cross(r * w(:, i), nrm)

@@ -132,8 +132,8 @@ contains
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
             call pw_forces(n, size(nb%wlist), m%n_tri, c%mats%n, p%x, p%v, p%w, p%radius, &
-                           p%mass, p%mat, nb%wstart, nb%wlist, m%vert, m%mat, pc%kn, pc%sn, &
-                           pc%st, pc%cn, pc%ct, pc%mu, pc%clamp_normal, c%dt, s%wc%tri, &
+                           p%mass, p%mat, nb%wstart, nb%wlist, m%vert, m%mat, m%wall, pc%kn, &
+                           pc%sn, pc%st, pc%cn, pc%ct, pc%mu, pc%clamp_normal, c%dt, s%wc%tri, &
                            s%wc%xi, p%f, p%t, overflow)
             call timer_stop(s%timers, phase_contacts_pw)
         end associate
@@ -263,6 +263,7 @@ contains
         if (c%mesh%n_tri > 0) then
             call acc_copyin(c%mesh%vert)
             call acc_copyin(c%mesh%mat)
+            call acc_copyin(c%mesh%wall)
         end if
     end subroutine device_enter
 
@@ -322,6 +323,7 @@ contains
         if (c%mesh%n_tri > 0) then
             call acc_delete(c%mesh%vert)
             call acc_delete(c%mesh%mat)
+            call acc_delete(c%mesh%wall)
         end if
         if (allocated(s%nb%start)) call lists_delete(s%nb)
     end subroutine device_exit

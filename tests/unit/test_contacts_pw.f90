@@ -1,6 +1,8 @@
 !> A sphere pressed onto a flat wall of many triangles feels exactly the force of one plane
 !> (Hertz), through one contact, wherever it is: over faces, shared edges and vertices shared
-!> by six triangles. Two walls meeting at 90 degrees give two contacts.
+!> by six triangles. Two walls meeting at 90 degrees give two contacts. A sphere sliding
+!> across 7 shared edges builds up the same tangential force as on one big triangle: the
+!> history follows the contact from triangle to triangle.
 program test_contacts_pw
     use dem_kinds, only: wp, ip
     use dem_mesh, only: mesh_t, mesh_add_plane
@@ -9,10 +11,12 @@ program test_contacts_pw
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp), r = 0.01_wp, d = 1.0e-5_wp, estar = 1.0e10_wp
     real(wp), parameter :: h = 0.01_wp   ! side of the squares of the wall
-    type(mesh_t) :: m
+    type(mesh_t) :: m, one
     real(wp) :: kn(2, 2), zero(2, 2), mu(2, 2), x(3, 1), v(3, 1), w(3, 1), f(3, 1), t(3, 1)
     real(wp) :: wxi(3, max_wall_contacts, 1), fhertz, pos(2)
     integer(ip) :: wtri(max_wall_contacts, 1), overflow, k, i
+    integer(ip) :: wtri1(max_wall_contacts, 1)
+    real(wp) :: wxi1(3, max_wall_contacts, 1), f1(3, 1), t1(3, 1), worst
     integer(ip), allocatable :: wlist(:)
 
     call mesh_add_plane(m, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.05_wp, 10_ip, &
@@ -42,6 +46,27 @@ program test_contacts_pw
     call press([1.0e-6_wp, 0.37_wp], 'beside an edge, 1e-8 m')
     call press([0.25_wp + 1.0e-7_wp, 0.25_wp], 'beside a diagonal edge')
 
+    ! sliding slowly along x from -2 h to +2 h, across 3 edges between squares and the
+    ! diagonals of 4 squares: the tangential force grows as on a single plane, k_t v dt per
+    ! step, until friction limits it
+    call mesh_add_plane(one, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.05_wp, 1_ip, &
+                        2_ip)
+    wtri = 0
+    wxi = 0.0_wp
+    wtri1 = 0
+    wxi1 = 0.0_wp
+    worst = 0.0_wp
+    v(:, 1) = [1.0e-3_wp, 0.0_wp, 0.0_wp]
+    do k = 0, 4000
+        x(:, 1) = [-2.0_wp * h + 1.0e-5_wp * k, 0.123_wp * h, r - d]
+        call step(m, wtri, wxi, f, t)
+        call step(one, wtri1, wxi1, f1, t1)
+        worst = max(worst, maxval(abs(f - f1)) / fhertz)
+    end do
+    call assert_true(abs(f1(1, 1)) > 0.1_wp * fhertz, 'a tangential force built up')
+    call assert_true(worst < 1e-9_wp, 'tangential history follows the contact across edges')
+    v = 0.0_wp
+
     ! a second wall at x = -0.02 facing +x: in the corner the sphere has two contacts
     call mesh_add_plane(m, [-0.02_wp, 0.0_wp, 0.05_wp], [1.0_wp, 0.0_wp, 0.0_wp], 0.05_wp, 4_ip, &
                         2_ip)
@@ -67,14 +92,25 @@ contains
 
     !> Forces with every triangle as a candidate and fresh history.
     subroutine evaluate()
-        wlist = [(i, i = 1, m%n_tri)]
         wtri = 0
         wxi = 0.0_wp
-        f = 0.0_wp
-        t = 0.0_wp
-        call pw_forces(1_ip, m%n_tri, m%n_tri, 2_ip, x, v, w, [r], [1.0e-3_wp], [1_ip], &
-                       [1_ip, m%n_tri + 1], wlist, m%vert, m%mat, kn, 2.0_wp * estar + zero, &
-                       zero, zero, zero, mu, .false., 1.0e-8_wp, wtri, wxi, f, t, overflow)
-        call assert_true(overflow == 0, 'no overflow')
+        call step(m, wtri, wxi, f, t)
     end subroutine evaluate
+
+    !> One evaluation of the wall forces on the sphere against mesh mm, with its history.
+    subroutine step(mm, stri, sxi, fo, to)
+        type(mesh_t), intent(in) :: mm
+        integer(ip), intent(inout) :: stri(max_wall_contacts, 1)
+        real(wp), intent(inout) :: sxi(3, max_wall_contacts, 1), fo(3, 1), to(3, 1)
+        real(wp) :: st(2, 2)
+        wlist = [(i, i = 1, mm%n_tri)]
+        st = 8.0_wp * 0.4e10_wp
+        fo = 0.0_wp
+        to = 0.0_wp
+        call pw_forces(1_ip, mm%n_tri, mm%n_tri, 2_ip, x, v, w, [r], [1.0e-3_wp], [1_ip], &
+                       [1_ip, mm%n_tri + 1], wlist, mm%vert, mm%mat, mm%wall, kn, &
+                       2.0_wp * estar + zero, st, zero, zero, mu, .false., 1.0e-3_wp, stri, sxi, &
+                       fo, to, overflow)
+        call assert_true(overflow == 0, 'no overflow')
+    end subroutine step
 end program test_contacts_pw
