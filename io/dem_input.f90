@@ -7,7 +7,8 @@ module dem_input
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_namelist_scan, only: nml_file_t, nml_block_t, nml_scan, nml_items, nml_location
     use dem_case, only: case_t, time_scales_t, case_time_scales
-    use dem_mesh, only: mesh_add_plane
+    use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion
+    use dem_stl, only: stl_read
     use dem_integrate, only: integrator_euler, integrator_verlet
     implicit none
     private
@@ -17,14 +18,16 @@ module dem_input
     integer, parameter :: name_len = 32
 
     !> The groups a case file may hold, and the keys of each (doc/input.md).
-    character(len=*), parameter :: input_groups(7) = [character(len=120) :: &
+    character(len=*), parameter :: input_groups(8) = [character(len=160) :: &
         'run: dt t_end integrator gravity expected_speed skin allow_unstable', &
         'output: dir interval trace_id', &
         'contact_model: tangential_stiffness_factor tangential_damping clamp_normal', &
         'material: name density youngs_modulus poisson_ratio rigid', &
         'pair: materials restitution friction', &
         'particle: id material radius position velocity angular_velocity', &
-        'wall_plane: material point normal half_width divisions']
+        'wall_plane: material point normal half_width divisions', &
+        'wall_mesh: file scale material velocity velocity_start velocity_end rotation_axis ' // &
+        'rotation_point angular_velocity rotation_start rotation_end']
 
 
 contains
@@ -65,6 +68,8 @@ contains
         call read_particles(nf, c, err)
         if (err%failed()) return
         call read_walls(nf, c, err)
+        if (err%failed()) return
+        call read_meshes(nf, c, err)
         if (err%failed()) return
         call check_pairs_used(nf, c, err)
         if (err%failed()) return
@@ -514,6 +519,94 @@ contains
         end do
     end subroutine read_walls
 
+    !> &wall_mesh (repeated): a wall read from an STL file, at rest or in rigid motion.
+    subroutine read_meshes(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=512) :: file       ! STL file (ASCII or binary), relative to the case file
+        real(wp) :: scale                ! metres per STL unit, > 0, default 1
+        character(len=name_len) :: material  ! material name, required
+        real(wp) :: velocity(3)          ! translation velocity [m/s], default 0
+        real(wp) :: velocity_start       ! when the translation starts [s], default 0
+        real(wp) :: velocity_end         ! when it ends [s], default never
+        real(wp) :: rotation_axis(3)     ! direction of the rotation axis, default (0, 0, 1)
+        real(wp) :: rotation_point(3)    ! a point of the axis [m], default (0, 0, 0)
+        real(wp) :: angular_velocity     ! about the axis, right-handed [rad/s], default 0
+        real(wp) :: rotation_start       ! when the rotation starts [s], default 0
+        real(wp) :: rotation_end         ! when it ends [s], default never
+        namelist /wall_mesh/ file, scale, material, velocity, velocity_start, velocity_end, &
+            rotation_axis, rotation_point, angular_velocity, rotation_start, rotation_end
+        type(nml_block_t) :: b
+        integer :: k_item, ios
+        character(len=512) :: msg
+        character(len=:), allocatable :: text, at, path
+        real(wp), allocatable :: vert(:, :, :)
+        integer :: k, im
+
+        do k = 1, count_blocks(nf, 'wall_mesh')
+            file = ''
+            scale = 1.0_wp
+            material = ''
+            velocity = 0.0_wp
+            velocity_start = 0.0_wp
+            velocity_end = huge(1.0_wp)
+            rotation_axis = [0.0_wp, 0.0_wp, 1.0_wp]
+            rotation_point = 0.0_wp
+            angular_velocity = 0.0_wp
+            rotation_start = 0.0_wp
+            rotation_end = huge(1.0_wp)
+            b = nf%blocks(block_index(nf, 'wall_mesh', k))
+            do k_item = 0, block_item_count(b)
+                text = block_text(b, k_item)
+                read(text, nml=wall_mesh, iostat=ios, iomsg=msg)
+                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            end do
+            if (err%failed()) return
+            at = nml_location(nf, b)
+            im = find_material(c, material, at, err)
+            if (im == 0) return
+            if (len_trim(file) == 0) then
+                call set_error(err, dem_err_input, at // ": key 'file' is required")
+                return
+            end if
+            if (.not. check_positive(at, scale, 'scale', '[m per STL unit]', err)) return
+            if (.not. check_vector(at, velocity, 'velocity', .false., err)) return
+            if (.not. check_vector(at, rotation_point, 'rotation_point', .false., err)) return
+            if (.not. check_vector(at, rotation_axis, 'rotation_axis', .false., err)) return
+            if (all(rotation_axis == 0.0_wp)) then
+                call set_error(err, dem_err_input, at // ": key 'rotation_axis': a non-zero " // &
+                               'vector is required')
+                return
+            end if
+            if (.not. in_range(angular_velocity, -unset, unset, .false., .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'angular_velocity': must be finite")
+                return
+            end if
+            if (.not. (velocity_end > velocity_start)) then
+                call set_error(err, dem_err_input, at // ": key 'velocity_end': must be later " // &
+                               'than velocity_start')
+                return
+            end if
+            if (.not. (rotation_end > rotation_start)) then
+                call set_error(err, dem_err_input, at // ": key 'rotation_end': must be later " // &
+                               'than rotation_start')
+                return
+            end if
+            path = trim(file)
+            if (path(1:1) /= '/') path = directory_of(nf%path) // path
+            call stl_read(path, scale, vert, err)
+            if (err%failed()) then
+                err%message = at // ": key 'file': " // err%message
+                return
+            end if
+            call mesh_append(c%mesh, vert, im)
+            call mesh_set_motion(c%mesh, c%mesh%n_wall, velocity, [velocity_start, velocity_end], &
+                                 rotation_axis, rotation_point, angular_velocity, &
+                                 [rotation_start, rotation_end])
+        end do
+    end subroutine read_meshes
+
     !> Every pair of materials that can touch must have a &pair group.
     subroutine check_pairs_used(nf, c, err)
         type(nml_file_t), intent(in) :: nf
@@ -737,6 +830,13 @@ contains
             ok = .true.
         end if
     end function check_vector
+
+    !> The directory part of a path, with its final '/' ('' for a bare file name).
+    function directory_of(path) result(dir)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: dir
+        dir = path(1:index(path, '/', back=.true.))
+    end function directory_of
 
     !> The file name without directory and extension.
     function file_stem(path) result(stem)

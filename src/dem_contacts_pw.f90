@@ -122,10 +122,10 @@ contains
 
     !> Add the wall contact forces and torques to every owned particle. `overflow` counts
     !> particles with more touching triangles or contacts than the fixed limits.
-    subroutine pw_forces(n_own, n_cand, n_tri, nm, x, v, w, radius, mass, mat, wstart, wlist, &
-                         vert, tmat, twall, kn, sn, st, cn, ct, mu, clamp_normal, dt, wtri, &
-                         wxi, f, t, overflow)
-        integer(ip), intent(in) :: n_own, n_cand, n_tri, nm
+    subroutine pw_forces(n_own, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, mat, wstart, &
+                         wlist, vert, tmat, twall, wall_v, wall_w, wall_c, kn, sn, st, cn, ct, &
+                         mu, clamp_normal, dt, wtri, wxi, f, t, overflow)
+        integer(ip), intent(in) :: n_own, n_cand, n_tri, n_wall, nm
         real(wp), intent(in) :: x(3, n_own), v(3, n_own), w(3, n_own)  !! [m], [m/s], [rad/s]
         real(wp), intent(in) :: radius(n_own), mass(n_own)             !! [m], [kg]
         integer(ip), intent(in) :: mat(n_own)
@@ -133,6 +133,9 @@ contains
         real(wp), intent(in) :: vert(3, 3, n_tri)                      !! [m]
         integer(ip), intent(in) :: tmat(n_tri)                         !! material of a triangle
         integer(ip), intent(in) :: twall(n_tri)                        !! wall of a triangle
+        real(wp), intent(in) :: wall_v(3, n_wall)   !! translation velocity of each wall [m/s]
+        real(wp), intent(in) :: wall_w(3, n_wall)   !! angular velocity of each wall [rad/s]
+        real(wp), intent(in) :: wall_c(3, n_wall)   !! a point of its rotation axis [m]
         real(wp), intent(in) :: kn(nm, nm), sn(nm, nm), st(nm, nm)   !! [Pa]
         real(wp), intent(in) :: cn(nm, nm), ct(nm, nm), mu(nm, nm)   !! [-]
         logical, intent(in) :: clamp_normal
@@ -193,7 +196,9 @@ contains
                 if (slot(c) > 0) xik = wxi(:, slot(c), i)
                 dist = sqrt(d2(c))
                 nrm = (q(:, c) - x(:, i)) / dist
-                vrel = v(:, i) + cross(r * w(:, i), nrm)
+                ! minus the wall's velocity at the contact point
+                vrel = v(:, i) + cross(r * w(:, i), nrm) - wall_v(:, twall(tri)) &
+                       - cross(wall_w(:, twall(tri)), q(:, c) - wall_c(:, twall(tri)))
                 b = tmat(tri)
                 call hm_force(r - dist, nrm, vrel, r, mass(i), kn(a, b), sn(a, b), st(a, b), &
                               cn(a, b), ct(a, b), mu(a, b), clamp_normal, dt, xik, fn, ft)

@@ -1,27 +1,152 @@
-!> Triangle walls: storage, the closest point of a triangle to a point (face, edge or
-!> vertex), and the flat rectangular wall made of triangles (doc/theory.md, section 4).
+!> Triangle walls: storage, rigid motion, the closest point of a triangle to a point (face,
+!> edge or vertex), and the flat rectangular wall made of triangles (doc/theory.md,
+!> section 4).
 module dem_mesh
     use dem_kinds, only: wp, ip
     use dem_vector, only: cross
     implicit none
     private
-    public :: mesh_t, mesh_add_plane, closest_point_triangle, &
-              feature_face, feature_edge, feature_vertex
+    public :: mesh_t, mesh_append, mesh_add_plane, mesh_set_motion, mesh_move, &
+              closest_point_triangle, feature_face, feature_edge, feature_vertex
 
     integer(ip), parameter :: feature_face = 0    !< closest point inside the triangle
     integer(ip), parameter :: feature_edge = 1    !< closest point on an edge
     integer(ip), parameter :: feature_vertex = 2  !< closest point is a vertex
 
     !> All wall triangles of a case in one set of arrays; `wall` says which wall each is from.
+    !> A wall moves rigidly: a translation at constant velocity between two times, and a
+    !> rotation at constant angular velocity about a fixed axis between two times.
     type :: mesh_t
         integer(ip) :: n_tri = 0
         integer(ip) :: n_wall = 0
-        real(wp), allocatable :: vert(:, :, :)  !< (xyz, corner, triangle) [m]
+        logical :: moving = .false.             !< some wall has a motion
+        real(wp), allocatable :: vert(:, :, :)  !< (xyz, corner, triangle), now [m]
+        real(wp), allocatable :: ref(:, :, :)   !< the same at t = 0 [m]
         integer(ip), allocatable :: mat(:)      !< material of each triangle
         integer(ip), allocatable :: wall(:)     !< the wall each triangle belongs to
+        ! per wall
+        integer(ip), allocatable :: first(:), last(:)  !< its triangles
+        real(wp), allocatable :: lin_v(:, :)    !< translation velocity (3, wall) [m/s]
+        real(wp), allocatable :: lin_t(:, :)    !< its start and end times (2, wall) [s]
+        real(wp), allocatable :: axis(:, :)     !< unit rotation axis (3, wall)
+        real(wp), allocatable :: pivot(:, :)    !< a point of the axis at t = 0 (3, wall) [m]
+        real(wp), allocatable :: omega(:)       !< angular velocity about axis [rad/s]
+        real(wp), allocatable :: rot_t(:, :)    !< its start and end times (2, wall) [s]
+        real(wp), allocatable :: wall_v(:, :)   !< translation velocity now (3, wall) [m/s]
+        real(wp), allocatable :: wall_w(:, :)   !< angular velocity vector now (3, wall) [rad/s]
+        real(wp), allocatable :: wall_c(:, :)   !< a point of the axis now (3, wall) [m]
     end type mesh_t
 
 contains
+
+    !> Append a wall at rest made of the given triangles.
+    subroutine mesh_append(m, vert, mat)
+        type(mesh_t), intent(inout) :: m
+        real(wp), intent(in) :: vert(:, :, :)  !! (xyz, corner, triangle) [m]
+        integer(ip), intent(in) :: mat         !! material index
+        real(wp), allocatable :: v3(:, :, :)
+        integer(ip) :: n, k, w
+        n = m%n_tri
+        k = size(vert, 3)
+        w = m%n_wall + 1
+        allocate(v3(3, 3, n + k))
+        if (n > 0) v3(:, :, 1:n) = m%vert
+        v3(:, :, n + 1:n + k) = vert
+        call move_alloc(v3, m%vert)
+        m%ref = m%vert
+        call grow_int(m%mat, n, k, mat)
+        call grow_int(m%wall, n, k, w)
+        call grow_int(m%first, w - 1, 1, n + 1)
+        call grow_int(m%last, w - 1, 1, n + k)
+        call grow_col(m%lin_v, [0.0_wp, 0.0_wp, 0.0_wp])
+        call grow_col(m%lin_t, [0.0_wp, 0.0_wp])
+        call grow_col(m%axis, [0.0_wp, 0.0_wp, 1.0_wp])
+        call grow_col(m%pivot, [0.0_wp, 0.0_wp, 0.0_wp])
+        call grow_col(m%rot_t, [0.0_wp, 0.0_wp])
+        call grow_col(m%wall_v, [0.0_wp, 0.0_wp, 0.0_wp])
+        call grow_col(m%wall_w, [0.0_wp, 0.0_wp, 0.0_wp])
+        call grow_col(m%wall_c, [0.0_wp, 0.0_wp, 0.0_wp])
+        if (w == 1) allocate(m%omega(0))
+        m%omega = [m%omega, 0.0_wp]
+        m%n_tri = n + k
+        m%n_wall = w
+    contains
+        !> a(1:len_a) followed by k copies of val
+        subroutine grow_int(a, len_a, k_, val)
+            integer(ip), allocatable, intent(inout) :: a(:)
+            integer(ip), intent(in) :: len_a, k_, val
+            integer(ip), allocatable :: b(:)
+            allocate(b(len_a + k_))
+            if (len_a > 0) b(1:len_a) = a(1:len_a)
+            b(len_a + 1:) = val
+            call move_alloc(b, a)
+        end subroutine grow_int
+        !> a with the column for wall w added
+        subroutine grow_col(a, column)
+            real(wp), allocatable, intent(inout) :: a(:, :)
+            real(wp), intent(in) :: column(:)
+            real(wp), allocatable :: b(:, :)
+            allocate(b(size(column), w))
+            if (w > 1) b(:, 1:w - 1) = a
+            b(:, w) = column
+            call move_alloc(b, a)
+        end subroutine grow_col
+    end subroutine mesh_append
+
+    !> Give wall w a rigid motion: translation at `velocity` from lin_t(1) to lin_t(2), and
+    !> rotation at `omega` about `axis` through `pivot` from rot_t(1) to rot_t(2).
+    subroutine mesh_set_motion(m, w, velocity, lin_t, axis, pivot, omega, rot_t)
+        type(mesh_t), intent(inout) :: m
+        integer(ip), intent(in) :: w
+        real(wp), intent(in) :: velocity(3)   !! [m/s]
+        real(wp), intent(in) :: lin_t(2)      !! start, end [s]
+        real(wp), intent(in) :: axis(3)       !! direction (need not be unit)
+        real(wp), intent(in) :: pivot(3)      !! a point of the axis at t = 0 [m]
+        real(wp), intent(in) :: omega         !! [rad/s], right-handed about axis
+        real(wp), intent(in) :: rot_t(2)      !! start, end [s]
+        m%lin_v(:, w) = velocity
+        m%lin_t(:, w) = lin_t
+        m%axis(:, w) = axis / norm2(axis)
+        m%pivot(:, w) = pivot
+        m%omega(w) = omega
+        m%rot_t(:, w) = rot_t
+        m%moving = m%moving .or. any(velocity /= 0.0_wp) .or. omega /= 0.0_wp
+        call mesh_move(m, 0.0_wp)
+    end subroutine mesh_set_motion
+
+    !> Put every moving wall in its pose at `time`, and set its velocities at that time:
+    !> x = pivot + R(theta) (x0 - pivot) + d, with theta = omega (min(max(t, t0), t1) - t0)
+    !> (Rodrigues' formula) and d = v (min(max(t, t0), t1) - t0).
+    subroutine mesh_move(m, time)
+        type(mesh_t), intent(inout) :: m
+        real(wp), intent(in) :: time   !! [s]
+        real(wp) :: theta, d(3), k(3), r(3, 3), kx(3, 3), e(3, 3)
+        integer(ip) :: w, t, c
+        e = 0.0_wp
+        e(1, 1) = 1.0_wp
+        e(2, 2) = 1.0_wp
+        e(3, 3) = 1.0_wp
+        do w = 1, m%n_wall
+            if (all(m%lin_v(:, w) == 0.0_wp) .and. m%omega(w) == 0.0_wp) cycle
+            d = m%lin_v(:, w) * (min(max(time, m%lin_t(1, w)), m%lin_t(2, w)) - m%lin_t(1, w))
+            theta = m%omega(w) * (min(max(time, m%rot_t(1, w)), m%rot_t(2, w)) - m%rot_t(1, w))
+            k = m%axis(:, w)
+            kx = reshape([0.0_wp, k(3), -k(2), -k(3), 0.0_wp, k(1), k(2), -k(1), 0.0_wp], [3, 3])
+            r = cos(theta) * e + sin(theta) * kx &
+                + (1.0_wp - cos(theta)) * spread(k, 2, 3) * spread(k, 1, 3)
+            do t = m%first(w), m%last(w)
+                do c = 1, 3
+                    m%vert(:, c, t) = m%pivot(:, w) + matmul(r, m%ref(:, c, t) - m%pivot(:, w)) &
+                                      + d
+                end do
+            end do
+            m%wall_c(:, w) = m%pivot(:, w) + d
+            m%wall_v(:, w) = 0.0_wp
+            if (time >= m%lin_t(1, w) .and. time < m%lin_t(2, w)) m%wall_v(:, w) = m%lin_v(:, w)
+            m%wall_w(:, w) = 0.0_wp
+            if (time >= m%rot_t(1, w) .and. time < m%rot_t(2, w)) m%wall_w(:, w) = m%omega(w) * k
+        end do
+    end subroutine mesh_move
 
     !> Append a flat square wall of side 2 half_width, centred on `point`, facing `normal`,
     !> cut into divisions x divisions squares of two triangles each.
@@ -34,7 +159,6 @@ contains
         integer(ip), intent(in) :: mat       !! material index
         real(wp) :: n(3), a(3), b(3), h, corner(3, 0:divisions, 0:divisions)
         real(wp), allocatable :: vert(:, :, :)
-        integer(ip), allocatable :: tmat(:), twall(:)
         integer(ip) :: i, j, k
 
         n = normal / norm2(normal)
@@ -53,15 +177,8 @@ contains
             end do
         end do
 
-        allocate(vert(3, 3, m%n_tri + 2 * divisions**2), tmat(m%n_tri + 2 * divisions**2), &
-                 twall(m%n_tri + 2 * divisions**2))
-        if (m%n_tri > 0) then
-            vert(:, :, 1:m%n_tri) = m%vert
-            tmat(1:m%n_tri) = m%mat
-            twall(1:m%n_tri) = m%wall
-        end if
-        m%n_wall = m%n_wall + 1
-        k = m%n_tri
+        allocate(vert(3, 3, 2 * divisions**2))
+        k = 0
         do j = 0, divisions - 1
             do i = 0, divisions - 1
                 ! counter-clockwise seen from the side the normal points to
@@ -74,12 +191,7 @@ contains
                 k = k + 2
             end do
         end do
-        tmat(m%n_tri + 1:k) = mat
-        twall(m%n_tri + 1:k) = m%n_wall
-        m%n_tri = k
-        call move_alloc(vert, m%vert)
-        call move_alloc(tmat, m%mat)
-        call move_alloc(twall, m%wall)
+        call mesh_append(m, vert, mat)
     end subroutine mesh_add_plane
 
     !> Closest point q of triangle (a, b, c) to point p, and whether it lies inside the face,

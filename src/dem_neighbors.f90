@@ -26,6 +26,7 @@ module dem_neighbors
         integer(ip), allocatable :: wstart(:) !< wall row i is wstart(i):wstart(i+1)-1
         integer(ip), allocatable :: wlist(:)  !< candidate triangle
         real(wp), allocatable :: x_ref(:, :)  !< positions at the last build [m]
+        real(wp), allocatable :: vert_ref(:, :, :)  !< moving walls' vertices then [m]
     end type neighbors_t
 
     !> A uniform grid over a box, with the items of each cell (compressed rows).
@@ -39,15 +40,19 @@ module dem_neighbors
 
 contains
 
-    !> True when some owned particle moved more than skin/2 since the last build.
-    logical function neighbors_stale(nb, n, x) result(stale)
+    !> True when some owned particle, or some vertex of a moving wall, moved more than skin/2
+    !> since the last build (together they close by at most the skin).
+    logical function neighbors_stale(nb, n, x, mesh) result(stale)
         type(neighbors_t), intent(in) :: nb
         integer(ip), intent(in) :: n        !! owned particles
         real(wp), intent(in) :: x(:, :)     !! positions [m]
+        type(mesh_t), intent(in) :: mesh
         stale = .true.
         if (.not. allocated(nb%x_ref)) return
         if (size(nb%x_ref, 2) /= n) return
         stale = max_displacement2(n, x, nb%x_ref) > (0.5_wp * nb%skin)**2
+        if (stale .or. .not. mesh%moving) return
+        stale = maxval(sum((mesh%vert - nb%vert_ref)**2, dim=1)) > (0.5_wp * nb%skin)**2
     end function neighbors_stale
 
     !> Largest squared displacement between two sets of positions [m^2].
@@ -114,6 +119,7 @@ contains
         if (n_all == 0) then
             allocate(nb%list(0), nb%partner(0), nb%xi(3, 0), nb%wlist(0))
             nb%x_ref = x(:, 1:n_own)
+            if (mesh%moving) nb%vert_ref = mesh%vert
             return
         end if
 
@@ -170,6 +176,7 @@ contains
         call build_wall_list(nb, n_own, x, radius, mesh, lo, hi, &
                              2.0_wp * rmax(0) + nb%skin, n_all)
         nb%x_ref = x(:, 1:n_own)
+        if (mesh%moving) nb%vert_ref = mesh%vert
         nb%n_builds = nb%n_builds + 1
     contains
         !> Partners of particle i in one level's grid: count them (k advances) or also list them.

@@ -12,6 +12,7 @@ module dem_solver
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, wall_contacts_permute, &
                                pw_forces
     use dem_forces, only: body_forces
+    use dem_mesh, only: mesh_t, mesh_move
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
     use dem_diagnostics, only: energies, count_pp_contacts, first_nonfinite, contact_trace
     use dem_output, only: output_t, output_open, output_series, output_contact, &
@@ -29,8 +30,10 @@ module dem_solver
         type(neighbors_t) :: nb
         type(wall_contacts_t) :: wc
         type(pair_constants_t) :: pc
+        type(mesh_t) :: mesh           !< the walls, in their pose at the last force evaluation
         integer(i8) :: step = 0        !< steps done; the time is step * dt
-        integer(ip) :: trace = 0       !< local index of the traced particle, 0: none
+        integer(i8) :: trace_id = 0    !< global id of the traced particle, 0: none
+        integer(ip) :: trace = 0       !< its local index
         real(wp) :: sort_cell = 0.0_wp !< cell size of the spatial order [m]
         integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
         type(timers_t) :: timers       !< time per phase of those steps
@@ -48,8 +51,10 @@ contains
             call particles_add(s%p, c%gid(i), c%mat(i), c%radius(i), &
                                c%mats%density(c%mat(i)), c%x(:, i), c%v(:, i), c%w(:, i))
             if (c%gid(i) == c%trace_id) s%trace = i
+        s%trace_id = c%trace_id
         end do
         call pair_constants_build(c%mats, c%opts, s%pc)
+        s%mesh = c%mesh
         call wall_contacts_init(s%wc, c%n_particles)
         s%nb%skin = c%skin
         s%sort_cell = 2.0_wp * minval(c%radius(1:c%n_particles)) + c%skin
@@ -70,11 +75,11 @@ contains
         every = max(1_i8, nint(c%output_interval / dt, i8))
         call output_open(out, c%output_dir, s%trace > 0, err)
         if (err%failed()) return
-        call device_enter(s, c)
+        call device_enter(s)
 
-        call rebuild(s, c)
+        call rebuild(s)
         if (c%integrator == integrator_verlet) then
-            call compute_forces(s, c, err)
+            call compute_forces(s, c, 0.0_wp, err)
             call write_trace(s, c, out, 0.0_wp, err)
         end if
         if (.not. err%failed()) call write_series(s, c, out, err)
@@ -88,7 +93,11 @@ contains
                     call drift(n, dt, p%v, p%x)
                     call timer_stop(s%timers, phase_integrate)
                 end if
-                call compute_forces(s, c, err)
+                if (c%integrator == integrator_euler) then
+                    call compute_forces(s, c, real(s%step, wp) * dt, err)
+                else
+                    call compute_forces(s, c, real(s%step + 1, wp) * dt, err)
+                end if
                 if (err%failed()) exit
                 if (c%integrator == integrator_euler) then
                     call write_trace(s, c, out, real(s%step, wp) * dt, err)
@@ -113,28 +122,37 @@ contains
                                                   s%p%gid, s%p%mat, s%p%radius, s%p%x, &
                                                   s%p%v, s%p%w, err)
         call output_close(out)
-        call device_exit(s, c)
+        call device_exit(s)
     end subroutine solver_run
 
-    !> Gravity, then particle and wall contacts; rebuild the lists first if they are stale.
-    subroutine compute_forces(s, c, err)
+    !> Walls to their pose at `time`, gravity, then particle and wall contacts; the lists are
+    !> rebuilt first if they are stale.
+    subroutine compute_forces(s, c, time, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
+        real(wp), intent(in) :: time       !! time of the positions [s]
         type(error_t), intent(inout) :: err
         integer(ip) :: overflow
-        if (neighbors_stale(s%nb, s%p%n_own, s%p%x)) call rebuild(s, c)
+        if (s%mesh%moving) then
+            call mesh_move(s%mesh, time)
+            call acc_update_device(s%mesh%vert)
+            call acc_update_device(s%mesh%wall_v)
+            call acc_update_device(s%mesh%wall_w)
+            call acc_update_device(s%mesh%wall_c)
+        end if
+        if (neighbors_stale(s%nb, s%p%n_own, s%p%x, s%mesh)) call rebuild(s)
         call timer_stop(s%timers, phase_neighbors)
-        associate (p => s%p, nb => s%nb, pc => s%pc, m => c%mesh, n => s%p%n_own)
+        associate (p => s%p, nb => s%nb, pc => s%pc, m => s%mesh, n => s%p%n_own)
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
             call pp_forces(n, n + p%n_ghost, size(nb%list), c%mats%n, p%x, p%v, p%w, p%radius, &
                            p%mass, p%mat, nb%start, nb%list, pc%kn, pc%sn, pc%st, pc%cn, &
                            pc%ct, pc%mu, pc%clamp_normal, c%dt, nb%xi, p%f, p%t)
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
-            call pw_forces(n, size(nb%wlist), m%n_tri, c%mats%n, p%x, p%v, p%w, p%radius, &
-                           p%mass, p%mat, nb%wstart, nb%wlist, m%vert, m%mat, m%wall, pc%kn, &
-                           pc%sn, pc%st, pc%cn, pc%ct, pc%mu, pc%clamp_normal, c%dt, s%wc%tri, &
-                           s%wc%xi, p%f, p%t, overflow)
+            call pw_forces(n, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, p%x, p%v, p%w, &
+                           p%radius, p%mass, p%mat, nb%wstart, nb%wlist, m%vert, m%mat, m%wall, &
+                           m%wall_v, m%wall_w, m%wall_c, pc%kn, pc%sn, pc%st, pc%cn, pc%ct, &
+                           pc%mu, pc%clamp_normal, c%dt, s%wc%tri, s%wc%xi, p%f, p%t, overflow)
             call timer_stop(s%timers, phase_contacts_pw)
         end associate
         if (overflow > 0) call set_error(err, dem_err_runtime, 'a particle touches more ' // &
@@ -143,9 +161,8 @@ contains
 
     !> Re-sort the particles in space and rebuild the neighbour lists, on the host; the
     !> history follows the particles, and the new state and lists go to the device.
-    subroutine rebuild(s, c)
+    subroutine rebuild(s)
         type(solver_t), intent(inout) :: s
-        type(case_t), intent(in) :: c
         integer(ip), allocatable :: order(:)
         call device_to_host(s)
         if (allocated(s%nb%start)) then
@@ -156,9 +173,9 @@ contains
         call particles_permute(s%p, order)
         call wall_contacts_permute(s%wc, order)
         call particles_to_device(s)
-        if (c%trace_id /= 0) s%trace = findloc(s%p%gid(1:s%p%n_own), c%trace_id, dim=1)
+        if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:s%p%n_own), s%trace_id, dim=1)
         call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
-                             s%p%radius, c%mesh, old_index=order)
+                             s%p%radius, s%mesh, old_index=order)
         call acc_copyin(s%nb%start)
         call acc_copyin(s%nb%list)
         call acc_copyin(s%nb%xi)
@@ -214,7 +231,7 @@ contains
                                                         p%w(:, i:i)), err)
             if (err%failed()) return
             call contact_trace(i, p%n_own + p%n_ghost, p%x, p%radius, p%mass, p%f, c%gravity, &
-                               c%mesh, overlap, fn, ft)
+                               s%mesh, overlap, fn, ft)
             call output_contact(out, time, overlap, fn, ft, p%x(:, i), p%v(:, i), p%w(:, i))
         end associate
     end subroutine write_trace
@@ -237,9 +254,8 @@ contains
     end subroutine check_finite
 
     !> Put the state on the device for the whole run.
-    subroutine device_enter(s, c)
+    subroutine device_enter(s)
         type(solver_t), intent(inout) :: s
-        type(case_t), intent(in) :: c
         associate (p => s%p)
             call acc_copyin(p%mat)
             call acc_copyin(p%radius)
@@ -260,10 +276,13 @@ contains
         call acc_copyin(s%pc%cn)
         call acc_copyin(s%pc%ct)
         call acc_copyin(s%pc%mu)
-        if (c%mesh%n_tri > 0) then
-            call acc_copyin(c%mesh%vert)
-            call acc_copyin(c%mesh%mat)
-            call acc_copyin(c%mesh%wall)
+        if (s%mesh%n_tri > 0) then
+            call acc_copyin(s%mesh%vert)
+            call acc_copyin(s%mesh%mat)
+            call acc_copyin(s%mesh%wall)
+            call acc_copyin(s%mesh%wall_v)
+            call acc_copyin(s%mesh%wall_w)
+            call acc_copyin(s%mesh%wall_c)
         end if
     end subroutine device_enter
 
@@ -297,9 +316,8 @@ contains
     end subroutine particles_to_device
 
     !> Release the device copies.
-    subroutine device_exit(s, c)
+    subroutine device_exit(s)
         type(solver_t), intent(inout) :: s
-        type(case_t), intent(in) :: c
         associate (p => s%p)
             call acc_delete(p%mat)
             call acc_delete(p%radius)
@@ -320,10 +338,13 @@ contains
         call acc_delete(s%pc%cn)
         call acc_delete(s%pc%ct)
         call acc_delete(s%pc%mu)
-        if (c%mesh%n_tri > 0) then
-            call acc_delete(c%mesh%vert)
-            call acc_delete(c%mesh%mat)
-            call acc_delete(c%mesh%wall)
+        if (s%mesh%n_tri > 0) then
+            call acc_delete(s%mesh%vert)
+            call acc_delete(s%mesh%mat)
+            call acc_delete(s%mesh%wall)
+            call acc_delete(s%mesh%wall_v)
+            call acc_delete(s%mesh%wall_w)
+            call acc_delete(s%mesh%wall_c)
         end if
         if (allocated(s%nb%start)) call lists_delete(s%nb)
     end subroutine device_exit

@@ -1,16 +1,19 @@
 !> Closest point on a triangle against brute-force sampling of the triangle, its feature
-!> classification, and the flat wall made of triangles (area, orientation).
+!> classification, the flat wall made of triangles (area, orientation), and rigid wall
+!> motion (poses against the closed form, wall velocity against finite differences).
 program test_mesh
     use dem_kinds, only: wp, ip
-    use dem_mesh, only: mesh_t, mesh_add_plane, closest_point_triangle, feature_face, &
-                        feature_edge, feature_vertex
+    use dem_mesh, only: mesh_t, mesh_add_plane, mesh_set_motion, mesh_move, &
+                        closest_point_triangle, feature_face, feature_edge, feature_vertex
     use dem_vector, only: cross
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     real(wp) :: a(3), b(3), c(3), p(3), q(3), s, t, best, d, n(3), area
     integer(ip) :: feature, trial, i, j, k
     integer, parameter :: ns = 400
-    type(mesh_t) :: m
+    type(mesh_t) :: m, mv
+    real(wp) :: p0(3), p1(3), dv(3), tt, hfd, vel(3), c0, s0
+    real(wp), parameter :: times(4) = [0.05_wp, 0.3_wp, 0.5_wp, 0.9_wp]
 
     a = [0.1_wp, -0.2_wp, 0.05_wp]
     b = [1.2_wp, 0.1_wp, -0.3_wp]
@@ -62,5 +65,32 @@ program test_mesh
     call assert_close(area, 1.0_wp, 1e-13_wp, 'area of the square')
     call assert_true(all(m%mat(1:98) == 2) .and. all(m%mat(99:100) == 1) .and. &
                      all(m%wall(1:98) == 1) .and. all(m%wall(99:100) == 2), 'materials, walls')
+
+    ! rigid motion: rotation about the axis (0,0,1) through (1,0,0) at 2 rad/s from t = 0.1 to
+    ! t = 0.6, and translation at (0, 0.3, 0) m/s from t = 0.2 on
+    call mesh_add_plane(mv, [2.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.5_wp, 1_ip, 1_ip)
+    call mesh_set_motion(mv, 1_ip, [0.0_wp, 0.3_wp, 0.0_wp], [0.2_wp, huge(1.0_wp)], &
+                         [0.0_wp, 0.0_wp, 5.0_wp], [1.0_wp, 0.0_wp, 0.0_wp], 2.0_wp, &
+                         [0.1_wp, 0.6_wp])
+    call assert_true(mv%moving, 'a wall with a motion moves')
+    do k = 1, 4
+        tt = times(k)
+        call mesh_move(mv, tt)
+        ! the first corner of the first triangle, (1.5, 0.5, 0) at t = 0
+        c0 = cos(2.0_wp * (min(max(tt, 0.1_wp), 0.6_wp) - 0.1_wp))
+        s0 = sin(2.0_wp * (min(max(tt, 0.1_wp), 0.6_wp) - 0.1_wp))
+        p0 = [1.0_wp + 0.5_wp * c0 - 0.5_wp * s0, 0.5_wp * s0 + 0.5_wp * c0, 0.0_wp] &
+             + [0.0_wp, 0.3_wp * max(tt - 0.2_wp, 0.0_wp), 0.0_wp]
+        call assert_close(norm2(mv%vert(:, 1, 1) - p0), 0.0_wp, 0.0_wp, 'pose', 1e-14_wp)
+        ! the velocity of a corner by central differences against v + w x (x - c)
+        hfd = 1.0e-6_wp
+        call mesh_move(mv, tt + hfd)
+        p1 = mv%vert(:, 2, 2)
+        call mesh_move(mv, tt - hfd)
+        dv = (p1 - mv%vert(:, 2, 2)) / (2.0_wp * hfd)
+        call mesh_move(mv, tt)
+        vel = mv%wall_v(:, 1) + cross(mv%wall_w(:, 1), mv%vert(:, 2, 2) - mv%wall_c(:, 1))
+        call assert_close(norm2(vel - dv), 0.0_wp, 0.0_wp, 'wall velocity', 1e-8_wp)
+    end do
     call assert_finish()
 end program test_mesh

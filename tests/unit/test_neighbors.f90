@@ -65,11 +65,11 @@ program test_neighbors
                 nb%xi(:, k) = real(gid(i) * 100000 + nb%partner(k), wp)
             end do
         end do
-        call assert_true(.not. neighbors_stale(nb, n, x), 'fresh lists are not stale')
+        call assert_true(.not. neighbors_stale(nb, n, x, m), 'fresh lists are not stale')
         x(1, 7) = x(1, 7) + 0.45_wp * nb%skin
-        call assert_true(.not. neighbors_stale(nb, n, x), 'moved less than skin/2')
+        call assert_true(.not. neighbors_stale(nb, n, x, m), 'moved less than skin/2')
         x(2, 9) = x(2, 9) + 0.55_wp * nb%skin
-        call assert_true(neighbors_stale(nb, n, x), 'moved more than skin/2')
+        call assert_true(neighbors_stale(nb, n, x, m), 'moved more than skin/2')
         call neighbors_build(nb, n, n, gid, x, r, m)
         ok = .true.
         do i = 1, n
