@@ -9,6 +9,13 @@ module dem_input
     use dem_case, only: case_t, time_scales_t, case_time_scales
     use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion
     use dem_stl, only: stl_read
+    use dem_particle_file, only: read_particle_file
+    use dem_insert, only: region_t, region_box, region_cylinder, insert_random
+    use dem_random, only: rng_t, rng_seed
+    use dem_outlets, only: outlet_t, outlet_plane, outlet_box
+    use dem_neighbors, only: neighbors_t, neighbors_build
+    use dem_mesh, only: mesh_t
+    use dem_particles, only: order_by_id
     use dem_integrate, only: integrator_euler, integrator_verlet
     implicit none
     private
@@ -18,13 +25,18 @@ module dem_input
     integer, parameter :: name_len = 32
 
     !> The groups a case file may hold, and the keys of each (doc/input.md).
-    character(len=*), parameter :: input_groups(8) = [character(len=160) :: &
-        'run: dt t_end integrator gravity expected_speed skin allow_unstable', &
+    character(len=*), parameter :: input_groups(11) = [character(len=160) :: &
+        'run: dt t_end integrator gravity expected_speed skin allow_unstable ' // &
+        'stop_kinetic_energy', &
         'output: dir interval trace_id', &
         'contact_model: tangential_stiffness_factor tangential_damping clamp_normal', &
         'material: name density youngs_modulus poisson_ratio rigid', &
         'pair: materials restitution friction', &
         'particle: id material radius position velocity angular_velocity', &
+        'particle_file: file', &
+        'insert: n material radius_min radius_max region box_min box_max cylinder_base ' // &
+        'cylinder_radius cylinder_height velocity seed', &
+        'outlet: region point normal box_min box_max', &
         'wall_plane: material point normal half_width divisions', &
         'wall_mesh: file scale material velocity velocity_start velocity_end rotation_axis ' // &
         'rotation_point angular_velocity rotation_start rotation_end']
@@ -67,6 +79,12 @@ contains
         if (err%failed()) return
         call read_particles(nf, c, err)
         if (err%failed()) return
+        call read_particle_files(nf, c, err)
+        if (err%failed()) return
+        call read_inserts(nf, c, err)
+        if (err%failed()) return
+        call check_particles(nf, c, err)
+        if (err%failed()) return
         call read_walls(nf, c, err)
         if (err%failed()) return
         call read_meshes(nf, c, err)
@@ -76,6 +94,8 @@ contains
         call read_run(nf, c, err)
         if (err%failed()) return
         call read_output(nf, c, err)
+        if (err%failed()) return
+        call read_outlets(nf, c, err)
     contains
         subroutine fail(msg)
             character(len=*), intent(in) :: msg
@@ -96,7 +116,10 @@ contains
                                     ! (the largest initial particle speed is used if larger)
         real(wp) :: skin            ! neighbour-list skin [m], > 0, default 0.4 min radius
         logical :: allow_unstable   ! run although dt exceeds the stability bound, default F
-        namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable
+        real(wp) :: stop_kinetic_energy  ! stop once the kinetic energy of all particles is
+                                         ! below this at an output time [J], >= 0, default 0
+        namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable, &
+            stop_kinetic_energy
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
@@ -112,6 +135,7 @@ contains
         expected_speed = 0.0_wp
         skin = unset
         allow_unstable = .false.
+        stop_kinetic_energy = 0.0_wp
         b = nf%blocks(block_index(nf, 'run', 1))
         do k_item = 0, block_item_count(b)
             text = block_text(b, k_item)
@@ -146,6 +170,12 @@ contains
         c%expected_speed = expected_speed
         c%skin = skin
         c%allow_unstable = allow_unstable
+        if (.not. in_range(stop_kinetic_energy, 0.0_wp, unset, .true., .false.)) then
+            call set_error(err, dem_err_input, at // ": key 'stop_kinetic_energy': must be " // &
+                           '>= 0 [J]')
+            return
+        end if
+        c%stop_kinetic_energy = stop_kinetic_energy
 
         call case_time_scales(c, ts)
         if (dt > ts%bound .and. .not. allow_unstable) then
@@ -410,16 +440,11 @@ contains
         character(len=512) :: msg
         character(len=:), allocatable :: text
         character(len=:), allocatable :: at
-        character(len=24) :: other
-        integer :: k, n, im, j
+        integer :: k, n, im
 
         n = count_blocks(nf, 'particle')
-        if (n == 0) then
-            call set_error(err, dem_err_input, nf%path // ': no &particle group')
-            return
-        end if
-        c%n_particles = n
         allocate(c%gid(n), c%mat(n), c%radius(n), c%x(3, n), c%v(3, n), c%w(3, n))
+        c%n_particles = n
         do k = 1, n
             id = k
             material = ''
@@ -446,20 +471,10 @@ contains
             if (.not. check_vector(at, position, 'position', .true., err)) return
             if (.not. check_vector(at, velocity, 'velocity', .false., err)) return
             if (.not. check_vector(at, angular_velocity, 'angular_velocity', .false., err)) return
-            if (id <= 0 .or. any(c%gid(1:k - 1) == id)) then
-                call set_error(err, dem_err_input, at // ": key 'id': must be > 0 and unique")
+            if (id <= 0) then
+                call set_error(err, dem_err_input, at // ": key 'id': must be > 0")
                 return
             end if
-            do j = 1, k - 1
-                if (norm2(position - c%x(:, j)) < c%radius(j) + radius &
-                    - 0.5_wp * min(radius, c%radius(j))) then
-                    write(other, '(i0)') c%gid(j)
-                    call set_error(err, dem_err_input, at // ": key 'position': the sphere " // &
-                        'overlaps particle ' // trim(other) // ' by more than half the ' // &
-                        'smaller radius')
-                    return
-                end if
-            end do
             c%gid(k) = id
             c%mat(k) = im
             c%radius(k) = radius
@@ -468,6 +483,285 @@ contains
             c%w(:, k) = angular_velocity
         end do
     end subroutine read_particles
+
+    !> &particle_file (repeated): particles read from a CSV file (dem_particle_file).
+    subroutine read_particle_files(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=512) :: file  ! CSV particle file, relative to the case file, required
+        namelist /particle_file/ file
+        type(nml_block_t) :: b
+        integer :: k_item, ios, k
+        character(len=512) :: msg
+        character(len=:), allocatable :: text, at
+        integer(i8), allocatable :: gid(:)
+        integer(ip), allocatable :: mat(:)
+        real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :)
+
+        do k = 1, count_blocks(nf, 'particle_file')
+            file = ''
+            b = nf%blocks(block_index(nf, 'particle_file', k))
+            do k_item = 0, block_item_count(b)
+                text = block_text(b, k_item)
+                read(text, nml=particle_file, iostat=ios, iomsg=msg)
+                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            end do
+            if (err%failed()) return
+            at = nml_location(nf, b)
+            if (len_trim(file) == 0) then
+                call set_error(err, dem_err_input, at // ": key 'file' is required")
+                return
+            end if
+            call read_particle_file(relative_to(nf%path, trim(file)), c%mats%name, gid, mat, &
+                                    radius, x, v, w, err)
+            if (err%failed()) then
+                err%message = at // ": key 'file': " // err%message
+                return
+            end if
+            if (any(c%mats%rigid(mat))) then
+                call set_error(err, dem_err_input, at // ": key 'file': a particle has a rigid " // &
+                               'material (rigid materials are for walls)')
+                return
+            end if
+            call append_particles(c, gid, mat, radius, x, v, w)
+        end do
+    end subroutine read_particle_files
+
+    !> &insert (repeated): n spheres at random, non-overlapping, in a box or a cylinder.
+    subroutine read_inserts(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        integer :: n                     ! how many spheres, >= 1, required
+        character(len=name_len) :: material  ! material name, required, not rigid
+        real(wp) :: radius_min           ! smallest radius [m], > 0, required
+        real(wp) :: radius_max           ! largest radius [m], >= radius_min, default radius_min
+        character(len=name_len) :: region    ! 'box' (default) or 'cylinder'
+        real(wp) :: box_min(3), box_max(3)   ! corners of the box [m]
+        real(wp) :: cylinder_base(3)     ! centre of the bottom of the (vertical) cylinder [m]
+        real(wp) :: cylinder_radius      ! [m], > 0
+        real(wp) :: cylinder_height      ! [m], > 0
+        real(wp) :: velocity(3)          ! initial velocity [m/s], default 0
+        integer(i8) :: seed              ! of the random positions and radii, default 1
+        namelist /insert/ n, material, radius_min, radius_max, region, box_min, box_max, &
+            cylinder_base, cylinder_radius, cylinder_height, velocity, seed
+        type(nml_block_t) :: b
+        integer :: k_item, ios, k, im, placed
+        character(len=512) :: msg
+        character(len=24) :: s1, s2
+        character(len=:), allocatable :: text, at
+        type(region_t) :: reg
+        type(rng_t) :: rng
+        real(wp), allocatable :: x(:, :), r(:)
+        integer(i8) :: next_id
+
+        do k = 1, count_blocks(nf, 'insert')
+            n = 0
+            material = ''
+            radius_min = unset
+            radius_max = unset
+            region = 'box'
+            box_min = unset
+            box_max = unset
+            cylinder_base = unset
+            cylinder_radius = unset
+            cylinder_height = unset
+            velocity = 0.0_wp
+            seed = 1
+            b = nf%blocks(block_index(nf, 'insert', k))
+            do k_item = 0, block_item_count(b)
+                text = block_text(b, k_item)
+                read(text, nml=insert, iostat=ios, iomsg=msg)
+                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            end do
+            if (err%failed()) return
+            at = nml_location(nf, b)
+            if (n < 1) then
+                call set_error(err, dem_err_input, at // ": key 'n': must be >= 1")
+                return
+            end if
+            im = find_material(c, material, at, err)
+            if (im == 0) return
+            if (c%mats%rigid(im)) then
+                call set_error(err, dem_err_input, at // ": key 'material': '" // &
+                               trim(material) // "' is rigid (walls only)")
+                return
+            end if
+            if (.not. check_positive(at, radius_min, 'radius_min', '[m]', err)) return
+            if (radius_max == unset) radius_max = radius_min
+            if (.not. in_range(radius_max, radius_min, unset, .true., .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'radius_max': must be >= " // &
+                               'radius_min [m]')
+                return
+            end if
+            if (.not. check_vector(at, velocity, 'velocity', .false., err)) return
+            select case (region)
+            case ('box')
+                reg%kind = region_box
+                if (.not. check_vector(at, box_min, 'box_min', .true., err)) return
+                if (.not. check_vector(at, box_max, 'box_max', .true., err)) return
+                if (any(box_max - box_min <= 2.0_wp * radius_max)) then
+                    call set_error(err, dem_err_input, at // ": key 'box_max': the box must " // &
+                                   'be wider than a sphere along every axis')
+                    return
+                end if
+                reg%lo = box_min
+                reg%hi = box_max
+            case ('cylinder')
+                reg%kind = region_cylinder
+                if (.not. check_vector(at, cylinder_base, 'cylinder_base', .true., err)) return
+                if (.not. check_positive(at, cylinder_radius, 'cylinder_radius', '[m]', err)) return
+                if (.not. check_positive(at, cylinder_height, 'cylinder_height', '[m]', err)) return
+                if (cylinder_radius <= radius_max .or. cylinder_height <= 2.0_wp * radius_max) then
+                    call set_error(err, dem_err_input, at // ": key 'cylinder_radius': the " // &
+                                   'cylinder must be wider and taller than a sphere')
+                    return
+                end if
+                reg%base = cylinder_base
+                reg%radius = cylinder_radius
+                reg%height = cylinder_height
+            case default
+                call set_error(err, dem_err_input, at // ": key 'region': '" // trim(region) // &
+                               "' is not known (accepted: box, cylinder)")
+                return
+            end select
+            rng = rng_seed(seed)
+            allocate(x(3, n), r(n))
+            call insert_random(rng, reg, n, radius_min, radius_max, c%x(:, 1:c%n_particles), &
+                               c%radius(1:c%n_particles), 10000, x, r, placed)
+            if (placed < n) then
+                write(s1, '(i0)') placed
+                write(s2, '(i0)') n
+                call set_error(err, dem_err_input, at // ": key 'n': only " // trim(s1) // &
+                    ' of ' // trim(s2) // ' spheres found room in the region (random ' // &
+                    'insertion fills at most about a third of a volume): enlarge the region')
+                return
+            end if
+            next_id = 1
+            if (c%n_particles > 0) next_id = maxval(c%gid(1:c%n_particles)) + 1
+            call append_particles(c, [(next_id + k_item, k_item = 0, n - 1)], spread(im, 1, n), &
+                                  r, x, spread(velocity, 2, n), spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n))
+            deallocate(x, r)
+        end do
+    end subroutine read_inserts
+
+    !> Append particles to the case.
+    subroutine append_particles(c, gid, mat, radius, x, v, w)
+        type(case_t), intent(inout) :: c
+        integer(i8), intent(in) :: gid(:)
+        integer(ip), intent(in) :: mat(:)
+        real(wp), intent(in) :: radius(:), x(:, :), v(:, :), w(:, :)
+        integer(ip) :: n
+        n = c%n_particles
+        c%gid = [c%gid(1:n), gid]
+        c%mat = [c%mat(1:n), mat]
+        c%radius = [c%radius(1:n), radius]
+        c%x = reshape([c%x(:, 1:n), x], [3, n + size(gid)])
+        c%v = reshape([c%v(:, 1:n), v], [3, n + size(gid)])
+        c%w = reshape([c%w(:, 1:n), w], [3, n + size(gid)])
+        c%n_particles = n + size(gid)
+    end subroutine append_particles
+
+    !> All particles together: at least one, ids unique, and no two overlapping by more than
+    !> half the smaller radius (found with the neighbour grid).
+    subroutine check_particles(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        integer(ip), allocatable :: order(:)
+        type(neighbors_t) :: nb
+        type(mesh_t) :: no_walls
+        integer(ip) :: i, j, k, n
+        character(len=24) :: s1, s2
+        n = c%n_particles
+        if (n == 0) then
+            call set_error(err, dem_err_input, nf%path // ': no particles (give &particle, ' // &
+                           '&particle_file or &insert)')
+            return
+        end if
+        order = order_by_id(c%gid(1:n))
+        do k = 2, n
+            if (c%gid(order(k)) == c%gid(order(k - 1))) then
+                write(s1, '(i0)') c%gid(order(k))
+                call set_error(err, dem_err_input, nf%path // ': particle id ' // trim(s1) // &
+                               ' is given twice')
+                return
+            end if
+        end do
+        call neighbors_build(nb, n, n, c%gid, c%x, c%radius, no_walls)
+        do i = 1, n
+            do k = nb%start(i), nb%start(i + 1) - 1
+                j = nb%list(k)
+                if (norm2(c%x(:, j) - c%x(:, i)) < c%radius(i) + c%radius(j) &
+                    - 0.5_wp * min(c%radius(i), c%radius(j))) then
+                    write(s1, '(i0)') min(c%gid(i), c%gid(j))
+                    write(s2, '(i0)') max(c%gid(i), c%gid(j))
+                    call set_error(err, dem_err_input, nf%path // ': particles ' // trim(s1) // &
+                        ' and ' // trim(s2) // ' overlap by more than half the smaller radius')
+                    return
+                end if
+            end do
+        end do
+    end subroutine check_particles
+
+    !> &outlet (repeated): particles whose centre enters the region are removed and counted.
+    subroutine read_outlets(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=name_len) :: region  ! 'plane': beyond a plane; 'box': outside a box
+        real(wp) :: point(3)               ! plane: a point of it [m]
+        real(wp) :: normal(3)              ! plane: points to the side where particles leave
+        real(wp) :: box_min(3), box_max(3) ! box: corners of the box particles stay in [m]
+        namelist /outlet/ region, point, normal, box_min, box_max
+        type(nml_block_t) :: b
+        integer :: k_item, ios, k
+        character(len=512) :: msg
+        character(len=:), allocatable :: text, at
+
+        allocate(c%outlets(count_blocks(nf, 'outlet')))
+        do k = 1, size(c%outlets)
+            region = ''
+            point = unset
+            normal = unset
+            box_min = unset
+            box_max = unset
+            b = nf%blocks(block_index(nf, 'outlet', k))
+            do k_item = 0, block_item_count(b)
+                text = block_text(b, k_item)
+                read(text, nml=outlet, iostat=ios, iomsg=msg)
+                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            end do
+            if (err%failed()) return
+            at = nml_location(nf, b)
+            select case (region)
+            case ('plane')
+                if (.not. check_vector(at, point, 'point', .true., err)) return
+                if (.not. check_vector(at, normal, 'normal', .true., err)) return
+                if (all(normal == 0.0_wp)) then
+                    call set_error(err, dem_err_input, at // ": key 'normal': a non-zero " // &
+                                   'vector is required')
+                    return
+                end if
+                c%outlets(k) = outlet_t(kind=outlet_plane, point=point, &
+                                        normal=normal / norm2(normal))
+            case ('box')
+                if (.not. check_vector(at, box_min, 'box_min', .true., err)) return
+                if (.not. check_vector(at, box_max, 'box_max', .true., err)) return
+                if (any(box_max <= box_min)) then
+                    call set_error(err, dem_err_input, at // ": key 'box_max': must exceed " // &
+                                   'box_min along every axis')
+                    return
+                end if
+                c%outlets(k) = outlet_t(kind=outlet_box, lo=box_min, hi=box_max)
+            case default
+                call set_error(err, dem_err_input, at // ": key 'region': '" // trim(region) // &
+                               "' is not known (accepted: plane, box)")
+                return
+            end select
+        end do
+    end subroutine read_outlets
 
     !> &wall_plane (one per flat square wall made of triangles).
     subroutine read_walls(nf, c, err)
@@ -540,7 +834,7 @@ contains
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
-        character(len=:), allocatable :: text, at, path
+        character(len=:), allocatable :: text, at
         real(wp), allocatable :: vert(:, :, :)
         integer :: k, im
 
@@ -593,9 +887,7 @@ contains
                                'than rotation_start')
                 return
             end if
-            path = trim(file)
-            if (path(1:1) /= '/') path = directory_of(nf%path) // path
-            call stl_read(path, scale, vert, err)
+            call stl_read(relative_to(nf%path, trim(file)), scale, vert, err)
             if (err%failed()) then
                 err%message = at // ": key 'file': " // err%message
                 return
@@ -831,12 +1123,16 @@ contains
         end if
     end function check_vector
 
-    !> The directory part of a path, with its final '/' ('' for a bare file name).
-    function directory_of(path) result(dir)
-        character(len=*), intent(in) :: path
-        character(len=:), allocatable :: dir
-        dir = path(1:index(path, '/', back=.true.))
-    end function directory_of
+    !> A file named in a case: absolute, or relative to the case file's directory.
+    function relative_to(case_path, file) result(path)
+        character(len=*), intent(in) :: case_path, file
+        character(len=:), allocatable :: path
+        if (file(1:1) == '/') then
+            path = file
+        else
+            path = case_path(1:index(case_path, '/', back=.true.)) // file
+        end if
+    end function relative_to
 
     !> The file name without directory and extension.
     function file_stem(path) result(stem)

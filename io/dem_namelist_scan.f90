@@ -2,6 +2,7 @@
 !> every error can name the file, the line, the group and the key. Comments (`!` to the end
 !> of the line, outside quotes) are removed; each group becomes one line of text.
 module dem_namelist_scan
+    use dem_text, only: read_line
     use dem_error, only: error_t, set_error, dem_err_input
     implicit none
     private
@@ -170,22 +171,6 @@ contains
             k = k + 1
         end do
     end subroutine nml_items
-
-    !> Read one line of any length.
-    subroutine read_line(u, line, ios)
-        integer, intent(in) :: u
-        character(len=:), allocatable, intent(out) :: line
-        integer, intent(out) :: ios
-        character(len=256) :: chunk
-        integer :: nread
-        line = ''
-        do
-            read(u, '(a)', advance='no', iostat=ios, size=nread) chunk
-            line = line // chunk(1:nread)
-            if (ios /= 0) exit
-        end do
-        if (is_iostat_eor(ios)) ios = 0
-    end subroutine read_line
 
     elemental logical function is_name_char(ch)
         character, intent(in) :: ch

@@ -12,7 +12,7 @@ module dem_output
               output_close, make_directory
 
     character(len=*), parameter :: series_header = &
-        'time,step,particles,contacts_pp,contacts_pw,kinetic_translational,' // &
+        'time,step,particles,removed,contacts_pp,contacts_pw,kinetic_translational,' // &
         'kinetic_rotational,potential_gravity,max_speed'
     character(len=*), parameter :: contact_header = &
         'time,overlap,normal_force,tangential_force,x,y,z,vx,vy,vz,wx,wy,wz'
@@ -69,13 +69,13 @@ contains
     end subroutine output_open
 
     !> One row of series.csv.
-    subroutine output_series(out, time, step, n, n_pp, n_pw, ke_t, ke_r, pe, vmax)
+    subroutine output_series(out, time, step, n, removed, n_pp, n_pw, ke_t, ke_r, pe, vmax)
         type(output_t), intent(in) :: out
         real(wp), intent(in) :: time, ke_t, ke_r, pe, vmax  !! [s], [J], [J], [J], [m/s]
-        integer(i8), intent(in) :: step
+        integer(i8), intent(in) :: step, removed
         integer(ip), intent(in) :: n, n_pp, n_pw
-        write(out%series, '(' // real_fmt // ',3(",",i0),",",i0,4(",",' // real_fmt // '))') &
-            time, step, n, n_pp, n_pw, ke_t, ke_r, pe, vmax
+        write(out%series, '(' // real_fmt // ',5(",",i0),4(",",' // real_fmt // '))') &
+            time, step, n, removed, n_pp, n_pw, ke_t, ke_r, pe, vmax
         flush(out%series)
         if (out%contact /= -1) flush(out%contact)
     end subroutine output_series
@@ -94,7 +94,7 @@ contains
         type(output_t), intent(in) :: out
         integer(ip), intent(in) :: order(:)    !! the particles to write, in this order
         integer(i8), intent(in) :: gid(:)
-        integer(ip), intent(in) :: mat(:)
+        character(len=*), intent(in) :: mat(:) !! material names
         real(wp), intent(in) :: radius(:), x(:, :), v(:, :), w(:, :)
         type(error_t), intent(inout) :: err
         integer :: u, k, i
@@ -102,7 +102,7 @@ contains
         if (err%failed()) return
         do k = 1, size(order)
             i = order(k)
-            write(u, '(i0,",",i0,10(",",' // real_fmt // '))') gid(i), mat(i), radius(i), &
+            write(u, '(i0,",",a,10(",",' // real_fmt // '))') gid(i), trim(mat(i)), radius(i), &
                 x(:, i), v(:, i), w(:, i)
         end do
         close(u)

@@ -71,11 +71,18 @@ def sliding_threshold_deg():
 
 
 def read_csv(path):
+    """Columns of a CSV file with a header line: numbers as float arrays, others as strings."""
     with open(path) as f:
         rows = list(csv.reader(f))
     header = [h.strip() for h in rows[0]]
-    data = np.array([[float(x) for x in r] for r in rows[1:]])
-    return {h: data[:, k] for k, h in enumerate(header)}
+    columns = {}
+    for k, h in enumerate(header):
+        values = [r[k].strip() for r in rows[1:]]
+        try:
+            columns[h] = np.array([float(x) for x in values])
+        except ValueError:
+            columns[h] = np.array(values)
+    return columns
 
 
 def contact_metrics(contact_csv):

@@ -4,6 +4,7 @@ module dem_case
     use dem_kinds, only: wp, ip, i8
     use dem_materials, only: materials_t, contact_options_t, effective_moduli, damping_ratio
     use dem_mesh, only: mesh_t
+    use dem_outlets, only: outlet_t
     use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt, &
                             tangential_critical_dt
     implicit none
@@ -20,6 +21,7 @@ module dem_case
         real(wp) :: expected_speed = 0.0_wp           !< largest impact speed expected [m/s]
         real(wp) :: skin = 0.0_wp                     !< neighbour-list skin [m]
         logical :: allow_unstable = .false.           !< run even above the stability bound
+        real(wp) :: stop_kinetic_energy = 0.0_wp      !< stop once the kinetic energy is below [J]
         character(len=:), allocatable :: output_dir
         real(wp) :: output_interval = 0.0_wp          !< series.csv interval [s]
         integer(i8) :: trace_id = 0                   !< particle whose contact is traced
@@ -30,6 +32,7 @@ module dem_case
         integer(ip), allocatable :: mat(:)
         real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :)
         type(mesh_t) :: mesh
+        type(outlet_t), allocatable :: outlets(:)
     end type case_t
 
     !> Time scales of a case and the bound they put on dt.

@@ -33,12 +33,17 @@ contains
         wc%xi = 0.0_wp
     end subroutine wall_contacts_init
 
-    !> Reorder the history with the particles: particle i becomes the one stored at order(i).
+    !> Reorder the history with the particles: particle i becomes the one stored at order(i);
+    !> the slots of particles left out are emptied.
     subroutine wall_contacts_permute(wc, order)
         type(wall_contacts_t), intent(inout) :: wc
         integer(ip), intent(in) :: order(:)
-        wc%tri(:, 1:size(order)) = wc%tri(:, order)
-        wc%xi(:, :, 1:size(order)) = wc%xi(:, :, order)
+        integer(ip) :: n
+        n = size(order)
+        wc%tri(:, 1:n) = wc%tri(:, order)
+        wc%xi(:, :, 1:n) = wc%xi(:, :, order)
+        wc%tri(:, n + 1:) = 0
+        wc%xi(:, :, n + 1:) = 0.0_wp
     end subroutine wall_contacts_permute
 
     !> Of the nc triangles touching a sphere (closest points q, features), keep those whose

@@ -60,12 +60,14 @@ contains
         p%w(:, i) = w
     end subroutine particles_add
 
-    !> Reorder the owned particles: particle i becomes the one stored at order(i).
+    !> Reorder the owned particles: particle i becomes the one stored at order(i). Particles
+    !> that `order` leaves out are removed.
     subroutine particles_permute(p, order)
         type(particles_t), intent(inout) :: p
-        integer(ip), intent(in) :: order(:)   !! a permutation of 1..n_own
+        integer(ip), intent(in) :: order(:)   !! distinct indices in 1..n_own
         integer(ip) :: n
-        n = p%n_own
+        n = size(order)
+        p%n_own = n
         p%gid(1:n) = p%gid(order)
         p%mat(1:n) = p%mat(order)
         p%radius(1:n) = p%radius(order)

@@ -13,6 +13,7 @@ module dem_solver
                                pw_forces
     use dem_forces, only: body_forces
     use dem_mesh, only: mesh_t, mesh_move
+    use dem_outlets, only: outlets_mark
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
     use dem_diagnostics, only: energies, count_pp_contacts, first_nonfinite, contact_trace
     use dem_output, only: output_t, output_open, output_series, output_contact, &
@@ -35,6 +36,8 @@ module dem_solver
         integer(i8) :: trace_id = 0    !< global id of the traced particle, 0: none
         integer(ip) :: trace = 0       !< its local index
         real(wp) :: sort_cell = 0.0_wp !< cell size of the spatial order [m]
+        integer(i8) :: removed = 0     !< particles removed by outlets
+        logical :: settled = .false.   !< the kinetic energy fell below stop_kinetic_energy
         integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
         type(timers_t) :: timers       !< time per phase of those steps
     end type solver_t
@@ -86,7 +89,7 @@ contains
         s%steps_run = 0
         s%timers = timers_t()
         call timer_start(s%timers)
-        do while (s%step < n_steps .and. .not. err%failed())
+        do while (s%step < n_steps .and. .not. (err%failed() .or. s%settled))
             associate (p => s%p, n => s%p%n_own)
                 if (c%integrator == integrator_verlet) then
                     call kick(n, 0.5_wp * dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
@@ -113,14 +116,16 @@ contains
             end associate
             s%step = s%step + 1
             s%steps_run = s%steps_run + 1
+            if (size(c%outlets) > 0) call remove_outlet_particles(s, c)
+            call timer_stop(s%timers, phase_neighbors)
             if (mod(s%step, every) == 0 .or. s%step == n_steps) call write_series(s, c, out, err)
             call timer_stop(s%timers, phase_output)
         end do
 
         call device_to_host(s)
         if (.not. err%failed()) call output_final(out, order_by_id(s%p%gid(1:s%p%n_own)), &
-                                                  s%p%gid, s%p%mat, s%p%radius, s%p%x, &
-                                                  s%p%v, s%p%w, err)
+                                                  s%p%gid, c%mats%name(s%p%mat), s%p%radius, &
+                                                  s%p%x, s%p%v, s%p%w, err)
         call output_close(out)
         call device_exit(s)
     end subroutine solver_run
@@ -159,21 +164,43 @@ contains
             'wall triangles than the contact store holds; the walls overlap or are too fine')
     end subroutine compute_forces
 
-    !> Re-sort the particles in space and rebuild the neighbour lists, on the host; the
-    !> history follows the particles, and the new state and lists go to the device.
-    subroutine rebuild(s)
+    !> Remove the particles that entered an outlet (the lists are rebuilt without them).
+    subroutine remove_outlet_particles(s, c)
         type(solver_t), intent(inout) :: s
-        integer(ip), allocatable :: order(:)
+        type(case_t), intent(in) :: c
+        logical :: gone(s%p%n_own)
+        integer(ip) :: n_gone
+        call acc_update_host(s%p%x)
+        n_gone = outlets_mark(s%p%n_own, s%p%x, c%outlets, gone)
+        if (n_gone == 0) return
+        s%removed = s%removed + n_gone
+        call rebuild(s, .not. gone)
+    end subroutine remove_outlet_particles
+
+    !> Re-sort the particles in space and rebuild the neighbour lists, on the host; the
+    !> history follows the particles, and the new state and lists go to the device. With
+    !> `keep`, the particles not kept are removed.
+    subroutine rebuild(s, keep)
+        type(solver_t), intent(inout) :: s
+        logical, intent(in), optional :: keep(:)
+        integer(ip), allocatable :: order(:), kept(:)
+        integer(ip) :: i
         call device_to_host(s)
         if (allocated(s%nb%start)) then
             call acc_update_host(s%nb%xi)
             call lists_delete(s%nb)
         end if
-        order = neighbors_spatial_order(s%p%n_own, s%p%x, s%sort_cell)
+        if (present(keep)) then
+            kept = pack([(i, i = 1, s%p%n_own)], keep)
+        else
+            kept = [(i, i = 1, s%p%n_own)]
+        end if
+        order = kept(neighbors_spatial_order(size(kept), s%p%x(:, kept), s%sort_cell))
         call particles_permute(s%p, order)
         call wall_contacts_permute(s%wc, order)
         call particles_to_device(s)
         if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:s%p%n_own), s%trace_id, dim=1)
+        if (s%trace_id /= 0 .and. s%trace == 0) s%trace_id = 0    ! it left through an outlet
         call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
                              s%p%radius, s%mesh, old_index=order)
         call acc_copyin(s%nb%start)
@@ -209,8 +236,9 @@ contains
             call energies(p%n_own, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, &
                           ke_t, ke_r, pe, vmax)
             n_pp = count_pp_contacts(p%n_own, p%x, p%radius, s%nb%start, s%nb%list)
-            call output_series(out, real(s%step, wp) * c%dt, s%step, p%n_own, n_pp, &
+            call output_series(out, real(s%step, wp) * c%dt, s%step, p%n_own, s%removed, n_pp, &
                                count(s%wc%tri(:, 1:p%n_own) > 0), ke_t, ke_r, pe, vmax)
+            s%settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
         end associate
     end subroutine write_series
 

@@ -107,7 +107,7 @@ bad("infinite_velocity", sub("velocity = 0, 0, -1", "velocity = 0, 0, -Inf"), "p
     "velocity", "finite")
 bad("missing_position", sub("position = 0, 0, 0.011, ", ""), "particle", "position", "required")
 bad("coincident_particles", GOOD + "&particle material = 'glass', radius = 0.01, position = "
-    "0, 0, 0.012 /\n", "particle", "position", "overlaps particle 1")
+    "0, 0, 0.012 /\n", None, None, "particles 1 and 2 overlap")
 bad("nan_poisson", sub("48.0e9, poisson_ratio = 0.2", "48.0e9, poisson_ratio = NaN"),
     "material", "poisson_ratio")
 bad("nan_radius", sub("radius = 0.01", "radius = NaN"), "particle", "radius")

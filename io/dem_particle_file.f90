@@ -1,0 +1,178 @@
+!> Particle files: CSV with a header line naming the columns id, material, radius, x, y, z
+!> and optionally vx, vy, vz, wx, wy, wz (any order; others are ignored). `final.csv` of a
+!> run is such a file, so a run's end state can start another case; another code's state can
+!> be loaded exactly (numbers are read to full precision). Materials are given by name.
+module dem_particle_file
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use dem_kinds, only: wp, ip, i8
+    use dem_text, only: read_line
+    use dem_error, only: error_t, set_error, dem_err_input
+    implicit none
+    private
+    public :: read_particle_file
+
+    character(len=*), parameter :: required(6) = [character(len=8) :: &
+        'id', 'material', 'radius', 'x', 'y', 'z']
+    character(len=*), parameter :: optional(6) = [character(len=8) :: &
+        'vx', 'vy', 'vz', 'wx', 'wy', 'wz']
+
+contains
+
+    !> Read every particle of a file. `names` are the materials a row may name; mat(k) is the
+    !> index of row k's material in them.
+    subroutine read_particle_file(path, names, gid, mat, radius, x, v, w, err)
+        character(len=*), intent(in) :: path
+        character(len=*), intent(in) :: names(:)
+        integer(i8), allocatable, intent(out) :: gid(:)
+        integer(ip), allocatable, intent(out) :: mat(:)
+        real(wp), allocatable, intent(out) :: radius(:), x(:, :), v(:, :), w(:, :)
+        type(error_t), intent(inout) :: err
+        character(len=:), allocatable :: line
+        character(len=64), allocatable :: fields(:)
+        character(len=16) :: num
+        integer :: u, ios, lineno, col(12), k, n, j
+        real(wp) :: val(10)
+
+        allocate(gid(0), mat(0), radius(0), x(3, 0), v(3, 0), w(3, 0))
+        open(newunit=u, file=path, status='old', action='read', iostat=ios)
+        if (ios /= 0) then
+            call set_error(err, dem_err_input, path // ': cannot open the particle file')
+            return
+        end if
+        call read_line(u, line, ios)
+        if (ios /= 0) then
+            call set_error(err, dem_err_input, path // ':1: empty particle file (a header ' // &
+                           'line id,material,radius,x,y,z[,vx,vy,vz,wx,wy,wz] is expected)')
+            close(u)
+            return
+        end if
+        call split(line, fields)
+        col = 0
+        do k = 1, size(fields)
+            do j = 1, 6
+                if (fields(k) == required(j)) col(j) = k
+                if (fields(k) == optional(j)) col(6 + j) = k
+            end do
+        end do
+        do j = 1, 6
+            if (col(j) == 0) then
+                call set_error(err, dem_err_input, path // ":1: the header has no column '" // &
+                    trim(required(j)) // "' (id,material,radius,x,y,z are required)")
+                close(u)
+                return
+            end if
+        end do
+        n = 0
+        lineno = 1
+        do
+            call read_line(u, line, ios)
+            if (ios /= 0) exit
+            lineno = lineno + 1
+            if (len_trim(line) == 0) cycle
+            write(num, '(i0)') lineno
+            call split(line, fields)
+            if (size(fields) < maxval(col)) then
+                call set_error(err, dem_err_input, path // ':' // trim(num) // ': ' // &
+                               'fewer columns than the header')
+                exit
+            end if
+            n = n + 1
+            if (n > size(gid)) call grow(max(1024, 2 * n))
+            read(fields(col(1)), *, iostat=ios) gid(n)
+            if (ios /= 0 .or. gid(n) <= 0) then
+                call set_error(err, dem_err_input, path // ':' // trim(num) // &
+                               ": column 'id': '" // trim(fields(col(1))) // "' is not an id > 0")
+                exit
+            end if
+            mat(n) = findloc(names, trim(fields(col(2))), dim=1)
+            if (mat(n) == 0) then
+                call set_error(err, dem_err_input, path // ':' // trim(num) // &
+                    ": column 'material': '" // trim(fields(col(2))) // "' is not a defined material")
+                exit
+            end if
+            val = 0.0_wp
+            do j = 3, 12
+                if (col(j) == 0) cycle
+                read(fields(col(j)), *, iostat=ios) val(j - 2)
+                if (ios == 0) then
+                    if (.not. ieee_is_finite(val(j - 2))) ios = 1
+                end if
+                if (ios /= 0) then
+                    call set_error(err, dem_err_input, path // ':' // trim(num) // ": column '" // &
+                        trim(column_name(j)) // "': '" // trim(fields(col(j))) // &
+                        "' is not a finite number")
+                    exit
+                end if
+            end do
+            if (err%failed()) exit
+            if (.not. (val(1) > 0.0_wp)) then
+                call set_error(err, dem_err_input, path // ':' // trim(num) // &
+                               ": column 'radius': must be > 0")
+                exit
+            end if
+            radius(n) = val(1)
+            x(:, n) = val(2:4)
+            v(:, n) = val(5:7)
+            w(:, n) = val(8:10)
+        end do
+        close(u)
+        if (err%failed()) return
+        if (n == 0) then
+            call set_error(err, dem_err_input, path // ': no particles after the header')
+            return
+        end if
+        call grow(n)
+    contains
+        subroutine grow(cap)
+            integer, intent(in) :: cap
+            integer(i8), allocatable :: g2(:)
+            integer(ip), allocatable :: m2(:)
+            real(wp), allocatable :: r2(:), x2(:, :), v2(:, :), w2(:, :)
+            integer :: keep
+            keep = min(n, size(gid))
+            allocate(g2(cap), m2(cap), r2(cap), x2(3, cap), v2(3, cap), w2(3, cap))
+            g2(1:keep) = gid(1:keep)
+            m2(1:keep) = mat(1:keep)
+            r2(1:keep) = radius(1:keep)
+            x2(:, 1:keep) = x(:, 1:keep)
+            v2(:, 1:keep) = v(:, 1:keep)
+            w2(:, 1:keep) = w(:, 1:keep)
+            call move_alloc(g2, gid)
+            call move_alloc(m2, mat)
+            call move_alloc(r2, radius)
+            call move_alloc(x2, x)
+            call move_alloc(v2, v)
+            call move_alloc(w2, w)
+        end subroutine grow
+    end subroutine read_particle_file
+
+    pure function column_name(j) result(name)
+        integer, intent(in) :: j
+        character(len=8) :: name
+        if (j <= 6) then
+            name = required(j)
+        else
+            name = optional(j - 6)
+        end if
+    end function column_name
+
+    !> The comma-separated fields of a line, trimmed.
+    subroutine split(line, fields)
+        character(len=*), intent(in) :: line
+        character(len=64), allocatable, intent(out) :: fields(:)
+        integer :: a, b, k, n
+        n = count([(line(k:k) == ',', k = 1, len(line))]) + 1
+        allocate(fields(n))
+        a = 1
+        do k = 1, n
+            b = index(line(a:), ',')
+            if (b == 0) then
+                b = len(line) + 1
+            else
+                b = a + b - 1
+            end if
+            fields(k) = adjustl(line(a:b - 1))
+            a = b + 1
+        end do
+    end subroutine split
+end module dem_particle_file

@@ -1,0 +1,115 @@
+"""Filling a box by random insertion, settling it, restarting from the settled particle file,
+and draining it through an outlet.
+
+1. &insert places 100 spheres in a box region without overlaps, reproducibly from a seed
+   (the same seed gives the same file bit for bit, another seed another packing); the run
+   stops by itself once the kinetic energy is below stop_kinetic_energy, with every sphere
+   inside the container and no overlap above 2 % of the radius (Hertz: a sphere under the
+   weight of a 10-sphere column overlaps less than that).
+2. The settled final.csv starts a new case (&particle_file): the state at t = 0 is the file's,
+   exactly (the gravitational energy of series.csv's first row equals the file's, computed
+   here).
+3. Without its floor, the bed drains through an outlet plane: every sphere is removed, and
+   particles + removed = 100 in every row of series.csv.
+4. Bad particle files are reported with the file, the line and the column.
+usage: test_fill_drain.py DEM WORKDIR"""
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+
+from regression_util import check, check_close, finish, run_dem
+import chung_ooi as co
+
+dem, work = sys.argv[1], os.path.abspath(sys.argv[2])
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+
+R, RHO, E, NU, G = 5.0e-3, 2500.0, 1.0e7, 0.2, 9.81
+MATERIALS = f"""&material name = 'soft', density = {RHO}, youngs_modulus = {E}, poisson_ratio = {NU} /
+&material name = 'wall', rigid = .true. /
+&pair materials = 'soft', 'soft', restitution = 0.3, friction = 0.3 /
+&pair materials = 'soft', 'wall', restitution = 0.3, friction = 0.3 /
+"""
+SIDES = """&wall_plane material = 'wall', point = -0.05, 0, 0.1, normal = 1, 0, 0, half_width = 0.1 /
+&wall_plane material = 'wall', point = 0.05, 0, 0.1, normal = -1, 0, 0, half_width = 0.1 /
+&wall_plane material = 'wall', point = 0, -0.05, 0.1, normal = 0, 1, 0, half_width = 0.1 /
+&wall_plane material = 'wall', point = 0, 0.05, 0.1, normal = 0, -1, 0, half_width = 0.1 /
+"""
+FLOOR = "&wall_plane material = 'wall', point = 0, 0, 0, normal = 0, 0, 1, half_width = 0.06 /\n"
+
+
+def case(name, body):
+    path = os.path.join(work, name + ".nml")
+    with open(path, "w") as f:
+        f.write(body)
+    return path
+
+
+def fill(name, seed):
+    return case(name, f"""&run dt = 5.0e-5, t_end = 2.0, stop_kinetic_energy = 1.0e-6 /
+&output interval = 0.01 /
+{MATERIALS}{SIDES}{FLOOR}&insert n = 100, material = 'soft', radius_min = {R}, seed = {seed},
+        box_min = -0.05, -0.05, 0.0, box_max = 0.05, 0.05, 0.15 /
+""")
+
+
+# 1. fill and settle, twice with one seed and once with another
+for name, seed in (("fill_a", 7), ("fill_b", 7), ("fill_c", 8)):
+    run_dem(dem, fill(name, seed), work)
+out = os.path.join(work, "output")
+a = open(os.path.join(out, "fill_a", "final.csv")).read()
+check(a == open(os.path.join(out, "fill_b", "final.csv")).read(), "same seed, same packing")
+check(a != open(os.path.join(out, "fill_c", "final.csv")).read(), "other seed, other packing")
+f = co.read_csv(os.path.join(out, "fill_a", "final.csv"))
+s = co.read_csv(os.path.join(out, "fill_a", "series.csv"))
+check(len(f["id"]) == 100 and sorted(f["id"]) == list(range(1, 101)), "ids 1 to 100")
+check(s["time"][-1] < 2.0 - 1e-9, f"the run stopped once settled (t = {s['time'][-1]})")
+check(s["kinetic_translational"][-1] + s["kinetic_rotational"][-1] < 1e-6, "settled")
+x = np.stack([f["x"], f["y"], f["z"]], axis=1)
+check(np.all(np.abs(x[:, :2]) < 0.05) and np.all(x[:, 2] > 0), "all inside the box")
+d = np.linalg.norm(x[:, None, :] - x[None, :, :], axis=2) + np.eye(100)
+check((2 * R - d).max() < 0.02 * R, f"largest overlap {(2 * R - d).max() / R:.3%} of R")
+
+# 2. restart from the settled file
+settled = os.path.join(out, "fill_a", "final.csv")
+path = case("restart", f"""&run dt = 5.0e-5, t_end = 1.0e-3 /
+{MATERIALS}{SIDES}{FLOOR}&particle_file file = '{settled}' /
+""")
+run_dem(dem, path, work)
+r0 = co.read_csv(os.path.join(out, "restart", "series.csv"))
+m = co.sphere_mass(RHO, R)
+check_close(r0["potential_gravity"][0], m * G * f["z"].sum(), 1e-13,
+            "restart: gravitational energy of the file")
+check(r0["particles"][0] == 100, "restart: 100 particles")
+
+# 3. drain: no floor, an outlet 5 cm below
+path = case("drain", f"""&run dt = 5.0e-5, t_end = 0.4 /
+&output interval = 0.005 /
+{MATERIALS}{SIDES}&particle_file file = '{settled}' /
+&outlet region = 'plane', point = 0, 0, -0.05, normal = 0, 0, -1 /
+""")
+run_dem(dem, path, work)
+dr = co.read_csv(os.path.join(out, "drain", "series.csv"))
+check(np.all(dr["particles"] + dr["removed"] == 100), "particles + removed = 100 in every row")
+check(dr["removed"][-1] == 100 and dr["particles"][-1] == 0, "all drained")
+check(np.all(np.diff(dr["removed"]) >= 0), "removed never decreases")
+
+# 4. bad particle files
+for name, text, words in (
+        ("no_column", "id,material,radius,x,y\n1,soft,0.005,0,0\n", [":1:", "'z'"]),
+        ("bad_number", "id,material,radius,x,y,z\n1,soft,0.005,0,0,0.1\n2,soft,0.005,0,zero,0.2\n",
+         [":3:", "'y'", "zero"]),
+        ("bad_material", "id,material,radius,x,y,z\n1,gold,0.005,0,0,0.1\n", [":2:", "gold"])):
+    csv = os.path.join(work, name + ".csv")
+    with open(csv, "w") as fh:
+        fh.write(text)
+    path = case(name, f"&run dt = 5.0e-5, t_end = 1.0e-3 /\n{MATERIALS}&particle_file file = "
+                f"'{csv}' /\n")
+    r = subprocess.run([dem, "--check", path], capture_output=True, text=True, cwd=work)
+    check(r.returncode == 2, f"{name}: exit code {r.returncode}")
+    for w in [path, "&particle_file", "'file'", csv] + words:
+        check(w in r.stderr, f"{name}: message lacks {w!r}: {r.stderr.strip()}")
+finish()
