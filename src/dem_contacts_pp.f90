@@ -44,7 +44,7 @@ contains
                 dist2 = d(1)**2 + d(2)**2 + d(3)**2
                 rsum = radius(i) + radius(j)
                 if (dist2 >= rsum**2) then
-                    xi(:, k) = 0.0_wp
+                    if (any(xi(:, k) /= 0.0_wp)) xi(:, k) = 0.0_wp   ! the contact has ended
                     cycle
                 end if
                 dist = sqrt(dist2)

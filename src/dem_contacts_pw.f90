@@ -162,6 +162,7 @@ contains
         !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, d2, qk, d2k) &
         !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, keep, slot)
         do i = 1, n_own
+            if (wstart(i + 1) == wstart(i) .and. wtri(1, i) == 0) cycle   ! no wall near
             r = radius(i)
             nc = 0
             do k = wstart(i), wstart(i + 1) - 1
@@ -213,10 +214,13 @@ contains
                 fi = fi - fn * nrm + ft
                 ti = ti + r * cross(nrm, ft)
             end do
-            wtri(:, i) = 0
-            wxi(:, :, i) = 0.0_wp
             wtri(1:ns, i) = new_tri(1:ns)
             wxi(:, 1:ns, i) = new_xi(:, 1:ns)
+            do c = ns + 1, max_wall_contacts       ! empty the slots no longer used
+                if (wtri(c, i) == 0) exit
+                wtri(c, i) = 0
+                wxi(:, c, i) = 0.0_wp
+            end do
             f(:, i) = f(:, i) + fi
             t(:, i) = t(:, i) + ti
         end do

@@ -123,7 +123,28 @@ contains
                 timer_seconds(s%timers, k), ' s ', &
                 100.0_wp * timer_seconds(s%timers, k) / max(total, tiny(1.0_wp)), ' %'
         end do
+        if (peak_memory_kib() > 0) write(output_unit, '(a,f10.1,a,f10.1,a)') &
+            'memory: peak resident ', peak_memory_kib() / 1024.0_wp, ' MiB, ', &
+            1024.0_wp * peak_memory_kib() / max(1, s%p%n_own), ' bytes per particle'
     end subroutine print_timing
+
+    !> Peak resident memory of this process [KiB] from /proc/self/status (Linux); 0 if unknown.
+    integer function peak_memory_kib() result(kib)
+        character(len=256) :: line
+        integer :: u, ios
+        kib = 0
+        open(newunit=u, file='/proc/self/status', action='read', status='old', iostat=ios)
+        if (ios /= 0) return
+        do
+            read(u, '(a)', iostat=ios) line
+            if (ios /= 0) exit
+            if (line(1:6) == 'VmHWM:') then
+                read(line(7:), *, iostat=ios) kib
+                exit
+            end if
+        end do
+        close(u)
+    end function peak_memory_kib
 
     subroutine usage_error(msg)
         character(len=*), intent(in) :: msg
