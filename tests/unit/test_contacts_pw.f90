@@ -1,8 +1,8 @@
 !> A sphere pressed onto a flat wall of many triangles feels exactly the force of one plane
 !> (Hertz), through one contact, wherever it is: over faces, shared edges and vertices shared
 !> by six triangles. Two walls meeting at 90 degrees give two contacts. A sphere sliding
-!> across 7 shared edges builds up the same tangential force as on one big triangle: the
-!> history follows the contact from triangle to triangle.
+!> across 108 shared edges feels, at every step, the normal and tangential force of one big
+!> plane: the history follows the contact from triangle to triangle.
 program test_contacts_pw
     use dem_kinds, only: wp, ip
     use dem_mesh, only: mesh_t, mesh_add_plane
@@ -11,7 +11,7 @@ program test_contacts_pw
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp), r = 0.01_wp, d = 1.0e-5_wp, estar = 1.0e10_wp
     real(wp), parameter :: h = 0.01_wp   ! side of the squares of the wall
-    type(mesh_t) :: m, one
+    type(mesh_t) :: m, one, fine
     real(wp) :: kn(2, 2), zero(2, 2), mu(2, 2), x(3, 1), v(3, 1), w(3, 1), f(3, 1), t(3, 1)
     real(wp) :: wxi(3, max_wall_contacts, 1), fhertz, pos(2)
     integer(ip) :: wtri(max_wall_contacts, 1), overflow, k, i
@@ -46,10 +46,13 @@ program test_contacts_pw
     call press([1.0e-6_wp, 0.37_wp], 'beside an edge, 1e-8 m')
     call press([0.25_wp + 1.0e-7_wp, 0.25_wp], 'beside a diagonal edge')
 
-    ! sliding slowly along x from -2 h to +2 h, across 3 edges between squares and the
-    ! diagonals of 4 squares: the tangential force grows as on a single plane, k_t v dt per
-    ! step, until friction limits it
-    call mesh_add_plane(one, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.05_wp, 1_ip, &
+    ! sliding slowly along x across a wall of 60 x 60 squares (h = 1/600 m): 54 edges between
+    ! squares and 54 diagonals are crossed; normal and tangential force equal those of a
+    ! single plane (1 m wide, 2 triangles) at every step, to 1e-9 of the normal force: the
+    ! tangential history follows the contact from triangle to triangle
+    call mesh_add_plane(fine, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.05_wp, 60_ip, &
+                        2_ip)
+    call mesh_add_plane(one, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.5_wp, 1_ip, &
                         2_ip)
     wtri = 0
     wxi = 0.0_wp
@@ -57,14 +60,15 @@ program test_contacts_pw
     wxi1 = 0.0_wp
     worst = 0.0_wp
     v(:, 1) = [1.0e-3_wp, 0.0_wp, 0.0_wp]
-    do k = 0, 4000
-        x(:, 1) = [-2.0_wp * h + 1.0e-5_wp * k, 0.123_wp * h, r - d]
-        call step(m, wtri, wxi, f, t)
+    do k = 0, 4500
+        x(:, 1) = [-0.045_wp + 2.0e-5_wp * k, 0.0123_wp, r - d]
+        call step(fine, wtri, wxi, f, t)
         call step(one, wtri1, wxi1, f1, t1)
+        call assert_true(count(wtri(:, 1) > 0) == 1, 'sliding: one contact')
         worst = max(worst, maxval(abs(f - f1)) / fhertz)
     end do
     call assert_true(abs(f1(1, 1)) > 0.1_wp * fhertz, 'a tangential force built up')
-    call assert_true(worst < 1e-9_wp, 'tangential history follows the contact across edges')
+    call assert_true(worst < 1e-9_wp, 'force continuous across 108 edges, as on one plane')
     v = 0.0_wp
 
     ! a second wall at x = -0.02 facing +x: in the corner the sphere has two contacts
