@@ -22,7 +22,10 @@ module dem_neighbors
         integer(ip), allocatable :: start(:)  !< row i is start(i):start(i+1)-1
         integer(ip), allocatable :: list(:)   !< partner's local index
         integer(i8), allocatable :: partner(:) !< partner's global id (history key)
+        integer(ip), allocatable :: mirror(:) !< the partner's entry for the same pair (0: ghost)
         real(wp), allocatable :: xi(:, :)     !< tangential displacement per entry [m]
+        real(wp), allocatable :: fpair(:, :)  !< work space of the contact kernel [N]
+        real(wp), allocatable :: cpair(:, :)  !< work space of the contact kernel [N]
         integer(ip), allocatable :: wstart(:) !< wall row i is wstart(i):wstart(i+1)-1
         integer(ip), allocatable :: wlist(:)  !< candidate triangle
         real(wp), allocatable :: x_ref(:, :)  !< positions at the last build [m]
@@ -110,14 +113,15 @@ contains
             call move_alloc(nb%xi, old_xi)
         end if
         if (allocated(nb%start)) deallocate(nb%start, nb%partner, nb%xi)
-        if (allocated(nb%list)) deallocate(nb%list)
+        if (allocated(nb%list)) deallocate(nb%list, nb%mirror, nb%fpair, nb%cpair)
         if (allocated(nb%wstart)) deallocate(nb%wstart, nb%wlist)
         allocate(nb%start(n_own + 1), nb%wstart(n_own + 1))
         nb%start(1) = 1
         nb%wstart(1) = 1
         nb%tri_tests = 0
         if (n_all == 0) then
-            allocate(nb%list(0), nb%partner(0), nb%xi(3, 0), nb%wlist(0))
+            allocate(nb%list(0), nb%partner(0), nb%xi(3, 0), nb%wlist(0), nb%mirror(0), &
+                     nb%fpair(3, 0), nb%cpair(3, 0))
             nb%x_ref = x(:, 1:n_own)
             if (mesh%moving) nb%vert_ref = mesh%vert
             return
@@ -162,6 +166,12 @@ contains
         end do
         nb%partner = gid(nb%list)
         nb%xi = 0.0_wp
+        allocate(nb%mirror(size(nb%list)), nb%fpair(3, size(nb%list)), nb%cpair(3, size(nb%list)))
+        do i = 1, n_own
+            do k = nb%start(i), nb%start(i + 1) - 1
+                nb%mirror(k) = find_entry(nb%list(k), gid(i))
+            end do
+        end do
         if (keep_history) then
             do i = 1, n_own
                 l = i
@@ -179,6 +189,28 @@ contains
         if (mesh%moving) nb%vert_ref = mesh%vert
         nb%n_builds = nb%n_builds + 1
     contains
+        !> The entry of row j_ whose partner has id g_ (0 if j_ is a ghost): rows are ordered
+        !> by partner id, so a binary search finds it.
+        integer(ip) function find_entry(j_, g_) result(e)
+            integer(ip), intent(in) :: j_
+            integer(i8), intent(in) :: g_
+            integer(ip) :: lo_, hi_
+            e = 0
+            if (j_ > n_own) return
+            lo_ = nb%start(j_)
+            hi_ = nb%start(j_ + 1) - 1
+            do while (lo_ <= hi_)
+                e = (lo_ + hi_) / 2
+                if (nb%partner(e) == g_) return
+                if (nb%partner(e) < g_) then
+                    lo_ = e + 1
+                else
+                    hi_ = e - 1
+                end if
+            end do
+            e = 0
+        end function find_entry
+
         !> Partners of particle i in one level's grid: count them (k advances) or also list them.
         subroutine scan_level(i_, g, rmax_l, fill, k_)
             integer(ip), intent(in) :: i_

@@ -149,9 +149,10 @@ contains
         call timer_stop(s%timers, phase_neighbors)
         associate (p => s%p, nb => s%nb, pc => s%pc, m => s%mesh, n => s%p%n_own)
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
-            call pp_forces(n, n + p%n_ghost, size(nb%list), c%mats%n, p%x, p%v, p%w, p%radius, &
-                           p%mass, p%mat, nb%start, nb%list, pc%kn, pc%sn, pc%st, pc%cn, &
-                           pc%ct, pc%mu, pc%clamp_normal, c%dt, nb%xi, p%f, p%t)
+            call pp_forces(n, n + p%n_ghost, size(nb%list), c%mats%n, p%gid, p%x, p%v, p%w, &
+                           p%radius, p%mass, p%mat, nb%start, nb%list, nb%mirror, pc%kn, pc%sn, &
+                           pc%st, pc%cn, pc%ct, pc%mu, pc%clamp_normal, c%dt, nb%xi, nb%fpair, &
+                           nb%cpair, p%f, p%t)
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
             call pw_forces(n, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, p%x, p%v, p%w, &
@@ -206,6 +207,9 @@ contains
         call acc_copyin(s%nb%start)
         call acc_copyin(s%nb%list)
         call acc_copyin(s%nb%xi)
+        call acc_copyin(s%nb%mirror)
+        call acc_copyin(s%nb%fpair)
+        call acc_copyin(s%nb%cpair)
         call acc_copyin(s%nb%wstart)
         call acc_copyin(s%nb%wlist)
         call acc_copyin(s%nb%x_ref)
@@ -216,6 +220,9 @@ contains
         call acc_delete(nb%start)
         call acc_delete(nb%list)
         call acc_delete(nb%xi)
+        call acc_delete(nb%mirror)
+        call acc_delete(nb%fpair)
+        call acc_delete(nb%cpair)
         call acc_delete(nb%wstart)
         call acc_delete(nb%wlist)
         call acc_delete(nb%x_ref)
@@ -285,6 +292,7 @@ contains
     subroutine device_enter(s)
         type(solver_t), intent(inout) :: s
         associate (p => s%p)
+            call acc_copyin(p%gid)
             call acc_copyin(p%mat)
             call acc_copyin(p%radius)
             call acc_copyin(p%mass)
@@ -329,6 +337,7 @@ contains
     !> Send every particle array and the wall contacts to the device (after a re-sort).
     subroutine particles_to_device(s)
         type(solver_t), intent(inout) :: s
+        call acc_update_device(s%p%gid)
         call acc_update_device(s%p%mat)
         call acc_update_device(s%p%radius)
         call acc_update_device(s%p%mass)
@@ -347,6 +356,7 @@ contains
     subroutine device_exit(s)
         type(solver_t), intent(inout) :: s
         associate (p => s%p)
+            call acc_delete(p%gid)
             call acc_delete(p%mat)
             call acc_delete(p%radius)
             call acc_delete(p%mass)

@@ -1,0 +1,93 @@
+!> The two-pass particle contact kernel (each pair evaluated once, gathered by both) against
+!> brute force evaluating every contact from both sides: the same forces and torques bit for
+!> bit, whatever order the particles are stored in; and Newton's third law (the contact
+!> forces sum to zero).
+program test_contacts_pp
+    use dem_kinds, only: wp, ip, i8
+    use dem_mesh, only: mesh_t
+    use dem_neighbors, only: neighbors_t, neighbors_build
+    use dem_contacts_pp, only: pp_forces
+    use dem_contact_hm, only: hm_force
+    use dem_vector, only: cross
+    use dem_assert, only: assert_true, assert_close, assert_finish
+    implicit none
+    integer(ip), parameter :: n = 80
+    real(wp), parameter :: e_star = 1.0e7_wp, dt = 1.0e-6_wp
+    real(wp) :: x(3, n), v(3, n), w(3, n), r(n), m(n), f(3, n), t(3, n), fb(3, n), tb(3, n)
+    real(wp) :: kn(1, 1), sn(1, 1), st(1, 1), cn(1, 1), mu(1, 1)
+    integer(i8) :: gid(n)
+    integer(ip) :: mat(n), i, order(n), trial
+    type(neighbors_t) :: nb
+    type(mesh_t) :: no_walls
+
+    kn = 4.0_wp / 3.0_wp * e_star
+    sn = 2.0_wp * e_star
+    st = 8.0_wp * 0.4_wp * e_star
+    cn = 0.5_wp
+    mu = 0.3_wp
+    mat = 1
+    call random_seed()
+    call random_number(x)
+    x = 0.05_wp * x                        ! dense: many overlaps
+    call random_number(r)
+    r = 0.004_wp + 0.004_wp * r
+    m = 2500.0_wp * 4.0_wp / 3.0_wp * acos(-1.0_wp) * r**3
+    call random_number(v)
+    v = v - 0.5_wp
+    call random_number(w)
+    w = 100.0_wp * (w - 0.5_wp)
+    gid = [(int(7 * i + 3, i8), i = 1, n)]
+    call brute_force(fb, tb)
+
+    do trial = 1, 3
+        ! store the particles in another order each time
+        order = [(i, i = 1, n)]
+        if (trial == 2) order = [(n + 1 - i, i = 1, n)]
+        if (trial == 3) order = [(mod(37 * i, n) + 1, i = 1, n)]
+        nb = neighbors_t(skin=0.001_wp)
+        call neighbors_build(nb, n, n, gid(order), x(:, order), r(order), no_walls)
+        f = 0.0_wp
+        t = 0.0_wp
+        call pp_forces(n, n, size(nb%list), 1_ip, gid(order), x(:, order), v(:, order), &
+                       w(:, order), r(order), m(order), mat, nb%start, nb%list, nb%mirror, kn, &
+                       sn, st, cn, cn, mu, .false., dt, nb%xi, nb%fpair, nb%cpair, f, t)
+        call assert_true(all(f == fb(:, order)) .and. all(t == tb(:, order)), &
+                         'two passes equal both-sides brute force, bit for bit')
+        call assert_true(count(nb%mirror > 0) == size(nb%list), 'every entry has its mirror')
+        do i = 1, 3
+            call assert_close(sum(f(i, :)), 0.0_wp, 0.0_wp, 'contact forces sum to zero', &
+                              1e-12_wp * maxval(abs(f)))
+        end do
+    end do
+    call assert_true(maxval(abs(fb)) > 0.0_wp, 'there are contacts')
+    call assert_finish()
+
+contains
+
+    !> Every contact evaluated from both sides, summed in the order of the partners' ids.
+    subroutine brute_force(fo, to)
+        real(wp), intent(out) :: fo(3, n), to(3, n)
+        integer(ip) :: a, b, byid(n)
+        real(wp) :: d(3), dist, nrm(3), vrel(3), xi(3), fn, ft(3)
+        byid = [(i, i = 1, n)]           ! gid grows with the index here
+        fo = 0.0_wp
+        to = 0.0_wp
+        do a = 1, n
+            do i = 1, n
+                b = byid(i)
+                if (b == a) cycle
+                d = x(:, b) - x(:, a)
+                if (sum(d**2) >= (r(a) + r(b))**2) cycle
+                dist = sqrt(d(1)**2 + d(2)**2 + d(3)**2)
+                nrm = d / dist
+                vrel = v(:, a) - v(:, b) + cross(r(a) * w(:, a) + r(b) * w(:, b), nrm)
+                xi = 0.0_wp
+                call hm_force(r(a) + r(b) - dist, nrm, vrel, r(a) * r(b) / (r(a) + r(b)), &
+                              m(a) * m(b) / (m(a) + m(b)), kn(1, 1), sn(1, 1), st(1, 1), &
+                              cn(1, 1), cn(1, 1), mu(1, 1), .false., dt, xi, fn, ft)
+                fo(:, a) = fo(:, a) + (-fn * nrm + ft)
+                to(:, a) = to(:, a) + r(a) * cross(nrm, ft)
+            end do
+        end do
+    end subroutine brute_force
+end program test_contacts_pp
