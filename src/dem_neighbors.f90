@@ -22,7 +22,9 @@ module dem_neighbors
         integer(ip), allocatable :: start(:)  !< row i is start(i):start(i+1)-1
         integer(ip), allocatable :: list(:)   !< partner's local index
         integer(i8), allocatable :: partner(:) !< partner's global id (history key)
-        integer(ip), allocatable :: mirror(:) !< the partner's entry for the same pair (0: ghost)
+        integer(ip), allocatable :: mirror(:) !< the partner's entry for the same pair, negated
+                                              !< when the partner (lower id) evaluates the
+                                              !< pair; 0 for a ghost partner
         real(wp), allocatable :: xi(:, :)     !< tangential displacement per entry [m]
         real(wp), allocatable :: fpair(:, :)  !< work space of the contact kernel [N]
         real(wp), allocatable :: cpair(:, :)  !< work space of the contact kernel [N]
@@ -170,6 +172,7 @@ contains
         do i = 1, n_own
             do k = nb%start(i), nb%start(i + 1) - 1
                 nb%mirror(k) = find_entry(nb%list(k), gid(i))
+                if (nb%partner(k) < gid(i)) nb%mirror(k) = -nb%mirror(k)
             end do
         end do
         if (keep_history) then

@@ -149,7 +149,7 @@ contains
         call timer_stop(s%timers, phase_neighbors)
         associate (p => s%p, nb => s%nb, pc => s%pc, m => s%mesh, n => s%p%n_own)
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
-            call pp_forces(n, n + p%n_ghost, size(nb%list), c%mats%n, p%gid, p%x, p%v, p%w, &
+            call pp_forces(n, n + p%n_ghost, size(nb%list), c%mats%n, p%x, p%v, p%w, &
                            p%radius, p%mass, p%mat, nb%start, nb%list, nb%mirror, pc%kn, pc%sn, &
                            pc%st, pc%cn, pc%ct, pc%mu, pc%clamp_normal, c%dt, nb%xi, nb%fpair, &
                            nb%cpair, p%f, p%t)
@@ -292,7 +292,6 @@ contains
     subroutine device_enter(s)
         type(solver_t), intent(inout) :: s
         associate (p => s%p)
-            call acc_copyin(p%gid)
             call acc_copyin(p%mat)
             call acc_copyin(p%radius)
             call acc_copyin(p%mass)
@@ -337,7 +336,6 @@ contains
     !> Send every particle array and the wall contacts to the device (after a re-sort).
     subroutine particles_to_device(s)
         type(solver_t), intent(inout) :: s
-        call acc_update_device(s%p%gid)
         call acc_update_device(s%p%mat)
         call acc_update_device(s%p%radius)
         call acc_update_device(s%p%mass)
@@ -356,7 +354,6 @@ contains
     subroutine device_exit(s)
         type(solver_t), intent(inout) :: s
         associate (p => s%p)
-            call acc_delete(p%gid)
             call acc_delete(p%mat)
             call acc_delete(p%radius)
             call acc_delete(p%mass)
