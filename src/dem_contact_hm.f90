@@ -33,33 +33,38 @@ contains
         real(wp), intent(inout) :: xi(3)  !! tangential spring displacement [m]
         real(wp), intent(out) :: fn       !! normal force, repulsive > 0 [N]
         real(wp), intent(out) :: ft(3)    !! tangential force on i [N]
-        real(wp) :: root, vn, vt(3), kt, len_old, len_new, ft_mag, ft_max
+        real(wp) :: root, q, vn, vt(3), kt, len_old, len_new, ft2, ft_max
 
+        ! sqrt(S m*) = sqrt(s m*) (R* d)^(1/4) for S = s sqrt(R* d): the square roots of the
+        ! masses and constants do not wait for the overlap's
         root = sqrt(rstar * overlap)
+        q = sqrt(root)
         vn = dot_product(vrel, nrm)
-        fn = kn * overlap * root + cn * sqrt(sn * root * mstar) * vn
+        fn = kn * overlap * root + cn * sqrt(sn * mstar) * q * vn
         if (clamp_normal) fn = max(fn, 0.0_wp)
 
         vt = vrel - vn * nrm
         len_old = dot_product(xi, xi)
-        xi = xi - dot_product(xi, nrm) * nrm
-        len_new = dot_product(xi, xi)
-        if (len_new > 0.0_wp) then
-            xi = xi * sqrt(len_old / len_new)
-        else
-            xi = 0.0_wp
+        if (len_old > 0.0_wp) then
+            xi = xi - dot_product(xi, nrm) * nrm
+            len_new = dot_product(xi, xi)
+            if (len_new > 0.0_wp) then
+                xi = xi * sqrt(len_old / len_new)
+            else
+                xi = 0.0_wp
+            end if
         end if
         xi = xi + vt * dt
 
         kt = st * root
         ft = -kt * xi
-        ft_mag = sqrt(dot_product(ft, ft))
+        ft2 = dot_product(ft, ft)
         ft_max = mu * abs(fn)
-        if (ft_mag > ft_max) then          ! sliding: spring rescaled to the limit, no damping
-            ft = ft * (ft_max / ft_mag)
+        if (ft2 > ft_max**2) then          ! sliding: spring rescaled to the limit, no damping
+            ft = ft * (ft_max / sqrt(ft2))
             xi = -ft / kt
         else
-            ft = ft - ct * sqrt(kt * mstar) * vt
+            ft = ft - ct * sqrt(st * mstar) * q * vt
         end if
     end subroutine hm_force
 end module dem_contact_hm
