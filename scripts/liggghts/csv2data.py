@@ -16,7 +16,7 @@ The data file (LIGGGHTS atom_style granular):
     Atoms:      atom-ID atom-type diameter density x y z
     Velocities: atom-ID vx vy vz omegax omegay omegaz
 with 2 atom types and box bounds x in [-0.06, 0.06], y in [-0.04, 0.04], z in [-0.095, 0.2],
-a little larger than the Case 3 container (CASES.md section 4).
+a little larger than the Case 3 container (98 x 60 mm, floor at z = -0.0902431 m).
 
 Usage: csv2data.py BED.csv OUT.data [--map KEY=TYPE ...]
 Standard library and numpy only.
