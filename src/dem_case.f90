@@ -60,9 +60,35 @@ contains
         end do
     end function case_total_mass
 
+    !> Speed of a free fall across the scene, sqrt(2 |g| h), with h the extent of the
+    !> particles and walls along gravity [m/s].
+    real(wp) function fall_speed(c) result(v)
+        type(case_t), intent(in) :: c
+        real(wp) :: g, e(3), lo, hi
+        integer(ip) :: i, k
+        g = norm2(c%gravity)
+        v = 0.0_wp
+        if (g == 0.0_wp .or. c%n_particles == 0) return
+        e = c%gravity / g
+        lo = huge(1.0_wp)
+        hi = -huge(1.0_wp)
+        do i = 1, c%n_particles
+            lo = min(lo, dot_product(e, c%x(:, i)))
+            hi = max(hi, dot_product(e, c%x(:, i)))
+        end do
+        do i = 1, c%mesh%n_tri
+            do k = 1, 3
+                lo = min(lo, dot_product(e, c%mesh%vert(:, k, i)))
+                hi = max(hi, dot_product(e, c%mesh%vert(:, k, i)))
+            end do
+        end do
+        v = sqrt(2.0_wp * g * (hi - lo))
+    end function fall_speed
+
     !> Rayleigh time of the smallest particle, shortest Hertz contact time over the material
     !> pairs present (smallest radius of each material; particle pairs meet at twice the
-    !> expected speed, particles hit walls at it), and the stability bound on dt.
+    !> expected speed, particles hit walls at it), and the stability bound on dt. The expected
+    !> speed is the largest of expected_speed, the initial speeds and the free-fall speed.
     subroutine case_time_scales(c, ts)
         type(case_t), intent(in) :: c
         type(time_scales_t), intent(out) :: ts
@@ -72,7 +98,7 @@ contains
         integer(ip) :: i, a, b
 
         rmin = huge(1.0_wp)
-        ts%speed = c%expected_speed
+        ts%speed = max(c%expected_speed, fall_speed(c))
         do i = 1, c%n_particles
             a = c%mat(i)
             rmin(a) = min(rmin(a), c%radius(i))

@@ -92,8 +92,8 @@ contains
             write(output_unit, '(a,es12.5,a,es10.3,a)') '  Hertz contact time   ', ts%contact, &
                 ' s (at the largest expected speed, ', ts%speed, ' m/s)'
         else
-            write(output_unit, '(a)') '  Hertz contact time   n/a (nothing moves; set ' // &
-                '&run expected_speed)'
+            write(output_unit, '(a)') '  Hertz contact time   n/a (nothing moves or falls; ' // &
+                'set &run expected_speed)'
         end if
         write(output_unit, '(a,es12.5,a,i0,a)') '  dt                   ', c%dt, ' s (', &
             ceiling(c%t_end / c%dt - 1.0e-9_wp), ' steps)'
