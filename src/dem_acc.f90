@@ -9,13 +9,13 @@ module dem_acc
     !> copyin of a whole array.
     interface acc_copyin
         module procedure copyin_r1, copyin_r2, copyin_r3, &
-                         copyin_i1, copyin_i2
+                         copyin_i1, copyin_i2, copyin_b1
     end interface acc_copyin
 
     !> delete of a whole array.
     interface acc_delete
         module procedure delete_r1, delete_r2, delete_r3, &
-                         delete_i1, delete_i2
+                         delete_i1, delete_i2, delete_b1
     end interface acc_delete
 
     !> update host of a whole array.
@@ -132,4 +132,13 @@ contains
         !$acc update device(a)
     end subroutine update_device_i2
 
+    subroutine copyin_b1(a)
+        logical, intent(in) :: a(:)
+        !$acc enter data copyin(a)
+    end subroutine copyin_b1
+
+    subroutine delete_b1(a)
+        logical, intent(in) :: a(:)
+        !$acc exit data delete(a)
+    end subroutine delete_b1
 end module dem_acc

@@ -2,8 +2,8 @@
 !> in two passes without atomics. First every pair is evaluated once, by the particle with
 !> the lower global id (or by the owned particle of a pair with a ghost), which stores the
 !> force and n x F_t in its own entry and the opposite force in the partner's entry of the
-!> same pair (each entry has one writer). Then each owned particle sums its row in order
-!> (partner ids). As the two sides of a contact are exact negatives, the sums equal those of
+!> same pair (each entry has one writer), and marks both entries as touching. Then each
+!> owned particle sums the touching entries of its row in order (partner ids). As the two sides of a contact are exact negatives, the sums equal those of
 !> evaluating every contact from both sides, bit for bit, at half the cost.
 module dem_contacts_pp
     use dem_kinds, only: wp, ip
@@ -17,8 +17,8 @@ contains
     !> Add the contact force and torque of every listed overlapping pair to the owned
     !> particles. Entries not in contact have their tangential history reset.
     subroutine pp_forces(n_own, n_all, n_entries, nm, x, v, w, radius, mass, mat, start, &
-                         list, mirror, kn, sn, st, cn, ct, mu, clamp_normal, dt, xi, fpair, &
-                         cpair, f, t)
+                         list, mirror, kn, sn, st, cn, ct, mu, clamp_normal, dt, xi, touching, &
+                         fpair, cpair, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_entries      !! length of the neighbour list
         integer(ip), intent(in) :: nm             !! number of materials
@@ -33,8 +33,9 @@ contains
         logical, intent(in) :: clamp_normal
         real(wp), intent(in) :: dt                   !! [s]
         real(wp), intent(inout) :: xi(3, n_entries)  !! tangential history [m]
-        real(wp), intent(out) :: fpair(3, n_entries) !! force of the entry's pair on its row [N]
-        real(wp), intent(out) :: cpair(3, n_entries) !! n x F_t of that pair [N]
+        logical, intent(inout) :: touching(n_entries) !! the entry's pair is in contact
+        real(wp), intent(inout) :: fpair(3, n_entries) !! force of a touching pair on its row [N]
+        real(wp), intent(inout) :: cpair(3, n_entries) !! n x F_t of that pair [N]
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m]
         integer(ip) :: i, j, k, a, b, km
         real(wp) :: d(3), dist2, dist, rsum, overlap, nrm(3), vrel(3), rstar, mstar
@@ -55,11 +56,9 @@ contains
                 rsum = radius(i) + radius(j)
                 if (dist2 >= rsum**2) then
                     if (any(xi(:, k) /= 0.0_wp)) xi(:, k) = 0.0_wp   ! the contact has ended
-                    fpair(:, k) = 0.0_wp
-                    cpair(:, k) = 0.0_wp
-                    if (km > 0) then
-                        fpair(:, km) = 0.0_wp
-                        cpair(:, km) = 0.0_wp
+                    if (touching(k)) then
+                        touching(k) = .false.
+                        if (km > 0) touching(km) = .false.
                     end if
                     cycle
                 end if
@@ -81,9 +80,11 @@ contains
                 cpair(1, k) = nrm(2) * ft(3) - nrm(3) * ft(2)
                 cpair(2, k) = nrm(3) * ft(1) - nrm(1) * ft(3)
                 cpair(3, k) = nrm(1) * ft(2) - nrm(2) * ft(1)
+                touching(k) = .true.
                 if (km > 0) then                               ! the partner's side
                     fpair(:, km) = -fpair(:, k)
                     cpair(:, km) = cpair(:, k)
+                    touching(km) = .true.
                 end if
             end do
         end do
@@ -94,6 +95,7 @@ contains
             fi = 0.0_wp
             ti = 0.0_wp
             do k = start(i), start(i + 1) - 1
+                if (.not. touching(k)) cycle
                 fi = fi + fpair(:, k)
                 ti = ti + radius(i) * cpair(:, k)
             end do

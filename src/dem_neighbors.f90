@@ -26,6 +26,7 @@ module dem_neighbors
                                               !< when the partner (lower id) evaluates the
                                               !< pair; 0 for a ghost partner
         real(wp), allocatable :: xi(:, :)     !< tangential displacement per entry [m]
+        logical, allocatable :: touching(:)   !< work space of the contact kernel
         real(wp), allocatable :: fpair(:, :)  !< work space of the contact kernel [N]
         real(wp), allocatable :: cpair(:, :)  !< work space of the contact kernel [N]
         integer(ip), allocatable :: wstart(:) !< wall row i is wstart(i):wstart(i+1)-1
@@ -115,7 +116,7 @@ contains
             call move_alloc(nb%xi, old_xi)
         end if
         if (allocated(nb%start)) deallocate(nb%start, nb%partner, nb%xi)
-        if (allocated(nb%list)) deallocate(nb%list, nb%mirror, nb%fpair, nb%cpair)
+        if (allocated(nb%list)) deallocate(nb%list, nb%mirror, nb%touching, nb%fpair, nb%cpair)
         if (allocated(nb%wstart)) deallocate(nb%wstart, nb%wlist)
         allocate(nb%start(n_own + 1), nb%wstart(n_own + 1))
         nb%start(1) = 1
@@ -123,7 +124,7 @@ contains
         nb%tri_tests = 0
         if (n_all == 0) then
             allocate(nb%list(0), nb%partner(0), nb%xi(3, 0), nb%wlist(0), nb%mirror(0), &
-                     nb%fpair(3, 0), nb%cpair(3, 0))
+                     nb%touching(0), nb%fpair(3, 0), nb%cpair(3, 0))
             nb%x_ref = x(:, 1:n_own)
             if (mesh%moving) nb%vert_ref = mesh%vert
             return
@@ -168,7 +169,9 @@ contains
         end do
         nb%partner = gid(nb%list)
         nb%xi = 0.0_wp
-        allocate(nb%mirror(size(nb%list)), nb%fpair(3, size(nb%list)), nb%cpair(3, size(nb%list)))
+        allocate(nb%mirror(size(nb%list)), nb%touching(size(nb%list)), &
+                 nb%fpair(3, size(nb%list)), nb%cpair(3, size(nb%list)))
+        nb%touching = .false.
         do i = 1, n_own
             do k = nb%start(i), nb%start(i + 1) - 1
                 nb%mirror(k) = find_entry(nb%list(k), gid(i))

@@ -151,8 +151,8 @@ contains
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
             call pp_forces(n, n + p%n_ghost, size(nb%list), c%mats%n, p%x, p%v, p%w, &
                            p%radius, p%mass, p%mat, nb%start, nb%list, nb%mirror, pc%kn, pc%sn, &
-                           pc%st, pc%cn, pc%ct, pc%mu, pc%clamp_normal, c%dt, nb%xi, nb%fpair, &
-                           nb%cpair, p%f, p%t)
+                           pc%st, pc%cn, pc%ct, pc%mu, pc%clamp_normal, c%dt, nb%xi, &
+                           nb%touching, nb%fpair, nb%cpair, p%f, p%t)
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
             call pw_forces(n, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, p%x, p%v, p%w, &
@@ -208,6 +208,7 @@ contains
         call acc_copyin(s%nb%list)
         call acc_copyin(s%nb%xi)
         call acc_copyin(s%nb%mirror)
+        call acc_copyin(s%nb%touching)
         call acc_copyin(s%nb%fpair)
         call acc_copyin(s%nb%cpair)
         call acc_copyin(s%nb%wstart)
@@ -221,6 +222,7 @@ contains
         call acc_delete(nb%list)
         call acc_delete(nb%xi)
         call acc_delete(nb%mirror)
+        call acc_delete(nb%touching)
         call acc_delete(nb%fpair)
         call acc_delete(nb%cpair)
         call acc_delete(nb%wstart)

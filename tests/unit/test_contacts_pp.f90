@@ -50,7 +50,8 @@ program test_contacts_pp
         t = 0.0_wp
         call pp_forces(n, n, size(nb%list), 1_ip, x(:, order), v(:, order), &
                        w(:, order), r(order), m(order), mat, nb%start, nb%list, nb%mirror, kn, &
-                       sn, st, cn, cn, mu, .false., dt, nb%xi, nb%fpair, nb%cpair, f, t)
+                       sn, st, cn, cn, mu, .false., dt, nb%xi, nb%touching, nb%fpair, &
+                       nb%cpair, f, t)
         call assert_true(all(f == fb(:, order)) .and. all(t == tb(:, order)), &
                          'two passes equal both-sides brute force, bit for bit')
         call assert_true(2 * count(nb%mirror < 0) == size(nb%list), &
