@@ -460,13 +460,8 @@ contains
             end do
             if (err%failed()) return
             at = nml_location(nf, b)
-            im = find_material(c, material, at, err)
+            im = find_material(c, material, at, err, particles=.true.)
             if (im == 0) return
-            if (c%mats%rigid(im)) then
-                call set_error(err, dem_err_input, at // ": key 'material': '" // &
-                               trim(material) // "' is rigid (walls only)")
-                return
-            end if
             if (.not. check_positive(at, radius, 'radius', '[m]', err)) return
             if (.not. check_vector(at, position, 'position', .true., err)) return
             if (.not. check_vector(at, velocity, 'velocity', .false., err)) return
@@ -581,13 +576,8 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'n': must be >= 1")
                 return
             end if
-            im = find_material(c, material, at, err)
+            im = find_material(c, material, at, err, particles=.true.)
             if (im == 0) return
-            if (c%mats%rigid(im)) then
-                call set_error(err, dem_err_input, at // ": key 'material': '" // &
-                               trim(material) // "' is rigid (walls only)")
-                return
-            end if
             if (.not. check_positive(at, radius_min, 'radius_min', '[m]', err)) return
             if (radius_max == unset) radius_max = radius_min
             if (.not. in_range(radius_max, radius_min, unset, .true., .false.)) then
@@ -1050,14 +1040,25 @@ contains
         idx = 0
     end function block_index
 
-    !> Index of the material named by key 'material' of a group; 0, with an error, if none.
-    integer function find_material(c, name, at, err) result(idx)
+    !> Index of the material named by key 'material' of a group; 0, with an error, if there
+    !> is none, or if it is rigid and meant for particles.
+    integer function find_material(c, name, at, err, particles) result(idx)
         type(case_t), intent(in) :: c
         character(len=*), intent(in) :: name, at
         type(error_t), intent(inout) :: err
+        logical, intent(in), optional :: particles
+        logical :: for_particles
+        for_particles = .false.
+        if (present(particles)) for_particles = particles
         idx = material_index(c, name)
-        if (idx == 0) call set_error(err, dem_err_input, at // ": key 'material': '" // &
-                                     trim(name) // "' is not a defined material")
+        if (idx == 0) then
+            call set_error(err, dem_err_input, at // ": key 'material': '" // trim(name) // &
+                           "' is not a defined material")
+        else if (for_particles .and. c%mats%rigid(idx)) then
+            call set_error(err, dem_err_input, at // ": key 'material': '" // trim(name) // &
+                           "' is rigid (walls only)")
+            idx = 0
+        end if
     end function find_material
 
     integer function material_index(c, name) result(idx)
