@@ -10,7 +10,7 @@ module dem_input
     use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion
     use dem_stl, only: stl_read
     use dem_particle_file, only: read_particle_file
-    use dem_insert, only: region_t, region_box, region_cylinder, insert_random
+    use dem_insert, only: region_t, region_box, region_cylinder, region_mesh, insert_random
     use dem_random, only: rng_t, rng_seed
     use dem_outlets, only: outlet_t, outlet_plane, outlet_box
     use dem_neighbors, only: neighbors_t, neighbors_build
@@ -35,7 +35,7 @@ module dem_input
         'particle: id material radius position velocity angular_velocity', &
         'particle_file: file', &
         'insert: n material radius_min radius_max region box_min box_max cylinder_base ' // &
-        'cylinder_radius cylinder_height velocity seed', &
+        'cylinder_radius cylinder_height mesh_file mesh_scale velocity seed', &
         'outlet: region point normal box_min box_max', &
         'wall_plane: material point normal half_width divisions', &
         'wall_mesh: file scale material velocity velocity_start velocity_end rotation_axis ' // &
@@ -532,15 +532,17 @@ contains
         character(len=name_len) :: material  ! material name, required, not rigid
         real(wp) :: radius_min           ! smallest radius [m], > 0, required
         real(wp) :: radius_max           ! largest radius [m], >= radius_min, default radius_min
-        character(len=name_len) :: region    ! 'box' (default) or 'cylinder'
+        character(len=name_len) :: region    ! 'box' (default), 'cylinder' or 'mesh'
         real(wp) :: box_min(3), box_max(3)   ! corners of the box [m]
         real(wp) :: cylinder_base(3)     ! centre of the bottom of the (vertical) cylinder [m]
         real(wp) :: cylinder_radius      ! [m], > 0
         real(wp) :: cylinder_height      ! [m], > 0
+        character(len=512) :: mesh_file  ! closed STL surface, relative to the case file
+        real(wp) :: mesh_scale           ! metres per STL unit, > 0, default 1
         real(wp) :: velocity(3)          ! initial velocity [m/s], default 0
         integer(i8) :: seed              ! of the random positions and radii, default 1
         namelist /insert/ n, material, radius_min, radius_max, region, box_min, box_max, &
-            cylinder_base, cylinder_radius, cylinder_height, velocity, seed
+            cylinder_base, cylinder_radius, cylinder_height, mesh_file, mesh_scale, velocity, seed
         type(nml_block_t) :: b
         integer :: k_item, ios, k, im, placed
         character(len=512) :: msg
@@ -562,6 +564,8 @@ contains
             cylinder_base = unset
             cylinder_radius = unset
             cylinder_height = unset
+            mesh_file = ''
+            mesh_scale = 1.0_wp
             velocity = 0.0_wp
             seed = 1
             b = nf%blocks(block_index(nf, 'insert', k))
@@ -611,9 +615,22 @@ contains
                 reg%base = cylinder_base
                 reg%radius = cylinder_radius
                 reg%height = cylinder_height
+            case ('mesh')
+                reg%kind = region_mesh
+                if (len_trim(mesh_file) == 0) then
+                    call set_error(err, dem_err_input, at // ": key 'mesh_file' is required")
+                    return
+                end if
+                if (.not. check_positive(at, mesh_scale, 'mesh_scale', '[m per STL unit]', err)) &
+                    return
+                call stl_read(relative_to(nf%path, trim(mesh_file)), mesh_scale, reg%vert, err)
+                if (err%failed()) then
+                    err%message = at // ": key 'mesh_file': " // err%message
+                    return
+                end if
             case default
                 call set_error(err, dem_err_input, at // ": key 'region': '" // trim(region) // &
-                               "' is not known (accepted: box, cylinder)")
+                               "' is not known (accepted: box, cylinder, mesh)")
                 return
             end select
             rng = rng_seed(seed)

@@ -4,12 +4,15 @@
 module dem_insert
     use dem_kinds, only: wp, ip
     use dem_random, only: rng_t, rng_uniform
+    use dem_mesh, only: closest_point_triangle
+    use dem_vector, only: cross
     implicit none
     private
-    public :: region_t, region_box, region_cylinder, insert_random
+    public :: region_t, region_box, region_cylinder, region_mesh, insert_random
 
     integer(ip), parameter :: region_box = 1       !< axis-aligned box lo..hi
     integer(ip), parameter :: region_cylinder = 2  !< vertical cylinder from a base centre
+    integer(ip), parameter :: region_mesh = 3      !< inside a closed triangle mesh
 
     !> Where spheres are inserted: entirely inside it.
     type :: region_t
@@ -18,6 +21,7 @@ module dem_insert
         real(wp) :: base(3) = 0.0_wp                !< cylinder: centre of the bottom [m]
         real(wp) :: radius = 0.0_wp                 !< cylinder radius [m]
         real(wp) :: height = 0.0_wp                 !< cylinder height [m]
+        real(wp), allocatable :: vert(:, :, :)      !< closed mesh: (xyz, corner, triangle) [m]
     end type region_t
 
 contains
@@ -34,7 +38,7 @@ contains
         integer(ip), intent(in) :: max_tries
         real(wp), intent(out) :: x(3, n), r(n)    !! [m]
         integer(ip), intent(out) :: placed
-        real(wp) :: lo(3), hi(3), h, p(3), big
+        real(wp) :: lo(3), hi(3), h, p(3), big, rlo(3), rhi(3)
         integer(ip), allocatable :: head(:), next(:)
         real(wp), allocatable :: xs(:, :), rs(:)
         integer(ip) :: dims(3), k, tries, m, total
@@ -43,10 +47,15 @@ contains
         if (reg%kind == region_box) then
             lo = reg%lo
             hi = reg%hi
+        else if (reg%kind == region_mesh) then
+            lo = minval(minval(reg%vert, dim=2), dim=2)
+            hi = maxval(maxval(reg%vert, dim=2), dim=2)
         else
             lo = reg%base - [reg%radius, reg%radius, 0.0_wp]
             hi = reg%base + [reg%radius, reg%radius, reg%height]
         end if
+        rlo = lo                       ! the region's box
+        rhi = hi
         big = r_max
         if (size(r_old) > 0) big = max(r_max, maxval(r_old))
         h = 2.0_wp * big
@@ -72,6 +81,7 @@ contains
             do tries = 1, max_tries
                 p = candidate(r(k))
                 free = is_free(p, r(k))
+                if (free .and. reg%kind == region_mesh) free = inside_mesh(p, r(k))
                 if (free) exit
             end do
             if (.not. free) return
@@ -84,9 +94,9 @@ contains
             real(wp), intent(in) :: rk
             real(wp) :: q(3), a, s
             integer(ip) :: d
-            if (reg%kind == region_box) then
+            if (reg%kind /= region_cylinder) then     ! a box, or the box around a mesh
                 do d = 1, 3
-                    q(d) = reg%lo(d) + rk + (reg%hi(d) - reg%lo(d) - 2.0_wp * rk) * rng_uniform(rng)
+                    q(d) = rlo(d) + rk + (rhi(d) - rlo(d) - 2.0_wp * rk) * rng_uniform(rng)
                 end do
             else
                 ! uniform in the disc: radius sqrt(u), angle 2 pi u
@@ -127,6 +137,35 @@ contains
             next(total) = head(id)
             head(id) = total
         end subroutine add
+
+        !> q lies inside the closed mesh (a ray from it crosses the surface an odd number of
+        !> times; Moller & Trumbore 1997) and at least rk from every triangle.
+        logical function inside_mesh(q, rk)
+            real(wp), intent(in) :: q(3), rk
+            real(wp), parameter :: dir(3) = [0.3712_wp, 0.2411_wp, 0.8967_wp]  ! not axis-aligned
+            real(wp) :: e1(3), e2(3), pv(3), tv(3), qv(3), det, u, v, qc(3)
+            integer(ip) :: t, crossings, fc
+            crossings = 0
+            inside_mesh = .false.
+            do t = 1, size(reg%vert, 3)
+                call closest_point_triangle(q, reg%vert(:, 1, t), reg%vert(:, 2, t), &
+                                            reg%vert(:, 3, t), qc, fc)
+                if (sum((qc - q)**2) < rk**2) return
+                e1 = reg%vert(:, 2, t) - reg%vert(:, 1, t)
+                e2 = reg%vert(:, 3, t) - reg%vert(:, 1, t)
+                pv = cross(dir, e2)
+                det = dot_product(e1, pv)
+                if (abs(det) < tiny(1.0_wp)) cycle
+                tv = q - reg%vert(:, 1, t)
+                u = dot_product(tv, pv) / det
+                if (u < 0.0_wp .or. u > 1.0_wp) cycle
+                qv = cross(tv, e1)
+                v = dot_product(dir, qv) / det
+                if (v < 0.0_wp .or. u + v > 1.0_wp) cycle
+                if (dot_product(e2, qv) / det > 0.0_wp) crossings = crossings + 1
+            end do
+            inside_mesh = mod(crossings, 2) == 1
+        end function inside_mesh
 
         pure function cell(q) result(c)
             real(wp), intent(in) :: q(3)

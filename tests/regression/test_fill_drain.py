@@ -12,6 +12,9 @@ and draining it through an outlet.
 3. Without its floor, the bed drains through an outlet plane: every sphere is removed, and
    particles + removed = 100 in every row of series.csv.
 4. Bad particle files are reported with the file, the line and the column.
+5. &insert into the inside of a closed mesh (a cube turned 45 degrees about z, so that its
+   bounding box is twice its volume): every sphere lies inside the cube, at least its radius
+   from every face.
 usage: test_fill_drain.py DEM WORKDIR"""
 import os
 import shutil
@@ -112,4 +115,30 @@ for name, text, words in (
     check(r.returncode == 2, f"{name}: exit code {r.returncode}")
     for w in [path, "&particle_file", "'file'", csv] + words:
         check(w in r.stderr, f"{name}: message lacks {w!r}: {r.stderr.strip()}")
+# 5. inside a closed mesh: a 40 mm cube turned 45 degrees about z, centred at the origin
+c, h = np.cos(np.pi / 4), 0.02
+corners = np.array([[sx * h, sy * h, sz * h] for sz in (-1, 1) for sy in (-1, 1)
+                    for sx in (-1, 1)])
+corners = corners @ np.array([[c, c, 0], [-c, c, 0], [0, 0, 1]])
+faces = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+with open(os.path.join(work, "cube.stl"), "w") as fh:
+    fh.write("solid cube\n")
+    for a_, b_, c_, d_ in faces:
+        for tri in ((a_, b_, c_), (a_, c_, d_)):
+            fh.write(" facet normal 0 0 0\n  outer loop\n")
+            for v in tri:
+                fh.write("   vertex %.17g %.17g %.17g\n" % tuple(corners[v]))
+            fh.write("  endloop\n endfacet\n")
+    fh.write("endsolid cube\n")
+path = case("in_mesh", f"""&run dt = 5.0e-5, t_end = 1.0e-4, gravity = 0, 0, 0 /
+{MATERIALS}&insert n = 60, material = 'soft', radius_min = 2.0e-3, region = 'mesh',
+        mesh_file = 'cube.stl', seed = 3 /
+""")
+run_dem(dem, path, work)
+cube = co.read_csv(os.path.join(out, "in_mesh", "final.csv"))
+p = np.stack([cube["x"], cube["y"], cube["z"]], axis=1)
+local = p @ np.array([[c, c, 0], [-c, c, 0], [0, 0, 1]]).T    # back into the cube's axes
+check(len(cube["id"]) == 60, "60 spheres in the mesh")
+check(np.all(np.abs(local) <= h - 2.0e-3 + 1e-12), "every sphere inside the turned cube")
+check(np.any(np.abs(p[:, 0]) + np.abs(p[:, 1]) > 0.0), "spheres spread over the cube")
 finish()
