@@ -4,141 +4,107 @@ module dem_acc
     use dem_kinds, only: wp, ip
     implicit none
     private
-    public :: acc_copyin, acc_delete, acc_update_host, acc_update_device
+    public :: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device
 
-    !> copyin of a whole array.
-    interface acc_copyin
-        module procedure copyin_r1, copyin_r2, copyin_r3, &
-                         copyin_i1, copyin_i2, copyin_b1
-    end interface acc_copyin
+    integer, parameter :: acc_enter = 1      !< create the device copy from the host's
+    integer, parameter :: acc_exit = 2       !< delete the device copy
+    integer, parameter :: acc_to_host = 3    !< update the host from the device
+    integer, parameter :: acc_to_device = 4  !< update the device from the host
 
-    !> delete of a whole array.
-    interface acc_delete
-        module procedure delete_r1, delete_r2, delete_r3, &
-                         delete_i1, delete_i2, delete_b1
-    end interface acc_delete
-
-    !> update host of a whole array.
-    interface acc_update_host
-        module procedure update_host_r1, update_host_r2, update_host_r3, &
-                         update_host_i1, update_host_i2
-    end interface acc_update_host
-
-    !> update device of a whole array.
-    interface acc_update_device
-        module procedure update_device_r1, update_device_r2, update_device_r3, &
-                         update_device_i1, update_device_i2
-    end interface acc_update_device
+    !> acc_data(a, op): one of the operations above on a whole array.
+    interface acc_data
+        module procedure data_r1, data_r2, data_r3, data_i1, data_i2, data_b1
+    end interface acc_data
 
 contains
 
-    subroutine copyin_r1(a)
-        real(wp), intent(in) :: a(:)
-        !$acc enter data copyin(a)
-    end subroutine copyin_r1
-
-    subroutine copyin_r2(a)
-        real(wp), intent(in) :: a(:, :)
-        !$acc enter data copyin(a)
-    end subroutine copyin_r2
-
-    subroutine copyin_r3(a)
-        real(wp), intent(in) :: a(:, :, :)
-        !$acc enter data copyin(a)
-    end subroutine copyin_r3
-
-    subroutine copyin_i1(a)
-        integer(ip), intent(in) :: a(:)
-        !$acc enter data copyin(a)
-    end subroutine copyin_i1
-
-    subroutine copyin_i2(a)
-        integer(ip), intent(in) :: a(:, :)
-        !$acc enter data copyin(a)
-    end subroutine copyin_i2
-
-    subroutine delete_r1(a)
-        real(wp), intent(in) :: a(:)
-        !$acc exit data delete(a)
-    end subroutine delete_r1
-
-    subroutine delete_r2(a)
-        real(wp), intent(in) :: a(:, :)
-        !$acc exit data delete(a)
-    end subroutine delete_r2
-
-    subroutine delete_r3(a)
-        real(wp), intent(in) :: a(:, :, :)
-        !$acc exit data delete(a)
-    end subroutine delete_r3
-
-    subroutine delete_i1(a)
-        integer(ip), intent(in) :: a(:)
-        !$acc exit data delete(a)
-    end subroutine delete_i1
-
-    subroutine delete_i2(a)
-        integer(ip), intent(in) :: a(:, :)
-        !$acc exit data delete(a)
-    end subroutine delete_i2
-
-    subroutine update_host_r1(a)
+    subroutine data_r1(a, op)
         real(wp), intent(inout) :: a(:)
-        !$acc update self(a)
-    end subroutine update_host_r1
+        integer, intent(in) :: op
+        select case (op)
+        case (acc_enter)
+            !$acc enter data copyin(a)
+        case (acc_exit)
+            !$acc exit data delete(a)
+        case (acc_to_host)
+            !$acc update self(a)
+        case (acc_to_device)
+            !$acc update device(a)
+        end select
+    end subroutine data_r1
 
-    subroutine update_host_r2(a)
+    subroutine data_r2(a, op)
         real(wp), intent(inout) :: a(:, :)
-        !$acc update self(a)
-    end subroutine update_host_r2
+        integer, intent(in) :: op
+        select case (op)
+        case (acc_enter)
+            !$acc enter data copyin(a)
+        case (acc_exit)
+            !$acc exit data delete(a)
+        case (acc_to_host)
+            !$acc update self(a)
+        case (acc_to_device)
+            !$acc update device(a)
+        end select
+    end subroutine data_r2
 
-    subroutine update_host_r3(a)
+    subroutine data_r3(a, op)
         real(wp), intent(inout) :: a(:, :, :)
-        !$acc update self(a)
-    end subroutine update_host_r3
+        integer, intent(in) :: op
+        select case (op)
+        case (acc_enter)
+            !$acc enter data copyin(a)
+        case (acc_exit)
+            !$acc exit data delete(a)
+        case (acc_to_host)
+            !$acc update self(a)
+        case (acc_to_device)
+            !$acc update device(a)
+        end select
+    end subroutine data_r3
 
-    subroutine update_host_i1(a)
+    subroutine data_i1(a, op)
         integer(ip), intent(inout) :: a(:)
-        !$acc update self(a)
-    end subroutine update_host_i1
+        integer, intent(in) :: op
+        select case (op)
+        case (acc_enter)
+            !$acc enter data copyin(a)
+        case (acc_exit)
+            !$acc exit data delete(a)
+        case (acc_to_host)
+            !$acc update self(a)
+        case (acc_to_device)
+            !$acc update device(a)
+        end select
+    end subroutine data_i1
 
-    subroutine update_host_i2(a)
+    subroutine data_i2(a, op)
         integer(ip), intent(inout) :: a(:, :)
-        !$acc update self(a)
-    end subroutine update_host_i2
+        integer, intent(in) :: op
+        select case (op)
+        case (acc_enter)
+            !$acc enter data copyin(a)
+        case (acc_exit)
+            !$acc exit data delete(a)
+        case (acc_to_host)
+            !$acc update self(a)
+        case (acc_to_device)
+            !$acc update device(a)
+        end select
+    end subroutine data_i2
 
-    subroutine update_device_r1(a)
-        real(wp), intent(in) :: a(:)
-        !$acc update device(a)
-    end subroutine update_device_r1
-
-    subroutine update_device_r2(a)
-        real(wp), intent(in) :: a(:, :)
-        !$acc update device(a)
-    end subroutine update_device_r2
-
-    subroutine update_device_r3(a)
-        real(wp), intent(in) :: a(:, :, :)
-        !$acc update device(a)
-    end subroutine update_device_r3
-
-    subroutine update_device_i1(a)
-        integer(ip), intent(in) :: a(:)
-        !$acc update device(a)
-    end subroutine update_device_i1
-
-    subroutine update_device_i2(a)
-        integer(ip), intent(in) :: a(:, :)
-        !$acc update device(a)
-    end subroutine update_device_i2
-
-    subroutine copyin_b1(a)
-        logical, intent(in) :: a(:)
-        !$acc enter data copyin(a)
-    end subroutine copyin_b1
-
-    subroutine delete_b1(a)
-        logical, intent(in) :: a(:)
-        !$acc exit data delete(a)
-    end subroutine delete_b1
+    subroutine data_b1(a, op)
+        logical, intent(inout) :: a(:)
+        integer, intent(in) :: op
+        select case (op)
+        case (acc_enter)
+            !$acc enter data copyin(a)
+        case (acc_exit)
+            !$acc exit data delete(a)
+        case (acc_to_host)
+            !$acc update self(a)
+        case (acc_to_device)
+            !$acc update device(a)
+        end select
+    end subroutine data_b1
 end module dem_acc

@@ -18,7 +18,7 @@ module dem_solver
     use dem_diagnostics, only: energies, count_pp_contacts, first_nonfinite, contact_trace
     use dem_output, only: output_t, output_open, output_series, output_contact, &
                           output_final, output_close
-    use dem_acc, only: acc_copyin, acc_delete, acc_update_host, acc_update_device
+    use dem_acc, only: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device
     use dem_timers, only: timers_t, timer_start, timer_stop, phase_neighbors, &
                           phase_contacts_pp, phase_contacts_pw, phase_integrate, phase_output
     implicit none
@@ -78,7 +78,7 @@ contains
         every = max(1_i8, nint(c%output_interval / dt, i8))
         call output_open(out, c%output_dir, s%trace > 0, err)
         if (err%failed()) return
-        call device_enter(s)
+        call device_data(s, acc_enter)
 
         call rebuild(s)
         if (c%integrator == integrator_verlet) then
@@ -122,12 +122,12 @@ contains
             call timer_stop(s%timers, phase_output)
         end do
 
-        call device_to_host(s)
+        call particle_data(s, acc_to_host)
         if (.not. err%failed()) call output_final(out, order_by_id(s%p%gid(1:s%p%n_own)), &
                                                   s%p%gid, c%mats%name(s%p%mat), s%p%radius, &
                                                   s%p%x, s%p%v, s%p%w, err)
         call output_close(out)
-        call device_exit(s)
+        call device_data(s, acc_exit)
     end subroutine solver_run
 
     !> Walls to their pose at `time`, gravity, then particle and wall contacts; the lists are
@@ -140,10 +140,7 @@ contains
         integer(ip) :: overflow
         if (s%mesh%moving) then
             call mesh_move(s%mesh, time)
-            call acc_update_device(s%mesh%vert)
-            call acc_update_device(s%mesh%wall_v)
-            call acc_update_device(s%mesh%wall_w)
-            call acc_update_device(s%mesh%wall_c)
+            call mesh_data(s%mesh, acc_to_device)
         end if
         if (neighbors_stale(s%nb, s%p%n_own, s%p%x, s%mesh)) call rebuild(s)
         call timer_stop(s%timers, phase_neighbors)
@@ -171,7 +168,7 @@ contains
         type(case_t), intent(in) :: c
         logical :: gone(s%p%n_own)
         integer(ip) :: n_gone
-        call acc_update_host(s%p%x)
+        call acc_data(s%p%x, acc_to_host)
         n_gone = outlets_mark(s%p%n_own, s%p%x, c%outlets, gone)
         if (n_gone == 0) return
         s%removed = s%removed + n_gone
@@ -186,10 +183,10 @@ contains
         logical, intent(in), optional :: keep(:)
         integer(ip), allocatable :: order(:), kept(:)
         integer(ip) :: i
-        call device_to_host(s)
+        call particle_data(s, acc_to_host)
         if (allocated(s%nb%start)) then
-            call acc_update_host(s%nb%xi)
-            call lists_delete(s%nb)
+            call acc_data(s%nb%xi, acc_to_host)
+            call list_data(s%nb, acc_exit)
         end if
         if (present(keep)) then
             kept = pack([(i, i = 1, s%p%n_own)], keep)
@@ -199,36 +196,13 @@ contains
         order = kept(neighbors_spatial_order(size(kept), s%p%x(:, kept), s%sort_cell))
         call particles_permute(s%p, order)
         call wall_contacts_permute(s%wc, order)
-        call particles_to_device(s)
+        call particle_data(s, acc_to_device)
         if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:s%p%n_own), s%trace_id, dim=1)
         if (s%trace_id /= 0 .and. s%trace == 0) s%trace_id = 0    ! it left through an outlet
         call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
                              s%p%radius, s%mesh, old_index=order)
-        call acc_copyin(s%nb%start)
-        call acc_copyin(s%nb%list)
-        call acc_copyin(s%nb%xi)
-        call acc_copyin(s%nb%mirror)
-        call acc_copyin(s%nb%touching)
-        call acc_copyin(s%nb%fpair)
-        call acc_copyin(s%nb%cpair)
-        call acc_copyin(s%nb%wstart)
-        call acc_copyin(s%nb%wlist)
-        call acc_copyin(s%nb%x_ref)
+        call list_data(s%nb, acc_enter)
     end subroutine rebuild
-
-    subroutine lists_delete(nb)
-        type(neighbors_t), intent(inout) :: nb
-        call acc_delete(nb%start)
-        call acc_delete(nb%list)
-        call acc_delete(nb%xi)
-        call acc_delete(nb%mirror)
-        call acc_delete(nb%touching)
-        call acc_delete(nb%fpair)
-        call acc_delete(nb%cpair)
-        call acc_delete(nb%wstart)
-        call acc_delete(nb%wlist)
-        call acc_delete(nb%x_ref)
-    end subroutine lists_delete
 
     !> One row of series.csv; stops the run if the state is no longer finite.
     subroutine write_series(s, c, out, err)
@@ -238,7 +212,7 @@ contains
         type(error_t), intent(inout) :: err
         real(wp) :: ke_t, ke_r, pe, vmax
         integer(ip) :: n_pp
-        call device_to_host(s)
+        call particle_data(s, acc_to_host)
         associate (p => s%p)
             call check_finite(s, c, first_nonfinite(p%n_own, p%x, p%v, p%w), err)
             if (err%failed()) return
@@ -261,7 +235,7 @@ contains
         real(wp) :: overlap, fn, ft
         integer(ip) :: i
         if (s%trace == 0 .or. err%failed()) return
-        call device_to_host(s)
+        call particle_data(s, acc_to_host)
         i = s%trace
         associate (p => s%p)
             call check_finite(s, c, i * first_nonfinite(1_ip, p%x(:, i:i), p%v(:, i:i), &
@@ -290,99 +264,66 @@ contains
         call set_error(err, dem_err_runtime, trim(msg))
     end subroutine check_finite
 
-    !> Put the state on the device for the whole run.
-    subroutine device_enter(s)
+    !> Put the state on the device for the whole run (acc_enter), or release it (acc_exit).
+    subroutine device_data(s, op)
         type(solver_t), intent(inout) :: s
-        associate (p => s%p)
-            call acc_copyin(p%mat)
-            call acc_copyin(p%radius)
-            call acc_copyin(p%mass)
-            call acc_copyin(p%inv_mass)
-            call acc_copyin(p%inv_inertia)
-            call acc_copyin(p%x)
-            call acc_copyin(p%v)
-            call acc_copyin(p%w)
-            call acc_copyin(p%f)
-            call acc_copyin(p%t)
-        end associate
-        call acc_copyin(s%wc%tri)
-        call acc_copyin(s%wc%xi)
-        call acc_copyin(s%pc%kn)
-        call acc_copyin(s%pc%sn)
-        call acc_copyin(s%pc%st)
-        call acc_copyin(s%pc%cn)
-        call acc_copyin(s%pc%ct)
-        call acc_copyin(s%pc%mu)
+        integer, intent(in) :: op
+        call particle_data(s, op)
+        call acc_data(s%pc%kn, op)
+        call acc_data(s%pc%sn, op)
+        call acc_data(s%pc%st, op)
+        call acc_data(s%pc%cn, op)
+        call acc_data(s%pc%ct, op)
+        call acc_data(s%pc%mu, op)
         if (s%mesh%n_tri > 0) then
-            call acc_copyin(s%mesh%vert)
-            call acc_copyin(s%mesh%mat)
-            call acc_copyin(s%mesh%wall)
-            call acc_copyin(s%mesh%wall_v)
-            call acc_copyin(s%mesh%wall_w)
-            call acc_copyin(s%mesh%wall_c)
+            call mesh_data(s%mesh, op)
+            call acc_data(s%mesh%mat, op)
+            call acc_data(s%mesh%wall, op)
         end if
-    end subroutine device_enter
+        if (op == acc_exit .and. allocated(s%nb%start)) call list_data(s%nb, op)
+    end subroutine device_data
 
-    !> Bring the particle state and wall contacts back to the host.
-    subroutine device_to_host(s)
+    !> The per-particle arrays and the wall-contact history, to or from the device.
+    subroutine particle_data(s, op)
         type(solver_t), intent(inout) :: s
-        call acc_update_host(s%p%x)
-        call acc_update_host(s%p%v)
-        call acc_update_host(s%p%w)
-        call acc_update_host(s%p%f)
-        call acc_update_host(s%p%t)
-        call acc_update_host(s%wc%tri)
-        call acc_update_host(s%wc%xi)
-    end subroutine device_to_host
+        integer, intent(in) :: op
+        call acc_data(s%p%mat, op)
+        call acc_data(s%p%radius, op)
+        call acc_data(s%p%mass, op)
+        call acc_data(s%p%inv_mass, op)
+        call acc_data(s%p%inv_inertia, op)
+        call acc_data(s%p%x, op)
+        call acc_data(s%p%v, op)
+        call acc_data(s%p%w, op)
+        call acc_data(s%p%f, op)
+        call acc_data(s%p%t, op)
+        call acc_data(s%wc%tri, op)
+        call acc_data(s%wc%xi, op)
+    end subroutine particle_data
 
-    !> Send every particle array and the wall contacts to the device (after a re-sort).
-    subroutine particles_to_device(s)
-        type(solver_t), intent(inout) :: s
-        call acc_update_device(s%p%mat)
-        call acc_update_device(s%p%radius)
-        call acc_update_device(s%p%mass)
-        call acc_update_device(s%p%inv_mass)
-        call acc_update_device(s%p%inv_inertia)
-        call acc_update_device(s%p%x)
-        call acc_update_device(s%p%v)
-        call acc_update_device(s%p%w)
-        call acc_update_device(s%p%f)
-        call acc_update_device(s%p%t)
-        call acc_update_device(s%wc%tri)
-        call acc_update_device(s%wc%xi)
-    end subroutine particles_to_device
+    !> The wall pose and velocities, to or from the device.
+    subroutine mesh_data(m, op)
+        type(mesh_t), intent(inout) :: m
+        integer, intent(in) :: op
+        call acc_data(m%vert, op)
+        call acc_data(m%wall_v, op)
+        call acc_data(m%wall_w, op)
+        call acc_data(m%wall_c, op)
+    end subroutine mesh_data
 
-    !> Release the device copies.
-    subroutine device_exit(s)
-        type(solver_t), intent(inout) :: s
-        associate (p => s%p)
-            call acc_delete(p%mat)
-            call acc_delete(p%radius)
-            call acc_delete(p%mass)
-            call acc_delete(p%inv_mass)
-            call acc_delete(p%inv_inertia)
-            call acc_delete(p%x)
-            call acc_delete(p%v)
-            call acc_delete(p%w)
-            call acc_delete(p%f)
-            call acc_delete(p%t)
-        end associate
-        call acc_delete(s%wc%tri)
-        call acc_delete(s%wc%xi)
-        call acc_delete(s%pc%kn)
-        call acc_delete(s%pc%sn)
-        call acc_delete(s%pc%st)
-        call acc_delete(s%pc%cn)
-        call acc_delete(s%pc%ct)
-        call acc_delete(s%pc%mu)
-        if (s%mesh%n_tri > 0) then
-            call acc_delete(s%mesh%vert)
-            call acc_delete(s%mesh%mat)
-            call acc_delete(s%mesh%wall)
-            call acc_delete(s%mesh%wall_v)
-            call acc_delete(s%mesh%wall_w)
-            call acc_delete(s%mesh%wall_c)
-        end if
-        if (allocated(s%nb%start)) call lists_delete(s%nb)
-    end subroutine device_exit
+    !> The neighbour lists, to or from the device.
+    subroutine list_data(nb, op)
+        type(neighbors_t), intent(inout) :: nb
+        integer, intent(in) :: op
+        call acc_data(nb%start, op)
+        call acc_data(nb%list, op)
+        call acc_data(nb%mirror, op)
+        call acc_data(nb%xi, op)
+        call acc_data(nb%touching, op)
+        call acc_data(nb%fpair, op)
+        call acc_data(nb%cpair, op)
+        call acc_data(nb%wstart, op)
+        call acc_data(nb%wlist, op)
+        call acc_data(nb%x_ref, op)
+    end subroutine list_data
 end module dem_solver
