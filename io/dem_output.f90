@@ -3,13 +3,13 @@
 !> particles at the end, in the particle-file columns). Rows are flushed as written, so a
 !> run that stops loses nothing already written.
 module dem_output
-    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+    use dem_files, only: make_directory
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io
     implicit none
     private
     public :: output_t, output_open, output_series, output_contact, output_final, &
-              output_close, make_directory
+              output_close
 
     character(len=*), parameter :: series_header = &
         'time,step,particles,removed,contacts_pp,contacts_pw,kinetic_translational,' // &
@@ -27,32 +27,8 @@ module dem_output
         integer :: contact = -1
     end type output_t
 
-    interface
-        integer(c_int) function c_mkdir(path, mode) bind(C, name='mkdir')
-            import :: c_char, c_int
-            character(kind=c_char), intent(in) :: path(*)
-            integer(c_int), value :: mode
-        end function c_mkdir
-    end interface
 
 contains
-
-    !> Create a directory and its parents (like mkdir -p).
-    subroutine make_directory(path, err)
-        character(len=*), intent(in) :: path
-        type(error_t), intent(inout) :: err
-        integer :: k, rc
-        logical :: exists
-        do k = 2, len(path) + 1
-            if (k <= len(path)) then
-                if (path(k:k) /= '/') cycle
-            end if
-            rc = c_mkdir(path(1:k - 1) // c_null_char, int(o'755', c_int))
-        end do
-        inquire(file=path // '/.', exist=exists)
-        if (.not. exists) call set_error(err, dem_err_io, path // ': cannot create the ' // &
-                                         'output directory')
-    end subroutine make_directory
 
     !> Create the output directory and open series.csv (and contact.csv when tracing).
     subroutine output_open(out, dir, trace, err)
