@@ -8,14 +8,14 @@
 module dem_h5
     use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_f_pointer, c_int8_t
     use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5eset_auto_f, h5pcreate_f, h5pclose_f, &
-                    h5pset_fapl_mpio_f, h5pset_dxpl_mpio_f, h5fcreate_f, h5fopen_f, h5fclose_f, &
+                    h5pset_fapl_mpio_f, h5pset_dxpl_mpio_f, h5pset_obj_track_times_f, h5fcreate_f, h5fopen_f, h5fclose_f, &
                     h5gcreate_f, h5gclose_f, h5screate_f, h5screate_simple_f, h5sclose_f, &
                     h5sselect_hyperslab_f, h5sselect_none_f, h5sget_simple_extent_ndims_f, &
                     h5sget_simple_extent_dims_f, h5dcreate_f, h5dopen_f, h5dclose_f, &
                     h5dwrite_f, h5dread_f, h5dget_space_f, h5dget_type_f, h5tcopy_f, &
                     h5tset_size_f, h5tget_size_f, h5tget_class_f, h5tclose_f, h5acreate_f, &
                     h5aopen_f, h5awrite_f, h5aread_f, h5aclose_f, h5lexists_f, h5kind_to_type, &
-                    H5P_FILE_ACCESS_F, H5P_DATASET_XFER_F, H5F_ACC_TRUNC_F, H5F_ACC_RDONLY_F, &
+                    H5P_FILE_ACCESS_F, H5P_DATASET_XFER_F, H5P_DATASET_CREATE_F, H5F_ACC_TRUNC_F, H5F_ACC_RDONLY_F, &
                     H5S_SCALAR_F, H5S_SELECT_SET_F, H5FD_MPIO_COLLECTIVE_F, H5T_IEEE_F64LE, &
                     H5T_STD_I32LE, H5T_STD_I64LE, H5T_FORTRAN_S1, H5T_FLOAT_F, H5T_INTEGER_F, &
                     H5T_STRING_F, H5_REAL_KIND, H5_INTEGER_KIND
@@ -224,22 +224,23 @@ contains
 
     !> Create dataset `name` of `file_type` and write `buf` (shape `dims`, elements of
     !> `bytes` bytes, of `mem_type`) collectively, with its checksum.
-    subroutine write_any(f, name, mem_type, file_type, dims, bytes, buf, err, distributed)
+    subroutine write_any(f, name, mem_type, file_type, shape_in, bytes, buf, err, distributed)
         type(h5_file_t), intent(inout) :: f
         character(len=*), intent(in) :: name
         integer(hid_t), intent(in) :: mem_type, file_type
-        integer(hsize_t), intent(in) :: dims(:)
+        integer(hsize_t), intent(in) :: shape_in(:)
         integer, intent(in) :: bytes
         type(c_ptr), intent(in) :: buf
         type(error_t), intent(inout) :: err
         logical, intent(in), optional :: distributed
-        integer(hsize_t) :: fdims(size(dims)), offs(size(dims))
-        integer(hid_t) :: fspace, mspace, dset, xfer
+        integer(hsize_t) :: dims(size(shape_in)), fdims(size(shape_in)), offs(size(shape_in))
+        integer(hid_t) :: fspace, mspace, dset, xfer, dcpl
         integer(i8) :: offset, total, sum
         integer :: r, e, ok
         logical :: rows, mine
 
         if (err%failed()) return
+        dims = max(0_hsize_t, shape_in)   ! gfortran 12 gives -1 for an empty array constructor
         r = size(dims)
         rows = .false.
         if (present(distributed)) rows = distributed .and. r > 0
@@ -265,7 +266,11 @@ contains
             call h5screate_simple_f(r, dims, mspace, e)
         end if
         ok = ior(ok, e)
-        call h5dcreate_f(f%id, name, file_type, fspace, dset, e)
+        call h5pcreate_f(H5P_DATASET_CREATE_F, dcpl, e)
+        ok = ior(ok, e)
+        call h5pset_obj_track_times_f(dcpl, .false., e)  ! no time stamps: same run, same bytes
+        ok = ior(ok, e)
+        call h5dcreate_f(f%id, name, file_type, fspace, dset, e, dcpl_id=dcpl)
         ok = ior(ok, e)
         if (.not. mine .or. product(dims) == 0) then
             call h5sselect_none_f(fspace, e)
@@ -286,6 +291,7 @@ contains
         call write_checksum(dset, sum, e)
         ok = ior(ok, e)
         call h5pclose_f(xfer, e)
+        call h5pclose_f(dcpl, e)
         call h5dclose_f(dset, e)
         call h5sclose_f(mspace, e)
         call h5sclose_f(fspace, e)

@@ -27,8 +27,9 @@ module dem_input
     !> The groups a case file may hold, and the keys of each (doc/input.md).
     character(len=*), parameter :: input_groups(11) = [character(len=160) :: &
         'run: dt t_end integrator gravity expected_speed skin allow_unstable ' // &
-        'stop_kinetic_energy', &
-        'output: dir interval trace_id', &
+        'stop_kinetic_energy max_speed wall_time_limit progress_interval', &
+        'output: dir interval trace_id snapshot_interval snapshot_force snapshot_contacts ' // &
+        'checkpoint_interval checkpoint_keep', &
         'contact_model: tangential_stiffness_factor tangential_damping clamp_normal', &
         'material: name density youngs_modulus poisson_ratio rigid', &
         'pair: materials restitution friction', &
@@ -56,6 +57,7 @@ contains
         c%source = path
         call nml_scan(path, nf, err)
         if (err%failed()) return
+        c%input_text = nf%text
         do k = 1, size(nf%blocks)
             known = .false.
             do g = 1, size(input_groups)
@@ -118,8 +120,15 @@ contains
         logical :: allow_unstable   ! run although dt exceeds the stability bound, default F
         real(wp) :: stop_kinetic_energy  ! stop once the kinetic energy of all particles is
                                          ! below this at an output time [J], >= 0, default 0
+        real(wp) :: max_speed       ! instability guard: a particle faster than this (or
+                                    ! spinning with a rim speed above it) stops the run
+                                    ! [m/s], > 0, default 0.1 min radius / dt
+        real(wp) :: wall_time_limit ! write a checkpoint and stop before this much wall-clock
+                                    ! time [s], >= 0, default 0 (none)
+        real(wp) :: progress_interval  ! wall-clock time between progress lines [s], >= 0
+                                       ! (0: none), default 10
         namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable, &
-            stop_kinetic_energy
+            stop_kinetic_energy, max_speed, wall_time_limit, progress_interval
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
@@ -136,6 +145,9 @@ contains
         skin = unset
         allow_unstable = .false.
         stop_kinetic_energy = 0.0_wp
+        max_speed = unset
+        wall_time_limit = 0.0_wp
+        progress_interval = 10.0_wp
         b = nf%blocks(block_index(nf, 'run', 1))
         do k_item = 0, block_item_count(b)
             text = block_text(b, k_item)
@@ -176,6 +188,21 @@ contains
             return
         end if
         c%stop_kinetic_energy = stop_kinetic_energy
+        if (max_speed == unset) max_speed = 0.1_wp * minval(c%radius(1:c%n_particles)) / dt
+        if (c%n_particles == 0) max_speed = huge(1.0_wp)
+        if (.not. check_positive(at, max_speed, 'max_speed', '[m/s]', err)) return
+        c%max_speed = max_speed
+        if (.not. in_range(wall_time_limit, 0.0_wp, unset, .true., .false.)) then
+            call set_error(err, dem_err_input, at // ": key 'wall_time_limit': must be >= 0 [s]")
+            return
+        end if
+        c%wall_time_limit = wall_time_limit
+        if (.not. in_range(progress_interval, 0.0_wp, unset, .true., .false.)) then
+            call set_error(err, dem_err_input, at // ": key 'progress_interval': must be " // &
+                           '>= 0 [s]')
+            return
+        end if
+        c%progress_interval = progress_interval
 
         call case_time_scales(c, ts)
         if (dt > ts%bound .and. .not. allow_unstable) then
@@ -197,7 +224,14 @@ contains
         real(wp) :: interval        ! series.csv interval [s], > 0, default t_end/100
         integer(i8) :: trace_id     ! id of a particle whose contact is written every step
                                     ! to contact.csv; 0 (default): none
-        namelist /output/ dir, interval, trace_id
+        real(wp) :: snapshot_interval    ! HDF5 snapshots [s], >= 0 (0: none), default t_end/10
+        logical :: snapshot_force        ! snapshots hold the force on each particle, default F
+        logical :: snapshot_contacts     ! and its number of contacts, default F
+        real(wp) :: checkpoint_interval  ! checkpoints [s], >= 0, default 0 (only at the end
+                                         ! and when a run is stopped)
+        integer :: checkpoint_keep       ! checkpoints kept, >= 1, default 2
+        namelist /output/ dir, interval, trace_id, snapshot_interval, snapshot_force, &
+            snapshot_contacts, checkpoint_interval, checkpoint_keep
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
@@ -207,6 +241,11 @@ contains
         dir = 'output/' // file_stem(nf%path)
         interval = c%t_end / 100.0_wp
         trace_id = 0
+        snapshot_interval = c%t_end / 10.0_wp
+        snapshot_force = .false.
+        snapshot_contacts = .false.
+        checkpoint_interval = 0.0_wp
+        checkpoint_keep = 2
         select case (count_blocks(nf, 'output'))
         case (0)
         case (1)
@@ -228,6 +267,20 @@ contains
                                'has this id')
                 return
             end if
+            if (.not. in_range(snapshot_interval, 0.0_wp, unset, .true., .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'snapshot_interval': must " // &
+                               'be >= 0 [s]')
+                return
+            end if
+            if (.not. in_range(checkpoint_interval, 0.0_wp, unset, .true., .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'checkpoint_interval': must " // &
+                               'be >= 0 [s]')
+                return
+            end if
+            if (checkpoint_keep < 1) then
+                call set_error(err, dem_err_input, at // ": key 'checkpoint_keep': must be >= 1")
+                return
+            end if
         case default
             call set_error(err, dem_err_input, nf%path // ': more than one &output group')
             return
@@ -235,6 +288,11 @@ contains
         c%output_dir = trim(dir)
         c%output_interval = interval
         c%trace_id = trace_id
+        c%snapshot_interval = snapshot_interval
+        c%snapshot_force = snapshot_force
+        c%snapshot_contacts = snapshot_contacts
+        c%checkpoint_interval = checkpoint_interval
+        c%checkpoint_keep = checkpoint_keep
     end subroutine read_output
 
     !> &contact_model: variants of Hertz-Mindlin that imitate other codes (doc/theory.md).
@@ -637,6 +695,7 @@ contains
             allocate(x(3, n), r(n))
             call insert_random(rng, reg, n, radius_min, radius_max, c%x(:, 1:c%n_particles), &
                                c%radius(1:c%n_particles), 10000, x, r, placed)
+            c%rng_state = rng%state
             if (placed < n) then
                 write(s1, '(i0)') placed
                 write(s2, '(i0)') n

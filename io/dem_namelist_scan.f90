@@ -18,6 +18,7 @@ module dem_namelist_scan
     !> A scanned file.
     type :: nml_file_t
         character(len=:), allocatable :: path
+        character(len=:), allocatable :: text   !< the whole file
         type(nml_block_t), allocatable :: blocks(:)
     end type nml_file_t
 
@@ -47,6 +48,7 @@ contains
         type(nml_block_t), allocatable :: tmp(:)
 
         nf%path = path
+        nf%text = ''
         allocate(nf%blocks(0))
         open(newunit=u, file=path, status='old', action='read', iostat=ios)
         if (ios /= 0) then
@@ -62,6 +64,7 @@ contains
         do
             call read_line(u, line, ios)
             if (ios /= 0) exit
+            nf%text = nf%text // line // new_line('a')
             lineno = lineno + 1
             write(num, '(i0)') lineno
             k = 0

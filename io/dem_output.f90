@@ -1,15 +1,16 @@
 !> Text outputs of a run, in its output directory: series.csv (one row per output
 !> interval), contact.csv (the traced particle's contact, every step) and final.csv (the
 !> particles at the end, in the particle-file columns). Rows are flushed as written, so a
-!> run that stops loses nothing already written.
+!> run that stops loses nothing already written. A restarted run cuts series.csv and
+!> contact.csv back to their length at its checkpoint and appends to them.
 module dem_output
-    use dem_files, only: make_directory
+    use dem_files, only: make_directory, file_truncate
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io
     implicit none
     private
     public :: output_t, output_open, output_series, output_contact, output_final, &
-              output_close
+              output_close, output_sizes
 
     character(len=*), parameter :: series_header = &
         'time,step,particles,removed,contacts_pp,contacts_pw,kinetic_translational,' // &
@@ -30,19 +31,41 @@ module dem_output
 
 contains
 
-    !> Create the output directory and open series.csv (and contact.csv when tracing).
-    subroutine output_open(out, dir, trace, err)
+    !> Create the output directory and open series.csv (and contact.csv when tracing). With
+    !> `keep` (bytes of series.csv and contact.csv at a checkpoint), files at least that long
+    !> are cut to it and appended to; otherwise they are started anew.
+    subroutine output_open(out, dir, trace, err, keep)
         type(output_t), intent(out) :: out
         character(len=*), intent(in) :: dir
         logical, intent(in) :: trace
         type(error_t), intent(inout) :: err
+        integer(i8), intent(in), optional :: keep(2)
+        integer(i8) :: bytes(2)
         out%dir = dir
         call make_directory(dir, err)
         if (err%failed()) return
-        call open_csv(dir // '/series.csv', series_header, out%series, err)
+        bytes = 0
+        if (present(keep)) bytes = keep
+        call open_csv(dir // '/series.csv', series_header, out%series, err, bytes(1))
         if (err%failed()) return
-        if (trace) call open_csv(dir // '/contact.csv', contact_header, out%contact, err)
+        if (trace) call open_csv(dir // '/contact.csv', contact_header, out%contact, err, &
+                                 bytes(2))
     end subroutine output_open
+
+    !> The lengths of series.csv and contact.csv now [bytes] (0 for a file not open).
+    function output_sizes(out) result(bytes)
+        type(output_t), intent(in) :: out
+        integer(i8) :: bytes(2)
+        bytes = 0
+        if (out%series /= -1) then
+            flush(out%series)
+            inquire(unit=out%series, size=bytes(1))
+        end if
+        if (out%contact /= -1) then
+            flush(out%contact)
+            inquire(unit=out%contact, size=bytes(2))
+        end if
+    end function output_sizes
 
     !> One row of series.csv.
     subroutine output_series(out, time, step, n, removed, n_pp, n_pw, ke_t, ke_r, pe, vmax)
@@ -93,11 +116,28 @@ contains
         out%contact = -1
     end subroutine output_close
 
-    subroutine open_csv(path, header, u, err)
+    !> Open a CSV file with its header; with keep > 0, an existing file of at least keep
+    !> bytes is cut to keep bytes and appended to instead.
+    subroutine open_csv(path, header, u, err, keep)
         character(len=*), intent(in) :: path, header
         integer, intent(out) :: u
         type(error_t), intent(inout) :: err
+        integer(i8), intent(in), optional :: keep
         integer :: ios
+        integer(i8) :: bytes
+        u = -1
+        bytes = -1
+        if (present(keep)) then
+            if (keep > 0) inquire(file=path, size=bytes)
+            if (bytes >= keep .and. keep > 0) then
+                call file_truncate(path, keep, err)
+                if (err%failed()) return
+                open(newunit=u, file=path, status='old', position='append', action='write', &
+                     iostat=ios)
+                if (ios /= 0) call set_error(err, dem_err_io, path // ': cannot write')
+                return
+            end if
+        end if
         open(newunit=u, file=path, status='replace', action='write', iostat=ios)
         if (ios /= 0) then
             call set_error(err, dem_err_io, path // ': cannot write')

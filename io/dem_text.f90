@@ -1,8 +1,9 @@
-!> Reading text files line by line.
+!> Text: reading files line by line, writing numbers.
 module dem_text
+    use dem_kinds, only: wp, i8
     implicit none
     private
-    public :: read_line
+    public :: read_line, itoa, real_text, duration_text
 
 contains
 
@@ -26,4 +27,33 @@ contains
             if (line(len(line):) == achar(13)) line = line(:len(line) - 1)
         end if
     end subroutine read_line
+
+    !> An integer as text, without blanks.
+    function itoa(k) result(s)
+        integer(i8), intent(in) :: k
+        character(len=:), allocatable :: s
+        character(len=24) :: buf
+        write(buf, '(i0)') k
+        s = trim(buf)
+    end function itoa
+
+    !> A real as text with four significant digits after the first (1.2346E-03).
+    function real_text(x) result(s)
+        real(wp), intent(in) :: x
+        character(len=:), allocatable :: s
+        character(len=24) :: buf
+        write(buf, '(es11.4)') x
+        s = trim(adjustl(buf))
+    end function real_text
+
+    !> A duration as h:mm:ss (seconds rounded up).
+    function duration_text(seconds) result(s)
+        real(wp), intent(in) :: seconds
+        character(len=:), allocatable :: s
+        character(len=32) :: buf
+        integer(i8) :: t
+        t = ceiling(max(0.0_wp, min(seconds, 1.0e12_wp)), i8)
+        write(buf, '(i0,":",i2.2,":",i2.2)') t / 3600, mod(t / 60, 60_i8), mod(t, 60_i8)
+        s = trim(buf)
+    end function duration_text
 end module dem_text

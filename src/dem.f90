@@ -1,15 +1,20 @@
-!> The public Fortran API in one module: read a case, set up a run, run it.
+!> The public Fortran API in one module: read a case, set up a run (or restore it from a
+!> checkpoint), run it.
 module dem
     use dem_kinds, only: wp, ip, i8
     use dem_version, only: dem_version_string
     use dem_error, only: error_t
     use dem_case, only: case_t, time_scales_t, case_time_scales, case_total_mass
     use dem_input, only: read_case
-    use dem_solver, only: solver_t, solver_init, solver_run
-    use dem_timers, only: n_phases, phase_names, timer_seconds
+    use dem_solver, only: solver_t, solver_init, solver_restore, solver_run, checkpoint_file, &
+                          stop_end, stop_settled, stop_wall_time, stop_signal
+    use dem_checkpoint, only: frame_t, checkpoint_read
+    use dem_timers, only: n_phases, phase_names, timer_seconds, wall_seconds
     implicit none
     private
     public :: wp, ip, i8, dem_version_string, error_t, case_t, time_scales_t, &
-              case_time_scales, case_total_mass, read_case, solver_t, solver_init, solver_run, &
-              n_phases, phase_names, timer_seconds
+              case_time_scales, case_total_mass, read_case, solver_t, solver_init, &
+              solver_restore, solver_run, checkpoint_file, stop_end, stop_settled, &
+              stop_wall_time, stop_signal, frame_t, checkpoint_read, n_phases, phase_names, &
+              timer_seconds, wall_seconds
 end module dem

@@ -14,6 +14,8 @@ module dem_case
     !> Everything a run needs to start.
     type :: case_t
         character(len=:), allocatable :: source       !< the namelist file
+        character(len=:), allocatable :: input_text   !< its contents
+        integer(i8) :: rng_state = 0                  !< the random generator after insertion
         real(wp) :: dt = 0.0_wp                       !< time step [s]
         real(wp) :: t_end = 0.0_wp                    !< end time [s]
         integer(ip) :: integrator = 1                 !< dem_integrate's integrator_*
@@ -22,9 +24,17 @@ module dem_case
         real(wp) :: skin = 0.0_wp                     !< neighbour-list skin [m]
         logical :: allow_unstable = .false.           !< run even above the stability bound
         real(wp) :: stop_kinetic_energy = 0.0_wp      !< stop once the kinetic energy is below [J]
+        real(wp) :: max_speed = huge(1.0_wp)          !< instability guard [m/s]
+        real(wp) :: wall_time_limit = 0.0_wp          !< checkpoint and stop before [s], 0: none
+        real(wp) :: progress_interval = 0.0_wp        !< between progress lines [s], 0: none
         character(len=:), allocatable :: output_dir
         real(wp) :: output_interval = 0.0_wp          !< series.csv interval [s]
         integer(i8) :: trace_id = 0                   !< particle whose contact is traced
+        real(wp) :: snapshot_interval = 0.0_wp        !< HDF5 snapshots [s], 0: none
+        logical :: snapshot_force = .false.           !< snapshots hold forces
+        logical :: snapshot_contacts = .false.        !< and contact counts
+        real(wp) :: checkpoint_interval = 0.0_wp      !< [s], 0: at the end and at stops only
+        integer(ip) :: checkpoint_keep = 2            !< checkpoints kept on disk
         type(materials_t) :: mats
         type(contact_options_t) :: opts
         integer(ip) :: n_particles = 0

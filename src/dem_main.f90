@@ -2,23 +2,33 @@
 program dem_main
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use dem, only: wp, dem_version_string, error_t, case_t, time_scales_t, case_time_scales, &
-                   case_total_mass, read_case, solver_t, solver_init, solver_run, n_phases, &
-                   phase_names, timer_seconds
+                   case_total_mass, read_case, solver_t, solver_init, solver_restore, &
+                   solver_run, checkpoint_file, stop_wall_time, stop_signal, frame_t, &
+                   checkpoint_read, n_phases, phase_names, timer_seconds, wall_seconds
     use dem_comm, only: comm_t, comm_init, comm_free
     implicit none
     type(comm_t) :: comm
     type(case_t) :: c
     type(solver_t) :: s
     type(error_t) :: err
-    character(len=:), allocatable :: arg1, path
-    logical :: check_only
+    type(frame_t) :: fr
+    character(len=:), allocatable :: arg1, path, restart
+    logical :: check_only, resume
     integer :: nargs
+    real(wp) :: started
 
+    !> exit status of a run stopped early (wall-time limit, signal) after writing a
+    !> checkpoint: it is to be continued with --resume (EX_TEMPFAIL of sysexits.h)
+    integer, parameter :: exit_continue = 75
+
+    started = wall_seconds()
     call comm_init(comm)
     nargs = command_argument_count()
     if (nargs < 1) call usage_error('no case file given')
     arg1 = argument(1)
     check_only = .false.
+    resume = .false.
+    restart = ''
     select case (arg1)
     case ('--version')
         if (comm%rank == 0) write(output_unit, '(a)') 'dem ' // dem_version_string
@@ -29,6 +39,14 @@ program dem_main
     case ('--check')
         if (nargs /= 2) call usage_error('--check takes one case file')
         check_only = .true.
+        path = argument(2)
+    case ('--restart')
+        if (nargs /= 3) call usage_error('--restart takes a checkpoint file and a case file')
+        restart = argument(2)
+        path = argument(3)
+    case ('--resume')
+        if (nargs /= 2) call usage_error('--resume takes one case file')
+        resume = .true.
         path = argument(2)
     case default
         if (arg1(1:1) == '-') call usage_error('unknown option ' // arg1)
@@ -45,10 +63,22 @@ program dem_main
     if (err%failed()) call fail(err)
     call print_check(c)
     if (check_only) call finish(0)
-    call solver_init(s, c)
-    call solver_run(s, c, err)
+    call solver_init(s, c, comm)
+    if (resume) restart = latest_checkpoint(c%output_dir)
+    if (len(restart) > 0) then
+        call checkpoint_read(restart, c, comm, fr, err)
+        if (err%failed()) call fail(err)
+        call solver_restore(s, c, fr)
+        write(output_unit, '(a,es12.5,a)') 'dem: restarting from ' // restart // ' (t = ', &
+            fr%time, ' s)'
+    end if
+    call solver_run(s, c, started, err)
     if (err%failed()) call fail(err)
     call print_timing(s)
+    if (s%stopped == stop_wall_time .or. s%stopped == stop_signal) then
+        write(output_unit, '(a)') 'dem: ' // s%stop_message
+        call finish(exit_continue)
+    end if
     write(output_unit, '(a)') 'dem: done; outputs in ' // c%output_dir
     call finish(0)
 
@@ -65,15 +95,38 @@ contains
 
     subroutine print_help()
         write(output_unit, '(a)') &
-            'usage: dem CASE.nml          run the case described by the namelist file', &
-            '       dem --check CASE.nml  validate the case and print its derived quantities', &
-            '       dem --version         print the version', &
-            '       dem --help            print this help', &
+            'usage: dem CASE.nml                     run the case described by the namelist', &
+            '       dem --resume CASE.nml            continue from the newest checkpoint of', &
+            '                                        the case, or start it if there is none', &
+            '       dem --restart CHECKPOINT CASE.nml  continue from that checkpoint', &
+            '       dem --check CASE.nml             validate the case, print its time scales', &
+            '       dem --version                    print the version', &
+            '       dem --help                       print this help', &
             '', &
             'Outputs go to the directory set by &output dir (default output/<case name>):', &
-            'series.csv, final.csv and, with &output trace_id, contact.csv.', &
-            'The namelist groups and keys are described in doc/input.md.'
+            'series.csv, final.csv, snapshots/*.h5 with snapshots.xmf (ParaView),', &
+            'checkpoints/*.h5 and, with &output trace_id, contact.csv (doc/output.md).', &
+            'The namelist groups and keys are described in doc/input.md.', &
+            '', &
+            'Exit status: 0 done; 2 bad input; 3 the run failed (instability); 4 a file could', &
+            'not be written; 75 stopped early (wall-time limit, SIGTERM or SIGUSR1) after', &
+            'writing a checkpoint: continue with dem --resume.'
     end subroutine print_help
+
+    !> The newest checkpoint in an output directory (checkpoints/latest), or '' if none.
+    function latest_checkpoint(dir) result(path)
+        character(len=*), intent(in) :: dir
+        character(len=:), allocatable :: path
+        character(len=512) :: name
+        integer :: u, ios
+        path = ''
+        open(newunit=u, file=dir // '/checkpoints/latest', status='old', action='read', &
+             iostat=ios)
+        if (ios /= 0) return
+        read(u, '(a)', iostat=ios) name
+        close(u)
+        if (ios == 0) path = dir // '/' // trim(name)
+    end function latest_checkpoint
 
     !> The derived quantities of a case (dem --check, and the start of every run).
     subroutine print_check(c)

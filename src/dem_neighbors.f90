@@ -11,7 +11,8 @@ module dem_neighbors
     use dem_mesh, only: mesh_t, closest_point_triangle
     implicit none
     private
-    public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order
+    public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order, &
+              neighbors_history, neighbors_set_history
 
     !> The lists, their per-entry tangential history, and the positions they were built at.
     type :: neighbors_t
@@ -246,6 +247,126 @@ contains
             end do
         end subroutine scan_level
     end subroutine neighbors_build
+
+    !> The tangential history of the pairs in contact, each pair once, as (lower id, higher
+    !> id) and its displacement, ordered by the two ids; `order` lists the owned particles
+    !> by id. A pair is taken from the row of its lower id, which evaluates it.
+    subroutine neighbors_history(nb, n_own, gid, order, pair, xi)
+        type(neighbors_t), intent(in) :: nb
+        integer(ip), intent(in) :: n_own
+        integer(i8), intent(in) :: gid(:)
+        integer(ip), intent(in) :: order(:)      !! the owned particles by increasing id
+        integer(i8), allocatable, intent(out) :: pair(:, :)  !! (2, pairs)
+        real(wp), allocatable, intent(out) :: xi(:, :)       !! (3, pairs) [m]
+        integer(ip) :: a, i, k, m, pass
+        do pass = 1, 2
+            m = 0
+            do a = 1, n_own
+                i = order(a)
+                do k = nb%start(i), nb%start(i + 1) - 1
+                    if (nb%partner(k) < gid(i) .or. all(nb%xi(:, k) == 0.0_wp)) cycle
+                    m = m + 1
+                    if (pass == 1) cycle
+                    pair(:, m) = [gid(i), nb%partner(k)]
+                    xi(:, m) = nb%xi(:, k)
+                end do
+            end do
+            if (pass == 1) allocate(pair(2, m), xi(3, m))
+        end do
+    end subroutine neighbors_history
+
+    !> Rows of history for particles 1..n_own from pairs as neighbors_history gives them
+    !> (ordered by ids), so that the next neighbors_build carries them into its lists. A
+    !> pair goes to the row of its lower id if that particle is owned, else to the row of
+    !> its higher id (the owned side of a pair with a ghost evaluates it too).
+    subroutine neighbors_set_history(nb, n_own, gid, order, pair, xi)
+        type(neighbors_t), intent(inout) :: nb
+        integer(ip), intent(in) :: n_own
+        integer(i8), intent(in) :: gid(:)
+        integer(ip), intent(in) :: order(:)      !! the owned particles by increasing id
+        integer(i8), intent(in) :: pair(:, :)    !! (2, pairs)
+        real(wp), intent(in) :: xi(:, :)         !! (3, pairs) [m]
+        integer(ip) :: row(2, size(pair, 2)), fill(n_own + 1), k, m, i
+        row = 0
+        do k = 1, 2
+            row(k, :) = local_index(pair(k, :))
+        end do
+        if (allocated(nb%start)) deallocate(nb%start, nb%partner, nb%xi)
+        allocate(nb%start(n_own + 1))
+        nb%start = 0
+        do m = 1, size(pair, 2)
+            i = merge(row(1, m), row(2, m), row(1, m) > 0)
+            if (i > 0) nb%start(i + 1) = nb%start(i + 1) + 1
+        end do
+        nb%start(1) = 1
+        do i = 1, n_own
+            nb%start(i + 1) = nb%start(i + 1) + nb%start(i)
+        end do
+        allocate(nb%partner(nb%start(n_own + 1) - 1), nb%xi(3, nb%start(n_own + 1) - 1))
+        fill = nb%start
+        do m = 1, size(pair, 2)          ! pairs by (lower, higher): rows come out ordered
+            if (row(1, m) > 0) then
+                i = row(1, m)
+                nb%partner(fill(i)) = pair(2, m)
+            else if (row(2, m) > 0) then
+                i = row(2, m)
+                nb%partner(fill(i)) = pair(1, m)
+            else
+                cycle
+            end if
+            nb%xi(:, fill(i)) = xi(:, m)
+            fill(i) = fill(i) + 1
+        end do
+        do i = 1, n_own
+            call sort_history_row(nb%partner(nb%start(i):nb%start(i + 1) - 1), &
+                                  nb%xi(:, nb%start(i):nb%start(i + 1) - 1))
+        end do
+    contains
+        !> Local index of each id (0 if not owned), by binary search in `order`.
+        function local_index(ids) result(idx)
+            integer(i8), intent(in) :: ids(:)
+            integer(ip) :: idx(size(ids)), lo, hi, mid, q
+            idx = 0
+            do q = 1, size(ids)
+                lo = 1
+                hi = n_own
+                do while (lo <= hi)
+                    mid = (lo + hi) / 2
+                    if (gid(order(mid)) == ids(q)) then
+                        idx(q) = order(mid)
+                        exit
+                    else if (gid(order(mid)) < ids(q)) then
+                        lo = mid + 1
+                    else
+                        hi = mid - 1
+                    end if
+                end do
+            end do
+        end function local_index
+    end subroutine neighbors_set_history
+
+    !> Order a row of history by partner id (insertion sort): a row holds the pairs where
+    !> its particle is the lower id, then those where it is the higher.
+    pure subroutine sort_history_row(partner, xi)
+        integer(i8), intent(inout) :: partner(:)
+        real(wp), intent(inout) :: xi(:, :)
+        integer(ip) :: a, b
+        integer(i8) :: key
+        real(wp) :: xkey(3)
+        do a = 2, size(partner)
+            key = partner(a)
+            xkey = xi(:, a)
+            b = a - 1
+            do while (b >= 1)
+                if (partner(b) <= key) exit
+                partner(b + 1) = partner(b)
+                xi(:, b + 1) = xi(:, b)
+                b = b - 1
+            end do
+            partner(b + 1) = key
+            xi(:, b + 1) = xkey
+        end do
+    end subroutine sort_history_row
 
     !> Wall triangles within R_i + skin of each owned particle. Each triangle is entered in
     !> the cells of a grid (sized for the smallest particles) that its bounding box covers; a

@@ -6,7 +6,7 @@ module dem_timers
     private
     public :: timers_t, phase_neighbors, phase_contacts_pp, phase_contacts_pw, &
               phase_integrate, phase_output, n_phases, phase_names, timer_start, timer_stop, &
-              timer_seconds
+              timer_seconds, wall_seconds
 
     integer, parameter :: phase_neighbors = 1    !< neighbour-list checks and rebuilds
     integer, parameter :: phase_contacts_pp = 2  !< gravity and particle-particle contacts
@@ -48,4 +48,11 @@ contains
         call system_clock(count_rate=rate)
         s = real(tm%ticks(phase), wp) / real(rate, wp)
     end function timer_seconds
+
+    !> Wall-clock time from an arbitrary origin [s].
+    real(wp) function wall_seconds() result(s)
+        integer(i8) :: count, rate
+        call system_clock(count, rate)
+        s = real(count, wp) / real(rate, wp)
+    end function wall_seconds
 end module dem_timers

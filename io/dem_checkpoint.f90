@@ -1,0 +1,331 @@
+!> Snapshots and checkpoints: HDF5 files of the state of a run at one step (layout in
+!> doc/output.md). A snapshot holds the particles and the walls in their pose; a checkpoint
+!> holds, in addition, everything else a run needs to continue bit for bit (contact
+!> history, run bookkeeping) and what identifies its case, so that a restart of another
+!> case is refused. A checkpoint is also a snapshot, and both can seed a new case as
+!> particle files. Files are written under a temporary name and renamed once complete.
+module dem_checkpoint
+    use, intrinsic :: iso_c_binding, only: c_int
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error, dem_err_input
+    use dem_version, only: dem_version_string
+    use dem_comm, only: comm_t, comm_barrier
+    use dem_case, only: case_t
+    use dem_mesh, only: mesh_t
+    use dem_contacts_pw, only: max_wall_contacts
+    use dem_text, only: itoa
+    use dem_files, only: file_rename
+    use dem_h5, only: h5_file_t, h5_create, h5_open, h5_close, h5_group, h5_write, h5_read, &
+                      h5_dims, h5_exists
+    implicit none
+    private
+    public :: frame_t, frame_write, checkpoint_read, checkpoint_format
+
+    character(len=*), parameter :: checkpoint_format = 'dem checkpoint 1'
+    character(len=*), parameter :: snapshot_format = 'dem snapshot 1'
+
+    !> The state of a run at one step, particles ordered by id.
+    type :: frame_t
+        real(wp) :: time = 0.0_wp                 !< [s]
+        integer(i8) :: step = 0
+        integer(ip) :: n = 0                      !< particles
+        integer(i8), allocatable :: gid(:)
+        integer(ip), allocatable :: mat(:)
+        real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :), f(:, :), t(:, :)
+        integer(ip), allocatable :: contacts(:)   !< contacts of each particle (snapshots)
+        ! contact history
+        integer(ip), allocatable :: wall_tri(:, :)    !< (slot, particle)
+        real(wp), allocatable :: wall_xi(:, :, :)     !< (xyz, slot, particle) [m]
+        integer(i8), allocatable :: pair(:, :)        !< (lower id, higher id) per pair
+        real(wp), allocatable :: pair_xi(:, :)        !< (xyz, pair) [m]
+        ! run bookkeeping
+        real(wp) :: time0 = 0.0_wp                !< the time of step0 [s]
+        integer(i8) :: step0 = 0                  !< steps count in dt from here
+        real(wp) :: dt = 0.0_wp                   !< [s]
+        integer(i8) :: removed = 0                !< particles removed by outlets
+        logical :: settled = .false.
+        integer(i8) :: rng_state = 0              !< the case's random generator
+        integer(i8) :: series_bytes = 0           !< length of series.csv at this step
+        integer(i8) :: contact_bytes = 0          !< length of contact.csv at this step
+        integer(i8), allocatable :: snap_step(:)  !< the snapshots written so far
+        real(wp), allocatable :: snap_time(:)     !< [s]
+        integer(i8), allocatable :: snap_n(:)     !< their particle counts
+        integer(i8), allocatable :: ckpt_step(:)  !< the checkpoints kept so far
+    end type frame_t
+
+    interface
+        integer(c_int) function c_sleep(seconds) bind(C, name='sleep')
+            import :: c_int
+            integer(c_int), value :: seconds
+        end function c_sleep
+    end interface
+
+contains
+
+    !> Write a snapshot (checkpoint false; force and contacts if allocated) or a checkpoint
+    !> of frame `fr` of case `c`, with the walls in pose `mesh`, to `path`, atomically.
+    subroutine frame_write(fr, c, mesh, path, checkpoint, comm, err)
+        type(frame_t), intent(in) :: fr
+        type(case_t), intent(in) :: c
+        type(mesh_t), intent(in) :: mesh
+        character(len=*), intent(in) :: path
+        logical, intent(in) :: checkpoint
+        type(comm_t), intent(in) :: comm
+        type(error_t), intent(inout) :: err
+        type(h5_file_t) :: h
+        character(len=:), allocatable :: part
+        integer(ip) :: k
+
+        part = path // '.part'
+        call h5_create(h, part, comm, err)
+        if (err%failed()) return
+        if (checkpoint) then
+            call h5_write(h, '/format', checkpoint_format, err)
+        else
+            call h5_write(h, '/format', snapshot_format, err)
+        end if
+        call h5_write(h, '/version', dem_version_string, err)
+        call h5_write(h, '/time', fr%time, err)
+        call h5_write(h, '/step', fr%step, err)
+        call h5_group(h, '/materials', err)
+        call h5_write(h, '/materials/name', c%mats%name, err)
+        call h5_group(h, '/particles', err)
+        call h5_write(h, '/particles/id', fr%gid, err, distributed=.true.)
+        call h5_write(h, '/particles/material', fr%mat, err, distributed=.true.)
+        call h5_write(h, '/particles/radius', fr%radius, err, distributed=.true.)
+        call h5_write(h, '/particles/position', fr%x, err, distributed=.true.)
+        call h5_write(h, '/particles/velocity', fr%v, err, distributed=.true.)
+        call h5_write(h, '/particles/angular_velocity', fr%w, err, distributed=.true.)
+        if (allocated(fr%f)) call h5_write(h, '/particles/force', fr%f, err, distributed=.true.)
+        if (checkpoint) call h5_write(h, '/particles/torque', fr%t, err, distributed=.true.)
+        if (allocated(fr%contacts)) call h5_write(h, '/particles/contacts', fr%contacts, err, &
+                                                  distributed=.true.)
+        call h5_group(h, '/walls', err)
+        call h5_write(h, '/walls/vertices', corners(mesh, .false.), err)
+        call h5_write(h, '/walls/triangles', reshape([(k, k = 0, 3 * mesh%n_tri - 1)], &
+                                                     [3, mesh%n_tri]), err)
+        call h5_write(h, '/walls/wall', [(mesh%wall(k), k = 1, mesh%n_tri)], err)
+        call h5_write(h, '/walls/material', [(mesh%mat(k), k = 1, mesh%n_tri)], err)
+        if (checkpoint) then
+            call write_state(h)
+            call pause_for_tests()
+        end if
+        call h5_close(h, err)
+        call comm_barrier(comm)
+        if (comm%rank == 0 .and. .not. err%failed()) call file_rename(part, path, err)
+        call comm_barrier(comm)
+    contains
+        subroutine write_state(h_)
+            type(h5_file_t), intent(inout) :: h_
+            call h5_group(h_, '/state', err)
+            call h5_write(h_, '/state/time0', fr%time0, err)
+            call h5_write(h_, '/state/step0', fr%step0, err)
+            call h5_write(h_, '/state/dt', fr%dt, err)
+            call h5_write(h_, '/state/removed', fr%removed, err)
+            call h5_write(h_, '/state/settled', merge(1_ip, 0_ip, fr%settled), err)
+            call h5_write(h_, '/state/rng_state', fr%rng_state, err)
+            call h5_write(h_, '/state/series_bytes', fr%series_bytes, err)
+            call h5_write(h_, '/state/contact_bytes', fr%contact_bytes, err)
+            call h5_write(h_, '/state/snapshot_step', fr%snap_step, err)
+            call h5_write(h_, '/state/snapshot_time', fr%snap_time, err)
+            call h5_write(h_, '/state/snapshot_particles', fr%snap_n, err)
+            call h5_write(h_, '/state/checkpoint_step', fr%ckpt_step, err)
+            call h5_write(h_, '/state/wall_contact_triangle', fr%wall_tri, err, &
+                          distributed=.true.)
+            call h5_write(h_, '/state/wall_contact_history', fr%wall_xi, err, &
+                          distributed=.true.)
+            call h5_write(h_, '/state/pair', fr%pair, err, distributed=.true.)
+            call h5_write(h_, '/state/pair_history', fr%pair_xi, err, distributed=.true.)
+            call h5_group(h_, '/case', err)
+            call h5_write(h_, '/case/input', c%input_text, err)
+            call h5_write(h_, '/case/particles', int(c%n_particles, i8), err)
+            call h5_write(h_, '/case/material_properties', material_properties(c), err)
+            call h5_write(h_, '/case/wall_reference', corners(c%mesh, .true.), err)
+        end subroutine write_state
+    end subroutine frame_write
+
+    !> The corners of the wall triangles (3, 3 n_tri), in their pose now or at t = 0 (ref).
+    function corners(mesh, ref) result(v)
+        type(mesh_t), intent(in) :: mesh
+        logical, intent(in) :: ref
+        real(wp) :: v(3, 3 * mesh%n_tri)
+        if (mesh%n_tri == 0) return
+        if (ref) then
+            v = reshape(mesh%ref, [3, 3 * mesh%n_tri])
+        else
+            v = reshape(mesh%vert, [3, 3 * mesh%n_tri])
+        end if
+    end function corners
+
+    !> Density, Young's modulus, Poisson ratio and rigidity (1 or 0) of each material.
+    function material_properties(c) result(props)
+        type(case_t), intent(in) :: c
+        real(wp) :: props(4, c%mats%n)
+        integer(ip) :: k
+        do k = 1, c%mats%n
+            props(:, k) = [c%mats%density(k), c%mats%youngs(k), c%mats%poisson(k), &
+                           merge(1.0_wp, 0.0_wp, c%mats%rigid(k))]
+        end do
+    end function material_properties
+
+    !> With DEM_CHECKPOINT_PAUSE=s in the environment, sleep s seconds in the middle of every
+    !> checkpoint write: the test of what a kill during the write leaves uses it.
+    subroutine pause_for_tests()
+        character(len=16) :: value
+        integer :: n, status, seconds
+        call get_environment_variable('DEM_CHECKPOINT_PAUSE', value, n, status)
+        if (status /= 0 .or. n == 0) return
+        read(value, *, iostat=status) seconds
+        if (status == 0 .and. seconds > 0) n = c_sleep(int(seconds, c_int))
+    end subroutine pause_for_tests
+
+    !> Read checkpoint `path` and check that it belongs to case `c` (same materials, walls
+    !> and initial particle count); the errors name the file and what differs.
+    subroutine checkpoint_read(path, c, comm, fr, err)
+        character(len=*), intent(in) :: path
+        type(case_t), intent(in) :: c
+        type(comm_t), intent(in) :: comm
+        type(frame_t), intent(out) :: fr
+        type(error_t), intent(inout) :: err
+        type(h5_file_t) :: h
+        integer(i8), allocatable :: dims(:)
+        integer(i8) :: n_case
+        integer(ip) :: settled, nm
+        character(len=len(checkpoint_format)) :: format
+        character(len=32), allocatable :: names(:)
+        real(wp), allocatable :: props(:, :), ref(:, :)
+
+        call h5_open(h, path, comm, err)
+        if (err%failed()) return
+        format = ''
+        if (h5_exists(h, '/format')) call h5_read(h, '/format', format, err)
+        if (format /= checkpoint_format .and. .not. err%failed()) &
+            call set_error(err, dem_err_input, path // ': not a dem checkpoint (a snapshot?)')
+
+        ! the case it belongs to
+        call h5_dims(h, '/case/material_properties', dims, err)
+        if (.not. err%failed()) then
+            nm = int(dims(2), ip)
+            allocate(names(nm), props(4, nm))
+            call h5_read(h, '/materials/name', names, err)
+            call h5_read(h, '/case/material_properties', props, err)
+        end if
+        if (.not. err%failed()) then
+            if (nm /= c%mats%n) then
+                call differs('materials: ' // name_list(names) // ' there, ' // &
+                             name_list(c%mats%name) // ' here')
+            else if (any(names /= c%mats%name) .or. &
+                     any(props /= material_properties(c))) then
+                call differs('material properties')
+            end if
+        end if
+        call h5_read(h, '/case/particles', n_case, err)
+        if (.not. err%failed() .and. n_case /= c%n_particles) call differs('particle count: ' &
+            // itoa(n_case) // ' there, ' // itoa(int(c%n_particles, i8)) // ' here')
+        call h5_dims(h, '/case/wall_reference', dims, err)
+        if (.not. err%failed()) then
+            if (dims(2) /= 3 * c%mesh%n_tri) then
+                call differs('walls: ' // itoa(dims(2) / 3) // ' triangles there, ' // &
+                             itoa(int(c%mesh%n_tri, i8)) // ' here')
+            else
+                allocate(ref(3, dims(2)))
+                call h5_read(h, '/case/wall_reference', ref, err)
+                if (.not. err%failed()) then
+                    if (any(ref /= corners(c%mesh, .true.))) call differs('wall geometry')
+                end if
+            end if
+        end if
+
+        ! the state
+        call h5_read(h, '/time', fr%time, err)
+        call h5_read(h, '/step', fr%step, err)
+        call h5_dims(h, '/particles/id', dims, err)
+        if (err%failed()) then
+            call h5_close(h, err)
+            return
+        end if
+        fr%n = int(dims(1), ip)
+        if (fr%n > c%n_particles) call differs('particle count: ' // itoa(dims(1)) // &
+                                               ' now there, at most ' // &
+                                               itoa(int(c%n_particles, i8)) // ' here')
+        if (err%failed()) then
+            call h5_close(h, err)
+            return
+        end if
+        allocate(fr%gid(fr%n), fr%mat(fr%n), fr%radius(fr%n), fr%x(3, fr%n), fr%v(3, fr%n), &
+                 fr%w(3, fr%n), fr%f(3, fr%n), fr%t(3, fr%n), &
+                 fr%wall_tri(max_wall_contacts, fr%n), fr%wall_xi(3, max_wall_contacts, fr%n))
+        call h5_read(h, '/particles/id', fr%gid, err)
+        call h5_read(h, '/particles/material', fr%mat, err)
+        call h5_read(h, '/particles/radius', fr%radius, err)
+        call h5_read(h, '/particles/position', fr%x, err)
+        call h5_read(h, '/particles/velocity', fr%v, err)
+        call h5_read(h, '/particles/angular_velocity', fr%w, err)
+        call h5_read(h, '/particles/force', fr%f, err)
+        call h5_read(h, '/particles/torque', fr%t, err)
+        call h5_read(h, '/state/wall_contact_triangle', fr%wall_tri, err)
+        call h5_read(h, '/state/wall_contact_history', fr%wall_xi, err)
+        call h5_dims(h, '/state/pair', dims, err)
+        if (.not. err%failed()) then
+            allocate(fr%pair(2, dims(2)), fr%pair_xi(3, dims(2)))
+            call h5_read(h, '/state/pair', fr%pair, err)
+            call h5_read(h, '/state/pair_history', fr%pair_xi, err)
+        end if
+        call h5_read(h, '/state/time0', fr%time0, err)
+        call h5_read(h, '/state/step0', fr%step0, err)
+        call h5_read(h, '/state/dt', fr%dt, err)
+        call h5_read(h, '/state/removed', fr%removed, err)
+        call h5_read(h, '/state/settled', settled, err)
+        fr%settled = settled /= 0
+        call h5_read(h, '/state/rng_state', fr%rng_state, err)
+        call h5_read(h, '/state/series_bytes', fr%series_bytes, err)
+        call h5_read(h, '/state/contact_bytes', fr%contact_bytes, err)
+        call read_i8_list('/state/snapshot_step', fr%snap_step)
+        call read_i8_list('/state/snapshot_particles', fr%snap_n)
+        call read_i8_list('/state/checkpoint_step', fr%ckpt_step)
+        call h5_dims(h, '/state/snapshot_time', dims, err)
+        if (.not. err%failed()) then
+            allocate(fr%snap_time(dims(1)))
+            call h5_read(h, '/state/snapshot_time', fr%snap_time, err)
+        end if
+        if (.not. err%failed()) then
+            if (any(fr%mat < 1 .or. fr%mat > c%mats%n) .or. any(fr%radius <= 0.0_wp) .or. &
+                any(fr%wall_tri < 0 .or. fr%wall_tri > c%mesh%n_tri)) &
+                call set_error(err, dem_err_input, path // ': the particle data are not ' // &
+                               'consistent (damaged file?)')
+        end if
+        call h5_close(h, err)
+    contains
+        subroutine differs(what)
+            character(len=*), intent(in) :: what
+            if (err%failed()) return
+            call set_error(err, dem_err_input, path // ': the checkpoint is of another case ' // &
+                           'than ' // c%source // ' (' // what // ')')
+        end subroutine differs
+
+        subroutine read_i8_list(name, a)
+            character(len=*), intent(in) :: name
+            integer(i8), allocatable, intent(out) :: a(:)
+            integer(i8), allocatable :: d(:)
+            call h5_dims(h, name, d, err)
+            if (err%failed()) then
+                allocate(a(0))
+                return
+            end if
+            allocate(a(d(1)))
+            call h5_read(h, name, a, err)
+        end subroutine read_i8_list
+    end subroutine checkpoint_read
+
+    function name_list(names) result(s)
+        character(len=*), intent(in) :: names(:)
+        character(len=:), allocatable :: s
+        integer :: k
+        s = '('
+        do k = 1, size(names)
+            if (k > 1) s = s // ', '
+            s = s // trim(names(k))
+        end do
+        s = s // ')'
+    end function name_list
+end module dem_checkpoint

@@ -1,0 +1,114 @@
+!> The XDMF index of the snapshots (doc/output.md): one XML file that ParaView opens
+!> directly, a time series whose every step holds the particles (points carrying radius,
+!> velocity and the other fields, to be drawn with a sphere glyph scaled by radius) and the
+!> walls (a triangle surface), read from the snapshot files. It is rewritten whole after
+!> each snapshot, under a temporary name then renamed.
+module dem_xdmf
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error, dem_err_io
+    use dem_text, only: itoa
+    use dem_files, only: file_rename
+    implicit none
+    private
+    public :: xdmf_write, snapshot_file
+
+contains
+
+    !> The snapshot file of a step, relative to the output directory.
+    function snapshot_file(step) result(name)
+        integer(i8), intent(in) :: step
+        character(len=:), allocatable :: name
+        character(len=12) :: digits
+        write(digits, '(i12.12)') step
+        name = 'snapshots/snapshot_' // digits // '.h5'
+    end function snapshot_file
+
+    !> Write `path` for the snapshots of steps `step` at times `time` holding `n` particles
+    !> each, with `n_tri` wall triangles; `force` and `contacts` say whether the snapshots
+    !> hold those fields.
+    subroutine xdmf_write(path, step, time, n, n_tri, force, contacts, err)
+        character(len=*), intent(in) :: path
+        integer(i8), intent(in) :: step(:), n(:)
+        real(wp), intent(in) :: time(:)
+        integer(ip), intent(in) :: n_tri
+        logical, intent(in) :: force, contacts
+        type(error_t), intent(inout) :: err
+        integer :: u, ios, k
+        character(len=:), allocatable :: h5
+
+        open(newunit=u, file=path // '.part', status='replace', action='write', iostat=ios)
+        if (ios /= 0) then
+            call set_error(err, dem_err_io, path // ': cannot write')
+            return
+        end if
+        write(u, '(a)') '<?xml version="1.0" ?>', '<Xdmf Version="3.0">', ' <Domain>', &
+            '  <Grid Name="dem" GridType="Collection" CollectionType="Temporal">'
+        do k = 1, size(step)
+            h5 = snapshot_file(step(k))
+            write(u, '(a)') '   <Grid Name="step ' // itoa(step(k)) // &
+                '" GridType="Collection" CollectionType="Spatial">'
+            write(u, '(a,es24.16e3,a)') '    <Time Value="', time(k), '"/>'
+            write(u, '(a)') '    <Grid Name="particles" GridType="Uniform">', &
+                '     <Topology TopologyType="Polyvertex" NumberOfElements="' // &
+                itoa(n(k)) // '" NodesPerElement="1"/>', &
+                '     <Geometry GeometryType="XYZ">', &
+                '      ' // item(h5, '/particles/position', itoa(n(k)) // ' 3', 'Float', 8), &
+                '     </Geometry>'
+            call attribute('radius', 'Scalar', 'Node', '/particles/radius', itoa(n(k)), &
+                           'Float', 8)
+            call attribute('velocity', 'Vector', 'Node', '/particles/velocity', &
+                           itoa(n(k)) // ' 3', 'Float', 8)
+            call attribute('angular_velocity', 'Vector', 'Node', &
+                           '/particles/angular_velocity', itoa(n(k)) // ' 3', 'Float', 8)
+            call attribute('id', 'Scalar', 'Node', '/particles/id', itoa(n(k)), 'Int', 8)
+            call attribute('material', 'Scalar', 'Node', '/particles/material', itoa(n(k)), &
+                           'Int', 4)
+            if (force) call attribute('force', 'Vector', 'Node', '/particles/force', &
+                                      itoa(n(k)) // ' 3', 'Float', 8)
+            if (contacts) call attribute('contacts', 'Scalar', 'Node', '/particles/contacts', &
+                                         itoa(n(k)), 'Int', 4)
+            write(u, '(a)') '    </Grid>'
+            if (n_tri > 0) then
+                write(u, '(a)') '    <Grid Name="walls" GridType="Uniform">', &
+                    '     <Topology TopologyType="Triangle" NumberOfElements="' // &
+                    itoa(int(n_tri, i8)) // '">', &
+                    '      ' // item(h5, '/walls/triangles', itoa(int(n_tri, i8)) // ' 3', &
+                                     'Int', 4), &
+                    '     </Topology>', '     <Geometry GeometryType="XYZ">', &
+                    '      ' // item(h5, '/walls/vertices', itoa(3_i8 * n_tri) // ' 3', &
+                                     'Float', 8), &
+                    '     </Geometry>'
+                call attribute('wall', 'Scalar', 'Cell', '/walls/wall', itoa(int(n_tri, i8)), &
+                               'Int', 4)
+                write(u, '(a)') '    </Grid>'
+            end if
+            write(u, '(a)') '   </Grid>'
+        end do
+        write(u, '(a)') '  </Grid>', ' </Domain>', '</Xdmf>'
+        close(u, iostat=ios)
+        if (ios /= 0) then
+            call set_error(err, dem_err_io, path // ': cannot write')
+            return
+        end if
+        call file_rename(path // '.part', path, err)
+    contains
+        subroutine attribute(name, kind, center, dataset, dims, number, precision)
+            character(len=*), intent(in) :: name, kind, center, dataset, dims, number
+            integer, intent(in) :: precision
+            write(u, '(a)') '     <Attribute Name="' // name // '" AttributeType="' // kind // &
+                '" Center="' // center // '">', &
+                '      ' // item(h5, dataset, dims, number, precision), &
+                '     </Attribute>'
+        end subroutine attribute
+    end subroutine xdmf_write
+
+    !> A DataItem that points at an HDF5 dataset.
+    function item(file, dataset, dims, number, precision) result(s)
+        character(len=*), intent(in) :: file, dataset, dims, number
+        integer, intent(in) :: precision
+        character(len=:), allocatable :: s
+        s = '<DataItem Dimensions="' // dims // '" NumberType="' // number // &
+            '" Precision="' // achar(iachar('0') + precision) // '" Format="HDF">' // file // &
+            ':' // dataset // '</DataItem>'
+    end function item
+end module dem_xdmf
