@@ -412,8 +412,9 @@ contains
         s%lists_on_device = .true.
     end subroutine rebuild
 
-    !> One row of series.csv; the state, which has passed the instability guard, becomes
-    !> the last good state.
+    !> One row of series.csv, its sums taken in the order of the particle ids (so that they
+    !> do not depend on where particles are stored); the state, which has passed the
+    !> instability guard, becomes the last good state.
     subroutine write_series(s, c, out, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -421,14 +422,16 @@ contains
         type(error_t), intent(inout) :: err
         real(wp) :: ke_t, ke_r, pe, vmax
         integer(ip) :: n_pp
+        integer(ip), allocatable :: order(:)
         call particle_data(s, acc_to_host)
         associate (p => s%p)
             if (first_nonfinite(p%n_own, p%x, p%v, p%w) > 0) then
                 call unstable(s, c, err)
                 return
             end if
-            call energies(p%n_own, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, &
-                          ke_t, ke_r, pe, vmax)
+            order = order_by_id(p%gid(1:p%n_own))
+            call energies(p%n_own, p%mass(order), p%inv_inertia(order), p%x(:, order), &
+                          p%v(:, order), p%w(:, order), c%gravity, ke_t, ke_r, pe, vmax)
             n_pp = count_pp_contacts(p%n_own, p%x, p%radius, s%nb%start, s%nb%list)
             call output_series(out, time_of(s, c, s%step), s%step, p%n_own, s%removed, n_pp, &
                                count(s%wc%tri(:, 1:p%n_own) > 0), ke_t, ke_r, pe, vmax)
