@@ -19,7 +19,7 @@ module dem_checkpoint
                       h5_dims, h5_exists
     implicit none
     private
-    public :: frame_t, frame_write, checkpoint_read, checkpoint_format
+    public :: frame_t, frame_write, checkpoint_read, snapshot_read_particles
 
     character(len=*), parameter :: checkpoint_format = 'dem checkpoint 1'
     character(len=*), parameter :: snapshot_format = 'dem snapshot 1'
@@ -195,7 +195,7 @@ contains
         character(len=32), allocatable :: names(:)
         real(wp), allocatable :: props(:, :), ref(:, :)
 
-        call h5_open(h, path, comm, err)
+        call h5_open(h, path, err, comm)
         if (err%failed()) return
         format = ''
         if (h5_exists(h, '/format')) call h5_read(h, '/format', format, err)
@@ -316,6 +316,63 @@ contains
             call h5_read(h, name, a, err)
         end subroutine read_i8_list
     end subroutine checkpoint_read
+
+    !> The particles of a snapshot or checkpoint file (a particle file): materials are
+    !> matched by name with `names`, the materials of the case.
+    subroutine snapshot_read_particles(path, names, gid, mat, radius, x, v, w, err)
+        character(len=*), intent(in) :: path
+        character(len=*), intent(in) :: names(:)
+        integer(i8), allocatable, intent(out) :: gid(:)
+        integer(ip), allocatable, intent(out) :: mat(:)
+        real(wp), allocatable, intent(out) :: radius(:), x(:, :), v(:, :), w(:, :)
+        type(error_t), intent(inout) :: err
+        type(h5_file_t) :: h
+        integer(i8), allocatable :: dims(:)
+        character(len=32), allocatable :: file_names(:)
+        integer(ip), allocatable :: to_case(:)
+        integer(ip) :: n, k
+        allocate(gid(0), mat(0), radius(0), x(3, 0), v(3, 0), w(3, 0))
+        call h5_open(h, path, err)
+        if (err%failed()) return
+        call h5_dims(h, '/materials/name', dims, err)
+        if (.not. err%failed()) then
+            allocate(file_names(dims(1)), to_case(dims(1)))
+            call h5_read(h, '/materials/name', file_names, err)
+        end if
+        call h5_dims(h, '/particles/id', dims, err)
+        if (err%failed()) then
+            call h5_close(h, err)
+            return
+        end if
+        n = int(dims(1), ip)
+        deallocate(gid, mat, radius, x, v, w)
+        allocate(gid(n), mat(n), radius(n), x(3, n), v(3, n), w(3, n))
+        call h5_read(h, '/particles/id', gid, err)
+        call h5_read(h, '/particles/material', mat, err)
+        call h5_read(h, '/particles/radius', radius, err)
+        call h5_read(h, '/particles/position', x, err)
+        call h5_read(h, '/particles/velocity', v, err)
+        call h5_read(h, '/particles/angular_velocity', w, err)
+        call h5_close(h, err)
+        if (err%failed()) return
+        do k = 1, size(file_names)
+            to_case(k) = findloc(names, file_names(k), dim=1)
+        end do
+        do k = 1, n
+            if (mat(k) < 1 .or. mat(k) > size(file_names)) then
+                call set_error(err, dem_err_input, path // ': particle ' // itoa(gid(k)) // &
+                               ' has no valid material index (damaged file?)')
+                return
+            end if
+            if (to_case(mat(k)) == 0) then
+                call set_error(err, dem_err_input, path // ": particle " // itoa(gid(k)) // &
+                               " is of material '" // trim(file_names(mat(k))) // "', which " // &
+                               'the case does not define')
+                return
+            end if
+            mat(k) = to_case(mat(k))
+        end do
+    end subroutine snapshot_read_particles
 
     function name_list(names) result(s)
         character(len=*), intent(in) :: names(:)

@@ -65,12 +65,12 @@ contains
         if (f%id < 0) call set_error(err, dem_err_io, path // ': cannot create the file')
     end subroutine h5_create
 
-    !> Open a file for reading; collective.
-    subroutine h5_open(f, path, comm, err)
+    !> Open a file for reading: collective on `comm`, or by this rank alone without it.
+    subroutine h5_open(f, path, err, comm)
         type(h5_file_t), intent(out) :: f
         character(len=*), intent(in) :: path
-        type(comm_t), intent(in) :: comm
         type(error_t), intent(inout) :: err
+        type(comm_t), intent(in), optional :: comm
         integer(hid_t) :: fapl
         integer :: e
         logical :: exists
@@ -79,10 +79,17 @@ contains
             call set_error(err, dem_err_io, path // ': no such file')
             return
         end if
-        call start(f, path, comm, fapl, err)
-        if (err%failed()) return
-        call h5fopen_f(path, H5F_ACC_RDONLY_F, f%id, e, access_prp=fapl)
-        call h5pclose_f(fapl, e)
+        if (present(comm)) then
+            call start(f, path, comm, fapl, err)
+            if (err%failed()) return
+            call h5fopen_f(path, H5F_ACC_RDONLY_F, f%id, e, access_prp=fapl)
+            call h5pclose_f(fapl, e)
+        else
+            f%path = path
+            call h5open_f(e)
+            if (e == 0) call h5eset_auto_f(0, e)
+            if (e == 0) call h5fopen_f(path, H5F_ACC_RDONLY_F, f%id, e)
+        end if
         if (e /= 0 .or. f%id < 0) then
             f%id = -1
             call set_error(err, dem_err_io, path // ': not a readable HDF5 file (truncated ' // &

@@ -2,11 +2,13 @@
 !> and optionally vx, vy, vz, wx, wy, wz (any order; others are ignored). `final.csv` of a
 !> run is such a file, so a run's end state can start another case; another code's state can
 !> be loaded exactly (numbers are read to full precision). Materials are given by name.
+!> HDF5 snapshots and checkpoints of a run are particle files too (dem_checkpoint).
 module dem_particle_file
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
     use dem_text, only: read_line
     use dem_error, only: error_t, set_error, dem_err_input
+    use dem_checkpoint, only: snapshot_read_particles
     implicit none
     private
     public :: read_particle_file
@@ -33,6 +35,11 @@ contains
         integer :: u, ios, lineno, col(12), k, n, j
         real(wp) :: val(10)
 
+        if (is_hdf5(path)) then
+            call snapshot_read_particles(path, names, gid, mat, radius, x, v, w, err)
+            if (err%failed()) err%code = dem_err_input
+            return
+        end if
         allocate(gid(0), mat(0), radius(0), x(3, 0), v(3, 0), w(3, 0))
         open(newunit=u, file=path, status='old', action='read', iostat=ios)
         if (ios /= 0) then
@@ -145,6 +152,21 @@ contains
             call move_alloc(w2, w)
         end subroutine grow
     end subroutine read_particle_file
+
+    !> True if the file starts with the HDF5 signature.
+    logical function is_hdf5(path)
+        character(len=*), intent(in) :: path
+        character(len=8) :: head
+        integer :: u, ios
+        is_hdf5 = .false.
+        open(newunit=u, file=path, access='stream', form='unformatted', status='old', &
+             action='read', iostat=ios)
+        if (ios /= 0) return
+        read(u, iostat=ios) head
+        close(u)
+        is_hdf5 = ios == 0 .and. head == achar(137) // 'HDF' // achar(13) // achar(10) // &
+                                            achar(26) // achar(10)
+    end function is_hdf5
 
     pure function column_name(j) result(name)
         integer, intent(in) :: j

@@ -47,7 +47,7 @@ program test_h5
     call h5_close(f, err)
     call assert_true(.not. err%failed(), 'writing: ' // message(err))
 
-    call h5_open(f, path, comm, err)
+    call h5_open(f, path, err, comm)
     call h5_read(f, '/a/b/x', y, err)
     call h5_read(f, '/a/s', s2, err)
     call h5_read(f, '/k', k2, err)
@@ -75,7 +75,7 @@ program test_h5
 
     ! damage one byte of /big's data: the checksum finds it
     call damage(path, transfer(1234.5_wp, 'abcdefgh'))
-    call h5_open(f, path, comm, err)
+    call h5_open(f, path, err, comm)
     call h5_read(f, '/big', big2, err)
     call assert_true(index(message(err), path // ': dataset /big is damaged') == 1, &
                      'damaged data: ' // message(err))
@@ -84,11 +84,11 @@ program test_h5
 
     ! a file cut in half is not opened
     call truncate_copy(path, cut)
-    call h5_open(f, cut, comm, err)
+    call h5_open(f, cut, err)
     call assert_true(index(message(err), cut // ': not a readable HDF5 file') == 1, &
                      'truncated file: ' // message(err))
     err = error_t()
-    call h5_open(f, 'no_such_file.h5', comm, err)
+    call h5_open(f, 'no_such_file.h5', err, comm)
     call assert_true(index(message(err), 'no_such_file.h5: no such file') == 1, 'missing file')
 
     call comm_free(comm)

@@ -1,0 +1,100 @@
+"""Checkpoint and restart continue a run bit for bit.
+
+1. For both integrators, a run of 2N steps straight and a run of N steps, then --restart from
+   its final checkpoint with t_end doubled, end in the same state to the last bit: every
+   particle's position, velocity, angular velocity, force and torque, the particle-particle
+   and particle-wall contact history, the wall pose, and series.csv, final.csv and the
+   snapshots. The restart happens while the particles press on each other and on the floor,
+   and while the floor moves (restart_case.py), so history and wall motion both matter.
+2. --resume without a checkpoint starts the case from t = 0 (same final.csv as a plain run).
+3. A restart with another dt counts time on from the checkpoint's: the series rows after it
+   are at t_checkpoint + k dt_new, and the run ends at t_end.
+usage: test_restart.py DEM WORKDIR"""
+import os
+import shutil
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+from regression_util import check, check_close, finish
+from restart_case import datasets, same_bits, write_case
+
+dem, work = sys.argv[1], os.path.abspath(sys.argv[2])
+shutil.rmtree(work, ignore_errors=True)
+DT, N = 2e-5, 6000
+SNAP = ", snapshot_interval = 0.04"
+
+
+def run(*args, expect=0):
+    r = subprocess.run([dem, *args], cwd=work, capture_output=True, text=True, timeout=300)
+    if r.returncode != expect:
+        print(r.stdout, r.stderr)
+    check(r.returncode == expect, f"dem {' '.join(args)}: exit {r.returncode}, expected {expect}")
+    return r
+
+
+def ckpt(name, step):
+    return os.path.join(work, f"out_{name}", "checkpoints", f"checkpoint_{step:012d}.h5")
+
+
+def read(path):
+    with open(path, "rb") as f:
+        return f.read()
+
+
+for integrator in ("symplectic_euler", "velocity_verlet"):
+    straight = f"straight_{integrator}"
+    split = f"split_{integrator}"
+    write_case(work, straight, t_end=2 * N * DT, integrator=integrator, output=SNAP)
+    write_case(work, split, t_end=N * DT, integrator=integrator, output=SNAP)
+    run(straight + ".nml")
+    run(split + ".nml")
+    with h5py.File(ckpt(split, N)) as f:
+        pairs, walls = f["state/pair"].shape[0], int((f["state/wall_contact_triangle"][()] > 0).sum())
+        check(pairs > 30 and walls > 30, f"{integrator}: contacts at the restart "
+              f"({pairs} pairs with history, {walls} wall contacts)")
+    write_case(work, split, t_end=2 * N * DT, integrator=integrator, output=SNAP)
+    r = run("--restart", ckpt(split, N), split + ".nml")
+    check("restarting from" in r.stdout, f"{integrator}: the restart is announced")
+
+    with h5py.File(ckpt(straight, 2 * N)) as a, h5py.File(ckpt(split, 2 * N)) as b:
+        names = [n for n in datasets(a) if n not in ("/case/input", "/state/checkpoint_step")]
+        check(sorted(names + ["/case/input", "/state/checkpoint_step"]) == sorted(datasets(b)),
+              f"{integrator}: same datasets")
+        differ = [n for n in names if not same_bits(a[n][()], b[n][()])]
+        check(not differ, f"{integrator}: datasets that differ after the restart: {differ}")
+    for out in ("series.csv", "final.csv", "snapshots.xmf"):
+        check(read(os.path.join(work, f"out_{straight}", out)) ==
+              read(os.path.join(work, f"out_{split}", out)), f"{integrator}: {out} differs")
+    snaps = sorted(os.listdir(os.path.join(work, f"out_{straight}", "snapshots")))
+    check(snaps == sorted(os.listdir(os.path.join(work, f"out_{split}", "snapshots"))),
+          f"{integrator}: same snapshot files")
+    for s in snaps:
+        with h5py.File(os.path.join(work, f"out_{straight}", "snapshots", s)) as a, \
+             h5py.File(os.path.join(work, f"out_{split}", "snapshots", s)) as b:
+            check(all(same_bits(a[n][()], b[n][()]) for n in datasets(a)),
+                  f"{integrator}: snapshot {s} differs")
+
+# 2. --resume with nothing to resume from
+write_case(work, "fresh", t_end=200 * DT)
+write_case(work, "resumed", t_end=200 * DT)
+run("fresh.nml")
+r = run("--resume", "resumed.nml")
+check("restarting" not in r.stdout, "--resume without a checkpoint starts from t = 0")
+check(read(os.path.join(work, "out_fresh", "final.csv")) ==
+      read(os.path.join(work, "out_resumed", "final.csv")), "--resume from nothing: final.csv")
+
+# 3. another dt after the restart
+name = "split_symplectic_euler"
+write_case(work, name, t_end=2 * N * DT, dt=DT / 2)
+shutil.rmtree(os.path.join(work, f"out_{name}", "snapshots"))
+run("--restart", ckpt(name, N), name + ".nml")
+rows = np.genfromtxt(os.path.join(work, f"out_{name}", "series.csv"), delimiter=",", names=True)
+after = rows[rows["step"] > N]
+expected = N * DT + (after["step"] - N) * DT / 2
+check(len(after) == 12 and np.allclose(after["time"], expected, rtol=0, atol=1e-12),
+      f"dt halved at the restart: rows after it at t_checkpoint + k dt ({after['time']})")
+check_close(rows["time"][-1], 2 * N * DT, 1e-12, "the run with the new dt ends at t_end")
+finish()
