@@ -12,10 +12,12 @@ BODY = """&material name = 'soft', density = 2500, youngs_modulus = 1e7, poisson
 &material name = 'wall', rigid = .true. /
 &pair materials = 'soft', 'soft', restitution = 0.3, friction = 0.3 /
 &pair materials = 'soft', 'wall', restitution = 0.3, friction = 0.3 /
-&insert n = 200, material = 'soft', radius_min = 0.004, radius_max = 0.005, region = 'box',
+"""
+INSERT = """&insert n = 200, material = 'soft', radius_min = 0.004, radius_max = 0.005, region = 'box',
         box_min = -0.045, -0.045, 0.005, box_max = 0.045, 0.045, 0.15, seed = 7,
         velocity = 0.1, 0, -0.2 /
-&wall_plane material = 'wall', point = -0.05, 0, 0.1, normal = 1, 0, 0, half_width = 0.1 /
+"""
+WALLS = """&wall_plane material = 'wall', point = -0.05, 0, 0.1, normal = 1, 0, 0, half_width = 0.1 /
 &wall_plane material = 'wall', point = 0.05, 0, 0.1, normal = -1, 0, 0, half_width = 0.1 /
 &wall_plane material = 'wall', point = 0, -0.05, 0.1, normal = 0, 1, 0, half_width = 0.1 /
 &wall_plane material = 'wall', point = 0, 0.05, 0.1, normal = 0, -1, 0, half_width = 0.1 /
@@ -26,9 +28,10 @@ BODY = """&material name = 'soft', density = 2500, youngs_modulus = 1e7, poisson
 
 
 def write_case(work, name, run="", output="", dt=2e-5, t_end=0.2,
-               integrator="symplectic_euler"):
+               integrator="symplectic_euler", particles=INSERT):
     """Write floor.stl and NAME.nml into work; return the case path. `run` and `output` are
-    extra keys of &run and &output; outputs go to work/out_NAME."""
+    extra keys of &run and &output, `particles` the groups that make the particles;
+    outputs go to work/out_NAME."""
     os.makedirs(work, exist_ok=True)
     with open(os.path.join(work, "floor.stl"), "w") as f:
         f.write("solid floor\n")
@@ -42,7 +45,7 @@ def write_case(work, name, run="", output="", dt=2e-5, t_end=0.2,
     with open(path, "w") as f:
         f.write(f"&run dt = {dt!r}, t_end = {t_end!r}, integrator = '{integrator}' {run} /\n")
         f.write(f"&output dir = 'out_{name}', interval = 0.01 {output} /\n")
-        f.write(BODY)
+        f.write(BODY + particles + WALLS)
     return path
 
 
