@@ -2,20 +2,22 @@
 !> together and written with collective transfers. A dataset is either distributed (each
 !> rank writes its own rows, the last Fortran dimension, at its offset in rank order) or
 !> replicated (the same on every rank; rank 0 writes it). Every dataset carries a checksum
-!> attribute (doc/output.md), checked when it is read, so that a damaged file is refused
-!> with the name of the damaged dataset instead of being used. Errors are returned, never
-!> printed by the HDF5 library.
+!> attribute (doc/theory.md, section 11), checked when it is read, so that a damaged file
+!> is refused with the name of the damaged dataset instead of being used. Errors are
+!> returned, never printed by the HDF5 library.
 module dem_h5
     use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_f_pointer, c_int8_t
     use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5eset_auto_f, h5pcreate_f, h5pclose_f, &
-                    h5pset_fapl_mpio_f, h5pset_dxpl_mpio_f, h5pset_obj_track_times_f, h5fcreate_f, h5fopen_f, h5fclose_f, &
+                    h5pset_fapl_mpio_f, h5pset_dxpl_mpio_f, h5pset_obj_track_times_f, &
+                    h5fcreate_f, h5fopen_f, h5fclose_f, &
                     h5gcreate_f, h5gclose_f, h5screate_f, h5screate_simple_f, h5sclose_f, &
                     h5sselect_hyperslab_f, h5sselect_none_f, h5sget_simple_extent_ndims_f, &
                     h5sget_simple_extent_dims_f, h5dcreate_f, h5dopen_f, h5dclose_f, &
                     h5dwrite_f, h5dread_f, h5dget_space_f, h5dget_type_f, h5tcopy_f, &
                     h5tset_size_f, h5tget_size_f, h5tget_class_f, h5tclose_f, h5acreate_f, &
                     h5aopen_f, h5awrite_f, h5aread_f, h5aclose_f, h5lexists_f, h5kind_to_type, &
-                    H5P_FILE_ACCESS_F, H5P_DATASET_XFER_F, H5P_DATASET_CREATE_F, H5F_ACC_TRUNC_F, H5F_ACC_RDONLY_F, &
+                    H5P_FILE_ACCESS_F, H5P_DATASET_XFER_F, H5P_DATASET_CREATE_F, &
+                    H5F_ACC_TRUNC_F, H5F_ACC_RDONLY_F, &
                     H5S_SCALAR_F, H5S_SELECT_SET_F, H5FD_MPIO_COLLECTIVE_F, H5T_IEEE_F64LE, &
                     H5T_STD_I32LE, H5T_STD_I64LE, H5T_FORTRAN_S1, H5T_FLOAT_F, H5T_INTEGER_F, &
                     H5T_STRING_F, H5_REAL_KIND, H5_INTEGER_KIND
@@ -422,7 +424,7 @@ contains
 
     !> Checksum of n bytes that start at byte `offset` of a dataset: the exclusive or of a
     !> hash of every byte and its position, so that ranks can add up their parts in any
-    !> order (doc/output.md).
+    !> order (doc/theory.md, section 11).
     integer(i8) function checksum(buf, n, offset) result(sum)
         type(c_ptr), intent(in) :: buf
         integer(hsize_t), intent(in) :: n

@@ -537,12 +537,12 @@ contains
         end do
     end subroutine read_particles
 
-    !> &particle_file (repeated): particles read from a CSV file (dem_particle_file).
+    !> &particle_file (repeated): particles read from a CSV or HDF5 file (dem_particle_file).
     subroutine read_particle_files(nf, c, err)
         type(nml_file_t), intent(in) :: nf
         type(case_t), intent(inout) :: c
         type(error_t), intent(inout) :: err
-        character(len=512) :: file  ! CSV particle file, relative to the case file, required
+        character(len=512) :: file  ! CSV or HDF5 particle file, relative to the case file, required
         namelist /particle_file/ file
         type(nml_block_t) :: b
         integer :: k_item, ios, k

@@ -4,11 +4,13 @@ module dem_comm
     use mpi_f08, only: MPI_Comm, MPI_COMM_WORLD, MPI_Init, MPI_Initialized, MPI_Finalize, &
                        MPI_Finalized, MPI_Comm_dup, MPI_Comm_free, MPI_Comm_rank, &
                        MPI_Comm_size, MPI_Abort, MPI_Exscan, MPI_Allreduce, MPI_Barrier, &
-                       MPI_INTEGER8, MPI_LOGICAL, MPI_SUM, MPI_LOR, MPI_BXOR, MPI_INFO_NULL
+                       MPI_INTEGER8, MPI_LOGICAL, MPI_SUM, MPI_LOR, MPI_BXOR, &
+                       MPI_INFO_NULL
     use dem_kinds, only: i8
     implicit none
     private
-    public :: comm_t, comm_init, comm_free, comm_offset, comm_any, comm_xor, comm_barrier, comm_info_null
+    public :: comm_t, comm_init, comm_free, comm_offset, comm_any, comm_xor, comm_barrier, &
+              comm_info_null
 
     !> A duplicated communicator with its rank and size.
     type :: comm_t

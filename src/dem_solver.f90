@@ -151,7 +151,7 @@ contains
         name = 'checkpoints/checkpoint_' // digits // '.h5'
     end function checkpoint_file
 
-    !> The time of a step [s].
+    !> The time of a step [s] (doc/theory.md, section 11).
     pure real(wp) function time_of(s, c, step) result(time)
         type(solver_t), intent(in) :: s
         type(case_t), intent(in) :: c
@@ -283,7 +283,7 @@ contains
     !> Stop the run if a signal came or the wall-time limit is near, after writing a
     !> checkpoint (unless one was just written). The limit is near when less time is left
     !> than twice the slowest checkpoint write (before the first: 4 us per particle) and two
-    !> steps.
+    !> steps (doc/theory.md, section 11).
     subroutine run_control(s, c, out, started, step_seconds, written, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -311,7 +311,8 @@ contains
             checkpoint_file(s%step) // '; continue with dem --resume ' // c%source
     end subroutine run_control
 
-    !> The progress line: step, time, percentage, particles, contacts, speed, time left.
+    !> The progress line: step, time, percentage, particles, contacts, speed, time left
+    !> (doc/theory.md, section 11).
     subroutine progress(s, c, n_end)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c

@@ -1,5 +1,6 @@
 """An OpenACC build gives the same results as the plain build: the same cases, run with both
-executables, write identical files (every digit of every number).
+executables, write identical files (every digit of every number; the HDF5 snapshots and
+checkpoints byte for byte, as they carry no time stamps).
 usage: test_builds_agree.py DEM WORKDIR REFERENCE_DEM"""
 import filecmp
 import os
@@ -8,6 +9,14 @@ import sys
 from regression_util import HERE, ROOT, check, finish, run_dem
 
 dem, work, reference = sys.argv[1], sys.argv[2], sys.argv[3]
+
+
+def files(top):
+    """The files under a directory, as sorted relative paths."""
+    return sorted(os.path.relpath(os.path.join(d, f), top)
+                  for d, _, names in os.walk(top) for f in names)
+
+
 cases = [os.path.join(ROOT, "cases", "verification", name + ".nml")
          for name in ("test1_sphere_sphere", "test2_sphere_wall", "test3_restitution",
                       "test4_oblique")]
@@ -18,8 +27,8 @@ for case in cases:
     for label, exe in (("tested", dem), ("reference", reference)):
         run_dem(exe, case, os.path.join(work, label))
         outputs.append(os.path.join(work, label, "output", stem))
-    names = sorted(os.listdir(outputs[1]))
-    check(names == sorted(os.listdir(outputs[0])), f"{stem}: different output files")
+    names = files(outputs[1])
+    check(names == files(outputs[0]), f"{stem}: different output files")
     for name in names:
         same = filecmp.cmp(os.path.join(outputs[0], name), os.path.join(outputs[1], name),
                            shallow=False)
