@@ -11,7 +11,7 @@ module dem_checkpoint
     use dem_version, only: dem_version_string
     use dem_comm, only: comm_t, comm_barrier
     use dem_case, only: case_t
-    use dem_mesh, only: mesh_t
+    use dem_mesh, only: mesh_t, mesh_move
     use dem_contacts_pw, only: max_wall_contacts
     use dem_text, only: itoa
     use dem_files, only: file_rename
@@ -180,7 +180,7 @@ contains
     end subroutine pause_for_tests
 
     !> Read checkpoint `path` and check that it belongs to case `c` (same materials, walls
-    !> and initial particle count); the errors name the file and what differs.
+    !> and their motion, initial particle count); the errors name the file and what differs.
     subroutine checkpoint_read(path, c, comm, fr, err)
         character(len=*), intent(in) :: path
         type(case_t), intent(in) :: c
@@ -194,6 +194,7 @@ contains
         character(len=len(checkpoint_format)) :: format
         character(len=32), allocatable :: names(:)
         real(wp), allocatable :: props(:, :), ref(:, :)
+        type(mesh_t) :: pose
 
         call h5_open(h, path, err, comm)
         if (err%failed()) return
@@ -239,6 +240,14 @@ contains
         ! the state
         call h5_read(h, '/time', fr%time, err)
         call h5_read(h, '/step', fr%step, err)
+        if (allocated(ref) .and. .not. err%failed()) then   ! the walls' pose then
+            call h5_read(h, '/walls/vertices', ref, err)
+            pose = c%mesh
+            if (pose%moving) call mesh_move(pose, fr%time)
+            if (.not. err%failed()) then
+                if (any(ref /= corners(pose, .false.))) call differs('wall motion')
+            end if
+        end if
         call h5_dims(h, '/particles/id', dims, err)
         if (err%failed()) then
             call h5_close(h, err)

@@ -5,7 +5,7 @@ module dem_solver
     use, intrinsic :: iso_fortran_env, only: output_unit
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
-    use dem_comm, only: comm_t
+    use dem_comm, only: comm_t, comm_any
     use dem_case, only: case_t, time_scales_t, case_time_scales
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
                              order_by_id
@@ -293,18 +293,20 @@ contains
         type(error_t), intent(inout) :: err
         real(wp) :: reserve
         character(len=:), allocatable :: sig
+        logical :: near
         sig = signal_received()
-        if (len(sig) > 0) then
+        reserve = 2.0_wp * max(s%ckpt_seconds, 4.0e-6_wp * s%p%n_own) + 2.0_wp * step_seconds
+        near = c%wall_time_limit > 0.0_wp .and. &
+               wall_seconds() - started + reserve >= c%wall_time_limit
+        if (.not. comm_any(s%comm, len(sig) > 0 .or. near)) return  ! every rank stops, or none
+        if (near) then
+            s%stopped = stop_wall_time
+            s%stop_message = 'the wall-time limit is near'
+        else
             s%stopped = stop_signal
-            s%stop_message = sig // ' received'
-        else if (c%wall_time_limit > 0.0_wp) then
-            reserve = 2.0_wp * max(s%ckpt_seconds, 4.0e-6_wp * s%p%n_own) + 2.0_wp * step_seconds
-            if (wall_seconds() - started + reserve >= c%wall_time_limit) then
-                s%stopped = stop_wall_time
-                s%stop_message = 'the wall-time limit is near'
-            end if
+            s%stop_message = 'a signal (SIGTERM or SIGUSR1) was received'
+            if (len(sig) > 0) s%stop_message = sig // ' received'
         end if
-        if (s%stopped == stop_end) return
         if (.not. written) call write_checkpoint(s, c, out, err)
         s%stop_message = s%stop_message // '; stopped at t = ' // real_text(time_of(s, c, &
             s%step)) // ' s after writing ' // c%output_dir // '/' // &
