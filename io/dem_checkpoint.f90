@@ -16,7 +16,7 @@ module dem_checkpoint
     use dem_text, only: itoa
     use dem_files, only: file_rename
     use dem_h5, only: h5_file_t, h5_create, h5_open, h5_close, h5_group, h5_write, h5_read, &
-                      h5_dims, h5_exists
+                      h5_dims, h5_text_length
     implicit none
     private
     public :: frame_t, frame_write, checkpoint_read, snapshot_read_particles
@@ -191,17 +191,21 @@ contains
         integer(i8), allocatable :: dims(:)
         integer(i8) :: n_case
         integer(ip) :: settled, nm
-        character(len=len(checkpoint_format)) :: format
+        character(len=:), allocatable :: format
         character(len=32), allocatable :: names(:)
         real(wp), allocatable :: props(:, :), ref(:, :)
         type(mesh_t) :: pose
 
         call h5_open(h, path, err, comm)
         if (err%failed()) return
-        format = ''
-        if (h5_exists(h, '/format')) call h5_read(h, '/format', format, err)
-        if (format /= checkpoint_format .and. .not. err%failed()) &
-            call set_error(err, dem_err_input, path // ': not a dem checkpoint (a snapshot?)')
+        allocate(character(len=h5_text_length(h, '/format')) :: format)
+        if (len(format) > 0) call h5_read(h, '/format', format, err)
+        if (format == snapshot_format) then
+            call set_error(err, dem_err_input, path // ': not a dem checkpoint (a snapshot)')
+        else if (format /= checkpoint_format .and. .not. err%failed()) then
+            call set_error(err, dem_err_input, path // ': not a dem checkpoint (no /format ' // &
+                           "'" // checkpoint_format // "')")
+        end if
 
         ! the case it belongs to
         call h5_dims(h, '/case/material_properties', dims, err)
@@ -215,8 +219,10 @@ contains
             if (nm /= c%mats%n) then
                 call differs('materials: ' // name_list(names) // ' there, ' // &
                              name_list(c%mats%name) // ' here')
-            else if (any(names /= c%mats%name) .or. &
-                     any(props /= material_properties(c))) then
+            else if (any(names /= c%mats%name)) then
+                call differs('materials: ' // name_list(names) // ' there, ' // &
+                             name_list(c%mats%name) // ' here')
+            else if (any(props /= material_properties(c))) then
                 call differs('material properties')
             end if
         end if

@@ -27,7 +27,7 @@ module dem_h5
     implicit none
     private
     public :: h5_file_t, h5_create, h5_open, h5_close, h5_group, h5_write, h5_read, h5_dims, &
-              h5_exists
+              h5_exists, h5_text_length
 
     !> An open file and the ranks that share it.
     type :: h5_file_t
@@ -183,6 +183,25 @@ contains
         call h5sclose_f(space, e)
         call h5dclose_f(dset, e)
     end subroutine h5_dims
+
+    !> The length of the strings of dataset `name`; 0 if it is missing or not text.
+    integer function h5_text_length(f, name) result(n)
+        type(h5_file_t), intent(in) :: f
+        character(len=*), intent(in) :: name
+        integer(hid_t) :: dset, t
+        integer(size_t) :: tsize
+        integer :: e, tclass
+        n = 0
+        if (.not. h5_exists(f, name)) return
+        call h5dopen_f(f%id, name, dset, e)
+        if (e /= 0) return
+        call h5dget_type_f(dset, t, e)
+        call h5tget_class_f(t, tclass, e)
+        call h5tget_size_f(t, tsize, e)
+        call h5tclose_f(t, e)
+        call h5dclose_f(dset, e)
+        if (tclass == H5T_STRING_F) n = int(tsize)
+    end function h5_text_length
 
     subroutine write_real(f, name, a, err, distributed)
         type(h5_file_t), intent(inout) :: f

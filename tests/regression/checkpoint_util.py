@@ -3,7 +3,7 @@ contacts and moving walls written on the fly, the checksum of a checkpoint's dat
 recomputed independently of the solver, exact comparison of HDF5 datasets, and running the
 solver in the background.
 
-The checksum is recomputed here from its definition (io/dem_h5.f90, doc/output.md): the
+The checksum is recomputed here from its definition (doc/theory.md, section 11): the
 exclusive or, over the bytes b_k (k = 1, 2, ...) of a dataset in storage order, of
 SplitMix64's finaliser applied to k + 2^56 b_k. Fixed-length strings are stored padded with
 blanks."""
@@ -15,24 +15,14 @@ import time
 import h5py
 import numpy as np
 
-# The floor: two triangles of a square, 0.12 m wide, at z = 0 (ASCII STL).
-FLOOR_STL = """solid floor
- facet normal 0 0 1
-  outer loop
-   vertex -0.06 -0.06 0
-   vertex 0.06 -0.06 0
-   vertex 0.06 0.06 0
-  endloop
- endfacet
- facet normal 0 0 1
-  outer loop
-   vertex -0.06 -0.06 0
-   vertex 0.06 0.06 0
-   vertex -0.06 0.06 0
-  endloop
- endfacet
-endsolid floor
-"""
+# The floor: two triangles of a square at z = 0, 0.16 m wide, so that it covers the box
+# however it turns (written as ASCII STL).
+FLOOR = [((-0.08, -0.08, 0.0), (0.08, -0.08, 0.0), (0.08, 0.08, 0.0)),
+         ((-0.08, -0.08, 0.0), (0.08, 0.08, 0.0), (-0.08, 0.08, 0.0))]
+FLOOR_STL = "solid floor\n" + "".join(
+    " facet normal 0 0 1\n  outer loop\n"
+    + "".join("   vertex %r %r %r\n" % v for v in tri) + "  endloop\n endfacet\n"
+    for tri in FLOOR) + "endsolid floor\n"
 
 # Soft spheres falling in a box of four planes onto an STL floor that rises, then spins:
 # particle-particle and particle-wall contacts with tangential history, and walls in motion.
@@ -42,21 +32,26 @@ BOX_CASE = """&run dt = {dt}, t_end = {t_end}, integrator = '{integrator}'{run} 
 &material name = 'wall', rigid = .true. /
 &pair materials = '{soft}', '{soft}', restitution = 0.3, friction = 0.3 /
 &pair materials = '{soft}', 'wall', restitution = 0.3, friction = 0.3 /
-&insert n = {n}, material = '{soft}', radius_min = 0.004, radius_max = 0.005, region = 'box', box_min = -0.045, -0.045, 0.005, box_max = 0.045, 0.045, 0.15, seed = 7, velocity = 0.1, 0, -0.2 /
-&wall_plane material = 'wall', point = {x0}, 0, 0.1, normal = 1, 0, 0, half_width = 0.1 /
+{particles}&wall_plane material = 'wall', point = {x0}, 0, 0.1, normal = 1, 0, 0, half_width = 0.1 /
 &wall_plane material = 'wall', point = 0.05, 0, 0.1, normal = -1, 0, 0, half_width = 0.1 /
 &wall_plane material = 'wall', point = 0, -0.05, 0.1, normal = 0, 1, 0, half_width = 0.1 /
-{last_plane}&wall_mesh file = '{stl}', material = 'wall', velocity = 0, 0, 0.01, velocity_start = 0.05, velocity_end = 0.15, rotation_axis = 0, 0, 1, rotation_point = 0, 0, 0, angular_velocity = 5, rotation_start = 0.1 /
+{last_plane}&wall_mesh file = '{stl}', material = 'wall', velocity = 0, 0, 0.01, velocity_start = {floor_start}, velocity_end = 0.15, rotation_axis = 0, 0, 1, rotation_point = 0, 0, 0, angular_velocity = 5, rotation_start = 0.1 /
 {extra}"""
+INSERT = ("&insert n = {n}, material = '{soft}', radius_min = 0.004, radius_max = 0.005, "
+          "region = 'box', box_min = -0.045, -0.045, 0.005, box_max = 0.045, 0.045, 0.15, "
+          "seed = 7, velocity = 0.1, 0, -0.2 /\n")
 LAST_PLANE = ("&wall_plane material = 'wall', point = 0, 0.05, 0.1, normal = 0, -1, 0, "
               "half_width = 0.1 /\n")
 
 
 def write_box_case(path, out_dir, t_end, dt=2.0e-5, interval=None, run="", output="",
                    integrator="symplectic_euler", n=200, E="1e7", soft="soft", x0="-0.05",
-                   four_planes=True, extra=""):
+                   four_planes=True, floor_start="0.05", extra="", particles=None):
     """Write the box case (and floor.stl beside it) to `path`; `run` and `output` are extra
-    keys of &run and &output (", key = value, ..."), `extra` extra groups."""
+    keys of &run and &output (", key = value, ..."), `extra` extra groups; the other
+    arguments change the case: particle count, Young's modulus and name of the particles'
+    material, the position of the first wall plane, the fourth wall plane or none, and when
+    the floor starts to rise [s]; `particles` replaces the random insertion."""
     stl = os.path.join(os.path.dirname(os.path.abspath(path)), "floor.stl")
     with open(stl, "w") as f:
         f.write(FLOOR_STL)
@@ -64,7 +59,10 @@ def write_box_case(path, out_dir, t_end, dt=2.0e-5, interval=None, run="", outpu
                            dir=os.path.abspath(out_dir),
                            interval=interval if interval is not None else t_end / 100.0,
                            output=output, soft=soft, E=E, n=n, x0=x0, stl="floor.stl",
-                           last_plane=LAST_PLANE if four_planes else "", extra=extra)
+                           last_plane=LAST_PLANE if four_planes else "",
+                           floor_start=floor_start, extra=extra,
+                           particles=particles if particles is not None
+                           else INSERT.format(n=n, soft=soft))
     with open(path, "w") as f:
         f.write(text)
     return path

@@ -31,7 +31,7 @@ import h5py
 from regression_util import check, finish, run_dem
 import checkpoint_util as cu
 
-dem, work = sys.argv[1], os.path.abspath(sys.argv[2])
+dem, work = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 os.makedirs(work, exist_ok=True)
 
 DT, T_END, EVERY = 2.0e-5, 0.2, 2500      # checkpoints at steps 2500, 5000, 7500, 10000

@@ -5,7 +5,7 @@
    particle's position, velocity, angular velocity, force and torque, the particle-particle
    and particle-wall contact history, the wall pose, and series.csv, final.csv and the
    snapshots. The restart happens while the particles press on each other and on the floor,
-   and while the floor moves (restart_case.py), so history and wall motion both matter.
+   and while the floor moves (checkpoint_util.py), so history and wall motion both matter.
 2. --resume without a checkpoint starts the case from t = 0 (same final.csv as a plain run).
 3. A restart with another dt counts time on from the checkpoint's: the series rows after it
    are at t_checkpoint + k dt_new, and the run ends at t_end.
@@ -19,12 +19,18 @@ import h5py
 import numpy as np
 
 from regression_util import check, check_close, finish
-from restart_case import datasets, same_bits, write_case
+import checkpoint_util as cu
 
 dem, work = sys.argv[1], os.path.abspath(sys.argv[2])
 shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
 DT, N = 2e-5, 6000
 SNAP = ", snapshot_interval = 0.04"
+
+
+def write_case(name, t_end, dt=DT, integrator="symplectic_euler", output=""):
+    cu.write_box_case(os.path.join(work, name + ".nml"), os.path.join(work, f"out_{name}"),
+                      t_end, dt=dt, interval=0.01, integrator=integrator, output=output)
 
 
 def run(*args, expect=0):
@@ -47,23 +53,23 @@ def read(path):
 for integrator in ("symplectic_euler", "velocity_verlet"):
     straight = f"straight_{integrator}"
     split = f"split_{integrator}"
-    write_case(work, straight, t_end=2 * N * DT, integrator=integrator, output=SNAP)
-    write_case(work, split, t_end=N * DT, integrator=integrator, output=SNAP)
+    write_case(straight, t_end=2 * N * DT, integrator=integrator, output=SNAP)
+    write_case(split, t_end=N * DT, integrator=integrator, output=SNAP)
     run(straight + ".nml")
     run(split + ".nml")
     with h5py.File(ckpt(split, N)) as f:
         pairs, walls = f["state/pair"].shape[0], int((f["state/wall_contact_triangle"][()] > 0).sum())
         check(pairs > 30 and walls > 30, f"{integrator}: contacts at the restart "
               f"({pairs} pairs with history, {walls} wall contacts)")
-    write_case(work, split, t_end=2 * N * DT, integrator=integrator, output=SNAP)
+    write_case(split, t_end=2 * N * DT, integrator=integrator, output=SNAP)
     r = run("--restart", ckpt(split, N), split + ".nml")
     check("restarting from" in r.stdout, f"{integrator}: the restart is announced")
 
     with h5py.File(ckpt(straight, 2 * N)) as a, h5py.File(ckpt(split, 2 * N)) as b:
-        names = [n for n in datasets(a) if n not in ("/case/input", "/state/checkpoint_step")]
-        check(sorted(names + ["/case/input", "/state/checkpoint_step"]) == sorted(datasets(b)),
+        names = [n for n in cu.datasets(a) if n not in ("case/input", "state/checkpoint_step")]
+        check(sorted(names + ["case/input", "state/checkpoint_step"]) == sorted(cu.datasets(b)),
               f"{integrator}: same datasets")
-        differ = [n for n in names if not same_bits(a[n][()], b[n][()])]
+        differ = [n for n in names if not cu.same_bits(a[n][()], b[n][()])]
         check(not differ, f"{integrator}: datasets that differ after the restart: {differ}")
     for out in ("series.csv", "final.csv", "snapshots.xmf"):
         check(read(os.path.join(work, f"out_{straight}", out)) ==
@@ -74,12 +80,12 @@ for integrator in ("symplectic_euler", "velocity_verlet"):
     for s in snaps:
         with h5py.File(os.path.join(work, f"out_{straight}", "snapshots", s)) as a, \
              h5py.File(os.path.join(work, f"out_{split}", "snapshots", s)) as b:
-            check(all(same_bits(a[n][()], b[n][()]) for n in datasets(a)),
+            check(all(cu.same_bits(a[n][()], b[n][()]) for n in cu.datasets(a)),
                   f"{integrator}: snapshot {s} differs")
 
 # 2. --resume with nothing to resume from
-write_case(work, "fresh", t_end=200 * DT)
-write_case(work, "resumed", t_end=200 * DT)
+write_case("fresh", t_end=200 * DT)
+write_case("resumed", t_end=200 * DT)
 run("fresh.nml")
 r = run("--resume", "resumed.nml")
 check("restarting" not in r.stdout, "--resume without a checkpoint starts from t = 0")
@@ -88,7 +94,7 @@ check(read(os.path.join(work, "out_fresh", "final.csv")) ==
 
 # 3. another dt after the restart
 name = "split_symplectic_euler"
-write_case(work, name, t_end=2 * N * DT, dt=DT / 2)
+write_case(name, t_end=2 * N * DT, dt=DT / 2)
 shutil.rmtree(os.path.join(work, f"out_{name}", "snapshots"))
 run("--restart", ckpt(name, N), name + ".nml")
 rows = np.genfromtxt(os.path.join(work, f"out_{name}", "series.csv"), delimiter=",", names=True)

@@ -25,11 +25,18 @@ import h5py
 import numpy as np
 
 from regression_util import check, finish
-from restart_case import FLOOR, same_bits, write_case
+import checkpoint_util as cu
 
 dem, work = sys.argv[1], os.path.abspath(sys.argv[2])
 shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
 RHO, G = 2500.0, 9.81
+
+
+def write_case(name, t_end, output, integrator="symplectic_euler", particles=None):
+    cu.write_box_case(os.path.join(work, name + ".nml"), os.path.join(work, f"out_{name}"),
+                      t_end, interval=0.01, integrator=integrator, output=output,
+                      particles=particles)
 
 
 def run(case):
@@ -37,7 +44,7 @@ def run(case):
     check(r.returncode == 0, f"dem {case}: exit {r.returncode}\n{r.stdout}{r.stderr}")
 
 
-write_case(work, "snap", t_end=0.12, integrator="velocity_verlet",
+write_case("snap", t_end=0.12, integrator="velocity_verlet",
            output=", snapshot_interval = 0.02, snapshot_force = .true., "
                   "snapshot_contacts = .true.")
 run("snap.nml")
@@ -111,7 +118,7 @@ for name in snapshots:
     angle = 5.0 * max(time - 0.1, 0.0)
     rot = np.array([[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0],
                     [0, 0, 1]])
-    floor = np.array(FLOOR).reshape(-1, 3) @ rot.T + [0, 0, lift]
+    floor = np.array(cu.FLOOR).reshape(-1, 3) @ rot.T + [0, 0, lift]
     tris = np.repeat(wall, 3)
     check(np.allclose(verts[tris == wall.max()], floor, rtol=0, atol=1e-12),
           f"{name}: the floor in its pose at t = {time}")
@@ -123,12 +130,12 @@ check(contacts_seen > 100, f"the snapshots hold contacts ({contacts_seen})")
 
 # 4. a snapshot as a particle file
 seed = os.path.join(out, snapshots[-1])
-write_case(work, "seeded", t_end=0.001, particles=f"&particle_file file = '{seed}' /\n",
+write_case("seeded", t_end=0.001, particles=f"&particle_file file = '{seed}' /\n",
            output=", snapshot_interval = 0.001")
 run("seeded.nml")
 with h5py.File(seed) as a, h5py.File(os.path.join(work, "out_seeded", "snapshots",
                                                   "snapshot_000000000000.h5")) as b:
     for k in ("id", "material", "radius", "position", "velocity", "angular_velocity"):
-        check(same_bits(a["particles"][k][()], b["particles"][k][()]),
+        check(cu.same_bits(a["particles"][k][()], b["particles"][k][()]),
               f"seeded from a snapshot: {k} bit for bit")
 finish()
