@@ -58,7 +58,8 @@ for integrator in ("symplectic_euler", "velocity_verlet"):
     run(straight + ".nml")
     run(split + ".nml")
     with h5py.File(ckpt(split, N)) as f:
-        pairs, walls = f["state/pair"].shape[0], int((f["state/wall_contact_triangle"][()] > 0).sum())
+        pairs = f["state/pair"].shape[0]
+        walls = int((f["state/wall_contact_triangle"][()] > 0).sum())
         check(pairs > 30 and walls > 30, f"{integrator}: contacts at the restart "
               f"({pairs} pairs with history, {walls} wall contacts)")
     write_case(split, t_end=2 * N * DT, integrator=integrator, output=SNAP)
