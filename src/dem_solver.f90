@@ -237,6 +237,7 @@ contains
                     call unstable(s, c, err)
                     exit
                 end if
+                call timer_stop(s%timers, phase_integrate)
             end associate
             s%step = s%step + 1
             s%steps_run = s%steps_run + 1
@@ -470,8 +471,9 @@ contains
         end associate
     end subroutine write_trace
 
-    !> The instability guard has tripped: write the last good state as a checkpoint, and stop
-    !> the run naming the first offending particle, the time and the likely cause.
+    !> The instability guard has tripped: write the last good state as a checkpoint (unless a
+    !> checkpoint, which passed the guard too, is newer), and stop the run naming the first
+    !> offending particle, the time and the likely cause.
     subroutine unstable(s, c, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -498,7 +500,10 @@ contains
             end if
         end associate
         saved = ''
-        if (allocated(s%good%gid)) then
+        if (any(s%ckpt_step > s%good%step)) then     ! a checkpoint newer than the last row
+            saved = '; the last good state is in ' // c%output_dir // '/' // &
+                    checkpoint_file(maxval(s%ckpt_step))
+        else if (allocated(s%good%gid)) then
             call write_frame_checkpoint(s, c, s%good, write_err)
             saved = '; the last good state, at t = ' // real_text(s%good%time) // ' s, is in ' &
                     // c%output_dir // '/' // checkpoint_file(s%good%step)
