@@ -19,7 +19,8 @@ module dem_checkpoint
                       h5_dims, h5_text_length
     implicit none
     private
-    public :: frame_t, frame_write, checkpoint_read, snapshot_read_particles
+    public :: frame_t, frame_write, checkpoint_read, snapshot_read_particles, checkpoint_file, &
+              checkpoint_latest, checkpoint_kept
 
     character(len=*), parameter :: checkpoint_format = 'dem checkpoint 1'
     character(len=*), parameter :: snapshot_format = 'dem snapshot 1'
@@ -157,6 +158,50 @@ contains
         end if
     end function corners
 
+    !> The checkpoint file of a step, relative to the output directory.
+    function checkpoint_file(step) result(name)
+        integer(i8), intent(in) :: step
+        character(len=:), allocatable :: name
+        character(len=12) :: digits
+        write(digits, '(i12.12)') step
+        name = 'checkpoints/checkpoint_' // digits // '.h5'
+    end function checkpoint_file
+
+    !> The newest checkpoint of an output directory (named by checkpoints/latest); '' if none.
+    function checkpoint_latest(dir) result(path)
+        character(len=*), intent(in) :: dir
+        character(len=:), allocatable :: path
+        character(len=512) :: name
+        integer :: u, ios
+        path = ''
+        open(newunit=u, file=dir // '/checkpoints/latest', status='old', action='read', &
+             iostat=ios)
+        if (ios /= 0) return
+        read(u, '(a)', iostat=ios) name
+        close(u)
+        if (ios == 0) path = dir // '/' // trim(name)
+    end function checkpoint_latest
+
+    !> The steps of the checkpoints that were kept when checkpoint `path` was written (it
+    !> last); none if the file cannot be read.
+    function checkpoint_kept(path) result(steps)
+        character(len=*), intent(in) :: path
+        integer(i8), allocatable :: steps(:)
+        type(h5_file_t) :: h
+        type(error_t) :: err
+        integer(i8), allocatable :: dims(:)
+        allocate(steps(0))
+        call h5_open(h, path, err)
+        call h5_dims(h, '/state/checkpoint_step', dims, err)
+        if (.not. err%failed()) then
+            deallocate(steps)
+            allocate(steps(dims(1)))
+            call h5_read(h, '/state/checkpoint_step', steps, err)
+            if (err%failed()) steps = [integer(i8) ::]
+        end if
+        call h5_close(h, err)
+    end function checkpoint_kept
+
     !> Density, Young's modulus, Poisson ratio and rigidity (1 or 0) of each material.
     function material_properties(c) result(props)
         type(case_t), intent(in) :: c
@@ -180,8 +225,19 @@ contains
     end subroutine pause_for_tests
 
     !> Read checkpoint `path` and check that it belongs to case `c` (same materials, walls
-    !> and their motion, initial particle count); the errors name the file and what differs.
+    !> and their motion, initial particle count); the errors name the file and what differs,
+    !> and count as bad input.
     subroutine checkpoint_read(path, c, comm, fr, err)
+        character(len=*), intent(in) :: path
+        type(case_t), intent(in) :: c
+        type(comm_t), intent(in) :: comm
+        type(frame_t), intent(out) :: fr
+        type(error_t), intent(inout) :: err
+        call read_frame(path, c, comm, fr, err)
+        if (err%failed()) err%code = dem_err_input
+    end subroutine checkpoint_read
+
+    subroutine read_frame(path, c, comm, fr, err)
         character(len=*), intent(in) :: path
         type(case_t), intent(in) :: c
         type(comm_t), intent(in) :: comm
@@ -330,7 +386,7 @@ contains
             allocate(a(d(1)))
             call h5_read(h, name, a, err)
         end subroutine read_i8_list
-    end subroutine checkpoint_read
+    end subroutine read_frame
 
     !> The particles of a snapshot or checkpoint file (a particle file): materials are
     !> matched by name with `names`, the materials of the case.

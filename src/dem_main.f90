@@ -3,9 +3,10 @@ program dem_main
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use dem, only: wp, dem_version_string, error_t, case_t, time_scales_t, case_time_scales, &
                    case_total_mass, read_case, solver_t, solver_init, solver_restore, &
-                   solver_run, checkpoint_file, stop_wall_time, stop_signal, frame_t, &
-                   checkpoint_read, n_phases, phase_names, timer_seconds, wall_seconds
+                   solver_run, stop_wall_time, stop_signal, frame_t, checkpoint_read, &
+                   checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds
     use dem_comm, only: comm_t, comm_init, comm_free
+    use dem_signals, only: signals_install
     implicit none
     type(comm_t) :: comm
     type(case_t) :: c
@@ -22,6 +23,7 @@ program dem_main
     integer, parameter :: exit_continue = 75
 
     started = wall_seconds()
+    call signals_install()     ! from now on SIGTERM and SIGUSR1 stop the run at a checkpoint
     call comm_init(comm)
     nargs = command_argument_count()
     if (nargs < 1) call usage_error('no case file given')
@@ -64,7 +66,7 @@ program dem_main
     call print_check(c)
     if (check_only) call finish(0)
     call solver_init(s, c, comm)
-    if (resume) restart = latest_checkpoint(c%output_dir)
+    if (resume) restart = checkpoint_latest(c%output_dir)
     if (len(restart) > 0) then
         call checkpoint_read(restart, c, comm, fr, err)
         if (err%failed()) call fail(err)
@@ -112,21 +114,6 @@ contains
             'not be written; 75 stopped early (wall-time limit, SIGTERM or SIGUSR1) after', &
             'writing a checkpoint: continue with dem --resume.'
     end subroutine print_help
-
-    !> The newest checkpoint in an output directory (checkpoints/latest), or '' if none.
-    function latest_checkpoint(dir) result(path)
-        character(len=*), intent(in) :: dir
-        character(len=:), allocatable :: path
-        character(len=512) :: name
-        integer :: u, ios
-        path = ''
-        open(newunit=u, file=dir // '/checkpoints/latest', status='old', action='read', &
-             iostat=ios)
-        if (ios /= 0) return
-        read(u, '(a)', iostat=ios) name
-        close(u)
-        if (ios == 0) path = dir // '/' // trim(name)
-    end function latest_checkpoint
 
     !> The derived quantities of a case (dem --check, and the start of every run).
     subroutine print_check(c)

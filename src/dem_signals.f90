@@ -1,7 +1,8 @@
 !> SIGTERM and SIGUSR1, which batch schedulers send some time before they kill a job, are
-!> caught and remembered, so that the time loop can write a checkpoint and stop cleanly at
-!> the end of the step. The handler is a bind(C) procedure installed with the C library's
-!> signal(); it only stores the signal number. Signal numbers are Linux's.
+!> caught and remembered (from signals_install, which the program calls at its start), so
+!> that the time loop can write a checkpoint and stop cleanly at the end of the step. The
+!> handler is a bind(C) procedure installed with the C library's signal(); it only stores
+!> the signal number. Signal numbers are Linux's.
 module dem_signals
     use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
     implicit none

@@ -23,10 +23,11 @@ module dem_solver
                                contact_trace
     use dem_output, only: output_t, output_open, output_series, output_contact, &
                           output_final, output_close, output_sizes
-    use dem_checkpoint, only: frame_t, frame_write
+    use dem_checkpoint, only: frame_t, frame_write, checkpoint_file, checkpoint_latest, &
+                              checkpoint_kept
     use dem_xdmf, only: xdmf_write, snapshot_file
     use dem_files, only: make_directory, file_remove, file_rename
-    use dem_signals, only: signals_install, signal_received
+    use dem_signals, only: signal_received
     use dem_text, only: itoa, real_text, duration_text
     use dem_acc, only: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device
     use dem_timers, only: timers_t, timer_start, timer_stop, phase_neighbors, &
@@ -34,7 +35,7 @@ module dem_solver
                           wall_seconds, timer_seconds
     implicit none
     private
-    public :: solver_t, solver_init, solver_restore, solver_run, checkpoint_file, &
+    public :: solver_t, solver_init, solver_restore, solver_run, &
               stop_end, stop_settled, stop_wall_time, stop_signal
 
     ! why solver_run returned without an error
@@ -71,6 +72,9 @@ module dem_solver
         integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
         real(wp), allocatable :: snap_time(:)
         integer(i8), allocatable :: ckpt_step(:)             !< checkpoints kept
+        integer(i8), allocatable :: stale(:)  !< checkpoints of a continuation abandoned by a
+                                              !< restart from an older one: removed once this
+                                              !< run has written its own
         real(wp) :: ckpt_seconds = 0.0_wp  !< wall time of the slowest checkpoint write [s]
         integer :: stopped = stop_end      !< why the last solver_run returned
         character(len=:), allocatable :: stop_message
@@ -99,16 +103,20 @@ contains
         s%sort_cell = 2.0_wp * minval(c%radius(1:c%n_particles)) + c%skin
         s%step = 0
         s%rng_state = c%rng_state
-        allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0))
+        allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0), s%stale(0))
     end subroutine solver_init
 
     !> Replace the state of a case just set up by solver_init with a checkpoint's. If dt is
     !> the checkpoint's, the times of the steps are those of the run that wrote it, so that
     !> the continuation is bit for bit the same; otherwise time counts on from its time.
+    !> Checkpoints newer than this one (a continuation now abandoned) are removed once the
+    !> run writes its first checkpoint.
     subroutine solver_restore(s, c, fr)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(frame_t), intent(in) :: fr
+        character(len=:), allocatable :: latest
+        integer(i8), allocatable :: kept(:)
         integer(ip) :: i
         s%p%n_own = 0
         do i = 1, fr%n
@@ -140,19 +148,15 @@ contains
         s%snap_time = fr%snap_time
         s%snap_n = fr%snap_n
         s%ckpt_step = fr%ckpt_step
+        latest = checkpoint_latest(c%output_dir)
+        if (len(latest) > 0) then
+            kept = checkpoint_kept(latest)
+            s%stale = pack(kept, kept > fr%step)
+        end if
         if (s%mesh%moving) call mesh_move(s%mesh, fr%time)
         s%good = fr
         s%restarted = .true.
     end subroutine solver_restore
-
-    !> The checkpoint file of a step, relative to the output directory.
-    function checkpoint_file(step) result(name)
-        integer(i8), intent(in) :: step
-        character(len=:), allocatable :: name
-        character(len=12) :: digits
-        write(digits, '(i12.12)') step
-        name = 'checkpoints/checkpoint_' // digits // '.h5'
-    end function checkpoint_file
 
     !> The time of a step [s] (doc/theory.md, section 11).
     pure real(wp) function time_of(s, c, step) result(time)
@@ -190,7 +194,6 @@ contains
             call output_open(out, c%output_dir, s%trace > 0, err)
         end if
         if (err%failed()) return
-        call signals_install()
         call device_data(s, acc_enter)
 
         call rebuild(s)
@@ -254,7 +257,7 @@ contains
             end if
             step_seconds = wall_seconds() - last
             last = last + step_seconds
-            call run_control(s, c, out, started, step_seconds, written, err)
+            if (s%step < n_end) call run_control(s, c, out, started, step_seconds, written, err)
             if (s%stopped /= stop_end) exit
             if (c%progress_interval > 0.0_wp .and. last >= next_progress) then
                 call progress(s, c, n_end)
@@ -656,7 +659,12 @@ contains
             if (all(kept /= s%ckpt_step(k))) &
                 call file_remove(c%output_dir // '/' // checkpoint_file(s%ckpt_step(k)))
         end do
+        do k = 1, size(s%stale)
+            if (all(kept /= s%stale(k))) &
+                call file_remove(c%output_dir // '/' // checkpoint_file(s%stale(k)))
+        end do
         s%ckpt_step = kept
+        s%stale = [integer(i8) ::]
         s%ckpt_seconds = max(s%ckpt_seconds, wall_seconds() - t0)
     end subroutine write_frame_checkpoint
 

@@ -9,6 +9,9 @@
 2. --resume without a checkpoint starts the case from t = 0 (same final.csv as a plain run).
 3. A restart with another dt counts time on from the checkpoint's: the series rows after it
    are at t_checkpoint + k dt_new, and the run ends at t_end.
+4. A restart from the older of two kept checkpoints abandons the continuation that wrote the
+   newer one: once the new run has written its own, that one is gone and checkpoint_keep
+   (2) checkpoints remain, the restart's and the new run's.
 usage: test_restart.py DEM WORKDIR"""
 import os
 import shutil
@@ -104,4 +107,15 @@ expected = N * DT + (after["step"] - N) * DT / 2
 check(len(after) == 12 and np.allclose(after["time"], expected, rtol=0, atol=1e-12),
       f"dt halved at the restart: rows after it at t_checkpoint + k dt ({after['time']})")
 check_close(rows["time"][-1], 2 * N * DT, 1e-12, "the run with the new dt ends at t_end")
+
+# 4. restart from the older checkpoint
+name = "split_velocity_verlet"
+folder = os.path.join(work, f"out_{name}", "checkpoints")
+before = sorted(os.listdir(folder))
+write_case(name, t_end=1.5 * N * DT, integrator="velocity_verlet", output=SNAP)
+run("--restart", ckpt(name, N), name + ".nml")
+after = sorted(os.listdir(folder))
+names = [os.path.basename(ckpt(name, k)) for k in (N, 3 * N // 2)] + ["latest"]
+check(after == names, f"restart from the older checkpoint: {before} became {after}, "
+                      f"expected {names}")
 finish()

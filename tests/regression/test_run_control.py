@@ -27,6 +27,10 @@ simulated time (100 000 steps, a few seconds of wall clock); and a single sphere
     before the failure, its values are finite and every speed (|v| and |w| R) is below the
     bound, whose default is 0.1 x smallest radius / dt. And a sphere that starts faster
     than an explicit &run max_speed stops the run at the first step (t = dt).
+(e) SIGUSR1 sent 0.1 s after the start (while MPI starts and the case is read) stops the
+    run at its first step with a checkpoint (exit 75); a 2-step case with a 1 ms wall-time
+    limit stops after step 1 (75), and its --resume, which reaches t_end, ends as finished
+    (0).
 usage: test_run_control.py DEM WORKDIR"""
 import math
 import os
@@ -286,6 +290,28 @@ if m is not None:
                                     f"{m.group(6)}, expected 0")
 rows = cu.lines_of(os.path.join(work, "fast", "series.csv")) - 1
 check(rows == 1, f"(d) fast sphere: {rows} rows in series.csv, expected the one at t = 0")
+
+# (e) a signal during start-up (before the time loop: starting MPI, reading the case,
+#     inserting 800 spheres) is kept and honoured at the first step; a stop that falls on
+#     the last step is no stop: the run ends as finished (exit 0, final.csv)
+case = cu.write_box_case(os.path.join(work, "early.nml"), os.path.join(work, "early"), T_END,
+                         DT, interval=0.01, n=800)
+p = cu.start([dem, case], work, os.path.join(work, "early_log"))
+time.sleep(0.1)
+p.send_signal(signal.SIGUSR1)
+rc = cu.finish_process(p, 120)
+check(rc == 75, f"(e) SIGUSR1 during start-up: exit status {rc}, expected 75")
+stop = stopped_checkpoint("(e)", os.path.join(work, "early"), os.path.join(work, "early_log"),
+                          "SIGUSR1", case)
+check(stop is not None and stop[0] == 1, f"(e) stopped at the first step ({stop})")
+case = cu.write_box_case(os.path.join(work, "last.nml"), os.path.join(work, "last"), 2 * DT,
+                         DT, interval=DT, run=", wall_time_limit = 0.001")
+runs = [subprocess.run([dem, "--resume", case], cwd=work, capture_output=True, text=True,
+                       timeout=120).returncode for _ in range(2)]
+check(runs == [75, 0], f"(e) a 2-step case with a 1 ms wall-time limit: exit statuses "
+                       f"{runs}, expected [75, 0] (the second run ends at t_end)")
+check(os.path.exists(os.path.join(work, "last", "final.csv")),
+      "(e) final.csv of the 2-step case")
 
 print(f"{time.monotonic() - t_start:.1f} s")
 finish()
