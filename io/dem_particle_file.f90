@@ -164,8 +164,8 @@ contains
         if (ios /= 0) return
         read(u, iostat=ios) head
         close(u)
-        is_hdf5 = ios == 0 .and. head == achar(137) // 'HDF' // achar(13) // achar(10) // &
-                                            achar(26) // achar(10)
+        if (ios == 0) is_hdf5 = ichar(head(1:1)) == 137 .and. head(2:4) == 'HDF' .and. &
+                                head(5:8) == achar(13) // achar(10) // achar(26) // achar(10)
     end function is_hdf5
 
     pure function column_name(j) result(name)

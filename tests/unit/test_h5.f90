@@ -20,7 +20,6 @@ program test_h5
     integer(i8), allocatable :: dims(:)
     character(len=6) :: names(2), names2(2)
     character(len=:), allocatable :: text, text2
-    integer :: i
 
     call comm_init(comm)
     call random_number(x)
