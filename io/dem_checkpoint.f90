@@ -13,7 +13,7 @@ module dem_checkpoint
     use dem_case, only: case_t
     use dem_mesh, only: mesh_t, mesh_move
     use dem_contacts_pw, only: max_wall_contacts
-    use dem_text, only: itoa
+    use dem_text, only: itoa, step_file
     use dem_files, only: file_rename
     use dem_h5, only: h5_file_t, h5_create, h5_open, h5_close, h5_group, h5_write, h5_read, &
                       h5_dims, h5_text_length
@@ -162,9 +162,7 @@ contains
     function checkpoint_file(step) result(name)
         integer(i8), intent(in) :: step
         character(len=:), allocatable :: name
-        character(len=12) :: digits
-        write(digits, '(i12.12)') step
-        name = 'checkpoints/checkpoint_' // digits // '.h5'
+        name = step_file('checkpoints/checkpoint_', step)
     end function checkpoint_file
 
     !> The newest checkpoint of an output directory (named by checkpoints/latest); '' if none.

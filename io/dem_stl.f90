@@ -19,14 +19,10 @@ module dem_stl
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, i8
     use dem_error, only: error_t, set_error, dem_err_input
+    use dem_text, only: itoa
     implicit none
     private
     public :: stl_read
-
-    !> An integer as text.
-    interface str
-        module procedure str_i4, str_i8
-    end interface str
 
     !> A triangle is degenerate when twice its area is at most this times the square of its
     !> longest edge (an aspect ratio above 1e12, in practice exactly collinear corners).
@@ -120,8 +116,8 @@ contains
             else if (looks_like_text(probe)) then
                 call read_ascii(u, path, fsize, scale, vert, e)
             else
-                call set_error(e, dem_err_input, path // ': byte ' // str(fsize) // &
-                    ': truncated binary STL file: ' // str(fsize) // ' bytes, shorter than ' // &
+                call set_error(e, dem_err_input, path // ': byte ' // itoa(fsize) // &
+                    ': truncated binary STL file: ' // itoa(fsize) // ' bytes, shorter than ' // &
                     'the 84-byte header (expected at least 84 bytes)')
             end if
         end if
@@ -144,16 +140,16 @@ contains
         integer(i8) :: expected
         expected = header_bytes + record_bytes * n
         if (fsize < expected) then
-            call set_error(err, dem_err_input, path // ': byte ' // str(fsize) // &
-                ': truncated binary STL file: the count at byte 80 says ' // str(n) // &
-                ' triangles, so ' // str(expected) // ' bytes are expected, but the file has ' // &
-                str(fsize) // ' bytes; the data ends at byte ' // str(fsize) // &
-                ' (inside triangle ' // str((fsize - header_bytes) / record_bytes + 1) // ')')
+            call set_error(err, dem_err_input, path // ': byte ' // itoa(fsize) // &
+                ': truncated binary STL file: the count at byte 80 says ' // itoa(n) // &
+                ' triangles, so ' // itoa(expected) // ' bytes are expected, but the file has ' // &
+                itoa(fsize) // ' bytes; the data ends at byte ' // itoa(fsize) // &
+                ' (inside triangle ' // itoa((fsize - header_bytes) / record_bytes + 1) // ')')
         else
             call set_error(err, dem_err_input, path // ': byte 80: the triangle count ' // &
-                str(n) // ' does not match the file size: ' // str(expected) // &
-                ' bytes are expected, the file has ' // str(fsize) // ' bytes (' // &
-                str(fsize - expected) // ' bytes too many)')
+                itoa(n) // ' does not match the file size: ' // itoa(expected) // &
+                ' bytes are expected, the file has ' // itoa(fsize) // ' bytes (' // &
+                itoa(fsize - expected) // ' bytes too many)')
         end if
     end subroutine binary_size_error
 
@@ -187,7 +183,7 @@ contains
             offset = header_bytes + record_bytes * t0      ! file offset of buf(1:1)
             read(u, pos=offset + 1, iostat=ios) buf(1:m * int(record_bytes))
             if (ios /= 0) then
-                call set_error(err, dem_err_input, path // ': byte ' // str(offset) // &
+                call set_error(err, dem_err_input, path // ': byte ' // itoa(offset) // &
                                ': read error in the binary STL file')
                 return
             end if
@@ -201,8 +197,8 @@ contains
                             ishft(int(iachar(buf(p + 4:p + 4)), int64), 24)
                         if (iand(ishft(bits, -23), 255_int64) == 255_int64) then
                             call set_error(err, dem_err_input, path // ': byte ' // &
-                                str(offset + p) // ': triangle ' // str(t) // ', corner ' // &
-                                str(c) // ': coordinate is not finite (NaN or Inf)')
+                                itoa(offset + p) // ': triangle ' // itoa(t) // ', corner ' // &
+                                itoa(c) // ': coordinate is not finite (NaN or Inf)')
                             return
                         end if
                         if (bits >= 2_int64**31) bits = bits - 2_int64**32
@@ -210,8 +206,8 @@ contains
                         x = real(f, wp)
                         if (abs(x) > xmax) then
                             call set_error(err, dem_err_input, path // ': byte ' // &
-                                str(offset + p) // ': triangle ' // str(t) // ', corner ' // &
-                                str(c) // ': coordinate times the scale is not finite')
+                                itoa(offset + p) // ': triangle ' // itoa(t) // ', corner ' // &
+                                itoa(c) // ': coordinate times the scale is not finite')
                             return
                         end if
                         vert(k, c, t) = x * scale
@@ -220,8 +216,8 @@ contains
                 end do
                 if (degenerate(vert(:, :, t))) then
                     call set_error(err, dem_err_input, path // ': byte ' // &
-                        str(header_bytes + record_bytes * (t - 1)) // ': triangle ' // &
-                        str(t) // ' is degenerate (zero area: equal or collinear corners)')
+                        itoa(header_bytes + record_bytes * (t - 1)) // ': triangle ' // &
+                        itoa(t) // ' is degenerate (zero area: equal or collinear corners)')
                     return
                 end if
             end do
@@ -260,7 +256,7 @@ contains
             if (.not. next_line(r, ls, le, ios)) exit
             lineno = lineno + 1
             if (ios /= 0) then
-                call set_error(err, dem_err_input, path // ':' // str(lineno) // &
+                call set_error(err, dem_err_input, path // ':' // itoa(lineno) // &
                                ': read error in the STL file')
                 return
             end if
@@ -306,7 +302,7 @@ contains
                 if (keyword_is(r%buf(ts:te), 'vertex')) then
                     if (nv == 3) then
                         call set_error(err, dem_err_input, here() // 'facet of line ' // &
-                            str(facet_line) // ' has more than 3 vertices')
+                            itoa(facet_line) // ' has more than 3 vertices')
                         return
                     end if
                     nv = nv + 1
@@ -315,7 +311,7 @@ contains
                         call next_token(r%buf, ts, le, te)
                         if (te < ts) then
                             call set_error(err, dem_err_input, here() // 'malformed vertex ' // &
-                                'line: 3 coordinates expected, ' // str(k - 1) // ' found')
+                                'line: 3 coordinates expected, ' // itoa(k - 1) // ' found')
                             return
                         end if
                         call parse_real(r%buf(ts:te), x, stat)
@@ -342,7 +338,7 @@ contains
                 else if (keyword_is(r%buf(ts:te), 'endloop')) then
                     if (nv /= 3) then
                         call set_error(err, dem_err_input, here() // 'facet of line ' // &
-                            str(facet_line) // ' has ' // str(nv) // ' vertices, 3 expected')
+                            itoa(facet_line) // ' has ' // itoa(nv) // ' vertices, 3 expected')
                         return
                     end if
                     state = st_endloop
@@ -357,8 +353,8 @@ contains
                 end if
                 ntri = ntri + 1
                 if (degenerate(tri)) then
-                    call set_error(err, dem_err_input, path // ':' // str(facet_line) // &
-                        ': triangle ' // str(ntri) // ' is degenerate (zero area: equal or ' // &
+                    call set_error(err, dem_err_input, path // ':' // itoa(facet_line) // &
+                        ': triangle ' // itoa(ntri) // ' is degenerate (zero area: equal or ' // &
                         'collinear corners)')
                     return
                 end if
@@ -375,14 +371,14 @@ contains
         end do
 
         if (state == st_solid) then
-            call set_error(err, dem_err_input, path // ':' // str(lineno) // ': the file ' // &
-                'ends inside the solid of line ' // str(solid_line) // &
+            call set_error(err, dem_err_input, path // ':' // itoa(lineno) // ': the file ' // &
+                'ends inside the solid of line ' // itoa(solid_line) // &
                 " without 'endsolid' (truncated?)")
         else if (state /= st_outside) then
-            call set_error(err, dem_err_input, path // ':' // str(lineno) // ': the file ' // &
-                'ends inside the facet of line ' // str(facet_line) // ' (truncated?)')
+            call set_error(err, dem_err_input, path // ':' // itoa(lineno) // ': the file ' // &
+                'ends inside the facet of line ' // itoa(facet_line) // ' (truncated?)')
         else if (ntri == 0) then
-            call set_error(err, dem_err_input, path // ':' // str(lineno) // ': the STL ' // &
+            call set_error(err, dem_err_input, path // ':' // itoa(lineno) // ': the STL ' // &
                 'file holds zero triangles')
         end if
         if (err%failed()) return
@@ -393,7 +389,7 @@ contains
         !> "file:line: " of the current line, for messages.
         function here() result(s)
             character(len=:), allocatable :: s
-            s = path // ':' // str(lineno) // ': '
+            s = path // ':' // itoa(lineno) // ': '
         end function here
 
         subroutine unexpected(wanted)
@@ -645,18 +641,4 @@ contains
         l2 = max(dot_product(e1, e1), dot_product(e2, e2), dot_product(e3, e3))
         degenerate = norm2(n) <= degenerate_ratio * l2
     end function degenerate
-
-    pure function str_i8(i) result(s)
-        integer(i8), intent(in) :: i
-        character(len=:), allocatable :: s
-        character(len=24) :: buf
-        write(buf, '(i0)') i
-        s = trim(buf)
-    end function str_i8
-
-    pure function str_i4(i) result(s)
-        integer, intent(in) :: i
-        character(len=:), allocatable :: s
-        s = str_i8(int(i, i8))
-    end function str_i4
 end module dem_stl

@@ -3,7 +3,12 @@ module dem_text
     use dem_kinds, only: wp, i8
     implicit none
     private
-    public :: read_line, itoa, real_text, duration_text
+    public :: read_line, itoa, real_text, duration_text, step_file
+
+    !> itoa(k): an integer (default or 64-bit) as text, without blanks.
+    interface itoa
+        module procedure itoa_i8, itoa_i4
+    end interface itoa
 
 contains
 
@@ -28,14 +33,29 @@ contains
         end if
     end subroutine read_line
 
-    !> An integer as text, without blanks.
-    function itoa(k) result(s)
+    pure function itoa_i8(k) result(s)
         integer(i8), intent(in) :: k
         character(len=:), allocatable :: s
         character(len=24) :: buf
         write(buf, '(i0)') k
         s = trim(buf)
-    end function itoa
+    end function itoa_i8
+
+    pure function itoa_i4(k) result(s)
+        integer, intent(in) :: k
+        character(len=:), allocatable :: s
+        s = itoa_i8(int(k, i8))
+    end function itoa_i4
+
+    !> The name of the file of a step: prefix, the step in 12 digits, '.h5'.
+    function step_file(prefix, step) result(name)
+        character(len=*), intent(in) :: prefix
+        integer(i8), intent(in) :: step
+        character(len=:), allocatable :: name
+        character(len=12) :: digits
+        write(digits, '(i12.12)') step
+        name = prefix // digits // '.h5'
+    end function step_file
 
     !> A real as text with four significant digits after the first (1.2346E-03).
     function real_text(x) result(s)

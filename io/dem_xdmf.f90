@@ -6,7 +6,7 @@
 module dem_xdmf
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io
-    use dem_text, only: itoa
+    use dem_text, only: itoa, step_file
     use dem_files, only: file_rename
     implicit none
     private
@@ -18,9 +18,7 @@ contains
     function snapshot_file(step) result(name)
         integer(i8), intent(in) :: step
         character(len=:), allocatable :: name
-        character(len=12) :: digits
-        write(digits, '(i12.12)') step
-        name = 'snapshots/snapshot_' // digits // '.h5'
+        name = step_file('snapshots/snapshot_', step)
     end function snapshot_file
 
     !> Write `path` for the snapshots of steps `step` at times `time` holding `n` particles
