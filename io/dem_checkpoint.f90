@@ -48,6 +48,7 @@ module dem_checkpoint
         integer(i8) :: rng_state = 0              !< the case's random generator
         integer(i8) :: series_bytes = 0           !< length of series.csv at this step
         integer(i8) :: contact_bytes = 0          !< length of contact.csv at this step
+        integer(i8) :: probes_bytes = 0           !< length of probes.csv at this step
         integer(i8), allocatable :: snap_step(:)  !< the snapshots written so far
         real(wp), allocatable :: snap_time(:)     !< [s]
         integer(i8), allocatable :: snap_n(:)     !< their particle counts
@@ -127,6 +128,7 @@ contains
             call h5_write(h_, '/state/rng_state', fr%rng_state, err)
             call h5_write(h_, '/state/series_bytes', fr%series_bytes, err)
             call h5_write(h_, '/state/contact_bytes', fr%contact_bytes, err)
+            call h5_write(h_, '/state/probes_bytes', fr%probes_bytes, err)
             call h5_write(h_, '/state/snapshot_step', fr%snap_step, err)
             call h5_write(h_, '/state/snapshot_time', fr%snap_time, err)
             call h5_write(h_, '/state/snapshot_particles', fr%snap_n, err)
@@ -349,6 +351,7 @@ contains
         call h5_read(h, '/state/rng_state', fr%rng_state, err)
         call h5_read(h, '/state/series_bytes', fr%series_bytes, err)
         call h5_read(h, '/state/contact_bytes', fr%contact_bytes, err)
+        call h5_read(h, '/state/probes_bytes', fr%probes_bytes, err)
         call read_i8_list('/state/snapshot_step', fr%snap_step)
         call read_i8_list('/state/snapshot_particles', fr%snap_n)
         call read_i8_list('/state/checkpoint_step', fr%ckpt_step)

@@ -13,6 +13,8 @@ module dem_input
     use dem_insert, only: region_t, region_box, region_cylinder, region_mesh, insert_random
     use dem_random, only: rng_t, rng_seed
     use dem_outlets, only: outlet_t, outlet_plane, outlet_box
+    use dem_probes, only: probe_t, probe_count, probe_center_of_mass, probe_track, &
+                          probe_histogram
     use dem_neighbors, only: neighbors_t, neighbors_build
     use dem_mesh, only: mesh_t
     use dem_particles, only: order_by_id
@@ -25,7 +27,7 @@ module dem_input
     integer, parameter :: name_len = 32
 
     !> The groups a case file may hold, and the keys of each (doc/input.md).
-    character(len=*), parameter :: input_groups(11) = [character(len=160) :: &
+    character(len=*), parameter :: input_groups(12) = [character(len=160) :: &
         'run: dt t_end integrator gravity expected_speed skin allow_unstable ' // &
         'stop_kinetic_energy max_speed wall_time_limit progress_interval', &
         'output: dir interval trace_id snapshot_interval snapshot_force snapshot_contacts ' // &
@@ -38,6 +40,7 @@ module dem_input
         'insert: n material radius_min radius_max region box_min box_max cylinder_base ' // &
         'cylinder_radius cylinder_height mesh_file mesh_scale velocity seed', &
         'outlet: region point normal box_min box_max', &
+        'probe: name kind region box_min box_max id time bins v_min v_max axis_point', &
         'wall_plane: material point normal half_width divisions', &
         'wall_mesh: file scale material velocity velocity_start velocity_end rotation_axis ' // &
         'rotation_point angular_velocity rotation_start rotation_end']
@@ -98,6 +101,8 @@ contains
         call read_output(nf, c, err)
         if (err%failed()) return
         call read_outlets(nf, c, err)
+        if (err%failed()) return
+        call read_probes(nf, c, err)
     contains
         subroutine fail(msg)
             character(len=*), intent(in) :: msg
@@ -828,6 +833,126 @@ contains
             end select
         end do
     end subroutine read_outlets
+
+    !> &probe (repeated): counts, centres of mass, a tracked particle, velocity histograms
+    !> (dem_probes; doc/output.md).
+    subroutine read_probes(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=name_len) :: name    ! column prefix in probes.csv, required, unique
+        character(len=name_len) :: kind    ! 'count' | 'center_of_mass' | 'track' | 'histogram'
+        character(len=name_len) :: region  ! 'all' (default) | 'box'
+        real(wp) :: box_min(3), box_max(3) ! box: corners [m]; a coordinate of +-1e30 leaves
+                                           ! the box open on that side
+        integer(i8) :: id                  ! track: the particle's id
+        real(wp) :: time                   ! histogram: when [s], >= 0, required
+        integer :: bins                    ! histogram: bins over [v_min, v_max), default 20
+        real(wp) :: v_min, v_max           ! histogram: range [m/s], required
+        real(wp) :: axis_point(3)          ! histogram: a point of the vertical axis [m],
+                                           ! default 0, 0, 0
+        namelist /probe/ name, kind, region, box_min, box_max, id, time, bins, v_min, v_max, &
+            axis_point
+        type(nml_block_t) :: b
+        integer :: k_item, ios, k
+        character(len=512) :: msg
+        character(len=:), allocatable :: text, at
+        type(probe_t) :: p
+
+        allocate(c%probes(count_blocks(nf, 'probe')))
+        do k = 1, size(c%probes)
+            name = ''
+            kind = ''
+            region = 'all'
+            box_min = unset
+            box_max = unset
+            id = 0
+            time = unset
+            bins = 20
+            v_min = unset
+            v_max = unset
+            axis_point = 0.0_wp
+            b = nf%blocks(block_index(nf, 'probe', k))
+            do k_item = 0, block_item_count(b)
+                text = block_text(b, k_item)
+                read(text, nml=probe, iostat=ios, iomsg=msg)
+                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            end do
+            if (err%failed()) return
+            at = nml_location(nf, b)
+            p = probe_t()
+            if (len_trim(name) == 0 .or. verify(trim(name), 'abcdefghijklmnopqrstuvwxyz' // &
+                'ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_') /= 0) then
+                call fail("key 'name': required, letters, digits and _ only")
+                return
+            end if
+            if (any(c%probes(1:k - 1)%name == name)) then
+                call fail("key 'name': '" // trim(name) // "' names another probe too")
+                return
+            end if
+            p%name = name
+            select case (region)
+            case ('all')
+            case ('box')
+                if (.not. check_vector(at, box_min, 'box_min', .true., err)) return
+                if (.not. check_vector(at, box_max, 'box_max', .true., err)) return
+                if (any(box_max <= box_min)) then
+                    call fail("key 'box_max': must exceed box_min along every axis")
+                    return
+                end if
+                p%lo = box_min
+                p%hi = box_max
+            case default
+                call fail("key 'region': '" // trim(region) // "' is not known (accepted: " // &
+                          'all, box)')
+                return
+            end select
+            select case (kind)
+            case ('count')
+                p%kind = probe_count
+            case ('center_of_mass')
+                p%kind = probe_center_of_mass
+            case ('track')
+                p%kind = probe_track
+                if (.not. any(c%gid(1:c%n_particles) == id)) then
+                    call fail("key 'id': no particle has this id")
+                    return
+                end if
+                p%id = id
+            case ('histogram')
+                p%kind = probe_histogram
+                if (.not. in_range(time, 0.0_wp, unset, .true., .false.)) then
+                    call fail("key 'time': required, >= 0 [s]")
+                    return
+                end if
+                if (bins < 1) then
+                    call fail("key 'bins': must be >= 1")
+                    return
+                end if
+                if (.not. (in_range(v_min, -unset, unset, .false., .false.) .and. &
+                           in_range(v_max, v_min, unset, .false., .false.))) then
+                    call fail("key 'v_max': v_min and v_max are required, v_min < v_max [m/s]")
+                    return
+                end if
+                if (.not. check_vector(at, axis_point, 'axis_point', .false., err)) return
+                p%time = time
+                p%bins = bins
+                p%v_min = v_min
+                p%v_max = v_max
+                p%axis = axis_point
+            case default
+                call fail("key 'kind': '" // trim(kind) // "' is not known (accepted: count, " // &
+                          'center_of_mass, track, histogram)')
+                return
+            end select
+            c%probes(k) = p
+        end do
+    contains
+        subroutine fail(msg_)
+            character(len=*), intent(in) :: msg_
+            call set_error(err, dem_err_input, at // ': ' // msg_)
+        end subroutine fail
+    end subroutine read_probes
 
     !> &wall_plane (one per flat square wall made of triangles).
     subroutine read_walls(nf, c, err)

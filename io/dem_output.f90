@@ -1,8 +1,9 @@
 !> Text outputs of a run, in its output directory: series.csv (one row per output
-!> interval), contact.csv (the traced particle's contact, every step) and final.csv (the
+!> interval), probes.csv (the probes' values at the same times), histogram_<probe>.csv
+!> (once each), contact.csv (the traced particle's contact, every step) and final.csv (the
 !> particles at the end, in the particle-file columns). Rows are flushed as written, so a
-!> run that stops loses nothing already written. A restarted run cuts series.csv and
-!> contact.csv back to their length at its checkpoint and appends to them.
+!> run that stops loses nothing already written. A restarted run cuts series.csv,
+!> probes.csv and contact.csv back to their length at its checkpoint and appends to them.
 module dem_output
     use dem_files, only: make_directory, file_truncate
     use dem_kinds, only: wp, ip, i8
@@ -10,7 +11,7 @@ module dem_output
     implicit none
     private
     public :: output_t, output_open, output_series, output_contact, output_final, &
-              output_close, output_sizes
+              output_close, output_sizes, output_probes, output_histogram
 
     character(len=*), parameter :: series_header = &
         'time,step,particles,removed,contacts_pp,contacts_pw,kinetic_translational,' // &
@@ -26,21 +27,24 @@ module dem_output
         character(len=:), allocatable :: dir
         integer :: series = -1
         integer :: contact = -1
+        integer :: probes = -1
     end type output_t
 
 
 contains
 
-    !> Create the output directory and open series.csv (and contact.csv when tracing). With
-    !> `keep` (bytes of series.csv and contact.csv at a checkpoint), files at least that long
-    !> are cut to it and appended to; otherwise they are started anew.
-    subroutine output_open(out, dir, trace, err, keep)
+    !> Create the output directory and open series.csv, contact.csv (when tracing) and
+    !> probes.csv (when `probe_columns`, its header after time and step, is not empty). With
+    !> `keep` (bytes of series.csv, contact.csv and probes.csv at a checkpoint), files at least
+    !> that long are cut to it and appended to; otherwise they are started anew.
+    subroutine output_open(out, dir, trace, probe_columns, err, keep)
         type(output_t), intent(out) :: out
         character(len=*), intent(in) :: dir
         logical, intent(in) :: trace
+        character(len=*), intent(in) :: probe_columns
         type(error_t), intent(inout) :: err
-        integer(i8), intent(in), optional :: keep(2)
-        integer(i8) :: bytes(2)
+        integer(i8), intent(in), optional :: keep(3)
+        integer(i8) :: bytes(3)
         out%dir = dir
         call make_directory(dir, err)
         if (err%failed()) return
@@ -50,22 +54,78 @@ contains
         if (err%failed()) return
         if (trace) call open_csv(dir // '/contact.csv', contact_header, out%contact, err, &
                                  bytes(2))
+        if (err%failed()) return
+        if (len(probe_columns) > 0) call open_csv(dir // '/probes.csv', 'time,step' // &
+                                                  probe_columns, out%probes, err, bytes(3))
     end subroutine output_open
 
-    !> The lengths of series.csv and contact.csv now [bytes] (0 for a file not open).
+    !> The lengths of series.csv, contact.csv and probes.csv now [bytes] (0: not open).
     function output_sizes(out) result(bytes)
         type(output_t), intent(in) :: out
-        integer(i8) :: bytes(2)
+        integer(i8) :: bytes(3)
+        integer :: units(3), k
+        units = [out%series, out%contact, out%probes]
         bytes = 0
-        if (out%series /= -1) then
-            flush(out%series)
-            inquire(unit=out%series, size=bytes(1))
-        end if
-        if (out%contact /= -1) then
-            flush(out%contact)
-            inquire(unit=out%contact, size=bytes(2))
-        end if
+        do k = 1, 3
+            if (units(k) == -1) cycle
+            flush(units(k))
+            inquire(unit=units(k), size=bytes(k))
+        end do
     end function output_sizes
+
+    !> One row of probes.csv (not-a-number where a probe has nothing to measure).
+    subroutine output_probes(out, time, step, values)
+        type(output_t), intent(in) :: out
+        real(wp), intent(in) :: time             !! [s]
+        integer(i8), intent(in) :: step
+        real(wp), intent(in) :: values(:)
+        if (out%probes == -1) return
+        write(out%probes, '(' // real_fmt // ',",",i0,*(:,",",' // real_fmt // '))') time, step, &
+            values
+        flush(out%probes)
+    end subroutine output_probes
+
+    !> histogram_<name>.csv: one row per bin, bin_lo,bin_hi,radial,angular,vertical, with a
+    !> first row for the values below the range and a last for those above (bounds -Infinity,
+    !> Infinity).
+    subroutine output_histogram(dir, name, v_min, v_max, counts, err)
+        character(len=*), intent(in) :: dir, name
+        real(wp), intent(in) :: v_min, v_max     !! [m/s]
+        integer(i8), intent(in) :: counts(0:, :) !! (bin, component)
+        type(error_t), intent(inout) :: err
+        real(wp) :: edges(0:size(counts, 1)), width
+        integer :: u, k, bins
+        bins = size(counts, 1) - 2
+        width = (v_max - v_min) / bins
+        edges(0) = -huge(1.0_wp)
+        edges(size(counts, 1)) = huge(1.0_wp)
+        do k = 1, bins + 1
+            edges(k) = v_min + (k - 1) * width
+        end do
+        edges(bins + 1) = v_max
+        call open_csv(dir // '/histogram_' // trim(name) // '.csv', &
+                      'bin_lo,bin_hi,radial,angular,vertical', u, err)
+        if (err%failed()) return
+        do k = 0, bins + 1
+            write(u, '(a,",",a,3(",",i0))') edge_text(edges(k)), edge_text(edges(k + 1)), &
+                counts(k, :)
+        end do
+        close(u)
+    contains
+        function edge_text(e) result(text)
+            real(wp), intent(in) :: e
+            character(len=:), allocatable :: text
+            character(len=32) :: buf
+            if (e == huge(1.0_wp)) then
+                text = 'Infinity'
+            else if (e == -huge(1.0_wp)) then
+                text = '-Infinity'
+            else
+                write(buf, '(' // real_fmt // ')') e
+                text = trim(adjustl(buf))
+            end if
+        end function edge_text
+    end subroutine output_histogram
 
     !> One row of series.csv.
     subroutine output_series(out, time, step, n, removed, n_pp, n_pw, ke_t, ke_r, pe, vmax)
@@ -112,8 +172,10 @@ contains
         type(output_t), intent(inout) :: out
         if (out%series /= -1) close(out%series)
         if (out%contact /= -1) close(out%contact)
+        if (out%probes /= -1) close(out%probes)
         out%series = -1
         out%contact = -1
+        out%probes = -1
     end subroutine output_close
 
     !> Open a CSV file with its header; with keep > 0, an existing file of at least keep

@@ -5,6 +5,7 @@ module dem_case
     use dem_materials, only: materials_t, contact_options_t, effective_moduli, damping_ratio
     use dem_mesh, only: mesh_t
     use dem_outlets, only: outlet_t
+    use dem_probes, only: probe_t
     use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt, &
                             tangential_critical_dt
     implicit none
@@ -43,6 +44,7 @@ module dem_case
         real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :)
         type(mesh_t) :: mesh
         type(outlet_t), allocatable :: outlets(:)
+        type(probe_t), allocatable :: probes(:)
     end type case_t
 
     !> Time scales of a case and the bound they put on dt.

@@ -22,7 +22,9 @@ module dem_solver
     use dem_diagnostics, only: energies, count_pp_contacts, first_nonfinite, count_unstable, &
                                contact_trace
     use dem_output, only: output_t, output_open, output_series, output_contact, &
-                          output_final, output_close, output_sizes
+                          output_final, output_close, output_sizes, output_probes, &
+                          output_histogram
+    use dem_probes, only: probe_header, probe_values, probe_histogram_counts, probe_histogram
     use dem_checkpoint, only: frame_t, frame_write, checkpoint_file, checkpoint_latest, &
                               checkpoint_kept
     use dem_xdmf, only: xdmf_write, snapshot_file
@@ -178,6 +180,8 @@ contains
         integer(i8) :: n_end, every, every_snap, every_ckpt
         real(wp) :: dt, next_progress, step_seconds, last
         logical :: written
+        character(len=:), allocatable :: columns
+        integer :: k
 
         dt = c%dt
         n_end = s%step0 + ceiling((c%t_end - s%time0) / dt - 1.0e-9_wp, i8)
@@ -186,12 +190,16 @@ contains
         every_ckpt = steps_of(c%checkpoint_interval)
         s%stopped = stop_end
         s%stop_message = ''
+        columns = ''
+        do k = 1, size(c%probes)
+            columns = columns // probe_header(c%probes(k), c%mats%name, .not. c%mats%rigid)
+        end do
         if (s%restarted) then
-            call output_open(out, c%output_dir, s%trace > 0, err, &
-                             [s%good%series_bytes, s%good%contact_bytes])
+            call output_open(out, c%output_dir, s%trace > 0, columns, err, &
+                             [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes])
             if (.not. err%failed() .and. size(s%snap_step) > 0) call write_xdmf(s, c, err)
         else
-            call output_open(out, c%output_dir, s%trace > 0, err)
+            call output_open(out, c%output_dir, s%trace > 0, columns, err)
         end if
         if (err%failed()) return
         call device_data(s, acc_enter)
@@ -432,8 +440,10 @@ contains
         type(output_t), intent(in) :: out
         type(error_t), intent(inout) :: err
         real(wp) :: ke_t, ke_r, pe, vmax
+        real(wp), allocatable :: values(:)
         integer(ip) :: n_pp
         integer(ip), allocatable :: order(:)
+        integer :: k
         call particle_data(s, acc_to_host)
         associate (p => s%p)
             if (first_nonfinite(p%n_own, p%x, p%v, p%w) > 0) then
@@ -447,8 +457,29 @@ contains
             call output_series(out, time_of(s, c, s%step), s%step, p%n_own, s%removed, n_pp, &
                                count(s%wc%tri(:, 1:p%n_own) > 0), ke_t, ke_r, pe, vmax)
             s%settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
+            values = [real(wp) ::]
+            do k = 1, size(c%probes)
+                values = [values, probe_values(c%probes(k), .not. c%mats%rigid, order, p%gid, &
+                                               p%mat, p%mass, p%x, p%v, p%w)]
+                if (c%probes(k)%kind == probe_histogram .and. histogram_due(c%probes(k)%time)) &
+                    call output_histogram(c%output_dir, c%probes(k)%name, c%probes(k)%v_min, &
+                                          c%probes(k)%v_max, probe_histogram_counts( &
+                                          c%probes(k), p%x(:, 1:p%n_own), p%v(:, 1:p%n_own)), &
+                                          err)
+            end do
+            call output_probes(out, time_of(s, c, s%step), s%step, values)
         end associate
         call capture(s, c, out, s%good)
+    contains
+        !> A histogram at time t_h is written at the first row at or after it: this one if the
+        !> row one output interval earlier was before it.
+        logical function histogram_due(t_h)
+            real(wp), intent(in) :: t_h
+            real(wp) :: t
+            t = time_of(s, c, s%step)
+            histogram_due = t >= t_h .and. &
+                t - max(1.0_wp, real(nint(c%output_interval / c%dt), wp)) * c%dt < t_h
+        end function histogram_due
     end subroutine write_series
 
     !> One row of contact.csv for the traced particle, if its state is finite.
@@ -528,7 +559,7 @@ contains
         type(output_t), intent(in) :: out
         type(frame_t), intent(out) :: fr
         integer(ip), allocatable :: order(:)
-        integer(i8) :: bytes(2)
+        integer(i8) :: bytes(3)
         integer(ip) :: a, i
         call particle_data(s, acc_to_host)
         if (s%lists_on_device) then
@@ -569,6 +600,7 @@ contains
         bytes = output_sizes(out)
         fr%series_bytes = bytes(1)
         fr%contact_bytes = bytes(2)
+        fr%probes_bytes = bytes(3)
         fr%snap_step = s%snap_step
         fr%snap_time = s%snap_time
         fr%snap_n = s%snap_n

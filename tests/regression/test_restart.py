@@ -3,9 +3,10 @@
 1. For both integrators, a run of 2N steps straight and a run of N steps, then --restart from
    its final checkpoint with t_end doubled, end in the same state to the last bit: every
    particle's position, velocity, angular velocity, force and torque, the particle-particle
-   and particle-wall contact history, the wall pose, and series.csv, final.csv and the
-   snapshots. The restart happens while the particles press on each other and on the floor,
-   and while the floor moves (checkpoint_util.py), so history and wall motion both matter.
+   and particle-wall contact history, the wall pose, and series.csv, probes.csv, final.csv
+   and the snapshots. The restart happens while the particles press on each other and on
+   the floor, and while the floor moves (checkpoint_util.py), so history and wall motion
+   both matter.
 2. --resume without a checkpoint starts the case from t = 0 (same final.csv as a plain run).
 3. A restart with another dt counts time on from the checkpoint's: the series rows after it
    are at t_checkpoint + k dt_new, and the run ends at t_end.
@@ -31,9 +32,17 @@ DT, N = 2e-5, 6000
 SNAP = ", snapshot_interval = 0.04"
 
 
+PROBES = """&probe name = 'low', kind = 'count', region = 'box', box_min = -1, -1, -1,
+        box_max = 1, 1, 0.03 /
+&probe name = 'com', kind = 'center_of_mass' /
+&probe name = 'p9', kind = 'track', id = 9 /
+"""
+
+
 def write_case(name, t_end, dt=DT, integrator="symplectic_euler", output=""):
     cu.write_box_case(os.path.join(work, name + ".nml"), os.path.join(work, f"out_{name}"),
-                      t_end, dt=dt, interval=0.01, integrator=integrator, output=output)
+                      t_end, dt=dt, interval=0.01, integrator=integrator, output=output,
+                      extra=PROBES)
 
 
 def run(*args, expect=0):
@@ -75,7 +84,7 @@ for integrator in ("symplectic_euler", "velocity_verlet"):
               f"{integrator}: same datasets")
         differ = [n for n in names if not cu.same_bits(a[n][()], b[n][()])]
         check(not differ, f"{integrator}: datasets that differ after the restart: {differ}")
-    for out in ("series.csv", "final.csv", "snapshots.xmf"):
+    for out in ("series.csv", "probes.csv", "final.csv", "snapshots.xmf"):
         check(read(os.path.join(work, f"out_{straight}", out)) ==
               read(os.path.join(work, f"out_{split}", out)), f"{integrator}: {out} differs")
     snaps = sorted(os.listdir(os.path.join(work, f"out_{straight}", "snapshots")))
