@@ -127,7 +127,8 @@ contains
                                          ! below this at an output time [J], >= 0, default 0
         real(wp) :: max_speed       ! instability guard: a particle faster than this (or
                                     ! spinning with a rim speed above it) stops the run
-                                    ! [m/s], > 0, default 0.1 min radius / dt
+                                    ! [m/s], > 0, default max(0.1 min radius / dt,
+                                    ! 10 x the expected speed of dem --check)
         real(wp) :: wall_time_limit ! write a checkpoint and stop before this much wall-clock
                                     ! time [s], >= 0, default 0 (none)
         real(wp) :: progress_interval  ! wall-clock time between progress lines [s], >= 0
@@ -193,10 +194,9 @@ contains
             return
         end if
         c%stop_kinetic_energy = stop_kinetic_energy
-        if (max_speed == unset) max_speed = 0.1_wp * minval(c%radius(1:c%n_particles)) / dt
-        if (c%n_particles == 0) max_speed = huge(1.0_wp)
-        if (.not. check_positive(at, max_speed, 'max_speed', '[m/s]', err)) return
-        c%max_speed = max_speed
+        if (max_speed /= unset) then
+            if (.not. check_positive(at, max_speed, 'max_speed', '[m/s]', err)) return
+        end if
         if (.not. in_range(wall_time_limit, 0.0_wp, unset, .true., .false.)) then
             call set_error(err, dem_err_input, at // ": key 'wall_time_limit': must be >= 0 [s]")
             return
@@ -210,6 +210,9 @@ contains
         c%progress_interval = progress_interval
 
         call case_time_scales(c, ts)
+        if (max_speed == unset .and. c%n_particles > 0) max_speed = &
+            max(0.1_wp * minval(c%radius(1:c%n_particles)) / dt, 10.0_wp * ts%speed)
+        c%max_speed = max_speed
         if (dt > ts%bound .and. .not. allow_unstable) then
             write(s1, '(es10.3)') dt
             write(s2, '(es10.3)') ts%bound

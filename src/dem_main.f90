@@ -142,6 +142,8 @@ contains
             c%dt / ts%contact
         write(output_unit, '(a,es12.5,a)') '  stability bound      ', ts%bound, &
             ' s (' // ts%bound_name // ')'
+        write(output_unit, '(a,es12.5,a)') '  instability guard    ', c%max_speed, &
+            ' m/s (&run max_speed)'
         write(output_unit, '(a,f10.3,a)') '  estimated memory     ', mem, ' MiB'
         write(output_unit, '(a)') '  output directory     ' // c%output_dir
         if (c%dt > ts%bound) write(output_unit, '(a)') '  warning: dt exceeds the ' // &

@@ -25,7 +25,8 @@ simulated time (100 000 steps, a few seconds of wall clock); and a single sphere
     (which we compute from its formula, doc/theory.md), says "reduce dt" and names the
     last good state's checkpoint: it exists, is intact, its time is the one named and is
     before the failure, its values are finite and every speed (|v| and |w| R) is below the
-    bound, whose default is 0.1 x smallest radius / dt. And a sphere that starts faster
+    bound, whose default is max(0.1 x smallest radius / dt, 10 x the expected speed that
+    dem --check prints). And a sphere that starts faster
     than an explicit &run max_speed stops the run at the first step (t = dt).
 (e) SIGUSR1 sent 0.1 s after the start (while MPI starts and the case is read) stops the
     run at its first step with a checkpoint (exit 75); a 2-step case with a 1 ms wall-time
@@ -221,6 +222,9 @@ if stop is not None:
 E, NU, RHO = 1.0e11, 0.2, 2500.0
 case = cu.write_box_case(os.path.join(work, "unstable.nml"), os.path.join(work, "unstable"),
                          0.2, DT, interval=0.001, E="1e11", run=", allow_unstable = .true.")
+check_out = subprocess.run([dem, "--check", case], cwd=work, capture_output=True, text=True,
+                           timeout=300).stdout
+v0 = float(re.search(r"at the largest expected speed, +(\S+) m/s", check_out).group(1))
 r = subprocess.run([dem, case], cwd=work, capture_output=True, text=True, timeout=300)
 message = r.stderr.strip()
 print(f"(d) exit {r.returncode}: {message}")
@@ -250,7 +254,7 @@ if m is not None:
         finite = all(np.all(np.isfinite(v)) for v in par.values() if v.dtype.kind == "f")
         check(finite, "(d) the last good state has non-finite values")
         radius = par["radius"]
-        bound = 0.1 * radius.min() / DT
+        bound = max(0.1 * radius.min() / DT, 10.0 * v0)
         speed = np.maximum(np.linalg.norm(par["velocity"], axis=1),
                            np.linalg.norm(par["angular_velocity"], axis=1) * radius)
         check(speed.max() < bound, f"(d) the last good state has a speed {speed.max():.4g} "

@@ -1,0 +1,189 @@
+#!/usr/bin/env python3
+"""Writes the namelists of the benchmark paper's three case studies (Dosta et al. 2024) with
+the definitions of its Tables 4-5 and of the published drivers (materials M1, M2, steel;
+g = 9.81 m/s^2; spheres; no rolling resistance; the default contact law, the LIGGGHTS/MUSEN
+form of Hertz-Mindlin). Run from anywhere; run the cases from the repository root, as the
+paths of the particle files are the outputs of the preparations there:
+
+  prepare_silo_<M1|M2>_<small|large>.nml  fill the silo (orifice closed by a plane) with
+                                          100 000 spheres of 4 mm and let them settle
+  silo_<M1|M2>_<small|large>.nml          discharge for 5 s; probes: particles above the
+                                          orifice plane, velocity histograms at 2 s
+  prepare_drum_1.nml, prepare_drum_2.nml  8 000 M2 of 4 mm settled in the drum, then
+                                          30 000 M1 of 2 mm settled on top
+  drum.nml                                5 s at 2 rad/s about y, omega = (0, -2, 0) as in
+                                          MercuryDPM; probes: zone counts, centres of mass
+  prepare_impact_<N>[_seed<k>].nml        N = 25 000, 50 000, 100 000 M1 of 2 mm settled in
+                                          the box (ten 25 000 beds of different seeds)
+  impact_<N>[_seed<k>].nml                the steel impactor (R = 10 mm) from z = 0.06 m at
+                                          5 m/s for 0.1 s; probe: its state every 1 ms
+
+`scripts/prepare-benchmark CASE` runs a case's preparation(s). The functions take the
+particle count and a stiffness scale, so that tests/regression/test_benchmark_cases.py can
+make reduced versions of the same cases."""
+import os
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+OUT = "output/benchmark"                 # outputs, relative to the repository root
+FROM_HERE = "../../" + OUT               # the same, relative to this directory
+
+MATERIALS = {"M1": (2500.0, 1.0e9), "M2": (2000.0, 0.5e9), "steel": (7200.0, 210.0e9)}
+PAIRS = [("M1", "M1", 0.5, 0.3), ("M1", "M2", 0.45, 0.2), ("M1", "steel", 0.4, 0.2),
+         ("M2", "M2", 0.4, 0.4), ("M2", "steel", 0.4, 0.2), ("steel", "steel", 0.6, 0.5)]
+SILO = {"small": dict(r_o=0.02, z_o=-0.0593008, top=0.320699),
+        "large": dict(r_o=0.03, z_o=-0.0554222, top=0.314578)}
+SILO_DT = {"M1": 1.5e-6, "M2": 2.0e-6}
+FLOOR = -0.0902431                        # impact box floor [m]
+IMPACTOR_ID = 1000000000
+BIG = "1e30"
+
+
+def materials(scale=1.0):
+    """&material and &pair groups; Young's moduli times `scale` (reduced test versions)."""
+    text = "".join(f"&material name = '{m}', density = {rho}, youngs_modulus = {e * scale:g}, "
+                   f"poisson_ratio = 0.2 /\n" for m, (rho, e) in MATERIALS.items())
+    return text + "".join(f"&pair materials = '{a}', '{b}', restitution = {e}, "
+                          f"friction = {mu} /\n" for a, b, e, mu in PAIRS)
+
+
+def run(dt, t_end, extra=""):
+    return f"&run dt = {dt:g}, t_end = {t_end:g}, gravity = 0, 0, -9.81{extra} /\n"
+
+
+def output(name, interval, snapshots, extra=""):
+    return (f"&output dir = '{OUT}/{name}', interval = {interval:g}, "
+            f"snapshot_interval = {snapshots:g}{extra} /\n")
+
+
+def silo_walls(orifice):
+    return (f"&wall_mesh file = 'geometry/silo_{orifice}.stl', material = 'steel' /\n")
+
+
+def prepare_silo(material, orifice, n=100000, scale=1.0, t_end=2.0):
+    """Spheres of 4 mm dropped into the silo from a cylinder above the cone (0.9 m high, so
+    that random insertion has room), onto a plane that closes the orifice; settled."""
+    s = SILO[orifice]
+    z_j = 0.1 - (s["r_o"] - s["z_o"])                # where cone and cylinder meet
+    height = min(0.9, 0.9 * n / 100000.0 + 0.05)
+    name = f"prepare_silo_{material}_{orifice}"
+    return (run(SILO_DT[material] / scale ** 0.5, t_end,
+                f", stop_kinetic_energy = {n * 1e-10:g}")
+            + output(name, 0.01, 0.0) + materials(scale)
+            + f"&insert n = {n}, material = '{material}', radius_min = 0.002, "
+              f"radius_max = 0.002, region = 'cylinder', cylinder_base = 0, 0, {z_j:.7g}, "
+              f"cylinder_radius = 0.096, cylinder_height = {height:g}, seed = 1 /\n"
+            + silo_walls(orifice)
+            + f"&wall_plane material = 'steel', point = 0, 0, {s['z_o']}, normal = 0, 0, 1, "
+              f"half_width = 0.035 /\n")
+
+
+def silo(material, orifice, scale=1.0, t_end=5.0, interval=0.1, histogram_time=2.0):
+    """Discharge: the settled packing without the plane; particles removed 0.02 m below the
+    orifice plane (MercuryDPM's deletion boundary); remaining particles counted above it."""
+    s = SILO[orifice]
+    name = f"silo_{material}_{orifice}"
+    above = (f"region = 'box', box_min = -{BIG}, -{BIG}, {s['z_o']}, "
+             f"box_max = {BIG}, {BIG}, {BIG}")
+    return (run(SILO_DT[material] / scale ** 0.5, t_end) + output(name, interval, 0.5)
+            + materials(scale)
+            + f"&particle_file file = '{FROM_HERE}/prepare_{name}/final.csv' /\n"
+            + silo_walls(orifice)
+            + f"&outlet region = 'plane', point = 0, 0, {s['z_o'] - 0.02:.7g}, "
+              f"normal = 0, 0, -1 /\n"
+            + f"&probe name = 'silo', kind = 'count', {above} /\n"
+            + f"&probe name = 'velocity', kind = 'histogram', time = {histogram_time:g}, "
+              f"bins = 40, v_min = -1.5, v_max = 0.5, {above} /\n")
+
+
+def drum_walls(rotating):
+    spin = (", rotation_axis = 0, 1, 0, rotation_point = 0, 0, 0, angular_velocity = -2"
+            if rotating else "")
+    return f"&wall_mesh file = 'geometry/drum.stl', material = 'steel'{spin} /\n"
+
+
+def prepare_drum(stage, n_m2=8000, n_m1=30000, scale=1.0, t_end=1.0):
+    """Stage 1: M2 (4 mm) inserted in the whole drum, settled; stage 2: M1 (2 mm) inserted
+    in a box above that bed, settled on it."""
+    dt = 8e-7 / scale ** 0.5
+    if stage == 1:
+        body = (f"&insert n = {n_m2}, material = 'M2', radius_min = 0.002, radius_max = 0.002, "
+                f"region = 'mesh', mesh_file = 'geometry/drum.stl', seed = 1 /\n")
+        n = n_m2
+    else:
+        body = (f"&particle_file file = '{FROM_HERE}/prepare_drum_1/final.csv' /\n"
+                f"&insert n = {n_m1}, material = 'M1', radius_min = 0.001, radius_max = 0.001, "
+                f"region = 'box', box_min = -0.07, -0.028, -0.03, "
+                f"box_max = 0.07, 0.028, 0.068, seed = 2 /\n")
+        n = n_m2 + n_m1
+    return (run(dt, t_end, f", stop_kinetic_energy = {n * 1e-11:g}")
+            + output(f"prepare_drum_{stage}", 0.01, 0.0) + materials(scale) + body
+            + drum_walls(False))
+
+
+def drum(scale=1.0, t_end=5.0, interval=0.1):
+    """Zone 1: x > 0 and z > 0 (the upper quadrant on the rising side for omega = (0,-2,0));
+    Zone 2: x < 0 and z < 0 (MercuryDPM's definitions)."""
+    return (run(8e-7 / scale ** 0.5, t_end) + output("drum", interval, 1.0) + materials(scale)
+            + f"&particle_file file = '{FROM_HERE}/prepare_drum_2/final.csv' /\n"
+            + drum_walls(True)
+            + f"&probe name = 'zone1', kind = 'count', region = 'box', box_min = 0, -{BIG}, 0, "
+              f"box_max = {BIG}, {BIG}, {BIG} /\n"
+            + f"&probe name = 'zone2', kind = 'count', region = 'box', "
+              f"box_min = -{BIG}, -{BIG}, -{BIG}, box_max = 0, {BIG}, 0 /\n"
+            + "&probe name = 'com', kind = 'center_of_mass' /\n")
+
+
+def impact_name(n, seed):
+    return f"impact_{n}" + (f"_seed{seed}" if seed > 1 else "")
+
+
+def prepare_impact(n, seed=1, scale=1.0, t_end=1.0):
+    """M1 spheres of 2 mm inserted in the box (a column five times the spheres' volume, so
+    that random insertion has room), settled."""
+    height = n * 4.19e-9 / 0.2 / (0.096 * 0.058)     # a fifth of the column is spheres
+    return (run(1e-6 / scale ** 0.5, t_end, f", stop_kinetic_energy = {n * 1e-11:g}")
+            + output("prepare_" + impact_name(n, seed), 0.01, 0.0) + materials(scale)
+            + f"&insert n = {n}, material = 'M1', radius_min = 0.001, radius_max = 0.001, "
+              f"region = 'box', box_min = -0.048, -0.029, {FLOOR + 0.001:.7g}, "
+              f"box_max = 0.048, 0.029, {FLOOR + 0.001 + height:.5g}, seed = {seed} /\n"
+            + "&wall_mesh file = 'geometry/impact_box.stl', material = 'steel' /\n")
+
+
+def impact(n, seed=1, scale=1.0, t_end=0.1, interval=1e-3):
+    """The steel impactor, R = 10 mm, centre at (0, 0, 0.06), 5 m/s down, into the bed."""
+    name = impact_name(n, seed)
+    return (run(5e-7 / scale ** 0.5, t_end) + output(name, interval, 0.01) + materials(scale)
+            + f"&particle_file file = '{FROM_HERE}/prepare_{name}/final.csv' /\n"
+            + f"&particle id = {IMPACTOR_ID}, material = 'steel', radius = 0.01, "
+              f"position = 0, 0, 0.06, velocity = 0, 0, -5 /\n"
+            + "&wall_mesh file = 'geometry/impact_box.stl', material = 'steel' /\n"
+            + f"&probe name = 'impactor', kind = 'track', id = {IMPACTOR_ID} /\n")
+
+
+def cases():
+    """{file name: text} of every case."""
+    out = {}
+    for m in ("M1", "M2"):
+        for o in ("small", "large"):
+            out[f"prepare_silo_{m}_{o}.nml"] = prepare_silo(m, o)
+            out[f"silo_{m}_{o}.nml"] = silo(m, o)
+    out["prepare_drum_1.nml"] = prepare_drum(1)
+    out["prepare_drum_2.nml"] = prepare_drum(2)
+    out["drum.nml"] = drum()
+    for n in (25000, 50000, 100000):
+        out[f"prepare_{impact_name(n, 1)}.nml"] = prepare_impact(n)
+        out[f"{impact_name(n, 1)}.nml"] = impact(n)
+    for seed in range(2, 11):
+        out[f"prepare_{impact_name(25000, seed)}.nml"] = prepare_impact(25000, seed)
+        out[f"{impact_name(25000, seed)}.nml"] = impact(25000, seed)
+    return out
+
+
+def main():
+    for name, text in cases().items():
+        with open(os.path.join(HERE, name), "w") as f:
+            f.write(f"! {name}: written by make_cases.py (Dosta et al. 2024 benchmark)\n" + text)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,117 @@
+"""Reduced versions of the benchmark cases (cases/benchmark/make_cases.py: the same
+namelists, with fewer particles and Young's moduli scaled down so that dt grows with the
+square root of the scale), prepared and run as the full ones are, checked for what must
+hold whatever the size:
+
+1. silo: filling and settling, then discharge: particles + removed is the initial count in
+   every row; particles are only removed below the outlet plane, 0.02 m under the orifice;
+   the count above the orifice plane never exceeds the particles left and falls; the
+   velocity histogram adds up to the particles above the orifice at its time.
+2. drum: two layers settled, then 0.4 s of rotation at omega = (0, -2, 0): no particle
+   leaves the closed drum (every snapshot: centre within R - 0.1 mm of the walls... i.e. at
+   most 0.1 - R + 1e-4 from the axis and |y| <= 0.03 - R + 1e-4), none is removed, the zone
+   counts never exceed the particles of their material, and the bed climbs on the rising
+   side x > 0 (the centre of mass of all particles moves to x > 0).
+3. impact: a bed of 4000 settled in the box, the steel impactor dropped on it: particle
+   count conserved; while the impactor ploughs through the bed (from the first sample at
+   which the bed's push exceeds its weight) its downward speed falls at every sample
+   (0.1 ms), until it is 2 mm from the floor; it does not pass the floor (its
+   lowest point stays within 2 mm of it: the soft floor contact overlaps that much).
+usage: test_benchmark_cases.py DEM WORKDIR"""
+import os
+import shutil
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+from regression_util import ROOT, check, finish
+
+sys.path.insert(0, os.path.join(ROOT, "cases", "benchmark"))
+import make_cases as mc     # noqa: E402
+import make_geometry as mg  # noqa: E402
+
+dem, work = sys.argv[1], os.path.abspath(sys.argv[2])
+shutil.rmtree(work, ignore_errors=True)
+cases = os.path.join(work, "cases", "benchmark")
+os.makedirs(os.path.join(cases, "geometry"))
+shutil.copytree(os.path.join(ROOT, "cases", "benchmark", "geometry"),
+                os.path.join(cases, "geometry"), dirs_exist_ok=True)
+SCALE = 1e-3
+
+
+def run(name, text):
+    path = os.path.join(cases, name + ".nml")
+    with open(path, "w") as f:
+        f.write(text)
+    r = subprocess.run([dem, path], cwd=work, capture_output=True, text=True, timeout=600)
+    check(r.returncode == 0, f"{name}: exit {r.returncode}: {r.stderr.strip()}")
+    return os.path.join(work, mc.OUT, name)
+
+
+def table(out, name):
+    return np.genfromtxt(os.path.join(out, name), delimiter=",", names=True)
+
+
+def snapshots(out):
+    folder = os.path.join(out, "snapshots")
+    for name in sorted(os.listdir(folder)):
+        with h5py.File(os.path.join(folder, name)) as f:
+            yield {k: f["particles"][k][()] for k in f["particles"]}
+
+
+# 1. silo
+N_SILO = 800
+z_o = mc.SILO["small"]["z_o"]
+run("prepare_silo_M1_small", mc.prepare_silo("M1", "small", n=N_SILO, scale=SCALE, t_end=0.4))
+out = run("silo_M1_small", mc.silo("M1", "small", scale=SCALE, t_end=0.5, interval=0.02,
+                                   histogram_time=0.1))
+s, p = table(out, "series.csv"), table(out, "probes.csv")
+check(np.all(s["particles"] + s["removed"] == N_SILO), "silo: particles + removed = 800")
+check(s["removed"][-1] > 0, f"silo: particles leave ({s['removed'][-1]:.0f} removed)")
+check(np.all(p["silo_M1"] <= s["particles"]), "silo: count above the orifice <= particles")
+check(p["silo_M1"][-1] < p["silo_M1"][0], "silo: the count above the orifice falls")
+lowest = min(snap["position"][:, 2].min(initial=np.inf) for snap in snapshots(out))
+check(lowest >= z_o - 0.02 - 0.01, f"silo: no particle far below the outlet plane ({lowest})")
+h = table(out, "histogram_velocity.csv")
+k = np.flatnonzero(p["time"] >= 0.1 - 1e-12)[0]
+check(all(h[c].sum() == p["silo_M1"][k] for c in ("radial", "angular", "vertical")),
+      "silo: the histograms add up to the particles above the orifice")
+
+# 2. drum
+N2, N1 = 150, 500
+run("prepare_drum_1", mc.prepare_drum(1, n_m2=N2, scale=SCALE, t_end=0.3))
+run("prepare_drum_2", mc.prepare_drum(2, n_m2=N2, n_m1=N1, scale=SCALE, t_end=0.3))
+out = run("drum", mc.drum(scale=SCALE, t_end=0.4, interval=0.02))
+s, p = table(out, "series.csv"), table(out, "probes.csv")
+check(np.all(s["particles"] == N1 + N2) and np.all(s["removed"] == 0), "drum: no loss")
+for m, n in (("M1", N1), ("M2", N2)):
+    check(np.all(p[f"zone1_{m}"] + p[f"zone2_{m}"] <= n), f"drum: zone counts of {m} <= {n}")
+outside = 0
+for snap in snapshots(out):
+    x, r = snap["position"], snap["radius"]
+    outside += np.count_nonzero(np.hypot(x[:, 0], x[:, 2]) > 0.1 - r + 1e-4)
+    outside += np.count_nonzero(np.abs(x[:, 1]) > 0.03 - r + 1e-4)
+check(outside == 0, f"drum: {outside} particle positions outside the drum")
+com_x = [np.nanmean([row["com_M1_x"], row["com_M2_x"]]) for row in p]
+check(com_x[0] < 0.002 and com_x[-1] > 0.005,
+      f"drum: the bed climbs on the rising side (centre x {com_x[0]:.4f} -> {com_x[-1]:.4f})")
+
+# 3. impact
+N_BED = 4000
+run("prepare_impact_4000", mc.prepare_impact(N_BED, scale=SCALE, t_end=0.2))
+out = run("impact_4000", mc.impact(N_BED, scale=SCALE, t_end=0.04, interval=1e-4))
+s, p = table(out, "series.csv"), table(out, "probes.csv")
+check(np.all(s["particles"] == N_BED + 1), "impact: particle count conserved")
+with open(os.path.join(work, mc.OUT, "prepare_impact_4000", "final.csv")) as f:
+    top = max(float(line.split(",")[5]) for line in f.readlines()[1:]) + 0.001
+z, vz = p["impactor_z"], p["impactor_vz"]
+inside = (z - 0.01 < top) & (z - 0.01 > mc.FLOOR + 0.002) & (np.cumsum(vz > 0) == 0)
+speed = -vz[inside]
+speed = speed[np.argmax(speed):]      # from when the bed's push exceeds the weight
+check(len(speed) >= 5, f"impact: {len(speed)} samples in the bed")
+check(np.all(np.diff(speed) < 0), f"impact: the impactor slows in the bed ({speed})")
+check(z.min() - 0.01 > mc.FLOOR - 0.002, f"impact: the impactor stays above the floor "
+                                         f"(lowest {z.min() - 0.01 - mc.FLOOR:.4f} m above)")
+finish()
