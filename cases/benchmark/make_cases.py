@@ -141,7 +141,7 @@ def prepare_impact(n, seed=1, scale=1.0, t_end=1.0):
     """M1 spheres of 2 mm inserted in the box (a column five times the spheres' volume, so
     that random insertion has room), settled."""
     height = n * 4.19e-9 / 0.2 / (0.096 * 0.058)     # a fifth of the column is spheres
-    return (run(1e-6 / scale ** 0.5, t_end, f", stop_kinetic_energy = {n * 1e-11:g}")
+    return (run(2e-6 / scale ** 0.5, t_end, f", stop_kinetic_energy = {n * 1e-11:g}")
             + output("prepare_" + impact_name(n, seed), 0.01, 0.0) + materials(scale)
             + f"&insert n = {n}, material = 'M1', radius_min = 0.001, radius_max = 0.001, "
               f"region = 'box', box_min = -0.048, -0.029, {FLOOR + 0.001:.7g}, "
