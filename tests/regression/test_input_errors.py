@@ -125,6 +125,17 @@ bad("unclosed_group", GOOD + "&particle material = 'glass', radius = 0.01\n", "p
     None, "not closed")
 bad("text_outside", "hello\n" + GOOD, None, None, "outside a namelist group")
 bad("two_run_groups", GOOD + "&run dt = 1e-7, t_end = 1e-5 /\n", "run", None)
+# run control and outputs of snapshots and checkpoints
+RUN = "&run dt = 1e-7, t_end = 1e-5, gravity = 0, 0, 0 /"
+OUT = "&output interval = 1e-6 /"
+for key, value, group, line in (("max_speed", "0", "run", RUN),
+                                ("wall_time_limit", "-1", "run", RUN),
+                                ("progress_interval", "-0.5", "run", RUN),
+                                ("snapshot_interval", "-1e-6", "output", OUT),
+                                ("checkpoint_interval", "-1", "output", OUT),
+                                ("checkpoint_keep", "0", "output", OUT),
+                                ("snapshot_force", "'yes'", "output", OUT)):
+    bad(f"bad_{key}", sub(line, line[:-2] + f", {key} = {value} /"), group, key)
 
 # command line
 r, _ = run(["--version"], "version")
