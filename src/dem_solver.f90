@@ -440,10 +440,8 @@ contains
         type(output_t), intent(in) :: out
         type(error_t), intent(inout) :: err
         real(wp) :: ke_t, ke_r, pe, vmax
-        real(wp), allocatable :: values(:)
         integer(ip) :: n_pp
         integer(ip), allocatable :: order(:)
-        integer :: k
         call particle_data(s, acc_to_host)
         associate (p => s%p)
             if (first_nonfinite(p%n_own, p%x, p%v, p%w) > 0) then
@@ -457,30 +455,44 @@ contains
             call output_series(out, time_of(s, c, s%step), s%step, p%n_own, s%removed, n_pp, &
                                count(s%wc%tri(:, 1:p%n_own) > 0), ke_t, ke_r, pe, vmax)
             s%settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
-            values = [real(wp) ::]
+            call write_probes(s, c, out, order, err)
+        end associate
+        call capture(s, c, out, s%good)
+    end subroutine write_series
+
+    !> The probes' row of probes.csv, and the histograms due now; `order` lists the particles
+    !> by id.
+    subroutine write_probes(s, c, out, order, err)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        type(output_t), intent(in) :: out
+        integer(ip), intent(in) :: order(:)
+        type(error_t), intent(inout) :: err
+        real(wp), allocatable :: values(:)
+        real(wp) :: t
+        integer :: k
+        t = time_of(s, c, s%step)
+        values = [real(wp) ::]
+        associate (p => s%p, n => s%p%n_own)
             do k = 1, size(c%probes)
                 values = [values, probe_values(c%probes(k), .not. c%mats%rigid, order, p%gid, &
                                                p%mat, p%mass, p%x, p%v, p%w)]
                 if (c%probes(k)%kind == probe_histogram .and. histogram_due(c%probes(k)%time)) &
                     call output_histogram(c%output_dir, c%probes(k)%name, c%probes(k)%v_min, &
                                           c%probes(k)%v_max, probe_histogram_counts( &
-                                          c%probes(k), p%x(:, 1:p%n_own), p%v(:, 1:p%n_own)), &
-                                          err)
+                                          c%probes(k), p%x(:, 1:n), p%v(:, 1:n)), err)
             end do
-            call output_probes(out, time_of(s, c, s%step), s%step, values)
         end associate
-        call capture(s, c, out, s%good)
+        call output_probes(out, t, s%step, values)
     contains
         !> A histogram at time t_h is written at the first row at or after it: this one if the
         !> row one output interval earlier was before it.
         logical function histogram_due(t_h)
             real(wp), intent(in) :: t_h
-            real(wp) :: t
-            t = time_of(s, c, s%step)
             histogram_due = t >= t_h .and. &
                 t - max(1.0_wp, real(nint(c%output_interval / c%dt), wp)) * c%dt < t_h
         end function histogram_due
-    end subroutine write_series
+    end subroutine write_probes
 
     !> One row of contact.csv for the traced particle, if its state is finite.
     subroutine write_trace(s, c, out, time, err)
