@@ -149,11 +149,18 @@ def prepare_impact(n, seed=1, scale=1.0, t_end=1.0):
             + "&wall_mesh file = 'geometry/impact_box.stl', material = 'steel' /\n")
 
 
-def impact(n, seed=1, scale=1.0, t_end=0.1, interval=1e-3):
-    """The steel impactor, R = 10 mm, centre at (0, 0, 0.06), 5 m/s down, into the bed."""
-    name = impact_name(n, seed)
-    return (run(5e-7 / scale ** 0.5, t_end) + output(name, interval, 0.01) + materials(scale)
-            + f"&particle_file file = '{FROM_HERE}/prepare_{name}/final.csv' /\n"
+def impact(n, seed=1, scale=1.0, t_end=0.1, interval=1e-3, dt=5e-7,
+           integrator="symplectic_euler", name=None, allow_unstable=False):
+    """The steel impactor, R = 10 mm, centre at (0, 0, 0.06), 5 m/s down, into the bed (dt,
+    integrator and output name other than the case's for the speed-against-error study)."""
+    bed = impact_name(n, seed)
+    name = name or bed
+    extra = "" if integrator == "symplectic_euler" else f", integrator = '{integrator}'"
+    if allow_unstable:
+        extra += ", allow_unstable = .true."
+    return (run(dt / scale ** 0.5, t_end, extra) + output(name, interval, 0.01)
+            + materials(scale)
+            + f"&particle_file file = '{FROM_HERE}/prepare_{bed}/final.csv' /\n"
             + f"&particle id = {IMPACTOR_ID}, material = 'steel', radius = 0.01, "
               f"position = 0, 0, 0.06, velocity = 0, 0, -5 /\n"
             + "&wall_mesh file = 'geometry/impact_box.stl', material = 'steel' /\n"
