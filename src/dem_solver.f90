@@ -457,7 +457,7 @@ contains
             s%settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
             call write_probes(s, c, out, order, err)
         end associate
-        call capture(s, c, out, s%good)
+        call capture(s, c, out, s%good, order)
     end subroutine write_series
 
     !> The probes' row of probes.csv, and the histograms due now; `order` lists the particles
@@ -565,11 +565,12 @@ contains
 
     !> The state now, particles by id, into `fr`; with the per-particle contact counts and
     !> forces when the snapshots hold them.
-    subroutine capture(s, c, out, fr)
+    subroutine capture(s, c, out, fr, by_id)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
         type(frame_t), intent(out) :: fr
+        integer(ip), intent(in), optional :: by_id(:)  !! the particles by id, if known
         integer(ip), allocatable :: order(:)
         integer(i8) :: bytes(3)
         integer(ip) :: a, i
@@ -579,7 +580,11 @@ contains
             call acc_data(s%nb%touching, acc_to_host)
         end if
         associate (p => s%p, n => s%p%n_own)
-            order = order_by_id(p%gid(1:n))
+            if (present(by_id)) then
+                order = by_id
+            else
+                order = order_by_id(p%gid(1:n))
+            end if
             fr%time = time_of(s, c, s%step)
             fr%step = s%step
             fr%n = n
