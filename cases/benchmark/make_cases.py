@@ -33,6 +33,8 @@ PAIRS = [("M1", "M1", 0.5, 0.3), ("M1", "M2", 0.45, 0.2), ("M1", "steel", 0.4, 0
 SILO = {"small": dict(r_o=0.02, z_o=-0.0593008, top=0.320699),
         "large": dict(r_o=0.03, z_o=-0.0554222, top=0.314578)}
 SILO_DT = {"M1": 1.5e-6, "M2": 2.0e-6}
+SILO_PREPARE_DT = {"M1": 4.0e-6, "M2": 5.0e-6}     # about 0.24 Rayleigh times of the 4 mm spheres
+SILO_REDUCED = 20000                               # particles in the reduced silos run here
 FLOOR = -0.0902431                        # impact box floor [m]
 IMPACTOR_ID = 1000000000
 BIG = "1e30"
@@ -59,14 +61,19 @@ def silo_walls(orifice):
     return (f"&wall_mesh file = 'geometry/silo_{orifice}.stl', material = 'steel' /\n")
 
 
+def silo_name(material, orifice, n=100000):
+    return f"silo_{material}_{orifice}" + (f"_{n}" if n != 100000 else "")
+
+
 def prepare_silo(material, orifice, n=100000, scale=1.0, t_end=2.0):
     """Spheres of 4 mm dropped into the silo from a cylinder above the cone (0.9 m high, so
-    that random insertion has room), onto a plane that closes the orifice; settled."""
+    that random insertion has room), onto a plane that closes the orifice; settled, at a
+    larger dt than the discharge (the packing's settling is not measured)."""
     s = SILO[orifice]
     z_j = 0.1 - (s["r_o"] - s["z_o"])                # where cone and cylinder meet
     height = min(0.9, 0.9 * n / 100000.0 + 0.05)
-    name = f"prepare_silo_{material}_{orifice}"
-    return (run(SILO_DT[material] / scale ** 0.5, t_end,
+    name = "prepare_" + silo_name(material, orifice, n)
+    return (run(SILO_PREPARE_DT[material] / scale ** 0.5, t_end,
                 f", stop_kinetic_energy = {n * 1e-10:g}")
             + output(name, 0.01, 0.0) + materials(scale)
             + f"&insert n = {n}, material = '{material}', radius_min = 0.002, "
@@ -77,16 +84,20 @@ def prepare_silo(material, orifice, n=100000, scale=1.0, t_end=2.0):
               f"half_width = 0.035 /\n")
 
 
-def silo(material, orifice, scale=1.0, t_end=5.0, interval=0.1, histogram_time=2.0):
+def silo(material, orifice, n=100000, scale=1.0, t_end=5.0, interval=0.1, histogram_time=2.0,
+         snapshots=0.5, dt=None, integrator="symplectic_euler", name=None):
     """Discharge: the settled packing without the plane; particles removed 0.02 m below the
-    orifice plane (MercuryDPM's deletion boundary); remaining particles counted above it."""
+    orifice plane (MercuryDPM's deletion boundary); remaining particles counted above it
+    (dt, integrator and output name other than the case's for the speed-against-error study)."""
     s = SILO[orifice]
-    name = f"silo_{material}_{orifice}"
+    bed = silo_name(material, orifice, n)
+    name = name or bed
     above = (f"region = 'box', box_min = -{BIG}, -{BIG}, {s['z_o']}, "
              f"box_max = {BIG}, {BIG}, {BIG}")
-    return (run(SILO_DT[material] / scale ** 0.5, t_end) + output(name, interval, 0.5)
-            + materials(scale)
-            + f"&particle_file file = '{FROM_HERE}/prepare_{name}/final.csv' /\n"
+    extra = "" if integrator == "symplectic_euler" else f", integrator = '{integrator}'"
+    return (run((dt or SILO_DT[material]) / scale ** 0.5, t_end, extra)
+            + output(name, interval, snapshots) + materials(scale)
+            + f"&particle_file file = '{FROM_HERE}/prepare_{bed}/final.csv' /\n"
             + silo_walls(orifice)
             + f"&outlet region = 'plane', point = 0, 0, {s['z_o'] - 0.02:.7g}, "
               f"normal = 0, 0, -1 /\n"
@@ -174,6 +185,10 @@ def cases():
         for o in ("small", "large"):
             out[f"prepare_silo_{m}_{o}.nml"] = prepare_silo(m, o)
             out[f"silo_{m}_{o}.nml"] = silo(m, o)
+            n = SILO_REDUCED
+            out[f"prepare_{silo_name(m, o, n)}.nml"] = prepare_silo(m, o, n, t_end=1.0)
+            out[f"{silo_name(m, o, n)}.nml"] = silo(m, o, n, t_end=0.5, interval=0.01,
+                                                     histogram_time=0.3, snapshots=0.1)
     out["prepare_drum_1.nml"] = prepare_drum(1)
     out["prepare_drum_2.nml"] = prepare_drum(2)
     out["drum.nml"] = drum()
