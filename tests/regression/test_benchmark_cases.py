@@ -17,11 +17,15 @@ hold whatever the size:
    which the bed's push exceeds its weight) its downward speed falls at every sample
    (0.1 ms), until it is 2 mm from the floor; it does not pass the floor (its
    lowest point stays within 2 mm of it: the soft floor contact overlaps that much).
+4. the analysis of doc/benchmarks.md: scripts/plot-benchmarks draws the figures of these
+   outputs; its flow-rate fit recovers the slope of an exact line, and its Beverloo k for the
+   paper's flow-rate ratio of 3.10 is the paper's 1.26.
 usage: test_benchmark_cases.py DEM WORKDIR"""
 import os
 import shutil
 import subprocess
 import sys
+from importlib.machinery import SourceFileLoader
 
 import h5py
 import numpy as np
@@ -64,8 +68,9 @@ def snapshots(out):
 # 1. silo
 N_SILO = 800
 z_o = mc.SILO["small"]["z_o"]
-run("prepare_silo_M1_small", mc.prepare_silo("M1", "small", n=N_SILO, scale=SCALE, t_end=0.4))
-out = run("silo_M1_small", mc.silo("M1", "small", scale=SCALE, t_end=0.5, interval=0.02,
+run("prepare_silo_M1_small_800", mc.prepare_silo("M1", "small", n=N_SILO, scale=SCALE,
+                                                 t_end=0.4))
+out = run("silo_M1_small_800", mc.silo("M1", "small", n=N_SILO, scale=SCALE, t_end=0.5, interval=0.02,
                                    histogram_time=0.1))
 s, p = table(out, "series.csv"), table(out, "probes.csv")
 check(np.all(s["particles"] + s["removed"] == N_SILO), "silo: particles + removed = 800")
@@ -114,4 +119,19 @@ check(len(speed) >= 5, f"impact: {len(speed)} samples in the bed")
 check(np.all(np.diff(speed) < 0), f"impact: the impactor slows in the bed ({speed})")
 check(z.min() - 0.01 > mc.FLOOR - 0.002, f"impact: the impactor stays above the floor "
                                          f"(lowest {z.min() - 0.01 - mc.FLOOR:.4f} m above)")
+
+# 4. analysis
+plot = os.path.join(ROOT, "scripts", "plot-benchmarks")
+r = subprocess.run([sys.executable, plot, "--output-dir", os.path.join(work, mc.OUT),
+                    "--doc", work], capture_output=True, text=True)
+check(r.returncode == 0, f"plot-benchmarks: exit {r.returncode}: {r.stderr.strip()}")
+for png in ("silo", "silo_histogram", "silo_section", "drum"):
+    check(os.path.exists(os.path.join(work, f"benchmark_{png}.png")), f"benchmark_{png}.png")
+pb = SourceFileLoader("plot_benchmarks", plot).load_module()
+t = np.linspace(0.0, 1.0, 101)
+line = np.zeros(101, dtype=[("time", float), ("silo_M1", float)])
+line["time"], line["silo_M1"] = t, 20000.0 - 7000.0 * t
+w, dev, keep = pb.flow_rate(line, "M1")
+check(abs(w - 7000.0) < 1e-6 and dev < 1e-6 and keep.sum() == 91, f"flow rate of a line {w}")
+check(abs(pb.beverloo_k(3.10) - 1.26) < 0.005, f"Beverloo k for 3.10: {pb.beverloo_k(3.10)}")
 finish()
