@@ -1,5 +1,6 @@
 # Compiler flags per build type, in one place (gfortran).
-#   Release: -O3 (add -march=native with DEM_NATIVE=ON)
+#   Release: -O3 (add -march=native -ffp-contract=off with DEM_NATIVE=ON: fused multiply-adds
+#            would make results depend on the number of MPI ranks, doc/theory.md section 13)
 #   Debug:   -O0 -g -fcheck=all -ffpe-trap=invalid,zero,overflow -Wall
 #   DEM_OPENACC=ON: -fopenacc, with nvptx offload when gcc-offload-nvptx is installed
 set(DEM_FORTRAN_FLAGS_COMMON -ffree-line-length-none -std=f2018 -fimplicit-none)
@@ -7,7 +8,7 @@ set(DEM_FORTRAN_FLAGS_RELEASE -O3)
 set(DEM_FORTRAN_FLAGS_DEBUG -O0 -g -fcheck=all -ffpe-trap=invalid,zero,overflow -Wall
     -Wno-maybe-uninitialized -fbacktrace)
 if(DEM_NATIVE)
-  list(APPEND DEM_FORTRAN_FLAGS_RELEASE -march=native)
+  list(APPEND DEM_FORTRAN_FLAGS_RELEASE -march=native -ffp-contract=off)
 endif()
 
 set(DEM_OPENACC_FLAGS "")

@@ -9,7 +9,9 @@ module dem_checkpoint
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_version, only: dem_version_string
-    use dem_comm, only: comm_t, comm_barrier
+    use dem_comm, only: comm_t, comm_barrier, comm_gather
+    use dem_particles, only: order_by_id
+    use dem_neighbors, only: neighbors_unique_pairs
     use dem_case, only: case_t
     use dem_mesh, only: mesh_t, mesh_move
     use dem_contacts_pw, only: max_wall_contacts
@@ -19,7 +21,7 @@ module dem_checkpoint
                       h5_dims, h5_text_length
     implicit none
     private
-    public :: frame_t, frame_write, checkpoint_read, snapshot_read_particles, checkpoint_file, &
+    public :: frame_t, frame_write, frame_gather, checkpoint_read, snapshot_read_particles, checkpoint_file, &
               checkpoint_latest, checkpoint_kept
 
     character(len=*), parameter :: checkpoint_format = 'dem checkpoint 1'
@@ -63,6 +65,59 @@ module dem_checkpoint
     end interface
 
 contains
+
+    !> Collect on rank 0 the frames that every rank captured of its own particles: the
+    !> particles ordered by id, each pair of the history once, ordered by the two ids; the
+    !> other ranks keep no particles. The run bookkeeping is left as it is.
+    subroutine frame_gather(fr, comm)
+        type(frame_t), intent(inout) :: fr
+        type(comm_t), intent(in) :: comm
+        integer(i8), allocatable :: gid(:), pair(:)
+        integer(ip), allocatable :: order(:)
+        real(wp), allocatable :: pair_xi(:)
+        integer :: n
+        call comm_gather(comm, fr%gid, gid)
+        order = order_by_id(gid)
+        n = size(gid)
+        fr%n = n
+        fr%gid = gid(order)
+        fr%mat = int(reshape(gathered_int(fr%mat, 1), [n]), ip)
+        fr%radius = reshape(gathered(fr%radius, 1), [n])
+        fr%x = gathered(reshape(fr%x, [3 * size(fr%x, 2)]), 3)
+        fr%v = gathered(reshape(fr%v, [3 * size(fr%v, 2)]), 3)
+        fr%w = gathered(reshape(fr%w, [3 * size(fr%w, 2)]), 3)
+        fr%f = gathered(reshape(fr%f, [3 * size(fr%f, 2)]), 3)
+        fr%t = gathered(reshape(fr%t, [3 * size(fr%t, 2)]), 3)
+        fr%wall_tri = int(gathered_int(reshape(fr%wall_tri, [size(fr%wall_tri)]), &
+                                       max_wall_contacts), ip)
+        fr%wall_xi = reshape(gathered(reshape(fr%wall_xi, [size(fr%wall_xi)]), &
+                                      3 * max_wall_contacts), [3, max_wall_contacts, n])
+        if (allocated(fr%contacts)) fr%contacts = int(reshape(gathered_int(fr%contacts, 1), &
+                                                              [n]), ip)
+        call comm_gather(comm, reshape(fr%pair, [size(fr%pair)]), pair)
+        call comm_gather(comm, reshape(fr%pair_xi, [size(fr%pair_xi)]), pair_xi)
+        call neighbors_unique_pairs(reshape(pair, [2, size(pair) / 2]), &
+                                    reshape(pair_xi, [3, size(pair) / 2]), fr%pair, fr%pair_xi)
+    contains
+        !> Every rank's values (k per particle) as columns, in the order of the ids.
+        function gathered(a, k) result(b)
+            real(wp), intent(in) :: a(:)
+            integer, intent(in) :: k
+            real(wp), allocatable :: b(:, :), all(:)
+            call comm_gather(comm, a, all)
+            b = reshape(all, [k, n])
+            b = b(:, order)
+        end function gathered
+
+        function gathered_int(a, k) result(b)
+            integer(ip), intent(in) :: a(:)
+            integer, intent(in) :: k
+            integer(i8), allocatable :: b(:, :), all(:)
+            call comm_gather(comm, int(a, i8), all)
+            b = reshape(all, [k, n])
+            b = b(:, order)
+        end function gathered_int
+    end subroutine frame_gather
 
     !> Write a snapshot (checkpoint false; force and contacts if allocated) or a checkpoint
     !> of frame `fr` of case `c`, with the walls in pose `mesh`, to `path`, atomically.

@@ -23,7 +23,7 @@ module dem_h5
                     H5T_STRING_F, H5_REAL_KIND, H5_INTEGER_KIND
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io
-    use dem_comm, only: comm_t, comm_offset, comm_xor, comm_info_null
+    use dem_comm, only: comm_t, comm_offset, comm_xor, comm_broadcast, comm_info_null
     implicit none
     private
     public :: h5_file_t, h5_create, h5_open, h5_close, h5_group, h5_write, h5_read, h5_dims, &
@@ -315,7 +315,11 @@ contains
         end if
         sum = 0
         if (mine) sum = checksum(buf, product(dims) * bytes, offset)
-        if (rows) sum = comm_xor(f%comm, sum)
+        if (rows) then
+            sum = comm_xor(f%comm, sum)
+        else
+            sum = comm_broadcast(f%comm, sum)      ! rank 0's data is what was written
+        end if
         call write_checksum(dset, sum, e)
         ok = ior(ok, e)
         call h5pclose_f(xfer, e)

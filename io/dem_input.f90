@@ -29,7 +29,7 @@ module dem_input
     !> The groups a case file may hold, and the keys of each (doc/input.md).
     character(len=*), parameter :: input_groups(12) = [character(len=160) :: &
         'run: dt t_end integrator gravity expected_speed skin allow_unstable ' // &
-        'stop_kinetic_energy max_speed wall_time_limit progress_interval', &
+        'stop_kinetic_energy max_speed wall_time_limit progress_interval imbalance_limit', &
         'output: dir interval trace_id snapshot_interval snapshot_force snapshot_contacts ' // &
         'checkpoint_interval checkpoint_keep', &
         'contact_model: tangential_stiffness_factor tangential_damping clamp_normal', &
@@ -133,8 +133,11 @@ contains
                                     ! time [s], >= 0, default 0 (none)
         real(wp) :: progress_interval  ! wall-clock time between progress lines [s], >= 0
                                        ! (0: none), default 10
+        real(wp) :: imbalance_limit ! on several MPI ranks, repartition when the largest
+                                    ! particle count of a rank exceeds the mean by this
+                                    ! factor, >= 1, default 1.1
         namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable, &
-            stop_kinetic_energy, max_speed, wall_time_limit, progress_interval
+            stop_kinetic_energy, max_speed, wall_time_limit, progress_interval, imbalance_limit
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
@@ -154,6 +157,7 @@ contains
         max_speed = unset
         wall_time_limit = 0.0_wp
         progress_interval = 10.0_wp
+        imbalance_limit = 1.1_wp
         b = nf%blocks(block_index(nf, 'run', 1))
         do k_item = 0, block_item_count(b)
             text = block_text(b, k_item)
@@ -208,6 +212,11 @@ contains
             return
         end if
         c%progress_interval = progress_interval
+        if (.not. in_range(imbalance_limit, 1.0_wp, unset, .true., .false.)) then
+            call set_error(err, dem_err_input, at // ": key 'imbalance_limit': must be >= 1")
+            return
+        end if
+        c%imbalance_limit = imbalance_limit
 
         call case_time_scales(c, ts)
         if (max_speed == unset .and. c%n_particles > 0) max_speed = &

@@ -4,13 +4,40 @@ module dem_comm
     use mpi_f08, only: MPI_Comm, MPI_COMM_WORLD, MPI_Init, MPI_Initialized, MPI_Finalize, &
                        MPI_Finalized, MPI_Comm_dup, MPI_Comm_free, MPI_Comm_rank, &
                        MPI_Comm_size, MPI_Abort, MPI_Exscan, MPI_Allreduce, MPI_Barrier, &
-                       MPI_INTEGER8, MPI_LOGICAL, MPI_SUM, MPI_LOR, MPI_BXOR, &
-                       MPI_INFO_NULL
-    use dem_kinds, only: i8
+                       MPI_Alltoall, MPI_Alltoallv, MPI_Gather, MPI_Gatherv, MPI_Bcast, &
+                       MPI_INTEGER, MPI_INTEGER8, MPI_DOUBLE_PRECISION, MPI_LOGICAL, MPI_SUM, &
+                       MPI_MAX, MPI_LOR, MPI_BXOR, MPI_IN_PLACE, MPI_INFO_NULL
+    use dem_kinds, only: wp, i8
     implicit none
     private
     public :: comm_t, comm_init, comm_free, comm_offset, comm_any, comm_xor, comm_barrier, &
-              comm_info_null
+              comm_info_null, comm_exchange, comm_counts, comm_sum, comm_max, comm_gather, &
+              comm_broadcast
+
+    !> Send parts of an array to every rank and receive theirs (MPI_Alltoallv).
+    interface comm_exchange
+        module procedure exchange_real, exchange_i8
+    end interface comm_exchange
+
+    !> True on every rank where true on any (MPI_Allreduce).
+    interface comm_any
+        module procedure any_scalar, any_array
+    end interface comm_any
+
+    !> Largest value over the ranks, element by element, in place (MPI_Allreduce).
+    interface comm_max
+        module procedure max_real, max_int
+    end interface comm_max
+
+    !> Sum over the ranks, in place (MPI_Allreduce).
+    interface comm_sum
+        module procedure sum_i8, sum_real
+    end interface comm_sum
+
+    !> Concatenate every rank's array on rank 0, in rank order (MPI_Gatherv).
+    interface comm_gather
+        module procedure gather_real, gather_i8
+    end interface comm_gather
 
     !> A duplicated communicator with its rank and size.
     type :: comm_t
@@ -66,12 +93,18 @@ contains
         call MPI_Allreduce(n, total, 1, MPI_INTEGER8, MPI_SUM, c%comm)
     end subroutine comm_offset
 
-    !> True on every rank if `flag` is true on any.
-    logical function comm_any(c, flag) result(any_flag)
+    logical function any_scalar(c, flag) result(any_flag)
         type(comm_t), intent(in) :: c
         logical, intent(in) :: flag
         call MPI_Allreduce(flag, any_flag, 1, MPI_LOGICAL, MPI_LOR, c%comm)
-    end function comm_any
+    end function any_scalar
+
+    function any_array(c, flags) result(any_flags)
+        type(comm_t), intent(in) :: c
+        logical, intent(in) :: flags(:)
+        logical :: any_flags(size(flags))
+        call MPI_Allreduce(flags, any_flags, size(flags), MPI_LOGICAL, MPI_LOR, c%comm)
+    end function any_array
 
     !> The bitwise exclusive or of `value` over the ranks.
     integer(i8) function comm_xor(c, value) result(x)
@@ -79,6 +112,105 @@ contains
         integer(i8), intent(in) :: value
         call MPI_Allreduce(value, x, 1, MPI_INTEGER8, MPI_BXOR, c%comm)
     end function comm_xor
+
+    !> How many items each rank sends this one, from how many this one sends each (MPI_Alltoall).
+    function comm_counts(c, send_counts) result(recv_counts)
+        type(comm_t), intent(in) :: c
+        integer, intent(in) :: send_counts(0:)   !! items for each rank
+        integer :: recv_counts(0:c%size - 1)
+        call MPI_Alltoall(send_counts, 1, MPI_INTEGER, recv_counts, 1, MPI_INTEGER, c%comm)
+    end function comm_counts
+
+    !> `send` holds the columns for rank 0, then those for rank 1, ... (send_counts of them);
+    !> `recv` gets those of every rank for this one, in rank order (recv_counts, from
+    !> comm_counts). The columns have the same length everywhere.
+    subroutine exchange_real(c, send, send_counts, recv, recv_counts)
+        type(comm_t), intent(in) :: c
+        real(wp), intent(in) :: send(:, :)
+        integer, intent(in) :: send_counts(0:), recv_counts(0:)
+        real(wp), intent(out) :: recv(:, :)
+        integer :: k
+        k = size(send, 1)
+        call MPI_Alltoallv(send, k * send_counts, k * starts(send_counts), MPI_DOUBLE_PRECISION, &
+                           recv, k * recv_counts, k * starts(recv_counts), MPI_DOUBLE_PRECISION, &
+                           c%comm)
+    end subroutine exchange_real
+
+    !> As exchange_real, for 64-bit integers.
+    subroutine exchange_i8(c, send, send_counts, recv, recv_counts)
+        type(comm_t), intent(in) :: c
+        integer(i8), intent(in) :: send(:, :)
+        integer, intent(in) :: send_counts(0:), recv_counts(0:)
+        integer(i8), intent(out) :: recv(:, :)
+        integer :: k
+        k = size(send, 1)
+        call MPI_Alltoallv(send, k * send_counts, k * starts(send_counts), MPI_INTEGER8, &
+                           recv, k * recv_counts, k * starts(recv_counts), MPI_INTEGER8, c%comm)
+    end subroutine exchange_i8
+
+    !> 0-based offsets of consecutive parts of the given sizes.
+    pure function starts(counts) result(s)
+        integer, intent(in) :: counts(0:)
+        integer :: s(0:size(counts) - 1), k
+        s(0) = 0
+        do k = 1, size(counts) - 1
+            s(k) = s(k - 1) + counts(k - 1)
+        end do
+    end function starts
+
+    subroutine sum_real(c, a)
+        type(comm_t), intent(in) :: c
+        real(wp), intent(inout) :: a(:)
+        call MPI_Allreduce(MPI_IN_PLACE, a, size(a), MPI_DOUBLE_PRECISION, MPI_SUM, c%comm)
+    end subroutine sum_real
+
+    subroutine sum_i8(c, a)
+        type(comm_t), intent(in) :: c
+        integer(i8), intent(inout) :: a(:)
+        call MPI_Allreduce(MPI_IN_PLACE, a, size(a), MPI_INTEGER8, MPI_SUM, c%comm)
+    end subroutine sum_i8
+
+    subroutine max_real(c, a)
+        type(comm_t), intent(in) :: c
+        real(wp), intent(inout) :: a(:)
+        call MPI_Allreduce(MPI_IN_PLACE, a, size(a), MPI_DOUBLE_PRECISION, MPI_MAX, c%comm)
+    end subroutine max_real
+
+    subroutine max_int(c, a)
+        type(comm_t), intent(in) :: c
+        integer, intent(inout) :: a(:)
+        call MPI_Allreduce(MPI_IN_PLACE, a, size(a), MPI_INTEGER, MPI_MAX, c%comm)
+    end subroutine max_int
+
+    !> Rank 0's value on every rank (MPI_Bcast).
+    integer(i8) function comm_broadcast(c, value) result(v)
+        type(comm_t), intent(in) :: c
+        integer(i8), intent(in) :: value
+        v = value
+        call MPI_Bcast(v, 1, MPI_INTEGER8, 0, c%comm)
+    end function comm_broadcast
+
+    subroutine gather_real(c, a, all)
+        type(comm_t), intent(in) :: c
+        real(wp), intent(in) :: a(:)
+        real(wp), allocatable, intent(out) :: all(:)   !! on rank 0; empty elsewhere
+        integer :: counts(0:c%size - 1)
+        call MPI_Gather(size(a), 1, MPI_INTEGER, counts, 1, MPI_INTEGER, 0, c%comm)
+        allocate(all(merge(sum(counts), 0, c%rank == 0)))
+        call MPI_Gatherv(a, size(a), MPI_DOUBLE_PRECISION, all, counts, starts(counts), &
+                         MPI_DOUBLE_PRECISION, 0, c%comm)
+    end subroutine gather_real
+
+    subroutine gather_i8(c, a, all)
+        type(comm_t), intent(in) :: c
+        integer(i8), intent(in) :: a(:)
+        integer(i8), allocatable, intent(out) :: all(:)   !! on rank 0; empty elsewhere
+        integer :: counts(0:c%size - 1)
+        call MPI_Gather(size(a), 1, MPI_INTEGER, counts, 1, MPI_INTEGER, 0, c%comm)
+        allocate(all(merge(sum(counts), 0, c%rank == 0)))
+        call MPI_Gatherv(a, size(a), MPI_INTEGER8, all, counts, starts(counts), MPI_INTEGER8, &
+                         0, c%comm)
+    end subroutine gather_i8
 
     !> Wait until every rank has arrived.
     subroutine comm_barrier(c)

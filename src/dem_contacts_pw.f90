@@ -11,10 +11,12 @@ module dem_contacts_pw
     implicit none
     private
     public :: wall_contacts_t, wall_contacts_init, wall_contacts_permute, pw_forces, &
-              max_wall_contacts
+              max_wall_contacts, wall_contacts_pack, wall_contacts_unpack, n_wall_pack_real
 
     integer(ip), parameter :: max_wall_contacts = 8     !< per particle
     integer(ip), parameter :: max_wall_candidates = 16  !< touching triangles per particle
+    !> reals per packed particle (the triangles travel as reals: exact below 2^53)
+    integer, parameter :: n_wall_pack_real = 4 * max_wall_contacts
 
     !> Per-particle wall contact history: triangle (0: free slot) and tangential displacement.
     type :: wall_contacts_t
@@ -45,6 +47,31 @@ contains
         wc%tri(:, n + 1:) = 0
         wc%xi(:, :, n + 1:) = 0.0_wp
     end subroutine wall_contacts_permute
+
+    !> The history of the particles idx, for another rank (n_wall_pack_real values each).
+    subroutine wall_contacts_pack(wc, idx, rbuf)
+        type(wall_contacts_t), intent(in) :: wc
+        integer(ip), intent(in) :: idx(:)
+        real(wp), intent(inout) :: rbuf(:, :)    !! (n_wall_pack_real, size(idx))
+        integer(ip) :: a
+        do a = 1, size(idx)
+            rbuf(1:max_wall_contacts, a) = real(wc%tri(:, idx(a)), wp)
+            rbuf(max_wall_contacts + 1:, a) = reshape(wc%xi(:, :, idx(a)), [3 * max_wall_contacts])
+        end do
+    end subroutine wall_contacts_pack
+
+    !> Store packed history for particles first, first+1, ... (wall_contacts_pack's inverse).
+    subroutine wall_contacts_unpack(wc, first, rbuf)
+        type(wall_contacts_t), intent(inout) :: wc
+        integer(ip), intent(in) :: first
+        real(wp), intent(in) :: rbuf(:, :)
+        integer(ip) :: a
+        do a = 1, size(rbuf, 2)
+            wc%tri(:, first + a - 1) = nint(rbuf(1:max_wall_contacts, a), ip)
+            wc%xi(:, :, first + a - 1) = reshape(rbuf(max_wall_contacts + 1:, a), &
+                                                 [3, max_wall_contacts])
+        end do
+    end subroutine wall_contacts_unpack
 
     !> Of the nc triangles touching a sphere (closest points q, features), keep those whose
     !> closest point is a local minimum of the distance to their union: faces always; an edge

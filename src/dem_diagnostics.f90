@@ -8,7 +8,7 @@ module dem_diagnostics
     use dem_mesh, only: mesh_t, closest_point_triangle
     implicit none
     private
-    public :: energies, count_pp_contacts, first_nonfinite, count_unstable, contact_trace
+    public :: energies, count_pp_sides, first_nonfinite, count_unstable, contact_trace
 
 contains
 
@@ -32,22 +32,21 @@ contains
         end do
     end subroutine energies
 
-    !> Number of overlapping particle pairs among the owned particles' list entries
-    !> (each pair counted once).
-    integer(ip) function count_pp_contacts(n_own, x, radius, start, list) result(n_pairs)
+    !> Number of overlapping particle pairs among the owned particles' list entries, counted
+    !> from both sides: summed over the ranks, twice the number of contacts.
+    integer(ip) function count_pp_sides(n_own, x, radius, start, list) result(sides)
         integer(ip), intent(in) :: n_own
         real(wp), intent(in) :: x(:, :), radius(:)
         integer(ip), intent(in) :: start(:), list(:)
-        integer(ip) :: i, k, j, twice
-        twice = 0
+        integer(ip) :: i, k, j
+        sides = 0
         do i = 1, n_own
             do k = start(i), start(i + 1) - 1
                 j = list(k)
-                if (sum((x(:, j) - x(:, i))**2) < (radius(i) + radius(j))**2) twice = twice + 1
+                if (sum((x(:, j) - x(:, i))**2) < (radius(i) + radius(j))**2) sides = sides + 1
             end do
         end do
-        n_pairs = twice / 2
-    end function count_pp_contacts
+    end function count_pp_sides
 
     !> Index of the first owned particle with a non-finite position, velocity or angular
     !> velocity; 0 if all are finite.

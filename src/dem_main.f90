@@ -4,7 +4,8 @@ program dem_main
     use dem, only: wp, dem_version_string, error_t, case_t, time_scales_t, case_time_scales, &
                    case_total_mass, read_case, solver_t, solver_init, solver_restore, &
                    solver_run, stop_wall_time, stop_signal, frame_t, checkpoint_read, &
-                   checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds
+                   checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
+                   solver_particles, solver_parallel_stats, i8
     use dem_comm, only: comm_t, comm_init, comm_free
     use dem_signals, only: signals_install
     implicit none
@@ -55,15 +56,9 @@ program dem_main
         if (nargs /= 1) call usage_error('one case file at a time')
         path = arg1
     end select
-    if (comm%size > 1) then
-        if (comm%rank == 0) write(error_unit, '(a)') 'dem: error: this version runs on ' // &
-                                                      'one MPI rank'
-        call comm%abort(2)
-    end if
-
     call read_case(path, c, err)
     if (err%failed()) call fail(err)
-    call print_check(c)
+    if (comm%rank == 0) call print_check(c)
     if (check_only) call finish(0)
     call solver_init(s, c, comm)
     if (resume) restart = checkpoint_latest(c%output_dir)
@@ -71,17 +66,18 @@ program dem_main
         call checkpoint_read(restart, c, comm, fr, err)
         if (err%failed()) call fail(err)
         call solver_restore(s, c, fr)
-        write(output_unit, '(a,es12.5,a)') 'dem: restarting from ' // restart // ' (t = ', &
-            fr%time, ' s)'
+        if (comm%rank == 0) write(output_unit, '(a,es12.5,a)') 'dem: restarting from ' // &
+            restart // ' (t = ', fr%time, ' s)'
     end if
     call solver_run(s, c, started, err)
     if (err%failed()) call fail(err)
-    call print_timing(s)
+    call print_timing(s, solver_particles(s))
+    if (comm%size > 1) call print_parallel(solver_parallel_stats(s))
     if (s%stopped == stop_wall_time .or. s%stopped == stop_signal) then
-        write(output_unit, '(a)') 'dem: ' // s%stop_message
+        if (comm%rank == 0) write(output_unit, '(a)') 'dem: ' // s%stop_message
         call finish(exit_continue)
     end if
-    write(output_unit, '(a)') 'dem: done; outputs in ' // c%output_dir
+    if (comm%rank == 0) write(output_unit, '(a)') 'dem: done; outputs in ' // c%output_dir
     call finish(0)
 
 contains
@@ -150,16 +146,22 @@ contains
             'stability bound (allow_unstable = .true.)'
     end subroutine print_check
 
-    !> Steps, time per particle-step and time per phase of the run.
-    subroutine print_timing(s)
+    !> Steps, time per particle-step and time per phase of the run (rank 0's clocks;
+    !> n particles at the end, over all ranks).
+    subroutine print_timing(s, n)
         type(solver_t), intent(in) :: s
+        integer(i8), intent(in) :: n
         real(wp) :: total, ns
         integer :: k
+        if (comm%rank /= 0) return
         total = sum([(timer_seconds(s%timers, k), k = 1, n_phases)])
-        ns = 1.0e9_wp * total / max(1.0_wp, real(s%steps_run, wp) * s%p%n_own)
-        write(output_unit, '(a,i0,a,i0,a,es11.4,a,f10.1,a)') 'timing: ', s%steps_run, &
-            ' steps of ', s%p%n_own, ' particles in ', total, ' s, ', ns, &
+        ns = 1.0e9_wp * total / max(1.0_wp, real(s%steps_run, wp) * n)
+        write(output_unit, '(a,i0,a,i0,a,es11.4,a,f10.1,a)', advance='no') 'timing: ', &
+            s%steps_run, ' steps of ', n, ' particles in ', total, ' s, ', ns, &
             ' ns per particle-step'
+        if (comm%size > 1) write(output_unit, '(a,i0,a)', advance='no') ' on ', comm%size, &
+            ' ranks'
+        write(output_unit, '(a)') ''
         do k = 1, n_phases
             write(output_unit, '(a,a12,es11.4,a,f6.1,a)') 'timing:   ', phase_names(k), &
                 timer_seconds(s%timers, k), ' s ', &
@@ -167,8 +169,18 @@ contains
         end do
         if (peak_memory_kib() > 0) write(output_unit, '(a,f10.1,a,f10.1,a)') &
             'memory: peak resident ', peak_memory_kib() / 1024.0_wp, ' MiB, ', &
-            1024.0_wp * peak_memory_kib() / max(1, s%p%n_own), ' bytes per particle'
+            1024.0_wp * peak_memory_kib() / max(1, s%p%n_own), ' bytes per particle' // &
+            trim(merge(' (rank 0)', '         ', comm%size > 1))
     end subroutine print_timing
+
+    !> The decomposition's statistics (solver_parallel_stats).
+    subroutine print_parallel(stats)
+        real(wp), intent(in) :: stats(4)
+        if (comm%rank /= 0) return
+        write(output_unit, '(a,i0,a,f6.3,a,f7.3,a,es10.3,a,i0,a)') 'parallel: ', comm%size, &
+            ' ranks, load imbalance ', stats(1), ', ghosts per particle ', stats(2), ', ', &
+            stats(3), ' bytes sent per step, ', nint(stats(4)), ' partitions'
+    end subroutine print_parallel
 
     !> Peak resident memory of this process [KiB] from /proc/self/status (Linux); 0 if unknown.
     integer function peak_memory_kib() result(kib)

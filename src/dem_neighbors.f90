@@ -8,11 +8,12 @@
 !> wall triangles, which are entered in every cell their reach covers.
 module dem_neighbors
     use dem_kinds, only: wp, ip, i8
+    use dem_particles, only: order_by_id
     use dem_mesh, only: mesh_t, closest_point_triangle
     implicit none
     private
     public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order, &
-              neighbors_history, neighbors_set_history
+              neighbors_history, neighbors_set_history, neighbors_unique_pairs
 
     !> The lists, their per-entry tangential history, and the positions they were built at.
     type :: neighbors_t
@@ -248,9 +249,11 @@ contains
         end subroutine scan_level
     end subroutine neighbors_build
 
-    !> The tangential history of the pairs in contact, each pair once, as (lower id, higher
-    !> id) and its displacement, ordered by the two ids; `order` lists the owned particles
-    !> by id. A pair is taken from the row of its lower id, which evaluates it.
+    !> The tangential history of the pairs in contact that this rank evaluates, each once, as
+    !> (lower id, higher id) and the displacement of the lower id's side; `order` lists the
+    !> owned particles by id. A pair is taken from the row of its lower id, or, when that is
+    !> a ghost, from the higher id's row, negated (the two sides are exact negatives). Without
+    !> ghosts the pairs come out ordered by the two ids.
     subroutine neighbors_history(nb, n_own, gid, order, pair, xi)
         type(neighbors_t), intent(in) :: nb
         integer(ip), intent(in) :: n_own
@@ -264,11 +267,17 @@ contains
             do a = 1, n_own
                 i = order(a)
                 do k = nb%start(i), nb%start(i + 1) - 1
-                    if (nb%partner(k) < gid(i) .or. all(nb%xi(:, k) == 0.0_wp)) cycle
+                    if (all(nb%xi(:, k) == 0.0_wp)) cycle
+                    if (nb%partner(k) < gid(i) .and. nb%mirror(k) /= 0) cycle
                     m = m + 1
                     if (pass == 1) cycle
-                    pair(:, m) = [gid(i), nb%partner(k)]
-                    xi(:, m) = nb%xi(:, k)
+                    if (nb%partner(k) > gid(i)) then
+                        pair(:, m) = [gid(i), nb%partner(k)]
+                        xi(:, m) = nb%xi(:, k)
+                    else
+                        pair(:, m) = [nb%partner(k), gid(i)]
+                        xi(:, m) = -nb%xi(:, k)
+                    end if
                 end do
             end do
             if (pass == 1) allocate(pair(2, m), xi(3, m))
@@ -277,8 +286,8 @@ contains
 
     !> Rows of history for particles 1..n_own from pairs as neighbors_history gives them
     !> (ordered by ids), so that the next neighbors_build carries them into its lists. A
-    !> pair goes to the row of its lower id if that particle is owned, else to the row of
-    !> its higher id (the owned side of a pair with a ghost evaluates it too).
+    !> pair goes to the row of its lower id if that particle is owned, else, negated, to the
+    !> row of its higher id (the owned side of a pair with a ghost evaluates it too).
     subroutine neighbors_set_history(nb, n_own, gid, order, pair, xi)
         type(neighbors_t), intent(inout) :: nb
         integer(ip), intent(in) :: n_own
@@ -308,13 +317,14 @@ contains
             if (row(1, m) > 0) then
                 i = row(1, m)
                 nb%partner(fill(i)) = pair(2, m)
+                nb%xi(:, fill(i)) = xi(:, m)
             else if (row(2, m) > 0) then
                 i = row(2, m)
                 nb%partner(fill(i)) = pair(1, m)
+                nb%xi(:, fill(i)) = -xi(:, m)
             else
                 cycle
             end if
-            nb%xi(:, fill(i)) = xi(:, m)
             fill(i) = fill(i) + 1
         end do
         do i = 1, n_own
@@ -344,6 +354,28 @@ contains
             end do
         end function local_index
     end subroutine neighbors_set_history
+
+    !> The pairs ordered by (lower id, higher id), each once (copies from two ranks are
+    !> equal: the two sides of a contact are exact negatives, doc/theory.md section 13).
+    subroutine neighbors_unique_pairs(pair_in, xi_in, pair, xi)
+        integer(i8), intent(in) :: pair_in(:, :)
+        real(wp), intent(in) :: xi_in(:, :)
+        integer(i8), allocatable, intent(out) :: pair(:, :)
+        real(wp), allocatable, intent(out) :: xi(:, :)
+        integer(ip), allocatable :: order(:)
+        logical, allocatable :: first(:)
+        integer :: m
+        order = order_by_id(pair_in(2, :))                  ! stable: by higher id, then
+        order = order(order_by_id(pair_in(1, order)))       ! by lower id
+        allocate(first(size(order)))
+        do m = 1, size(order)
+            first(m) = m == 1
+            if (m > 1) first(m) = any(pair_in(:, order(m)) /= pair_in(:, order(m - 1)))
+        end do
+        order = pack(order, first)
+        pair = pair_in(:, order)
+        xi = xi_in(:, order)
+    end subroutine neighbors_unique_pairs
 
     !> Order a row of history by partner id (insertion sort): a row holds the pairs where
     !> its particle is the lower id, then those where it is the higher.

@@ -4,7 +4,13 @@ module dem_particles
     use dem_kinds, only: wp, ip, i8
     implicit none
     private
-    public :: particles_t, particles_init, particles_add, particles_permute, order_by_id
+    public :: particles_t, particles_init, particles_add, particles_permute, order_by_id, &
+              particles_pack, particles_unpack, n_pack_int, n_pack_real, sphere_mass, &
+              sphere_inv_inertia
+
+    integer, parameter :: n_pack_int = 2    !< integers per packed particle: gid, material
+    integer, parameter :: n_pack_real = 19  !< reals: radius, mass, 1/mass, 1/inertia, x, v, w,
+                                            !< force, torque
 
     !> Structure of arrays for spheres. Kernels receive the arrays, never the type.
     type :: particles_t
@@ -45,20 +51,32 @@ contains
         real(wp), intent(in) :: radius          !! [m]
         real(wp), intent(in) :: density         !! [kg/m^3]
         real(wp), intent(in) :: x(3), v(3), w(3)  !! position [m], velocity [m/s], [rad/s]
-        real(wp), parameter :: pi = acos(-1.0_wp)
         integer(ip) :: i
         i = p%n_own + 1
         p%n_own = i
         p%gid(i) = gid
         p%mat(i) = mat
         p%radius(i) = radius
-        p%mass(i) = 4.0_wp / 3.0_wp * pi * radius**3 * density
+        p%mass(i) = sphere_mass(radius, density)
         p%inv_mass(i) = 1.0_wp / p%mass(i)
-        p%inv_inertia(i) = 1.0_wp / (0.4_wp * p%mass(i) * radius**2)
+        p%inv_inertia(i) = sphere_inv_inertia(p%mass(i), radius)
         p%x(:, i) = x
         p%v(:, i) = v
         p%w(:, i) = w
     end subroutine particles_add
+
+    !> Mass of a sphere [kg].
+    elemental real(wp) function sphere_mass(radius, density) result(m)
+        real(wp), intent(in) :: radius, density    !! [m], [kg/m^3]
+        real(wp), parameter :: pi = acos(-1.0_wp)
+        m = 4.0_wp / 3.0_wp * pi * radius**3 * density
+    end function sphere_mass
+
+    !> Inverse moment of inertia of a solid sphere, 1/(2/5 m R^2) [1/(kg m^2)].
+    elemental real(wp) function sphere_inv_inertia(mass, radius) result(r)
+        real(wp), intent(in) :: mass, radius       !! [kg], [m]
+        r = 1.0_wp / (0.4_wp * mass * radius**2)
+    end function sphere_inv_inertia
 
     !> Reorder the owned particles: particle i becomes the one stored at order(i). Particles
     !> that `order` leaves out are removed.
@@ -80,6 +98,45 @@ contains
         p%f(:, 1:n) = p%f(:, order)
         p%t(:, 1:n) = p%t(:, order)
     end subroutine particles_permute
+
+    !> Every field of the particles idx, appended to the buffers that carry them to another
+    !> rank (n_pack_int and n_pack_real values per particle, in the order of idx).
+    subroutine particles_pack(p, idx, ibuf, rbuf)
+        type(particles_t), intent(in) :: p
+        integer(ip), intent(in) :: idx(:)
+        integer(i8), intent(inout) :: ibuf(:, :)   !! (n_pack_int, size(idx))
+        real(wp), intent(inout) :: rbuf(:, :)      !! (n_pack_real, size(idx))
+        integer(ip) :: a, i
+        do a = 1, size(idx)
+            i = idx(a)
+            ibuf(:, a) = [p%gid(i), int(p%mat(i), i8)]
+            rbuf(:, a) = [p%radius(i), p%mass(i), p%inv_mass(i), p%inv_inertia(i), p%x(:, i), &
+                          p%v(:, i), p%w(:, i), p%f(:, i), p%t(:, i)]
+        end do
+    end subroutine particles_pack
+
+    !> Store packed particles at first, first+1, ... (particles_pack's inverse).
+    subroutine particles_unpack(p, first, ibuf, rbuf)
+        type(particles_t), intent(inout) :: p
+        integer(ip), intent(in) :: first
+        integer(i8), intent(in) :: ibuf(:, :)
+        real(wp), intent(in) :: rbuf(:, :)
+        integer(ip) :: a, i
+        do a = 1, size(ibuf, 2)
+            i = first + a - 1
+            p%gid(i) = ibuf(1, a)
+            p%mat(i) = int(ibuf(2, a), ip)
+            p%radius(i) = rbuf(1, a)
+            p%mass(i) = rbuf(2, a)
+            p%inv_mass(i) = rbuf(3, a)
+            p%inv_inertia(i) = rbuf(4, a)
+            p%x(:, i) = rbuf(5:7, a)
+            p%v(:, i) = rbuf(8:10, a)
+            p%w(:, i) = rbuf(11:13, a)
+            p%f(:, i) = rbuf(14:16, a)
+            p%t(:, i) = rbuf(17:19, a)
+        end do
+    end subroutine particles_unpack
 
     !> The indices 1..size(gid) in increasing order of gid (merge sort, stable).
     function order_by_id(gid) result(idx)

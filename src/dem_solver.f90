@@ -2,13 +2,16 @@
 !> writes when, and run control: checkpoints and restarts, the wall-time limit, signals,
 !> the instability guard and the progress line (doc/output.md).
 module dem_solver
-    use, intrinsic :: iso_fortran_env, only: output_unit
+    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
-    use dem_comm, only: comm_t, comm_any
+    use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather
     use dem_case, only: case_t, time_scales_t, case_time_scales
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
-                             order_by_id
+                             order_by_id, sphere_mass, sphere_inv_inertia
+    use dem_domain, only: domain_t, domain_init, domain_balance, domain_imbalance, &
+                          domain_migrate, domain_ghosts, domain_update
     use dem_materials, only: pair_constants_t, pair_constants_build
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
                              neighbors_spatial_order, neighbors_history, neighbors_set_history
@@ -19,14 +22,14 @@ module dem_solver
     use dem_mesh, only: mesh_t, mesh_move
     use dem_outlets, only: outlets_mark
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
-    use dem_diagnostics, only: energies, count_pp_contacts, first_nonfinite, count_unstable, &
+    use dem_diagnostics, only: energies, count_pp_sides, first_nonfinite, count_unstable, &
                                contact_trace
     use dem_output, only: output_t, output_open, output_series, output_contact, &
                           output_final, output_close, output_sizes, output_probes, &
                           output_histogram
     use dem_probes, only: probe_header, probe_values, probe_histogram_counts, probe_histogram
-    use dem_checkpoint, only: frame_t, frame_write, checkpoint_file, checkpoint_latest, &
-                              checkpoint_kept
+    use dem_checkpoint, only: frame_t, frame_write, frame_gather, checkpoint_file, &
+                              checkpoint_latest, checkpoint_kept
     use dem_xdmf, only: xdmf_write, snapshot_file
     use dem_files, only: make_directory, file_remove, file_rename
     use dem_signals, only: signal_received
@@ -37,7 +40,8 @@ module dem_solver
                           wall_seconds, timer_seconds
     implicit none
     private
-    public :: solver_t, solver_init, solver_restore, solver_run, &
+    public :: solver_t, solver_init, solver_restore, solver_run, solver_particles, &
+              solver_parallel_stats, &
               stop_end, stop_settled, stop_wall_time, stop_signal
 
     ! why solver_run returned without an error
@@ -65,6 +69,9 @@ module dem_solver
         integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
         type(timers_t) :: timers       !< time per phase of those steps
         type(comm_t) :: comm           !< the ranks of the run
+        type(domain_t) :: dom          !< their blocks and ghosts (more than one rank)
+        real(wp) :: imbalance_limit = 1.0_wp  !< repartition above this load ratio
+        logical :: distributed = .false.  !< each rank holds only its own particles
         real(wp) :: time0 = 0.0_wp     !< time of step step0; time = time0 + (step - step0) dt
         integer(i8) :: step0 = 0
         integer(i8) :: rng_state = 0   !< the case's random generator
@@ -102,6 +109,7 @@ contains
         s%mesh = c%mesh
         call wall_contacts_init(s%wc, c%n_particles)
         s%nb%skin = c%skin
+        s%imbalance_limit = c%imbalance_limit
         s%sort_cell = 2.0_wp * minval(c%radius(1:c%n_particles)) + c%skin
         s%step = 0
         s%rng_state = c%rng_state
@@ -160,6 +168,28 @@ contains
         s%restarted = .true.
     end subroutine solver_restore
 
+    !> The particles of the run, over all ranks.
+    integer(i8) function solver_particles(s) result(n)
+        type(solver_t), intent(in) :: s
+        integer(i8) :: a(1)
+        a = s%p%n_own
+        call comm_sum(s%comm, a)
+        n = a(1)
+    end function solver_particles
+
+    !> On several ranks: the load imbalance (largest particle count of a rank over the mean),
+    !> ghosts per owned particle, bytes sent between ranks per step of the last run (all
+    !> ranks together) and the partitions computed.
+    function solver_parallel_stats(s) result(stats)
+        type(solver_t), intent(in) :: s
+        real(wp) :: stats(4)
+        integer(i8) :: sums(3)
+        sums = [int(s%p%n_own, i8), int(s%p%n_ghost, i8), s%dom%bytes]
+        call comm_sum(s%comm, sums)
+        stats = [domain_imbalance(s%comm, s%p%n_own), real(sums(2), wp) / max(1_i8, sums(1)), &
+                 real(sums(3), wp) / max(1_i8, s%steps_run), real(s%dom%balances, wp)]
+    end function solver_parallel_stats
+
     !> The time of a step [s] (doc/theory.md, section 11).
     pure real(wp) function time_of(s, c, step) result(time)
         type(solver_t), intent(in) :: s
@@ -179,7 +209,8 @@ contains
         type(output_t) :: out
         integer(i8) :: n_end, every, every_snap, every_ckpt
         real(wp) :: dt, next_progress, step_seconds, last
-        logical :: written
+        logical :: written, bad, show
+        type(frame_t) :: fr
         character(len=:), allocatable :: columns
         integer :: k
 
@@ -194,14 +225,19 @@ contains
         do k = 1, size(c%probes)
             columns = columns // probe_header(c%probes(k), c%mats%name, .not. c%mats%rigid)
         end do
-        if (s%restarted) then
-            call output_open(out, c%output_dir, s%trace > 0, columns, err, &
-                             [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes])
-            if (.not. err%failed() .and. size(s%snap_step) > 0) call write_xdmf(s, c, err)
-        else
-            call output_open(out, c%output_dir, s%trace > 0, columns, err)
+        if (s%comm%size > 1 .and. s%trace_id /= 0) call set_error(err, dem_err_runtime, &
+            c%source // ': &output trace_id: tracing runs on one MPI rank')
+        if (s%comm%rank == 0 .and. .not. err%failed()) then   ! the CSV files are rank 0's
+            if (s%restarted) then
+                call output_open(out, c%output_dir, s%trace > 0, columns, err, &
+                                 [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes])
+                if (.not. err%failed() .and. size(s%snap_step) > 0) call write_xdmf(s, c, err)
+            else
+                call output_open(out, c%output_dir, s%trace > 0, columns, err)
+            end if
         end if
-        if (err%failed()) return
+        if (failed_anywhere(s, err)) return
+        if (s%comm%size > 1) call start_domain(s, c)
         call device_data(s, acc_enter)
 
         call rebuild(s)
@@ -210,10 +246,11 @@ contains
                 call compute_forces(s, c, time_of(s, c, s%step), err)
                 call write_trace(s, c, out, time_of(s, c, s%step), err)
             end if
-            if (.not. err%failed()) call write_series(s, c, out, err)
+            if (.not. failed_anywhere(s, err)) call write_series(s, c, out, err)
             if (every_snap > 0 .and. .not. err%failed()) call write_snapshot(s, c, err)
         end if
         s%steps_run = 0
+        s%dom%bytes = 0
         s%timers = timers_t()
         next_progress = wall_seconds() + c%progress_interval
         step_seconds = 0.0_wp
@@ -231,55 +268,68 @@ contains
                 else
                     call compute_forces(s, c, time_of(s, c, s%step + 1), err)
                 end if
-                if (err%failed()) exit
-                if (c%integrator == integrator_euler) then
+                if (c%integrator == integrator_euler .and. .not. err%failed()) then
                     call write_trace(s, c, out, time_of(s, c, s%step), err)
                     call timer_stop(s%timers, phase_output)
                     call kick(n, dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
                     call drift(n, dt, p%v, p%x)
                     call timer_stop(s%timers, phase_integrate)
-                else
+                else if (.not. err%failed()) then
                     call kick(n, 0.5_wp * dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
                     call timer_stop(s%timers, phase_integrate)
                     call write_trace(s, c, out, time_of(s, c, s%step + 1), err)
                 end if
-                if (count_unstable(n, c%max_speed, p%radius, p%v, p%w) > 0) then
+                bad = .false.
+                if (.not. err%failed()) bad = count_unstable(n, c%max_speed, p%radius, p%v, &
+                                                             p%w) > 0
+            end associate
+            if (failed_anywhere(s, err, bad)) then
+                if (.not. err%failed()) then           ! unstable on some rank
                     s%step = s%step + 1
                     call unstable(s, c, err)
-                    exit
                 end if
-                call timer_stop(s%timers, phase_integrate)
-            end associate
+                exit
+            end if
+            call timer_stop(s%timers, phase_integrate)
             s%step = s%step + 1
             s%steps_run = s%steps_run + 1
             if (size(c%outlets) > 0) call remove_outlet_particles(s, c)
             call timer_stop(s%timers, phase_neighbors)
             written = .false.
             if (due(every) .or. s%step == n_end) call write_series(s, c, out, err)
-            if (err%failed()) exit
+            if (failed_anywhere(s, err)) exit
             if (due(every_snap) .or. (every_snap > 0 .and. s%step == n_end)) &
                 call write_snapshot(s, c, err)
             if (due(every_ckpt) .or. s%step == n_end .or. s%settled) then
                 call write_checkpoint(s, c, out, err)
                 written = .true.
             end if
+            if (failed_anywhere(s, err)) exit
             step_seconds = wall_seconds() - last
             last = last + step_seconds
-            if (s%step < n_end) call run_control(s, c, out, started, step_seconds, written, err)
+            show = s%comm%rank == 0 .and. c%progress_interval > 0.0_wp .and. last >= next_progress
+            if (s%step < n_end) then
+                call run_control(s, c, out, started, step_seconds, written, show, err)
+            else
+                show = .false.
+            end if
             if (s%stopped /= stop_end) exit
-            if (c%progress_interval > 0.0_wp .and. last >= next_progress) then
+            if (show) then
                 call progress(s, c, n_end)
-                next_progress = last + c%progress_interval
+                next_progress = next_progress + c%progress_interval    ! on a fixed schedule
+                if (next_progress <= last) next_progress = last + c%progress_interval
             end if
             call timer_stop(s%timers, phase_output)
         end do
         if (s%settled .and. s%stopped == stop_end) s%stopped = stop_settled
 
-        call particle_data(s, acc_to_host)
-        if (.not. err%failed() .and. (s%stopped == stop_end .or. s%stopped == stop_settled)) &
-            call output_final(out, order_by_id(s%p%gid(1:s%p%n_own)), s%p%gid, &
-                              c%mats%name(s%p%mat), s%p%radius, s%p%x, s%p%v, s%p%w, err)
-        call output_close(out)
+        if (.not. err%failed() .and. (s%stopped == stop_end .or. s%stopped == stop_settled)) then
+            call capture(s, c, out, fr)
+            if (s%comm%rank == 0) call output_final(out, [(k, k = 1, fr%n)], fr%gid, &
+                c%mats%name(fr%mat), fr%radius, fr%x, fr%v, fr%w, err)
+            bad = failed_anywhere(s, err)
+        end if
+        if (s%comm%rank == 0) call output_close(out)
         call device_data(s, acc_exit)
     contains
         integer(i8) function steps_of(interval) result(k)
@@ -295,26 +345,80 @@ contains
         end function due
     end subroutine solver_run
 
+    !> True on every rank when `err` is set, or `flag` is true, on any rank. A rank other
+    !> than 0 whose error is its own prints it (rank 0 prints its errors at the end); the
+    !> ranks without an error take the largest code of those with one.
+    logical function failed_anywhere(s, err, flag) result(failed)
+        type(solver_t), intent(in) :: s
+        type(error_t), intent(inout) :: err
+        logical, intent(in), optional :: flag
+        logical :: flags(2)
+        integer :: code(1)
+        flags = [err%failed(), .false.]
+        if (present(flag)) flags(2) = flag
+        if (s%comm%size > 1) flags = comm_any(s%comm, flags)
+        failed = any(flags)
+        if (.not. flags(1) .or. s%comm%size == 1) return
+        code = err%code
+        call comm_max(s%comm, code)
+        if (err%failed() .and. s%comm%rank > 0) write(error_unit, '(a)') 'dem: error (rank ' &
+            // itoa(s%comm%rank) // '): ' // err%message
+        if (.not. err%failed()) call set_error(err, code(1), 'the run stopped on an error ' // &
+                                               'of another rank (above)')
+    end function failed_anywhere
+
+    !> The blocks of a run on several ranks, over the box of the particles (every rank holds
+    !> all of them now) and the walls.
+    subroutine start_domain(s, c)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        real(wp) :: lo(3), hi(3), rmin
+        integer(ip) :: n
+        n = s%p%n_own
+        lo = huge(1.0_wp)
+        hi = -huge(1.0_wp)
+        if (n > 0) then
+            lo = minval(s%p%x(:, 1:n), dim=2)
+            hi = maxval(s%p%x(:, 1:n), dim=2)
+        end if
+        if (s%mesh%n_tri > 0) then
+            lo = min(lo, minval(reshape(s%mesh%vert, [3, 3 * s%mesh%n_tri]), dim=2))
+            hi = max(hi, maxval(reshape(s%mesh%vert, [3, 3 * s%mesh%n_tri]), dim=2))
+        end if
+        if (any(lo > hi)) then                     ! nothing at all
+            lo = 0.0_wp
+            hi = 0.0_wp
+        end if
+        rmin = 0.0_wp
+        if (n > 0) rmin = minval(s%p%radius(1:n))
+        call domain_init(s%dom, s%comm, lo, hi, 2.0_wp * (2.0_wp * rmin + c%skin), c%skin)
+    end subroutine start_domain
+
     !> Stop the run if a signal came or the wall-time limit is near, after writing a
     !> checkpoint (unless one was just written). The limit is near when less time is left
     !> than twice the slowest checkpoint write (before the first: 4 us per particle), two
-    !> steps and the time to shut down (doc/theory.md, section 11).
-    subroutine run_control(s, c, out, started, step_seconds, written, err)
+    !> steps and the time to shut down (doc/theory.md, section 11). Every rank stops, or none;
+    !> `show` (rank 0's clock says that a progress line is due) becomes every rank's.
+    subroutine run_control(s, c, out, started, step_seconds, written, show, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
         real(wp), intent(in) :: started, step_seconds
         logical, intent(in) :: written
+        logical, intent(inout) :: show
         type(error_t), intent(inout) :: err
         real(wp) :: reserve
         character(len=:), allocatable :: sig
-        logical :: near
+        logical :: near, flags(3)
         sig = signal_received()
         reserve = 2.0_wp * max(s%ckpt_seconds, 4.0e-6_wp * s%p%n_own) + 2.0_wp * step_seconds &
                   + shutdown_seconds
         near = c%wall_time_limit > 0.0_wp .and. &
                wall_seconds() - started + reserve >= c%wall_time_limit
-        if (.not. comm_any(s%comm, len(sig) > 0 .or. near)) return  ! every rank stops, or none
+        flags = comm_any(s%comm, [len(sig) > 0, near, show])
+        show = flags(3)
+        near = flags(2)
+        if (.not. (flags(1) .or. near)) return
         if (near) then
             s%stopped = stop_wall_time
             s%stop_message = 'the wall-time limit is near'
@@ -336,22 +440,21 @@ contains
         type(case_t), intent(in) :: c
         integer(i8), intent(in) :: n_end
         real(wp) :: run_seconds, rate, left
-        integer(ip) :: n_pp, n_pw
+        integer(i8) :: counts(3)
         integer :: k
-        if (s%comm%rank /= 0) return
         call particle_data(s, acc_to_host)
-        n_pp = count_pp_contacts(s%p%n_own, s%p%x, s%p%radius, s%nb%start, s%nb%list)
-        n_pw = count(s%wc%tri(:, 1:s%p%n_own) > 0)
+        counts = contact_counts(s)
+        if (s%comm%rank /= 0) return
         run_seconds = 0.0_wp
         do k = 1, size(s%timers%ticks)
             run_seconds = run_seconds + timer_seconds(s%timers, k)
         end do
-        rate = real(s%steps_run, wp) * s%p%n_own / max(run_seconds, tiny(1.0_wp))
+        rate = real(s%steps_run, wp) * counts(3) / max(run_seconds, tiny(1.0_wp))
         left = real(n_end - s%step, wp) * run_seconds / max(1.0_wp, real(s%steps_run, wp))
         write(output_unit, '(a,i0,a,es11.4,a,f5.1,a,i0,a,i0,a,es9.2,a,a)') 'progress: step ', &
             s%step, '  t = ', time_of(s, c, s%step), ' s  ', &
             100.0_wp * real(s%step - s%step0, wp) / max(1.0_wp, real(n_end - s%step0, wp)), &
-            ' %  particles ', s%p%n_own, '  contacts ', n_pp + n_pw, '  ', rate, &
+            ' %  particles ', counts(3), '  contacts ', counts(1) + counts(2), '  ', rate, &
             ' particle-steps/s  left ', duration_text(left)
         flush(output_unit)
     end subroutine progress
@@ -364,11 +467,20 @@ contains
         real(wp), intent(in) :: time       !! time of the positions [s]
         type(error_t), intent(inout) :: err
         integer(ip) :: overflow
+        logical :: stale
         if (s%mesh%moving) then
             call mesh_move(s%mesh, time)
             call mesh_data(s%mesh, acc_to_device)
         end if
-        if (neighbors_stale(s%nb, s%p%n_own, s%p%x, s%mesh)) call rebuild(s)
+        stale = neighbors_stale(s%nb, s%p%n_own, s%p%x, s%mesh)
+        if (s%comm%size > 1) stale = comm_any(s%comm, stale)
+        if (stale) then
+            call rebuild(s)
+        else if (s%comm%size > 1) then
+            call particle_data(s, acc_to_host)
+            call domain_update(s%dom, s%comm, s%p)
+            call particle_data(s, acc_to_device)
+        end if
         call timer_stop(s%timers, phase_neighbors)
         associate (p => s%p, nb => s%nb, pc => s%pc, m => s%mesh, n => s%p%n_own)
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
@@ -393,17 +505,20 @@ contains
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         logical :: gone(s%p%n_own)
-        integer(ip) :: n_gone
+        integer(i8) :: n_gone(1)
         call acc_data(s%p%x, acc_to_host)
         n_gone = outlets_mark(s%p%n_own, s%p%x, c%outlets, gone)
-        if (n_gone == 0) return
-        s%removed = s%removed + n_gone
+        if (s%comm%size > 1) call comm_sum(s%comm, n_gone)
+        if (n_gone(1) == 0) return
+        s%removed = s%removed + n_gone(1)
         call rebuild(s, .not. gone)
     end subroutine remove_outlet_particles
 
     !> Re-sort the particles in space and rebuild the neighbour lists, on the host; the
     !> history follows the particles, and the new state and lists go to the device. With
-    !> `keep`, the particles not kept are removed.
+    !> `keep`, the particles not kept are removed. On several ranks, the particles first go
+    !> to the ranks of their blocks (repartitioned when the load is out of balance), then
+    !> the ghosts are exchanged.
     subroutine rebuild(s, keep)
         type(solver_t), intent(inout) :: s
         logical, intent(in), optional :: keep(:)
@@ -419,9 +534,14 @@ contains
         else
             kept = [(i, i = 1, s%p%n_own)]
         end if
+        if (s%comm%size > 1) then
+            call distribute(s, kept)
+            kept = [(i, i = 1, s%p%n_own)]
+        end if
         order = kept(neighbors_spatial_order(size(kept), s%p%x(:, kept), s%sort_cell))
         call particles_permute(s%p, order)
         call wall_contacts_permute(s%wc, order)
+        if (s%comm%size > 1) call domain_ghosts(s%dom, s%comm, s%p)
         call particle_data(s, acc_to_device)
         if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:s%p%n_own), s%trace_id, dim=1)
         if (s%trace_id /= 0 .and. s%trace == 0) s%trace_id = 0    ! it left through an outlet
@@ -431,56 +551,140 @@ contains
         s%lists_on_device = .true.
     end subroutine rebuild
 
+    !> Give the particles `kept` (the others are removed) and their contact history to the
+    !> ranks of their blocks, rebalancing first when the load is more uneven than the limit
+    !> (the first time, every rank holds every particle and keeps its own). The history
+    !> of the particles now owned is left for the next neighbors_build. The particle count
+    !> and the momentum are checked to be the same after the move (to round-off).
+    subroutine distribute(s, kept)
+        type(solver_t), intent(inout) :: s
+        integer(ip), intent(in) :: kept(:)
+        integer(i8), allocatable :: pair(:, :)
+        real(wp), allocatable :: xi(:, :)
+        integer(ip), allocatable :: mine(:)
+        real(wp) :: imbalance, before(5), after(5)
+        integer(ip) :: i
+        integer :: status
+        if (s%distributed) then
+            call neighbors_history(s%nb, s%p%n_own, s%p%gid, order_by_id(s%p%gid(1:s%p%n_own)), &
+                                   pair, xi)
+        else if (allocated(s%good%pair)) then      ! restored from a checkpoint
+            pair = s%good%pair
+            xi = s%good%pair_xi
+        else
+            allocate(pair(2, 0), xi(3, 0))
+        end if
+        imbalance = domain_imbalance(s%comm, size(kept, kind=ip))
+        if (.not. s%distributed .or. imbalance > s%imbalance_limit) then
+            mine = kept                      ! the first time, rank 0 speaks for every particle
+            if (.not. s%distributed .and. s%comm%rank > 0) mine = kept(1:0)
+            call domain_balance(s%dom, s%comm, size(mine, kind=ip), s%p%x(:, mine), &
+                                s%p%radius(mine), s%wc%tri(:, mine), status)
+            if (status /= 1) error stop 'dem: METIS could not partition the blocks'
+        end if
+        before = totals(kept, .not. s%distributed)
+        call domain_migrate(s%dom, s%comm, s%p, s%wc, kept, pair, xi, .not. s%distributed)
+        s%distributed = .true.
+        after = totals([(i, i = 1, s%p%n_own)], .false.)
+        if (nint(after(1)) /= nint(before(1)) .or. any(abs(after(2:4) - before(2:4)) > &
+            1.0e-9_wp * (before(5) + tiny(1.0_wp)))) &
+            error stop 'dem: a migration did not conserve the particles or their momentum'
+    contains
+        !> Particles, momentum and sum of |momentum| of the particles idx over the ranks (only
+        !> rank 0's when every rank holds every particle).
+        function totals(idx, everywhere) result(t)
+            integer(ip), intent(in) :: idx(:)
+            logical, intent(in) :: everywhere
+            real(wp) :: t(5)
+            integer(ip) :: k
+            t = 0.0_wp
+            if (.not. everywhere .or. s%comm%rank == 0) then
+                t(1) = size(idx)
+                do k = 1, size(idx)
+                    t(2:4) = t(2:4) + s%p%mass(idx(k)) * s%p%v(:, idx(k))
+                    t(5) = t(5) + s%p%mass(idx(k)) * norm2(s%p%v(:, idx(k)))
+                end do
+            end if
+            call comm_sum(s%comm, t)
+        end function totals
+        call neighbors_set_history(s%nb, s%p%n_own, s%p%gid, order_by_id(s%p%gid(1:s%p%n_own)), &
+                                   pair, xi)
+    end subroutine distribute
+
     !> One row of series.csv, its sums taken in the order of the particle ids (so that they
-    !> do not depend on where particles are stored); the state, which has passed the
-    !> instability guard, becomes the last good state.
+    !> depend neither on where particles are stored nor on the number of ranks); the state,
+    !> which has passed the instability guard, becomes the last good state. Rank 0 computes
+    !> the row from the state gathered there and writes it.
     subroutine write_series(s, c, out, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
         type(error_t), intent(inout) :: err
         real(wp) :: ke_t, ke_r, pe, vmax
-        integer(ip) :: n_pp
-        integer(ip), allocatable :: order(:)
+        real(wp), allocatable :: mass(:)
+        integer(i8) :: counts(3), bytes(3)
+        logical :: settled
         call particle_data(s, acc_to_host)
-        associate (p => s%p)
-            if (first_nonfinite(p%n_own, p%x, p%v, p%w) > 0) then
-                call unstable(s, c, err)
-                return
-            end if
-            order = order_by_id(p%gid(1:p%n_own))
-            call energies(p%n_own, p%mass(order), p%inv_inertia(order), p%x(:, order), &
-                          p%v(:, order), p%w(:, order), c%gravity, ke_t, ke_r, pe, vmax)
-            n_pp = count_pp_contacts(p%n_own, p%x, p%radius, s%nb%start, s%nb%list)
-            call output_series(out, time_of(s, c, s%step), s%step, p%n_own, s%removed, n_pp, &
-                               count(s%wc%tri(:, 1:p%n_own) > 0), ke_t, ke_r, pe, vmax)
-            s%settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
-            call write_probes(s, c, out, order, err)
-        end associate
-        call capture(s, c, out, s%good, order)
+        if (comm_any(s%comm, first_nonfinite(s%p%n_own, s%p%x, s%p%v, s%p%w) > 0)) then
+            call unstable(s, c, err)
+            return
+        end if
+        counts = contact_counts(s)
+        call capture(s, c, out, s%good)
+        settled = .false.
+        if (s%comm%rank == 0) then
+            associate (fr => s%good)
+                mass = sphere_mass(fr%radius, c%mats%density(fr%mat))
+                call energies(fr%n, mass, sphere_inv_inertia(mass, fr%radius), fr%x, fr%v, &
+                              fr%w, c%gravity, ke_t, ke_r, pe, vmax)
+                call output_series(out, fr%time, s%step, fr%n, s%removed, int(counts(1), ip), &
+                                   int(counts(2), ip), ke_t, ke_r, pe, vmax)
+                settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
+                call write_probes(s, c, out, mass, err)
+            end associate
+            bytes = output_sizes(out)            ! the row just written belongs to the state
+            s%good%series_bytes = bytes(1)
+            s%good%contact_bytes = bytes(2)
+            s%good%probes_bytes = bytes(3)
+        end if
+        s%settled = comm_any(s%comm, settled)
     end subroutine write_series
 
-    !> The probes' row of probes.csv, and the histograms due now; `order` lists the particles
-    !> by id.
-    subroutine write_probes(s, c, out, order, err)
+    !> Particle contacts (pairs), wall contacts and particles, over the ranks (the ghosts
+    !> are brought to the owned particles' step first).
+    function contact_counts(s) result(counts)
+        type(solver_t), intent(inout) :: s
+        integer(i8) :: counts(3)
+        if (s%comm%size > 1) call domain_update(s%dom, s%comm, s%p)
+        counts = [int(count_pp_sides(s%p%n_own, s%p%x, s%p%radius, s%nb%start, s%nb%list), i8), &
+                  count(s%wc%tri(:, 1:s%p%n_own) > 0, kind=i8), int(s%p%n_own, i8)]
+        call comm_sum(s%comm, counts)
+        counts(1) = counts(1) / 2
+    end function contact_counts
+
+    !> The probes' row of probes.csv, and the histograms due now, from the last good state
+    !> (particles by id; `mass` of each).
+    subroutine write_probes(s, c, out, mass, err)
         type(solver_t), intent(in) :: s
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
-        integer(ip), intent(in) :: order(:)
+        real(wp), intent(in) :: mass(:)
         type(error_t), intent(inout) :: err
         real(wp), allocatable :: values(:)
         real(wp) :: t
         integer :: k
+        integer(ip) :: i
         t = time_of(s, c, s%step)
         values = [real(wp) ::]
-        associate (p => s%p, n => s%p%n_own)
+        associate (fr => s%good)
             do k = 1, size(c%probes)
-                values = [values, probe_values(c%probes(k), .not. c%mats%rigid, order, p%gid, &
-                                               p%mat, p%mass, p%x, p%v, p%w)]
+                values = [values, probe_values(c%probes(k), .not. c%mats%rigid, &
+                                               [(i, i = 1, fr%n)], fr%gid, fr%mat, mass, fr%x, &
+                                               fr%v, fr%w)]
                 if (c%probes(k)%kind == probe_histogram .and. histogram_due(c%probes(k)%time)) &
                     call output_histogram(c%output_dir, c%probes(k)%name, c%probes(k)%v_min, &
                                           c%probes(k)%v_max, probe_histogram_counts( &
-                                          c%probes(k), p%x(:, 1:n), p%v(:, 1:n)), err)
+                                          c%probes(k), fr%x, fr%v), err)
             end do
         end associate
         call output_probes(out, t, s%step, values)
@@ -518,8 +722,8 @@ contains
     end subroutine write_trace
 
     !> The instability guard has tripped: write the last good state as a checkpoint (unless a
-    !> checkpoint, which passed the guard too, is newer), and stop the run naming the first
-    !> offending particle, the time and the likely cause.
+    !> checkpoint, which passed the guard too, is newer), and stop the run naming the
+    !> offending particle of lowest id, the time and the likely cause.
     subroutine unstable(s, c, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -527,24 +731,43 @@ contains
         type(time_scales_t) :: ts
         type(error_t) :: write_err
         character(len=:), allocatable :: what, saved
+        integer(i8), allocatable :: ids(:)
+        real(wp), allocatable :: speeds(:)
         integer(ip) :: i, bad
         real(wp) :: speed
         call particle_data(s, acc_to_host)
+        bad = 0
+        speed = ieee_value(speed, ieee_quiet_nan)     ! a non-finite state
         associate (p => s%p)
-            bad = first_nonfinite(p%n_own, p%x, p%v, p%w)
-            what = ' has a non-finite state'
+            do i = 1, p%n_own
+                if (first_nonfinite(1_ip, p%x(:, i:i), p%v(:, i:i), p%w(:, i:i)) > 0) then
+                    if (bad == 0 .or. p%gid(i) < p%gid(max(bad, 1))) bad = i
+                end if
+            end do
             if (bad == 0) then
                 do i = 1, p%n_own
-                    speed = max(norm2(p%v(:, i)), norm2(p%w(:, i)) * p%radius(i))
-                    if (speed >= c%max_speed) then
-                        bad = i
-                        what = ' moves at ' // real_text(speed) // ' m/s, above the bound ' // &
-                               real_text(c%max_speed) // ' m/s (&run max_speed)'
-                        exit
+                    if (max(norm2(p%v(:, i)), norm2(p%w(:, i)) * p%radius(i)) < c%max_speed) cycle
+                    if (bad > 0) then
+                        if (p%gid(i) > p%gid(bad)) cycle
                     end if
+                    bad = i
+                    speed = max(norm2(p%v(:, i)), norm2(p%w(:, i)) * p%radius(i))
                 end do
             end if
+            call comm_gather(s%comm, [merge(p%gid(max(bad, 1)), 0_i8, bad > 0)], ids)
+            call comm_gather(s%comm, [speed], speeds)
         end associate
+        what = ''
+        if (s%comm%rank == 0) then              ! the offender of lowest id, any rank
+            i = minloc(ids, mask=ids > 0, dim=1)
+            what = 'unstable: particle ' // itoa(ids(i))
+            if (ieee_is_nan(speeds(i))) then
+                what = what // ' has a non-finite state'
+            else
+                what = what // ' moves at ' // real_text(speeds(i)) // ' m/s, above the bound ' &
+                       // real_text(c%max_speed) // ' m/s (&run max_speed)'
+            end if
+        end if
         saved = ''
         if (any(s%ckpt_step > s%good%step)) then     ! a checkpoint newer than the last row
             saved = '; the last good state is in ' // c%output_dir // '/' // &
@@ -557,20 +780,20 @@ contains
                                             write_err%message
         end if
         call case_time_scales(c, ts)
-        call set_error(err, dem_err_runtime, 'unstable: particle ' // itoa(s%p%gid(max(1, bad))) &
-            // what // ' at t = ' // real_text(time_of(s, c, s%step)) // ' s; dt is ' // &
+        call set_error(err, dem_err_runtime, what // ' at t = ' // &
+            real_text(time_of(s, c, s%step)) // ' s; dt is ' // &
             real_text(c%dt / ts%rayleigh) // ' of the Rayleigh time (' // &
             real_text(ts%rayleigh) // ' s): reduce dt' // saved)
     end subroutine unstable
 
-    !> The state now, particles by id, into `fr`; with the per-particle contact counts and
-    !> forces when the snapshots hold them.
-    subroutine capture(s, c, out, fr, by_id)
+    !> The state now, particles by id, into `fr`, with the per-particle contact counts when
+    !> the snapshots hold them; on several ranks, gathered on rank 0 (the others keep no
+    !> particles).
+    subroutine capture(s, c, out, fr)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
         type(frame_t), intent(out) :: fr
-        integer(ip), intent(in), optional :: by_id(:)  !! the particles by id, if known
         integer(ip), allocatable :: order(:)
         integer(i8) :: bytes(3)
         integer(ip) :: a, i
@@ -580,11 +803,7 @@ contains
             call acc_data(s%nb%touching, acc_to_host)
         end if
         associate (p => s%p, n => s%p%n_own)
-            if (present(by_id)) then
-                order = by_id
-            else
-                order = order_by_id(p%gid(1:n))
-            end if
+            order = order_by_id(p%gid(1:n))
             fr%time = time_of(s, c, s%step)
             fr%step = s%step
             fr%n = n
@@ -608,16 +827,19 @@ contains
                 end do
             end if
         end associate
+        if (s%comm%size > 1) call frame_gather(fr, s%comm)
         fr%time0 = s%time0
         fr%step0 = s%step0
         fr%dt = c%dt
         fr%removed = s%removed
         fr%settled = s%settled
         fr%rng_state = s%rng_state
-        bytes = output_sizes(out)
-        fr%series_bytes = bytes(1)
-        fr%contact_bytes = bytes(2)
-        fr%probes_bytes = bytes(3)
+        if (s%comm%rank == 0) then
+            bytes = output_sizes(out)
+            fr%series_bytes = bytes(1)
+            fr%contact_bytes = bytes(2)
+            fr%probes_bytes = bytes(3)
+        end if
         fr%snap_step = s%snap_step
         fr%snap_time = s%snap_time
         fr%snap_n = s%snap_n
@@ -639,17 +861,20 @@ contains
         type(error_t), intent(inout) :: err
         type(frame_t) :: fr
         type(output_t) :: none
+        integer(i8) :: n_total(1)
         if (err%failed()) return
         call make_directory(c%output_dir // '/snapshots', err)
         if (err%failed()) return
         call capture(s, c, none, fr)
+        n_total = size(fr%gid, kind=i8)
+        call comm_sum(s%comm, n_total)
         if (.not. c%snapshot_force) deallocate(fr%f)
         call frame_write(fr, c, mesh_at(s, fr%time), c%output_dir // '/' // &
                          snapshot_file(s%step), .false., s%comm, err)
         if (err%failed()) return
         s%snap_step = [pack(s%snap_step, s%snap_step < s%step), s%step]
         s%snap_time = [s%snap_time(1:size(s%snap_step) - 1), fr%time]
-        s%snap_n = [s%snap_n(1:size(s%snap_step) - 1), int(fr%n, i8)]
+        s%snap_n = [s%snap_n(1:size(s%snap_step) - 1), n_total(1)]
         call write_xdmf(s, c, err)
     end subroutine write_snapshot
 

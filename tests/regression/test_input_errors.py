@@ -131,6 +131,7 @@ OUT = "&output interval = 1e-6 /"
 for key, value, group, line in (("max_speed", "0", "run", RUN),
                                 ("wall_time_limit", "-1", "run", RUN),
                                 ("progress_interval", "-0.5", "run", RUN),
+                                ("imbalance_limit", "0.9", "run", RUN),
                                 ("snapshot_interval", "-1e-6", "output", OUT),
                                 ("checkpoint_interval", "-1", "output", OUT),
                                 ("checkpoint_keep", "0", "output", OUT),

@@ -1,0 +1,152 @@
+"""The same answer on any number of MPI ranks (doc/parallel.md): a case run on 1, 2, 3 (and
+4) ranks gives bit-identical results: final.csv, series.csv (energies summed in id order,
+contact counts), probes.csv, and the checkpoints' particles and contact history, for
+
+1. a settling bed with contacts and a moving, spinning STL floor (the box case of the
+   checkpoint tests), on 1, 2, 3 and 4 ranks;
+2. a short discharge of the reduced small silo (particles removed by the outlet: count plus
+   removed conserved in every row, and equal to the one-rank run's);
+3. the impact case at reduced size (a steel sphere into a settled bed);
+4. a checkpoint written on 3 ranks, restarted on 2: the same final state as the
+   uninterrupted run on one rank; and a checkpoint written on 1 rank restarted on 3.
+
+The runs are independent: each rank count decomposes space differently (METIS on blocks),
+so equality means that the forces do not depend on the decomposition, that particles
+migrate with all their state and history, and that outputs gather in id order.
+usage: test_parallel.py DEM WORKDIR MPIEXEC"""
+import os
+import shutil
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+from regression_util import ROOT, check, finish
+import checkpoint_util as cu
+
+sys.path.insert(0, os.path.join(ROOT, "cases", "benchmark"))
+import make_cases as mc     # noqa: E402
+
+dem, work, mpiexec = sys.argv[1], os.path.abspath(sys.argv[2]), sys.argv[3]
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+
+
+def run(case, ranks, *args, code=0):
+    """Run dem on `ranks` ranks from `work`; check the exit status."""
+    cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(ranks), dem,
+           *args, case]
+    r = subprocess.run(cmd, cwd=work, capture_output=True, text=True, timeout=900)
+    check(r.returncode == code, f"{os.path.basename(case)} on {ranks} ranks: exit "
+                                f"{r.returncode}: {r.stderr.strip()[-2000:]}")
+    return r
+
+
+def same_file(a, b, what):
+    with open(a, "rb") as fa, open(b, "rb") as fb:
+        check(fa.read() == fb.read(), f"{what}: {b} differs from {a}")
+
+
+def same_state(a, b, what):
+    """The particles and contact history of two checkpoints, bit for bit."""
+    with h5py.File(a) as fa, h5py.File(b) as fb:
+        for name in ("particles/id", "particles/position", "particles/velocity",
+                     "particles/angular_velocity", "particles/force", "particles/torque",
+                     "state/pair", "state/pair_history", "state/wall_contact_triangle",
+                     "state/wall_contact_history", "state/removed"):
+            check(np.array_equal(fa[name][()], fb[name][()]), f"{what}: {name} differs")
+
+
+def compare(name, ranks_list, files=("final.csv", "series.csv")):
+    """Run case `name`.nml (in work, outputs in work/<name>_<ranks>) on each rank count and
+    compare the outputs with the one-rank run's."""
+    outs = {}
+    for ranks in ranks_list:
+        with open(os.path.join(work, name + ".nml")) as f:
+            text = f.read()
+        case = os.path.join(work, f"{name}_{ranks}.nml")
+        with open(case, "w") as f:
+            f.write(text.replace("@OUT@", os.path.join(work, f"{name}_{ranks}")))
+        run(case, ranks)
+        outs[ranks] = os.path.join(work, f"{name}_{ranks}")
+    checkpoints = [c for c in sorted(os.listdir(os.path.join(outs[1], "checkpoints")))
+                   if c.endswith(".h5")]
+    check(len(checkpoints) >= 2, f"{name}: checkpoints {checkpoints}")
+    for ranks in ranks_list[1:]:
+        for f in files:
+            same_file(os.path.join(outs[1], f), os.path.join(outs[ranks], f),
+                      f"{name} on {ranks} ranks")
+        for ck in checkpoints:
+            same_state(os.path.join(outs[1], "checkpoints", ck),
+                       os.path.join(outs[ranks], "checkpoints", ck), f"{name} on {ranks} ranks")
+    return outs
+
+
+# 1. settling bed, moving floor
+cu.write_box_case(os.path.join(work, "box.nml"), "@OUT@", t_end=0.1, n=200,
+                  output=", snapshot_interval = 0, checkpoint_interval = 0.05")
+with open(os.path.join(work, "box.nml")) as f:
+    text = f.read()
+with open(os.path.join(work, "box.nml"), "w") as f:
+    f.write(text.replace(os.path.abspath("@OUT@"), "@OUT@"))
+outs = compare("box", [1, 2, 3, 4])
+s = np.genfromtxt(os.path.join(outs[1], "series.csv"), delimiter=",", names=True)
+check(s["contacts_pp"][-1] > 100 and s["contacts_pw"][-1] > 10,
+      f"box: the bed has contacts ({s['contacts_pp'][-1]:.0f}, {s['contacts_pw'][-1]:.0f})")
+
+# 2. silo discharge (reduced: 400 spheres, stiffness x 1e-3)
+SCALE = 1e-3
+shutil.copytree(os.path.join(ROOT, "cases", "benchmark", "geometry"),
+                os.path.join(work, "geometry"))
+prep = mc.prepare_silo("M1", "small", n=400, scale=SCALE, t_end=0.4)
+prep = prep.replace(f"'{mc.OUT}/prepare_silo_M1_small_400'", f"'{work}/prepare_silo'")
+with open(os.path.join(work, "prepare_silo.nml"), "w") as f:
+    f.write(prep)
+run(os.path.join(work, "prepare_silo.nml"), 2)
+silo = mc.silo("M1", "small", n=400, scale=SCALE, t_end=0.3, interval=0.02, histogram_time=0.2,
+               snapshots=0.0)
+silo = silo.replace(f"'{mc.OUT}/silo_M1_small_400'", "'@OUT@'").replace(
+    f"{mc.FROM_HERE}/prepare_silo_M1_small_400/final.csv", f"{work}/prepare_silo/final.csv")
+silo = silo.replace("snapshot_interval = 0 /",
+                    "snapshot_interval = 0, checkpoint_interval = 0.1 /")
+with open(os.path.join(work, "silo.nml"), "w") as f:
+    f.write(silo)
+outs = compare("silo", [1, 2, 3], ("final.csv", "series.csv", "probes.csv",
+                                   "histogram_velocity.csv"))
+s = np.genfromtxt(os.path.join(outs[1], "series.csv"), delimiter=",", names=True)
+check(np.all(s["particles"] + s["removed"] == 400) and s["removed"][-1] > 20,
+      f"silo: particles + removed = 400 in every row, {s['removed'][-1]:.0f} removed")
+
+# 3. impact, reduced
+prep = mc.prepare_impact(1500, scale=SCALE, t_end=0.15).replace(
+    f"'{mc.OUT}/prepare_impact_1500'", f"'{work}/prepare_impact'")
+with open(os.path.join(work, "prepare_impact.nml"), "w") as f:
+    f.write(prep)
+run(os.path.join(work, "prepare_impact.nml"), 3)
+impact = mc.impact(1500, scale=SCALE, t_end=0.02, interval=1e-3).replace(
+    f"'{mc.OUT}/impact_1500'", "'@OUT@'").replace(
+    f"{mc.FROM_HERE}/prepare_impact_1500/final.csv", f"{work}/prepare_impact/final.csv")
+impact = impact.replace("snapshot_interval = 0.01", "snapshot_interval = 0, "
+                        "checkpoint_interval = 0.01")
+with open(os.path.join(work, "impact.nml"), "w") as f:
+    f.write(impact)
+outs = compare("impact", [1, 2, 3], ("final.csv", "series.csv", "probes.csv"))
+
+# 4. checkpoint on 3 ranks, restart on 2 (and on 1 rank, restart on 3): the run's directory
+# copied, restarted from its first checkpoint (series.csv is cut back to it and continued)
+for first, then in ((3, 2), (1, 3)):
+    name = f"restart_{first}_{then}"
+    d = os.path.join(work, name)
+    shutil.copytree(os.path.join(work, f"box_{first}"), d)
+    ck = sorted(c for c in os.listdir(os.path.join(d, "checkpoints")) if c.endswith(".h5"))[0]
+    with open(os.path.join(work, f"box_{first}.nml")) as f:
+        text = f.read()
+    case = os.path.join(work, name + ".nml")
+    with open(case, "w") as f:
+        f.write(text.replace(os.path.join(work, f"box_{first}"), d))
+    run(case, then, "--restart", os.path.join(d, "checkpoints", ck))
+    for f in ("final.csv", "series.csv"):
+        same_file(os.path.join(work, "box_1", f), os.path.join(d, f),
+                  f"checkpoint on {first} ranks, restarted on {then}")
+finish()
