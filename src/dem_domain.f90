@@ -301,16 +301,17 @@ contains
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :)
         real(wp), allocatable :: rbuf(:, :), rrecv(:, :)
         integer(ip) :: c0(3), c1(3), cx, cy, cz, i, q, n_sent, pass
-        real(wp) :: reach
+        real(wp) :: reach, rmax_all
         d%rmax = 0.0_wp
         if (p%n_own > 0) d%rmax(comm%rank) = maxval(p%radius(1:p%n_own))
         call comm_max(comm, d%rmax)
+        rmax_all = maxval(d%rmax)
         allocate(marked(0:comm%size - 1))
         do pass = 1, 2
             marked = 0
             n_sent = 0
             do i = 1, p%n_own
-                reach = p%radius(i) + maxval(d%rmax) + d%skin
+                reach = p%radius(i) + rmax_all + d%skin
                 c0 = block_coords(d, p%x(:, i) - reach)
                 c1 = block_coords(d, p%x(:, i) + reach)
                 do cz = c0(3), c1(3)

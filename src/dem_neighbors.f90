@@ -110,8 +110,9 @@ contains
         integer(ip) :: i, l, pass, k
         logical :: keep_history
 
-        keep_history = allocated(nb%start)
-        if (keep_history) keep_history = size(nb%start) == n_own + 1
+        keep_history = allocated(nb%start)       ! old rows, matched by old_index if given
+        if (keep_history .and. .not. present(old_index)) &
+            keep_history = size(nb%start) == n_own + 1
         if (keep_history) then
             call move_alloc(nb%start, old_start)
             call move_alloc(nb%partner, old_partner)

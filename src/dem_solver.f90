@@ -345,14 +345,14 @@ contains
         end function due
     end subroutine solver_run
 
-    !> True on every rank when `err` is set, or `flag` is true, on any rank. A rank other
-    !> than 0 whose error is its own prints it (rank 0 prints its errors at the end); the
-    !> ranks without an error take the largest code of those with one.
+    !> True on every rank when `err` is set, or `flag` is true, on any rank. When rank 0 has
+    !> no error of its own, the other ranks print theirs (rank 0 prints its errors at the
+    !> end); the ranks without an error take the largest code of those with one.
     logical function failed_anywhere(s, err, flag) result(failed)
         type(solver_t), intent(in) :: s
         type(error_t), intent(inout) :: err
         logical, intent(in), optional :: flag
-        logical :: flags(2)
+        logical :: flags(2), root_failed
         integer :: code(1)
         flags = [err%failed(), .false.]
         if (present(flag)) flags(2) = flag
@@ -361,7 +361,8 @@ contains
         if (.not. flags(1) .or. s%comm%size == 1) return
         code = err%code
         call comm_max(s%comm, code)
-        if (err%failed() .and. s%comm%rank > 0) write(error_unit, '(a)') 'dem: error (rank ' &
+        root_failed = comm_any(s%comm, s%comm%rank == 0 .and. err%failed())
+        if (err%failed() .and. .not. root_failed) write(error_unit, '(a)') 'dem: error (rank ' &
             // itoa(s%comm%rank) // '): ' // err%message
         if (.not. err%failed()) call set_error(err, code(1), 'the run stopped on an error ' // &
                                                'of another rank (above)')
@@ -589,6 +590,8 @@ contains
         if (nint(after(1)) /= nint(before(1)) .or. any(abs(after(2:4) - before(2:4)) > &
             1.0e-9_wp * (before(5) + tiny(1.0_wp)))) &
             error stop 'dem: a migration did not conserve the particles or their momentum'
+        call neighbors_set_history(s%nb, s%p%n_own, s%p%gid, order_by_id(s%p%gid(1:s%p%n_own)), &
+                                   pair, xi)
     contains
         !> Particles, momentum and sum of |momentum| of the particles idx over the ranks (only
         !> rank 0's when every rank holds every particle).
@@ -607,8 +610,6 @@ contains
             end if
             call comm_sum(s%comm, t)
         end function totals
-        call neighbors_set_history(s%nb, s%p%n_own, s%p%gid, order_by_id(s%p%gid(1:s%p%n_own)), &
-                                   pair, xi)
     end subroutine distribute
 
     !> One row of series.csv, its sums taken in the order of the particle ids (so that they
