@@ -21,8 +21,8 @@ module dem_checkpoint
                       h5_dims, h5_text_length
     implicit none
     private
-    public :: frame_t, frame_write, frame_gather, checkpoint_read, snapshot_read_particles, checkpoint_file, &
-              checkpoint_latest, checkpoint_kept
+    public :: frame_t, frame_write, frame_gather, checkpoint_read, snapshot_read_particles, &
+              checkpoint_file, checkpoint_latest, checkpoint_kept
 
     character(len=*), parameter :: checkpoint_format = 'dem checkpoint 1'
     character(len=*), parameter :: snapshot_format = 'dem snapshot 1'

@@ -134,8 +134,9 @@ contains
         real(wp) :: progress_interval  ! wall-clock time between progress lines [s], >= 0
                                        ! (0: none), default 10
         real(wp) :: imbalance_limit ! on several MPI ranks, repartition when the largest
-                                    ! particle count of a rank exceeds the mean by this
-                                    ! factor, >= 1, default 1.1
+                                    ! particle count of a rank over the mean exceeds this
+                                    ! times the ratio the last partition achieved, >= 1,
+                                    ! default 1.1
         namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable, &
             stop_kinetic_energy, max_speed, wall_time_limit, progress_interval, imbalance_limit
         type(nml_block_t) :: b

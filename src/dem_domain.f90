@@ -20,7 +20,8 @@ module dem_domain
     public :: domain_t, domain_init, domain_balance, domain_imbalance, domain_migrate, &
               domain_ghosts, domain_update
 
-    integer, parameter :: blocks_per_rank = 64   !< target, for a fine-grained balance
+    integer, parameter :: blocks_per_rank = 64   !< target in the particles' box
+    integer, parameter :: max_blocks_per_rank = 512  !< in the whole box (walls included)
 
     !> The blocks, their ranks, and the ghost exchange of the current lists.
     type :: domain_t
@@ -39,18 +40,23 @@ module dem_domain
 
 contains
 
-    !> Blocks over the box [lo, hi], of edge at least h_min (the reach of the largest
-    !> contact), about blocks_per_rank per rank.
-    subroutine domain_init(d, comm, lo, hi, h_min, skin)
+    !> Blocks over the box [lo, hi], of edge at least h_min, about blocks_per_rank per rank
+    !> in the box [p_lo, p_hi] of the particles (where the load is), at most
+    !> max_blocks_per_rank per rank in all.
+    subroutine domain_init(d, comm, lo, hi, p_lo, p_hi, h_min, skin)
         type(domain_t), intent(out) :: d
         type(comm_t), intent(in) :: comm
-        real(wp), intent(in) :: lo(3), hi(3)   !! [m]
+        real(wp), intent(in) :: lo(3), hi(3), p_lo(3), p_hi(3)   !! [m]
         real(wp), intent(in) :: h_min, skin    !! [m]
         real(wp) :: volume
-        volume = product(max(hi - lo, h_min))
+        volume = product(max(p_hi - p_lo, h_min))
         d%h = max(h_min, (volume / real(blocks_per_rank * comm%size, wp))**(1.0_wp / 3.0_wp))
         if (.not. d%h > 0.0_wp) d%h = 1.0_wp          ! an empty case: one block
-        d%n = max(1, ceiling((hi - lo) / d%h))
+        do
+            d%n = max(1, ceiling((hi - lo) / d%h))
+            if (real(d%n(1), wp) * d%n(2) * d%n(3) <= max_blocks_per_rank * comm%size) exit
+            d%h = 1.26_wp * d%h
+        end do
         d%origin = lo
         d%skin = skin
         allocate(d%owner(product(d%n)), d%rmax(0:comm%size - 1), d%send(0), &
@@ -86,9 +92,10 @@ contains
         d2 = sum(max(0.0_wp, lo - x, x - hi)**2)
     end function block_distance2
 
-    !> Assign the blocks to ranks with METIS: vertex weight = particles + wall contacts in a
-    !> block (empty space costs nothing), edge weight = 1 + particles within reach of the
-    !> shared face. Every rank computes the same partition from the same sums. `status` is
+    !> Assign the blocks to ranks with METIS: vertex weight = 1 + s (particles + wall
+    !> contacts) in a block, with s as large as 32-bit weights allow, up to 1024 (empty
+    !> space costs almost nothing; METIS balances badly with weights of zero), edge weight =
+    !> 1 + particles within reach of the shared face. Every rank computes the same partition from the same sums. `status` is
     !> METIS's (1: done).
     subroutine domain_balance(d, comm, n_own, x, radius, wall_tri, status)
         type(domain_t), intent(inout) :: d
@@ -97,12 +104,12 @@ contains
         real(wp), intent(in) :: x(:, :), radius(:)   !! owned particles [m]
         integer(ip), intent(in) :: wall_tri(:, :)    !! wall-contact slots (0: free)
         integer, intent(out) :: status
-        integer(i8), allocatable :: weight(:), face(:, :)
+        integer(i8), allocatable :: weight(:), face(:)      ! face(6 (b - 1) + f): face f of b
         integer, allocatable :: xadj(:), adjncy(:), adjwgt(:), part(:)
         real(wp) :: r(1), reach
         integer(ip) :: i, b, k, c(3), e(3), nb, m, f, side
         nb = product(d%n)
-        allocate(weight(nb), face(6, nb))
+        allocate(weight(nb), face(6 * nb))
         weight = 0
         face = 0
         r = 0.0_wp
@@ -114,14 +121,14 @@ contains
             weight(b) = weight(b) + 1 + count(wall_tri(:, i) > 0)
             reach = radius(i) + r(1) + d%skin
             do k = 1, 3
-                if (x(k, i) - (d%origin(k) + c(k) * d%h) < reach) &
-                    face(2 * k - 1, b) = face(2 * k - 1, b) + 1
-                if (d%origin(k) + (c(k) + 1) * d%h - x(k, i) < reach) &
-                    face(2 * k, b) = face(2 * k, b) + 1
+                f = 6 * (b - 1) + 2 * k - 1                  ! the lower face along k
+                if (x(k, i) - (d%origin(k) + c(k) * d%h) < reach) face(f) = face(f) + 1
+                if (d%origin(k) + (c(k) + 1) * d%h - x(k, i) < reach) face(f + 1) = face(f + 1) + 1
             end do
         end do
         call comm_sum(comm, weight)
-        face = reshape(summed(reshape(face, [6 * nb])), [6, nb])
+        weight = 1 + weight * max(1_i8, min(1024_i8, (2_i8**30 - nb) / max(1_i8, sum(weight))))
+        call comm_sum(comm, face)
         allocate(xadj(nb + 1), adjncy(6 * nb), adjwgt(6 * nb), part(nb))
         xadj(1) = 0
         m = 0
@@ -135,7 +142,8 @@ contains
                 if (e(k) < 0 .or. e(k) >= d%n(k)) cycle
                 m = m + 1
                 adjncy(m) = block_index(d, e) - 1
-                adjwgt(m) = int(1 + face(f, b) + face(f - side, block_index(d, e)))
+                adjwgt(m) = int(1 + face(6 * (b - 1) + f) &
+                                + face(6 * (block_index(d, e) - 1) + f - side))   ! its face to b
             end do
             xadj(b + 1) = m
         end do
@@ -143,13 +151,6 @@ contains
                              status)
         d%owner = part
         d%balances = d%balances + 1
-    contains
-        function summed(a) result(s)
-            integer(i8), intent(in) :: a(:)
-            integer(i8) :: s(size(a))
-            s = a
-            call comm_sum(comm, s)
-        end function summed
     end subroutine domain_balance
 
     !> Largest particle count of a rank over the mean (1: balanced).

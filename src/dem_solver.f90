@@ -70,7 +70,8 @@ module dem_solver
         type(timers_t) :: timers       !< time per phase of those steps
         type(comm_t) :: comm           !< the ranks of the run
         type(domain_t) :: dom          !< their blocks and ghosts (more than one rank)
-        real(wp) :: imbalance_limit = 1.0_wp  !< repartition above this load ratio
+        real(wp) :: imbalance_limit = 1.0_wp  !< repartition above this load ratio ...
+        real(wp) :: balanced = 1.0_wp  !< ... times the ratio the last partition achieved
         logical :: distributed = .false.  !< each rank holds only its own particles
         real(wp) :: time0 = 0.0_wp     !< time of step step0; time = time0 + (step - step0) dt
         integer(i8) :: step0 = 0
@@ -373,7 +374,7 @@ contains
     subroutine start_domain(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        real(wp) :: lo(3), hi(3), rmin
+        real(wp) :: lo(3), hi(3), p_lo(3), p_hi(3), rmin
         integer(ip) :: n
         n = s%p%n_own
         lo = huge(1.0_wp)
@@ -382,6 +383,8 @@ contains
             lo = minval(s%p%x(:, 1:n), dim=2)
             hi = maxval(s%p%x(:, 1:n), dim=2)
         end if
+        p_lo = lo
+        p_hi = hi
         if (s%mesh%n_tri > 0) then
             lo = min(lo, minval(reshape(s%mesh%vert, [3, 3 * s%mesh%n_tri]), dim=2))
             hi = max(hi, maxval(reshape(s%mesh%vert, [3, 3 * s%mesh%n_tri]), dim=2))
@@ -390,9 +393,14 @@ contains
             lo = 0.0_wp
             hi = 0.0_wp
         end if
+        if (n == 0) then
+            p_lo = lo
+            p_hi = hi
+        end if
         rmin = 0.0_wp
         if (n > 0) rmin = minval(s%p%radius(1:n))
-        call domain_init(s%dom, s%comm, lo, hi, 2.0_wp * (2.0_wp * rmin + c%skin), c%skin)
+        call domain_init(s%dom, s%comm, lo, hi, p_lo, p_hi, 2.0_wp * (2.0_wp * rmin + c%skin), &
+                         c%skin)
     end subroutine start_domain
 
     !> Stop the run if a signal came or the wall-time limit is near, after writing a
@@ -553,8 +561,10 @@ contains
     end subroutine rebuild
 
     !> Give the particles `kept` (the others are removed) and their contact history to the
-    !> ranks of their blocks, rebalancing first when the load is more uneven than the limit
-    !> (the first time, every rank holds every particle and keeps its own). The history
+    !> ranks of their blocks, rebalancing first when the load ratio exceeds the limit times
+    !> the ratio the last partition achieved (blocks may not allow better, and a draining
+    !> silo's last particles would be repartitioned at every rebuild); the first time, every
+    !> rank holds every particle and keeps its own. The history
     !> of the particles now owned is left for the next neighbors_build. The particle count
     !> and the momentum are checked to be the same after the move (to round-off).
     subroutine distribute(s, kept)
@@ -566,6 +576,7 @@ contains
         real(wp) :: imbalance, before(5), after(5)
         integer(ip) :: i
         integer :: status
+        logical :: balance
         if (s%distributed) then
             call neighbors_history(s%nb, s%p%n_own, s%p%gid, order_by_id(s%p%gid(1:s%p%n_own)), &
                                    pair, xi)
@@ -576,7 +587,8 @@ contains
             allocate(pair(2, 0), xi(3, 0))
         end if
         imbalance = domain_imbalance(s%comm, size(kept, kind=ip))
-        if (.not. s%distributed .or. imbalance > s%imbalance_limit) then
+        balance = .not. s%distributed .or. imbalance > s%imbalance_limit * s%balanced
+        if (balance) then
             mine = kept                      ! the first time, rank 0 speaks for every particle
             if (.not. s%distributed .and. s%comm%rank > 0) mine = kept(1:0)
             call domain_balance(s%dom, s%comm, size(mine, kind=ip), s%p%x(:, mine), &
@@ -586,6 +598,7 @@ contains
         before = totals(kept, .not. s%distributed)
         call domain_migrate(s%dom, s%comm, s%p, s%wc, kept, pair, xi, .not. s%distributed)
         s%distributed = .true.
+        if (balance) s%balanced = domain_imbalance(s%comm, s%p%n_own)
         after = totals([(i, i = 1, s%p%n_own)], .false.)
         if (nint(after(1)) /= nint(before(1)) .or. any(abs(after(2:4) - before(2:4)) > &
             1.0e-9_wp * (before(5) + tiny(1.0_wp)))) &
