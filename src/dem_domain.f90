@@ -187,14 +187,16 @@ contains
         integer(ip), allocatable :: idx(:), stay(:), by_id(:)
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :), pbuf(:, :), precv(:, :)
         real(wp), allocatable :: rbuf(:, :), rrecv(:, :), xbuf(:, :), xrecv(:, :)
+        logical, allocatable :: removed(:)
         integer :: nr, np, i, m
         allocate(dest(p%n_own + p%n_ghost))
         do i = 1, p%n_own + p%n_ghost
             dest(i) = d%owner(block_index(d, block_coords(d, p%x(:, i))))
         end do
-        dest(1:p%n_own) = -1 - dest(1:p%n_own)          ! removed unless kept
-        dest(kept) = -1 - dest(kept)
-        dest(1:p%n_own) = max(dest(1:p%n_own), -1)
+        allocate(removed(p%n_own))
+        removed = .true.
+        removed(kept) = .false.
+        where (removed) dest(1:p%n_own) = -1
         stay = pack([(i, i = 1, p%n_own)], dest(1:p%n_own) == comm%rank)
         if (everywhere) then
             call particles_permute(p, stay)
