@@ -931,29 +931,33 @@ contains
         fr%ckpt_step = kept
         call frame_write(fr, c, mesh_at(s, fr%time), c%output_dir // '/' // &
                          checkpoint_file(fr%step), .true., s%comm, err)
-        if (err%failed() .or. s%comm%rank /= 0) return
-        open(newunit=u, file=c%output_dir // '/checkpoints/latest.part', status='replace', &
-             action='write', iostat=ios)
-        if (ios == 0) write(u, '(a)', iostat=ios) checkpoint_file(fr%step)
-        if (ios == 0) close(u, iostat=ios)
-        if (ios /= 0) then
-            call set_error(err, dem_err_runtime, c%output_dir // '/checkpoints/latest: ' // &
-                           'cannot write')
-            return
-        end if
-        call file_rename(c%output_dir // '/checkpoints/latest.part', &
-                         c%output_dir // '/checkpoints/latest', err)
-        do k = 1, size(s%ckpt_step)
-            if (all(kept /= s%ckpt_step(k))) &
-                call file_remove(c%output_dir // '/' // checkpoint_file(s%ckpt_step(k)))
-        end do
-        do k = 1, size(s%stale)
-            if (all(kept /= s%stale(k))) &
-                call file_remove(c%output_dir // '/' // checkpoint_file(s%stale(k)))
-        end do
-        s%ckpt_step = kept
+        if (err%failed()) return
+        if (s%comm%rank == 0) call point_latest_and_prune()    ! the files are rank 0's
+        s%ckpt_step = kept                       ! the bookkeeping is every rank's
         s%stale = [integer(i8) ::]
         s%ckpt_seconds = max(s%ckpt_seconds, wall_seconds() - t0)
+    contains
+        subroutine point_latest_and_prune()
+            open(newunit=u, file=c%output_dir // '/checkpoints/latest.part', status='replace', &
+                 action='write', iostat=ios)
+            if (ios == 0) write(u, '(a)', iostat=ios) checkpoint_file(fr%step)
+            if (ios == 0) close(u, iostat=ios)
+            if (ios /= 0) then
+                call set_error(err, dem_err_runtime, c%output_dir // '/checkpoints/latest: ' // &
+                               'cannot write')
+                return
+            end if
+            call file_rename(c%output_dir // '/checkpoints/latest.part', &
+                             c%output_dir // '/checkpoints/latest', err)
+            do k = 1, size(s%ckpt_step)
+                if (all(kept /= s%ckpt_step(k))) &
+                    call file_remove(c%output_dir // '/' // checkpoint_file(s%ckpt_step(k)))
+            end do
+            do k = 1, size(s%stale)
+                if (all(kept /= s%stale(k))) &
+                    call file_remove(c%output_dir // '/' // checkpoint_file(s%stale(k)))
+            end do
+        end subroutine point_latest_and_prune
     end subroutine write_frame_checkpoint
 
     !> Put the state on the device for the whole run (acc_enter), or release it (acc_exit).

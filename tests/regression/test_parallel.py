@@ -1,6 +1,7 @@
 """The same answer on any number of MPI ranks (doc/parallel.md): a case run on 1, 2, 3 (and
 4) ranks gives bit-identical results: final.csv, series.csv (energies summed in id order,
-contact counts), probes.csv, and the checkpoints' particles and contact history, for
+contact counts), probes.csv, snapshots (with forces and contact counts), and the
+checkpoints' particles and contact history, for
 
 1. a settling bed with contacts and a moving, spinning STL floor (the box case of the
    checkpoint tests), on 1, 2, 3 and 4 ranks;
@@ -85,12 +86,20 @@ def compare(name, ranks_list, files=("final.csv", "series.csv")):
 
 # 1. settling bed, moving floor
 cu.write_box_case(os.path.join(work, "box.nml"), "@OUT@", t_end=0.1, n=200,
-                  output=", snapshot_interval = 0, checkpoint_interval = 0.05")
+                  output=", snapshot_interval = 0.05, snapshot_force = .true., "
+                         "snapshot_contacts = .true., checkpoint_interval = 0.05")
 with open(os.path.join(work, "box.nml")) as f:
     text = f.read()
 with open(os.path.join(work, "box.nml"), "w") as f:
     f.write(text.replace(os.path.abspath("@OUT@"), "@OUT@"))
-outs = compare("box", [1, 2, 3, 4])
+outs = compare("box", [1, 2, 3, 4], ("final.csv", "series.csv", "snapshots.xmf"))
+for ranks in (2, 3, 4):
+    for snap in sorted(os.listdir(os.path.join(outs[1], "snapshots"))):
+        with h5py.File(os.path.join(outs[1], "snapshots", snap)) as fa, \
+                h5py.File(os.path.join(outs[ranks], "snapshots", snap)) as fb:
+            for name in fa["particles"]:
+                check(np.array_equal(fa["particles"][name][()], fb["particles"][name][()]),
+                      f"box on {ranks} ranks: {snap}: particles/{name} differs")
 s = np.genfromtxt(os.path.join(outs[1], "series.csv"), delimiter=",", names=True)
 check(s["contacts_pp"][-1] > 10 and s["contacts_pw"][-1] > 10,
       f"box: the bed has contacts ({s['contacts_pp'][-1]:.0f}, {s['contacts_pw'][-1]:.0f})")
