@@ -30,7 +30,7 @@ module dem_domain
         integer(ip) :: n(3) = 1                  !< blocks along x, y, z
         real(wp) :: skin = 0.0_wp                !< neighbour-list skin [m]
         integer, allocatable :: owner(:)         !< rank of each block
-        real(wp), allocatable :: rmax(:)         !< largest radius each rank owns [m]
+        real(wp), allocatable :: rmax(:)         !< largest radius in each block [m]
         integer(ip), allocatable :: send(:)      !< owned particles sent as ghosts, by rank
         integer, allocatable :: send_counts(:)   !< ghosts sent to each rank
         integer, allocatable :: recv_counts(:)   !< ghosts received from each rank
@@ -59,7 +59,7 @@ contains
         end do
         d%origin = lo
         d%skin = skin
-        allocate(d%owner(product(d%n)), d%rmax(0:comm%size - 1), d%send(0), &
+        allocate(d%owner(product(d%n)), d%rmax(product(d%n)), d%send(0), &
                  d%send_counts(0:comm%size - 1), d%recv_counts(0:comm%size - 1))
         d%owner = 0
         d%rmax = 0.0_wp
@@ -95,8 +95,8 @@ contains
     !> Assign the blocks to ranks with METIS: vertex weight = 1 + s (particles + wall
     !> contacts) in a block, with s as large as 32-bit weights allow, up to 1024 (empty
     !> space costs almost nothing; METIS balances badly with weights of zero), edge weight =
-    !> 1 + particles within reach of the shared face. Every rank computes the same partition from the same sums. `status` is
-    !> METIS's (1: done).
+    !> 1 + particles within reach of the shared face. Every rank computes the same partition
+    !> from the same sums. `status` is METIS's (1: done).
     subroutine domain_balance(d, comm, n_own, x, radius, wall_tri, status)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
@@ -293,8 +293,8 @@ contains
 
     !> Send copies of the owned particles within reach of another rank's blocks to it, and
     !> store the copies received as ghosts after the owned particles. Particle i goes to rank
-    !> q when it is within R_i + (q's largest radius) + skin of one of q's blocks: every pair
-    !> that the lists can hold until their next rebuild is then on both ranks.
+    !> q when it is within R_i + R_b + skin of one of q's blocks b, R_b the largest radius in
+    !> b: every pair that the lists can hold until their next rebuild is then on both ranks.
     subroutine domain_ghosts(d, comm, p)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
@@ -303,10 +303,13 @@ contains
         integer(ip), allocatable :: from(:)
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :)
         real(wp), allocatable :: rbuf(:, :), rrecv(:, :)
-        integer(ip) :: c0(3), c1(3), cx, cy, cz, i, q, n_sent, pass
+        integer(ip) :: c0(3), c1(3), cx, cy, cz, i, q, b, n_sent, pass
         real(wp) :: reach, rmax_all
         d%rmax = 0.0_wp
-        if (p%n_own > 0) d%rmax(comm%rank) = maxval(p%radius(1:p%n_own))
+        do i = 1, p%n_own
+            b = block_index(d, block_coords(d, p%x(:, i)))
+            d%rmax(b) = max(d%rmax(b), p%radius(i))
+        end do
         call comm_max(comm, d%rmax)
         rmax_all = maxval(d%rmax)
         allocate(marked(0:comm%size - 1))
@@ -320,10 +323,11 @@ contains
                 do cz = c0(3), c1(3)
                     do cy = c0(2), c1(2)
                         do cx = c0(1), c1(1)
-                            q = d%owner(block_index(d, [cx, cy, cz]))
-                            if (q == comm%rank .or. marked(q) == i) cycle
+                            b = block_index(d, [cx, cy, cz])
+                            q = d%owner(b)
+                            if (q == comm%rank .or. marked(q) == i .or. d%rmax(b) == 0.0_wp) cycle
                             if (block_distance2(d, [cx, cy, cz], p%x(:, i)) &
-                                >= (p%radius(i) + d%rmax(q) + d%skin)**2) cycle
+                                >= (p%radius(i) + d%rmax(b) + d%skin)**2) cycle
                             marked(q) = i
                             n_sent = n_sent + 1
                             if (pass == 1) cycle
