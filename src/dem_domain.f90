@@ -10,7 +10,7 @@ module dem_domain
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_exchange, comm_counts, comm_sum, comm_max
     use dem_metis, only: metis_partition
-    use dem_neighbors, only: neighbors_unique_pairs
+    use dem_neighbors, only: neighbors_unique_pairs, fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
                              n_pack_int, n_pack_real, order_by_id
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_pack, wall_contacts_unpack, &
@@ -52,11 +52,7 @@ contains
         volume = product(max(p_hi - p_lo, h_min))
         d%h = max(h_min, (volume / real(blocks_per_rank * comm%size, wp))**(1.0_wp / 3.0_wp))
         if (.not. d%h > 0.0_wp) d%h = 1.0_wp          ! an empty case: one block
-        do
-            d%n = max(1, ceiling((hi - lo) / d%h))
-            if (real(d%n(1), wp) * d%n(2) * d%n(3) <= max_blocks_per_rank * comm%size) exit
-            d%h = 1.26_wp * d%h
-        end do
+        call fit_grid(lo, hi, real(max_blocks_per_rank * comm%size, wp), d%h, d%n)
         d%origin = lo
         d%skin = skin
         allocate(d%owner(product(d%n)), d%rmax(product(d%n)), d%send(0), &

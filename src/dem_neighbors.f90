@@ -13,7 +13,7 @@ module dem_neighbors
     implicit none
     private
     public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order, &
-              neighbors_history, neighbors_set_history, neighbors_unique_pairs
+              neighbors_history, neighbors_set_history, neighbors_unique_pairs, fit_grid
 
     !> The lists, their per-entry tangential history, and the positions they were built at.
     type :: neighbors_t
@@ -548,12 +548,21 @@ contains
         integer(ip), intent(in) :: n_items
         g%origin = lo
         g%h = h
-        do
-            g%n = max(1, ceiling((hi - lo) / g%h))
-            if (real(g%n(1), wp) * g%n(2) * g%n(3) <= max(27.0_wp, 4.0_wp * n_items)) exit
-            g%h = g%h * 1.26_wp
-        end do
+        call fit_grid(lo, hi, max(27.0_wp, 4.0_wp * n_items), g%h, g%n)
     end subroutine grid_shape
+
+    !> Cubic cells over the box [lo, hi]: the cell size h grows by factors of 1.26 until
+    !> there are at most max_cells; n cells along x, y, z.
+    pure subroutine fit_grid(lo, hi, max_cells, h, n)
+        real(wp), intent(in) :: lo(3), hi(3), max_cells
+        real(wp), intent(inout) :: h
+        integer(ip), intent(out) :: n(3)
+        do
+            n = max(1, ceiling((hi - lo) / h))
+            if (real(n(1), wp) * n(2) * n(3) <= max_cells) exit
+            h = h * 1.26_wp
+        end do
+    end subroutine fit_grid
 
     !> Sort the given items into the cells of their positions (counting sort, stable).
     subroutine grid_fill(g, n_items, items, x)

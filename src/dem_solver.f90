@@ -485,10 +485,14 @@ contains
         if (s%comm%size > 1) stale = comm_any(s%comm, stale)
         if (stale) then
             call rebuild(s)
-        else if (s%comm%size > 1) then
-            call particle_data(s, acc_to_host)
+        else if (s%comm%size > 1) then                ! only x, v, w of the ghosts change
+            call acc_data(s%p%x, acc_to_host)
+            call acc_data(s%p%v, acc_to_host)
+            call acc_data(s%p%w, acc_to_host)
             call domain_update(s%dom, s%comm, s%p)
-            call particle_data(s, acc_to_device)
+            call acc_data(s%p%x, acc_to_device)
+            call acc_data(s%p%v, acc_to_device)
+            call acc_data(s%p%w, acc_to_device)
         end if
         call timer_stop(s%timers, phase_neighbors)
         associate (p => s%p, nb => s%nb, pc => s%pc, m => s%mesh, n => s%p%n_own)
