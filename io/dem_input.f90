@@ -27,9 +27,10 @@ module dem_input
     integer, parameter :: name_len = 32
 
     !> The groups a case file may hold, and the keys of each (doc/input.md).
-    character(len=*), parameter :: input_groups(12) = [character(len=160) :: &
+    character(len=*), parameter :: input_groups(12) = [character(len=200) :: &
         'run: dt t_end integrator gravity expected_speed skin allow_unstable ' // &
-        'stop_kinetic_energy max_speed wall_time_limit progress_interval imbalance_limit', &
+        'stop_kinetic_energy max_speed wall_time_limit progress_interval imbalance_limit ' // &
+        'gpu_aware_mpi', &
         'output: dir interval trace_id snapshot_interval snapshot_force snapshot_contacts ' // &
         'checkpoint_interval checkpoint_keep', &
         'contact_model: tangential_stiffness_factor tangential_damping clamp_normal', &
@@ -137,8 +138,11 @@ contains
                                     ! particle count of a rank over the mean exceeds this
                                     ! times the ratio the last partition achieved, >= 1,
                                     ! default 1.1
+        logical :: gpu_aware_mpi    ! in an OpenACC build on several ranks, hand device
+                                    ! addresses of the halo buffers to MPI, default false
         namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable, &
-            stop_kinetic_energy, max_speed, wall_time_limit, progress_interval, imbalance_limit
+            stop_kinetic_energy, max_speed, wall_time_limit, progress_interval, imbalance_limit, &
+            gpu_aware_mpi
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
@@ -159,6 +163,7 @@ contains
         wall_time_limit = 0.0_wp
         progress_interval = 10.0_wp
         imbalance_limit = 1.1_wp
+        gpu_aware_mpi = .false.
         b = nf%blocks(block_index(nf, 'run', 1))
         do k_item = 0, block_item_count(b)
             text = block_text(b, k_item)
@@ -218,6 +223,7 @@ contains
             return
         end if
         c%imbalance_limit = imbalance_limit
+        c%gpu_aware_mpi = gpu_aware_mpi
 
         call case_time_scales(c, ts)
         if (max_speed == unset .and. c%n_particles > 0) max_speed = &

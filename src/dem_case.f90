@@ -29,6 +29,7 @@ module dem_case
         real(wp) :: wall_time_limit = 0.0_wp          !< checkpoint and stop before [s], 0: none
         real(wp) :: progress_interval = 0.0_wp        !< between progress lines [s], 0: none
         real(wp) :: imbalance_limit = 1.1_wp          !< repartition above this load ratio
+        logical :: gpu_aware_mpi = .false.            !< MPI takes device addresses
         character(len=:), allocatable :: output_dir
         real(wp) :: output_interval = 0.0_wp          !< series.csv interval [s]
         integer(i8) :: trace_id = 0                   !< particle whose contact is traced

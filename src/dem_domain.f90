@@ -9,6 +9,7 @@
 module dem_domain
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_exchange, comm_counts, comm_sum, comm_max
+    use dem_acc, only: acc_data, acc_to_host, acc_to_device
     use dem_metis, only: metis_partition
     use dem_neighbors, only: neighbors_unique_pairs, fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
@@ -18,7 +19,7 @@ module dem_domain
     implicit none
     private
     public :: domain_t, domain_init, domain_balance, domain_imbalance, domain_migrate, &
-              domain_ghosts, domain_update
+              domain_ghosts, domain_update, domain_data
 
     integer, parameter :: blocks_per_rank = 64   !< target in the particles' box
     integer, parameter :: max_blocks_per_rank = 512  !< in the whole box (walls included)
@@ -34,6 +35,9 @@ module dem_domain
         integer(ip), allocatable :: send(:)      !< owned particles sent as ghosts, by rank
         integer, allocatable :: send_counts(:)   !< ghosts sent to each rank
         integer, allocatable :: recv_counts(:)   !< ghosts received from each rank
+        real(wp), allocatable :: sbuf(:, :)      !< x, v, w of the ghosts sent (9, send)
+        real(wp), allocatable :: rbuf(:, :)      !< x, v, w of the ghosts received (9, ghosts)
+        logical :: gpu_aware_mpi = .false.       !< MPI takes the buffers' device addresses
         integer(i8) :: balances = 0              !< partitions computed so far
         integer(i8) :: bytes = 0                 !< bytes this rank has sent to others
     end type domain_t
@@ -55,8 +59,8 @@ contains
         call fit_grid(lo, hi, real(max_blocks_per_rank * comm%size, wp), d%h, d%n)
         d%origin = lo
         d%skin = skin
-        allocate(d%owner(product(d%n)), d%rmax(product(d%n)), d%send(0), &
-                 d%send_counts(0:comm%size - 1), d%recv_counts(0:comm%size - 1))
+        allocate(d%owner(product(d%n)), d%rmax(product(d%n)), d%send(0), d%sbuf(9, 0), &
+                 d%rbuf(9, 0), d%send_counts(0:comm%size - 1), d%recv_counts(0:comm%size - 1))
         d%owner = 0
         d%rmax = 0.0_wp
         d%send_counts = 0
@@ -345,27 +349,80 @@ contains
         d%bytes = d%bytes + 8 * (size(ibuf) + size(rbuf))
         call particles_unpack(p, p%n_own + 1, irecv, rrecv)
         p%n_ghost = size(irecv, 2)
+        if (allocated(d%sbuf)) deallocate(d%sbuf, d%rbuf)
+        allocate(d%sbuf(9, size(d%send)), d%rbuf(9, p%n_ghost))
     end subroutine domain_ghosts
 
-    !> Refresh the ghosts' positions and velocities (every step between rebuilds).
+    !> Refresh the ghosts' positions and velocities from their owners (every step): packed,
+    !> exchanged and unpacked on the device during a run; MPI is handed the buffers' device
+    !> addresses with gpu_aware_mpi, host copies of them otherwise.
     subroutine domain_update(d, comm, p)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         type(particles_t), intent(inout) :: p
-        real(wp), allocatable :: rbuf(:, :), rrecv(:, :)
-        integer(ip) :: a, i
-        allocate(rbuf(9, size(d%send)), rrecv(9, p%n_ghost))
-        do a = 1, size(d%send)
-            i = d%send(a)
-            rbuf(:, a) = [p%x(:, i), p%v(:, i), p%w(:, i)]
-        end do
-        call comm_exchange(comm, rbuf, d%send_counts, rrecv, d%recv_counts)
-        d%bytes = d%bytes + 8 * size(rbuf)
-        do a = 1, p%n_ghost
-            i = p%n_own + a
-            p%x(:, i) = rrecv(1:3, a)
-            p%v(:, i) = rrecv(4:6, a)
-            p%w(:, i) = rrecv(7:9, a)
-        end do
+        call pack_halo(size(d%send, kind=ip), d%send, p%x, p%v, p%w, d%sbuf)
+        call exchange_halo(comm, d%sbuf, d%send_counts, d%rbuf, d%recv_counts, d%gpu_aware_mpi)
+        d%bytes = d%bytes + 8 * size(d%sbuf)
+        call unpack_halo(p%n_own, p%n_ghost, d%rbuf, p%x, p%v, p%w)
     end subroutine domain_update
+
+    !> The exchange of domain_update's buffers.
+    subroutine exchange_halo(comm, sbuf, send_counts, rbuf, recv_counts, gpu_aware_mpi)
+        type(comm_t), intent(in) :: comm
+        real(wp), intent(inout) :: sbuf(:, :), rbuf(:, :)
+        integer, intent(in) :: send_counts(0:), recv_counts(0:)
+        logical, intent(in) :: gpu_aware_mpi
+        if (gpu_aware_mpi) then
+            !$acc host_data use_device(sbuf, rbuf)
+            call comm_exchange(comm, sbuf, send_counts, rbuf, recv_counts)
+            !$acc end host_data
+        else
+            call acc_data(sbuf, acc_to_host)
+            call comm_exchange(comm, sbuf, send_counts, rbuf, recv_counts)
+            call acc_data(rbuf, acc_to_device)
+        end if
+    end subroutine exchange_halo
+
+    !> sbuf(:, a) = x, v, w of particle send(a).
+    subroutine pack_halo(n_send, send, x, v, w, sbuf)
+        integer(ip), intent(in) :: n_send, send(n_send)
+        real(wp), intent(in) :: x(:, :), v(:, :), w(:, :)
+        real(wp), intent(out) :: sbuf(9, n_send)
+        integer(ip) :: a, i, j
+        !$acc parallel loop default(present) private(i)
+        do a = 1, n_send
+            i = send(a)
+            do j = 1, 3
+                sbuf(j, a) = x(j, i)
+                sbuf(3 + j, a) = v(j, i)
+                sbuf(6 + j, a) = w(j, i)
+            end do
+        end do
+    end subroutine pack_halo
+
+    !> x, v, w of ghost a (particle n_own + a) = rbuf(:, a).
+    subroutine unpack_halo(n_own, n_ghost, rbuf, x, v, w)
+        integer(ip), intent(in) :: n_own, n_ghost
+        real(wp), intent(in) :: rbuf(9, n_ghost)
+        real(wp), intent(inout) :: x(:, :), v(:, :), w(:, :)
+        integer(ip) :: a, j
+        !$acc parallel loop default(present)
+        do a = 1, n_ghost
+            do j = 1, 3
+                x(j, n_own + a) = rbuf(j, a)
+                v(j, n_own + a) = rbuf(3 + j, a)
+                w(j, n_own + a) = rbuf(6 + j, a)
+            end do
+        end do
+    end subroutine unpack_halo
+
+    !> The ghost exchange's lists and buffers, onto the device after domain_ghosts
+    !> (acc_enter) or off it before the next (acc_exit).
+    subroutine domain_data(d, op)
+        type(domain_t), intent(inout) :: d
+        integer, intent(in) :: op
+        call acc_data(d%send, op)
+        call acc_data(d%sbuf, op)
+        call acc_data(d%rbuf, op)
+    end subroutine domain_data
 end module dem_domain

@@ -116,37 +116,64 @@ contains
 
     !> Put every moving wall in its pose at `time`, and set its velocities at that time:
     !> x = pivot + R(theta) (x0 - pivot) + d, with theta = omega (min(max(t, t0), t1) - t0)
-    !> (Rodrigues' formula) and d = v (min(max(t, t0), t1) - t0).
+    !> (Rodrigues' formula) and d = v (min(max(t, t0), t1) - t0). The poses are set on the
+    !> host; the vertices are placed where they are: on the device during a run of an
+    !> OpenACC build, on the host otherwise.
     subroutine mesh_move(m, time)
         type(mesh_t), intent(inout) :: m
         real(wp), intent(in) :: time   !! [s]
-        real(wp) :: theta, d(3), k(3), r(3, 3), kx(3, 3), e(3, 3)
-        integer(ip) :: w, t, c
+        real(wp) :: theta, d(3, m%n_wall), k(3), r(3, 3, m%n_wall), kx(3, 3), e(3, 3)
+        logical :: moves(m%n_wall)
+        integer(ip) :: w
         e = 0.0_wp
         e(1, 1) = 1.0_wp
         e(2, 2) = 1.0_wp
         e(3, 3) = 1.0_wp
         do w = 1, m%n_wall
-            if (all(m%lin_v(:, w) == 0.0_wp) .and. m%omega(w) == 0.0_wp) cycle
-            d = m%lin_v(:, w) * (min(max(time, m%lin_t(1, w)), m%lin_t(2, w)) - m%lin_t(1, w))
+            moves(w) = any(m%lin_v(:, w) /= 0.0_wp) .or. m%omega(w) /= 0.0_wp
+            d(:, w) = m%lin_v(:, w) * (min(max(time, m%lin_t(1, w)), m%lin_t(2, w)) &
+                                       - m%lin_t(1, w))
             theta = m%omega(w) * (min(max(time, m%rot_t(1, w)), m%rot_t(2, w)) - m%rot_t(1, w))
             k = m%axis(:, w)
             kx = reshape([0.0_wp, k(3), -k(2), -k(3), 0.0_wp, k(1), k(2), -k(1), 0.0_wp], [3, 3])
-            r = cos(theta) * e + sin(theta) * kx &
-                + (1.0_wp - cos(theta)) * spread(k, 2, 3) * spread(k, 1, 3)
-            do t = m%first(w), m%last(w)
-                do c = 1, 3
-                    m%vert(:, c, t) = m%pivot(:, w) + matmul(r, m%ref(:, c, t) - m%pivot(:, w)) &
-                                      + d
-                end do
-            end do
-            m%wall_c(:, w) = m%pivot(:, w) + d
+            r(:, :, w) = cos(theta) * e + sin(theta) * kx &
+                         + (1.0_wp - cos(theta)) * spread(k, 2, 3) * spread(k, 1, 3)
+            if (.not. moves(w)) cycle
+            m%wall_c(:, w) = m%pivot(:, w) + d(:, w)
             m%wall_v(:, w) = 0.0_wp
             if (time >= m%lin_t(1, w) .and. time < m%lin_t(2, w)) m%wall_v(:, w) = m%lin_v(:, w)
             m%wall_w(:, w) = 0.0_wp
             if (time >= m%rot_t(1, w) .and. time < m%rot_t(2, w)) m%wall_w(:, w) = m%omega(w) * k
         end do
+        call place_triangles(m%n_tri, m%n_wall, m%wall, moves, m%pivot, r, d, m%ref, m%vert)
     end subroutine mesh_move
+
+    !> The corners of the triangles of moving walls at their wall's pose (rotation r about
+    !> the pivot, then translation d), from their corners at t = 0 (on the device if vert is
+    !> there, copied there and back otherwise).
+    subroutine place_triangles(n_tri, n_wall, wall, moves, pivot, r, d, ref, vert)
+        integer(ip), intent(in) :: n_tri, n_wall
+        integer(ip), intent(in) :: wall(n_tri)
+        logical, intent(in) :: moves(n_wall)
+        real(wp), intent(in) :: pivot(3, n_wall), r(3, 3, n_wall), d(3, n_wall)
+        real(wp), intent(in) :: ref(3, 3, n_tri)
+        real(wp), intent(inout) :: vert(3, 3, n_tri)
+        integer(ip) :: t, c, w, j
+        real(wp) :: a(3)
+        !$acc parallel loop collapse(2) copyin(wall, moves, pivot, r, d, ref) copy(vert) &
+        !$acc private(w, j, a)
+        do t = 1, n_tri
+            do c = 1, 3
+                w = wall(t)
+                if (.not. moves(w)) cycle
+                a = ref(:, c, t) - pivot(:, w)
+                do j = 1, 3
+                    vert(j, c, t) = pivot(j, w) + (r(j, 1, w) * a(1) + r(j, 2, w) * a(2) &
+                                                   + r(j, 3, w) * a(3)) + d(j, w)
+                end do
+            end do
+        end do
+    end subroutine place_triangles
 
     !> Append a flat square wall of side 2 half_width, centred on `point`, facing `normal`,
     !> cut into divisions x divisions squares of two triangles each.

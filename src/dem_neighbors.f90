@@ -60,10 +60,10 @@ contains
         if (size(nb%x_ref, 2) /= n) return
         stale = max_displacement2(n, x, nb%x_ref) > (0.5_wp * nb%skin)**2
         if (stale .or. .not. mesh%moving) return
-        stale = maxval(sum((mesh%vert - nb%vert_ref)**2, dim=1)) > (0.5_wp * nb%skin)**2
+        stale = max_displacement2(3 * mesh%n_tri, mesh%vert, nb%vert_ref) > (0.5_wp * nb%skin)**2
     end function neighbors_stale
 
-    !> Largest squared displacement between two sets of positions [m^2].
+    !> Largest squared displacement between two sets of positions (or vertices) [m^2].
     real(wp) function max_displacement2(n, x, x_ref) result(d2max)
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: x(3, n), x_ref(3, n)

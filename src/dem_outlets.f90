@@ -18,28 +18,49 @@ module dem_outlets
 
 contains
 
-    !> Mark the owned particles whose centre lies in an outlet; return how many.
+    !> Mark the owned particles whose centre lies in an outlet; return how many (on the
+    !> device during a run: x and gone are there).
     integer(ip) function outlets_mark(n, x, outlets, gone) result(n_gone)
         integer(ip), intent(in) :: n
-        real(wp), intent(in) :: x(:, :)            !! positions [m]
+        real(wp), intent(in) :: x(3, n)            !! positions [m]
         type(outlet_t), intent(in) :: outlets(:)
         logical, intent(out) :: gone(n)
         integer(ip) :: i, k
-        gone = .false.
-        do k = 1, size(outlets)
-            associate (o => outlets(k))
-                select case (o%kind)
-                case (outlet_plane)
-                    do i = 1, n
-                        gone(i) = gone(i) .or. dot_product(x(:, i) - o%point, o%normal) > 0.0_wp
-                    end do
-                case (outlet_box)
-                    do i = 1, n
-                        gone(i) = gone(i) .or. any(x(:, i) < o%lo) .or. any(x(:, i) > o%hi)
-                    end do
-                end select
-            end associate
+        !$acc parallel loop default(present)
+        do i = 1, n
+            gone(i) = .false.
         end do
-        n_gone = count(gone)
+        do k = 1, size(outlets)
+            select case (outlets(k)%kind)
+            case (outlet_plane)
+                call mark(n, x, outlet_plane, outlets(k)%point, outlets(k)%normal, gone)
+            case (outlet_box)
+                call mark(n, x, outlet_box, outlets(k)%lo, outlets(k)%hi, gone)
+            end select
+        end do
+        n_gone = 0
+        !$acc parallel loop default(present) reduction(+:n_gone)
+        do i = 1, n
+            if (gone(i)) n_gone = n_gone + 1
+        end do
     end function outlets_mark
+
+    !> gone(i) also when x_i is beyond the plane through a with normal b (outlet_plane), or
+    !> outside the box of corners a, b (outlet_box).
+    subroutine mark(n, x, kind, a, b, gone)
+        integer(ip), intent(in) :: n, kind
+        real(wp), intent(in) :: x(3, n), a(3), b(3)
+        logical, intent(inout) :: gone(n)
+        integer(ip) :: i
+        !$acc parallel loop present(x, gone) copyin(a, b)
+        do i = 1, n
+            if (kind == outlet_plane) then
+                gone(i) = gone(i) .or. (x(1, i) - a(1)) * b(1) + (x(2, i) - a(2)) * b(2) &
+                                       + (x(3, i) - a(3)) * b(3) > 0.0_wp
+            else
+                gone(i) = gone(i) .or. x(1, i) < a(1) .or. x(2, i) < a(2) .or. x(3, i) < a(3) &
+                          .or. x(1, i) > b(1) .or. x(2, i) > b(2) .or. x(3, i) > b(3)
+            end if
+        end do
+    end subroutine mark
 end module dem_outlets

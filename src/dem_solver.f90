@@ -10,7 +10,7 @@ module dem_solver
     use dem_case, only: case_t, time_scales_t, case_time_scales
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
                              order_by_id, sphere_mass, sphere_inv_inertia
-    use dem_domain, only: domain_t, domain_init, domain_balance, domain_imbalance, &
+    use dem_domain, only: domain_t, domain_init, domain_data, domain_balance, domain_imbalance, &
                           domain_migrate, domain_ghosts, domain_update
     use dem_materials, only: pair_constants_t, pair_constants_build
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
@@ -401,6 +401,7 @@ contains
         if (n > 0) rmin = minval(s%p%radius(1:n))
         call domain_init(s%dom, s%comm, lo, hi, p_lo, p_hi, 2.0_wp * (2.0_wp * rmin + c%skin), &
                          c%skin)
+        s%dom%gpu_aware_mpi = c%gpu_aware_mpi
     end subroutine start_domain
 
     !> Stop the run if a signal came or the wall-time limit is near, after writing a
@@ -479,20 +480,14 @@ contains
         logical :: stale
         if (s%mesh%moving) then
             call mesh_move(s%mesh, time)
-            call mesh_data(s%mesh, acc_to_device)
+            call wall_motion_data(s%mesh, acc_to_device)
         end if
         stale = neighbors_stale(s%nb, s%p%n_own, s%p%x, s%mesh)
         if (s%comm%size > 1) stale = comm_any(s%comm, stale)
         if (stale) then
             call rebuild(s)
         else if (s%comm%size > 1) then                ! only x, v, w of the ghosts change
-            call acc_data(s%p%x, acc_to_host)
-            call acc_data(s%p%v, acc_to_host)
-            call acc_data(s%p%w, acc_to_host)
             call domain_update(s%dom, s%comm, s%p)
-            call acc_data(s%p%x, acc_to_device)
-            call acc_data(s%p%v, acc_to_device)
-            call acc_data(s%p%w, acc_to_device)
         end if
         call timer_stop(s%timers, phase_neighbors)
         associate (p => s%p, nb => s%nb, pc => s%pc, m => s%mesh, n => s%p%n_own)
@@ -519,9 +514,11 @@ contains
         type(case_t), intent(in) :: c
         logical :: gone(s%p%n_own)
         integer(i8) :: n_gone(1)
-        call acc_data(s%p%x, acc_to_host)
+        call acc_data(gone, acc_enter)
         n_gone = outlets_mark(s%p%n_own, s%p%x, c%outlets, gone)
         if (s%comm%size > 1) call comm_sum(s%comm, n_gone)
+        if (n_gone(1) > 0) call acc_data(gone, acc_to_host)
+        call acc_data(gone, acc_exit)
         if (n_gone(1) == 0) return
         s%removed = s%removed + n_gone(1)
         call rebuild(s, .not. gone)
@@ -538,9 +535,11 @@ contains
         integer(ip), allocatable :: order(:), kept(:)
         integer(ip) :: i
         call particle_data(s, acc_to_host)
+        if (s%mesh%moving) call acc_data(s%mesh%vert, acc_to_host)
         if (s%lists_on_device) then
             call acc_data(s%nb%xi, acc_to_host)
             call list_data(s%nb, acc_exit)
+            if (s%comm%size > 1) call domain_data(s%dom, acc_exit)
         end if
         if (present(keep)) then
             kept = pack([(i, i = 1, s%p%n_own)], keep)
@@ -556,6 +555,7 @@ contains
         call wall_contacts_permute(s%wc, order)
         if (s%comm%size > 1) call domain_ghosts(s%dom, s%comm, s%p)
         call particle_data(s, acc_to_device)
+        if (s%comm%size > 1) call domain_data(s%dom, acc_enter)
         if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:s%p%n_own), s%trace_id, dim=1)
         if (s%trace_id /= 0 .and. s%trace == 0) s%trace_id = 0    ! it left through an outlet
         call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
@@ -977,11 +977,10 @@ contains
         call acc_data(s%pc%mu, op)
         if (s%mesh%n_tri > 0) then
             call mesh_data(s%mesh, op)
-            call acc_data(s%mesh%mat, op)
-            call acc_data(s%mesh%wall, op)
         end if
         if (op == acc_exit .and. s%lists_on_device) then
             call list_data(s%nb, op)
+            if (s%comm%size > 1) call domain_data(s%dom, op)
             s%lists_on_device = .false.
         end if
     end subroutine device_data
@@ -1004,15 +1003,25 @@ contains
         call acc_data(s%wc%xi, op)
     end subroutine particle_data
 
-    !> The wall pose and velocities, to or from the device.
+    !> The walls (triangles now and at t = 0, materials, velocities), to or from the device.
     subroutine mesh_data(m, op)
         type(mesh_t), intent(inout) :: m
         integer, intent(in) :: op
         call acc_data(m%vert, op)
+        call acc_data(m%ref, op)
+        call acc_data(m%mat, op)
+        call acc_data(m%wall, op)
+        call wall_motion_data(m, op)
+    end subroutine mesh_data
+
+    !> The walls' velocities and axes now, to or from the device.
+    subroutine wall_motion_data(m, op)
+        type(mesh_t), intent(inout) :: m
+        integer, intent(in) :: op
         call acc_data(m%wall_v, op)
         call acc_data(m%wall_w, op)
         call acc_data(m%wall_c, op)
-    end subroutine mesh_data
+    end subroutine wall_motion_data
 
     !> The neighbour lists, to or from the device.
     subroutine list_data(nb, op)
@@ -1028,5 +1037,6 @@ contains
         call acc_data(nb%wstart, op)
         call acc_data(nb%wlist, op)
         call acc_data(nb%x_ref, op)
+        if (allocated(nb%vert_ref)) call acc_data(nb%vert_ref, op)
     end subroutine list_data
 end module dem_solver

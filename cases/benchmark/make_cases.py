@@ -13,6 +13,8 @@ paths of the particle files are the outputs of the preparations there:
                                           30 000 M1 of 2 mm settled on top
   drum.nml                                5 s at 2 rad/s about y, omega = (0, -2, 0) as in
                                           MercuryDPM; probes: zone counts, centres of mass
+  prepare_drum_slice_<1|2>.nml, drum_slice.nml  the same in a quarter of the drum's depth
+                                          (0.015 m, 2 000 M2 and 7 500 M1), run here
   prepare_impact_<N>[_seed<k>].nml        N = 25 000, 50 000, 100 000 M1 of 2 mm settled in
                                           the box (ten 25 000 beds of different seeds)
   impact_<N>[_seed<k>].nml                the steel impactor (R = 10 mm) from z = 0.06 m at
@@ -106,37 +108,39 @@ def silo(material, orifice, n=100000, scale=1.0, t_end=5.0, interval=0.1, histog
               f"bins = 40, v_min = -1.5, v_max = 0.5, {above} /\n")
 
 
-def drum_walls(rotating):
+def drum_walls(rotating, drum="drum"):
     spin = (", rotation_axis = 0, 1, 0, rotation_point = 0, 0, 0, angular_velocity = -2"
             if rotating else "")
-    return f"&wall_mesh file = 'geometry/drum.stl', material = 'steel'{spin} /\n"
+    return f"&wall_mesh file = 'geometry/{drum}.stl', material = 'steel'{spin} /\n"
 
 
-def prepare_drum(stage, n_m2=8000, n_m1=30000, scale=1.0, t_end=1.0):
+def prepare_drum(stage, n_m2=8000, n_m1=30000, scale=1.0, t_end=1.0, drum="drum",
+                 half_depth=0.03):
     """Stage 1: M2 (4 mm) inserted in the whole drum, settled; stage 2: M1 (2 mm) inserted
-    in a box above that bed, settled on it."""
+    in a box above that bed, settled on it (`drum`: the wall file and the cases' name)."""
     dt = 8e-7 / scale ** 0.5
     if stage == 1:
         body = (f"&insert n = {n_m2}, material = 'M2', radius_min = 0.002, radius_max = 0.002, "
-                f"region = 'mesh', mesh_file = 'geometry/drum.stl', seed = 1 /\n")
+                f"region = 'mesh', mesh_file = 'geometry/{drum}.stl', seed = 1 /\n")
         n = n_m2
     else:
-        body = (f"&particle_file file = '{FROM_HERE}/prepare_drum_1/final.csv' /\n"
+        y = half_depth - 0.002
+        body = (f"&particle_file file = '{FROM_HERE}/prepare_{drum}_1/final.csv' /\n"
                 f"&insert n = {n_m1}, material = 'M1', radius_min = 0.001, radius_max = 0.001, "
-                f"region = 'box', box_min = -0.07, -0.028, -0.03, "
-                f"box_max = 0.07, 0.028, 0.068, seed = 2 /\n")
+                f"region = 'box', box_min = -0.07, -{y:g}, -0.03, "
+                f"box_max = 0.07, {y:g}, 0.068, seed = 2 /\n")
         n = n_m2 + n_m1
     return (run(dt, t_end, f", stop_kinetic_energy = {n * 1e-11:g}")
-            + output(f"prepare_drum_{stage}", 0.01, 0.0) + materials(scale) + body
-            + drum_walls(False))
+            + output(f"prepare_{drum}_{stage}", 0.01, 0.0) + materials(scale) + body
+            + drum_walls(False, drum))
 
 
-def drum(scale=1.0, t_end=5.0, interval=0.1):
+def drum(scale=1.0, t_end=5.0, interval=0.1, drum="drum"):
     """Zone 1: x > 0 and z > 0 (the upper quadrant on the rising side for omega = (0,-2,0));
     Zone 2: x < 0 and z < 0 (MercuryDPM's definitions)."""
-    return (run(8e-7 / scale ** 0.5, t_end) + output("drum", interval, 1.0) + materials(scale)
-            + f"&particle_file file = '{FROM_HERE}/prepare_drum_2/final.csv' /\n"
-            + drum_walls(True)
+    return (run(8e-7 / scale ** 0.5, t_end) + output(drum, interval, 1.0) + materials(scale)
+            + f"&particle_file file = '{FROM_HERE}/prepare_{drum}_2/final.csv' /\n"
+            + drum_walls(True, drum)
             + f"&probe name = 'zone1', kind = 'count', region = 'box', box_min = 0, -{BIG}, 0, "
               f"box_max = {BIG}, {BIG}, {BIG} /\n"
             + f"&probe name = 'zone2', kind = 'count', region = 'box', "
@@ -192,6 +196,10 @@ def cases():
     out["prepare_drum_1.nml"] = prepare_drum(1)
     out["prepare_drum_2.nml"] = prepare_drum(2)
     out["drum.nml"] = drum()
+    slice_ = dict(n_m2=2000, n_m1=7500, drum="drum_slice", half_depth=0.0075)
+    out["prepare_drum_slice_1.nml"] = prepare_drum(1, **slice_)
+    out["prepare_drum_slice_2.nml"] = prepare_drum(2, **slice_)
+    out["drum_slice.nml"] = drum(drum="drum_slice")
     for n in (25000, 50000, 100000):
         out[f"prepare_{impact_name(n, 1)}.nml"] = prepare_impact(n)
         out[f"{impact_name(n, 1)}.nml"] = impact(n)

@@ -12,6 +12,8 @@ particle never reaches the outer skin of those 2 mm thick shells). z is vertical
   drum.stl                         a 100-gon cylinder of radius 0.1 m about the y axis, depth
                                    0.06 m (y = -0.03 .. 0.03), closed by two 100-gon end discs
                                    (fans of 98 triangles): 396 triangles.
+  drum_slice.stl                   the same drum 0.015 m deep (y = -0.0075 .. 0.0075): a quarter
+                                   of it, for the reduced drum run on a workstation.
   impact_box.stl                   the open-top box x = -0.049 .. 0.049, y = -0.03 .. 0.03,
                                    floor at z = -0.0902431, rim at z = 0.107757: 10 triangles.
 
@@ -30,6 +32,7 @@ SILOS = {  # orifice radius and plane z_o, c of the cone r = z + c, top of the c
     "large": dict(r_o=0.03, z_o=-0.0554222, c=0.0854222, top=0.314578),
 }
 DRUM = dict(radius=0.1, half_depth=0.03)
+DRUM_SLICE = dict(radius=0.1, half_depth=0.0075)
 BOX = dict(x=0.049, y=0.030, floor=-0.0902431, rim=0.107757)
 
 
@@ -101,6 +104,7 @@ def main():
     for name, dims in SILOS.items():
         write_stl(os.path.join(out, f"silo_{name}.stl"), silo(**dims), f"silo {name} orifice")
     write_stl(os.path.join(out, "drum.stl"), drum(**DRUM), "drum")
+    write_stl(os.path.join(out, "drum_slice.stl"), drum(**DRUM_SLICE), "drum slice")
     write_stl(os.path.join(out, "impact_box.stl"), box(**BOX), "impact box")
 
 

@@ -7,7 +7,8 @@ checkpoints' particles and contact history, for
    checkpoint tests), on 1, 2, 3 and 4 ranks;
 2. a short discharge of the reduced small silo (particles removed by the outlet: count plus
    removed conserved in every row, and equal to the one-rank run's);
-3. the impact case at reduced size (a steel sphere into a settled bed);
+3. the impact case at reduced size (a steel sphere into a settled bed), and on 2 ranks with
+   the halo handed to MPI by device address (gpu_aware_mpi);
 4. a checkpoint written on 3 ranks, restarted on 2: the same final state as the
    uninterrupted run on one rank; and a checkpoint written on 1 rank restarted on 3.
 
@@ -141,6 +142,16 @@ impact = impact.replace("snapshot_interval = 0.01", "snapshot_interval = 0, "
 with open(os.path.join(work, "impact.nml"), "w") as f:
     f.write(impact)
 outs = compare("impact", [1, 2, 3], ("final.csv", "series.csv", "probes.csv"))
+# the halo buffers handed to MPI by their device addresses (gpu_aware_mpi; on the host, and
+# in the OpenACC build's host fallback, the same memory): the same answer
+d = os.path.join(work, "impact_gpu_aware_2")
+with open(os.path.join(work, "impact.nml")) as f:
+    text = f.read().replace("@OUT@", d).replace("&run ", "&run gpu_aware_mpi = .true., ", 1)
+with open(d + ".nml", "w") as f:
+    f.write(text)
+run(d + ".nml", 2)
+for f in ("final.csv", "series.csv", "probes.csv"):
+    same_file(os.path.join(outs[1], f), os.path.join(d, f), "impact with gpu_aware_mpi")
 
 # 4. checkpoint on 3 ranks, restart on 2 (and on 1 rank, restart on 3): the run's directory
 # copied, restarted from its first checkpoint (series.csv is cut back to it and continued)
