@@ -5,13 +5,14 @@ module dem_comm
                        MPI_Finalized, MPI_Comm_dup, MPI_Comm_free, MPI_Comm_rank, &
                        MPI_Comm_size, MPI_Abort, MPI_Exscan, MPI_Allreduce, MPI_Barrier, &
                        MPI_Alltoall, MPI_Alltoallv, MPI_Gather, MPI_Gatherv, MPI_Bcast, &
+                       MPI_Comm_split_type, MPI_COMM_TYPE_SHARED, &
                        MPI_INTEGER, MPI_INTEGER8, MPI_DOUBLE_PRECISION, MPI_LOGICAL, MPI_SUM, &
                        MPI_MAX, MPI_LOR, MPI_BXOR, MPI_IN_PLACE, MPI_INFO_NULL
     use dem_kinds, only: wp, i8
     implicit none
     private
-    public :: comm_t, comm_init, comm_free, comm_offset, comm_any, comm_xor, comm_barrier, &
-              comm_info_null, comm_exchange, comm_counts, comm_sum, comm_max, comm_gather, &
+    public :: comm_t, comm_init, comm_free, comm_node_rank, comm_offset, comm_any, comm_xor, &
+              comm_barrier, comm_info_null, comm_exchange, comm_counts, comm_sum, comm_max, comm_gather, &
               comm_broadcast
 
     !> Send parts of an array to every rank and receive theirs (MPI_Alltoallv).
@@ -112,6 +113,15 @@ contains
         integer(i8), intent(in) :: value
         call MPI_Allreduce(value, x, 1, MPI_INTEGER8, MPI_BXOR, c%comm)
     end function comm_xor
+
+    !> This rank's rank among the ranks of its node (shared memory), from 0.
+    integer function comm_node_rank(c) result(r)
+        type(comm_t), intent(in) :: c
+        type(MPI_Comm) :: node
+        call MPI_Comm_split_type(c%comm, MPI_COMM_TYPE_SHARED, c%rank, MPI_INFO_NULL, node)
+        call MPI_Comm_rank(node, r)
+        call MPI_Comm_free(node)
+    end function comm_node_rank
 
     !> How many items each rank sends this one, from how many this one sends each (MPI_Alltoall).
     function comm_counts(c, send_counts) result(recv_counts)

@@ -6,7 +6,7 @@ module dem_solver
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
-    use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather
+    use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather, comm_node_rank
     use dem_case, only: case_t, time_scales_t, case_time_scales
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
                              order_by_id, sphere_mass, sphere_inv_inertia
@@ -34,7 +34,8 @@ module dem_solver
     use dem_files, only: make_directory, file_remove, file_rename
     use dem_signals, only: signal_received
     use dem_text, only: itoa, real_text, duration_text
-    use dem_acc, only: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device
+    use dem_acc, only: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device, &
+                       acc_select_device
     use dem_timers, only: timers_t, timer_start, timer_stop, phase_neighbors, &
                           phase_contacts_pp, phase_contacts_pw, phase_integrate, phase_output, &
                           wall_seconds, timer_seconds
@@ -77,6 +78,7 @@ module dem_solver
         integer(i8) :: step0 = 0
         integer(i8) :: rng_state = 0   !< the case's random generator
         logical :: restarted = .false. !< the state comes from a checkpoint
+        integer :: device = -1         !< OpenACC device of this rank (-1: the host)
         logical :: lists_on_device = .false.
         type(frame_t) :: good          !< the last state that passed the instability guard
         integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
@@ -239,6 +241,7 @@ contains
         end if
         if (failed_anywhere(s, err)) return
         if (s%comm%size > 1) call start_domain(s, c)
+        s%device = acc_select_device(comm_node_rank(s%comm))
         call device_data(s, acc_enter)
 
         call rebuild(s)

@@ -1,10 +1,14 @@
-!> The only module that moves data between host and device (OpenACC). Without -fopenacc
-!> the directives are comments and these wrappers do nothing.
+!> The only module that moves data between host and device (OpenACC), and that chooses the
+!> device. Without -fopenacc the directives are comments and these wrappers do nothing.
+!> Preprocessed (.F90) for the one call of the OpenACC runtime library, under _OPENACC.
 module dem_acc
     use dem_kinds, only: wp, ip
+#ifdef _OPENACC
+    use openacc, only: acc_get_num_devices, acc_set_device_num, acc_device_not_host
+#endif
     implicit none
     private
-    public :: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device
+    public :: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device, acc_select_device
 
     integer, parameter :: acc_enter = 1      !< create the device copy from the host's
     integer, parameter :: acc_exit = 2       !< delete the device copy
@@ -17,6 +21,21 @@ module dem_acc
     end interface acc_data
 
 contains
+
+    !> Run this MPI rank's kernels on device mod(local_rank, devices of the node), one rank
+    !> per GPU when the ranks of a node are as many as its GPUs; -1 when there is no
+    !> accelerator (a build without OpenACC, or its host fallback).
+    integer function acc_select_device(local_rank) result(device)
+        integer, intent(in) :: local_rank   !! rank among the node's ranks, from 0
+        device = -1
+#ifdef _OPENACC
+        if (acc_get_num_devices(acc_device_not_host) < 1) return
+        device = mod(local_rank, acc_get_num_devices(acc_device_not_host))
+        call acc_set_device_num(device, acc_device_not_host)
+#else
+        if (local_rank < 0) device = -1      ! (the rank counts in OpenACC builds only)
+#endif
+    end function acc_select_device
 
     subroutine data_r1(a, op)
         real(wp), intent(inout) :: a(:)
