@@ -41,8 +41,8 @@ module dem_solver
                           wall_seconds, timer_seconds
     implicit none
     private
-    public :: solver_t, solver_init, solver_restore, solver_run, solver_particles, &
-              solver_parallel_stats, &
+    public :: solver_t, solver_init, solver_restore, solver_run, solver_start, solver_advance, &
+              solver_finish, solver_particles, solver_parallel_stats, &
               stop_end, stop_settled, stop_wall_time, stop_signal
 
     ! why solver_run returned without an error
@@ -55,6 +55,18 @@ module dem_solver
     real(wp), parameter :: shutdown_seconds = 0.25_wp
 
     !> The state of a run.
+    !> The bookkeeping of a run between solver_start and solver_finish.
+    type :: run_t
+        type(output_t) :: out
+        integer(i8) :: n_end = 0               !< the run's last step
+        integer(i8) :: every = 0               !< steps between rows of series.csv (0: none)
+        integer(i8) :: every_snap = 0          !< ... between snapshots
+        integer(i8) :: every_ckpt = 0          !< ... between checkpoints
+        real(wp) :: started = 0.0_wp           !< wall-clock start of the program [s]
+        real(wp) :: next_progress = 0.0_wp     !< wall-clock time of the next progress line [s]
+        real(wp) :: last = 0.0_wp              !< wall-clock time of the last step's end [s]
+    end type run_t
+
     type :: solver_t
         type(particles_t) :: p
         type(neighbors_t) :: nb
@@ -79,6 +91,7 @@ module dem_solver
         integer(i8) :: rng_state = 0   !< the case's random generator
         logical :: restarted = .false. !< the state comes from a checkpoint
         integer :: device = -1         !< OpenACC device of this rank (-1: the host)
+        type(run_t) :: run             !< between solver_start and solver_finish
         logical :: lists_on_device = .false.
         type(frame_t) :: good          !< the last state that passed the instability guard
         integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
@@ -209,58 +222,88 @@ contains
         type(case_t), intent(in) :: c
         real(wp), intent(in) :: started
         type(error_t), intent(inout) :: err
-        type(output_t) :: out
-        integer(i8) :: n_end, every, every_snap, every_ckpt
-        real(wp) :: dt, next_progress, step_seconds, last
-        logical :: written, bad, show
-        type(frame_t) :: fr
+        call solver_start(s, c, started, err)
+        if (err%failed()) return
+        call solver_advance(s, c, s%run%n_end, err)
+        call solver_finish(s, c, err)
+    end subroutine solver_run
+
+    !> Open the outputs, decompose space (several ranks), put the state on the device, build
+    !> the lists, and write the outputs of the first step (unless restarted). On failure,
+    !> every rank returns with err set and nothing to finish.
+    subroutine solver_start(s, c, started, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        real(wp), intent(in) :: started
+        type(error_t), intent(inout) :: err
         character(len=:), allocatable :: columns
         integer :: k
+        associate (r => s%run)
+            r%started = started
+            r%n_end = s%step0 + ceiling((c%t_end - s%time0) / c%dt - 1.0e-9_wp, i8)
+            r%every = steps_of(c%output_interval)
+            r%every_snap = steps_of(c%snapshot_interval)
+            r%every_ckpt = steps_of(c%checkpoint_interval)
+            s%stopped = stop_end
+            s%stop_message = ''
+            columns = ''
+            do k = 1, size(c%probes)
+                columns = columns // probe_header(c%probes(k), c%mats%name, .not. c%mats%rigid)
+            end do
+            if (s%comm%size > 1 .and. s%trace_id /= 0) call set_error(err, dem_err_runtime, &
+                c%source // ': &output trace_id: tracing runs on one MPI rank')
+            if (s%comm%rank == 0 .and. .not. err%failed()) then  ! the CSV files are rank 0's
+                if (s%restarted) then
+                    call output_open(r%out, c%output_dir, s%trace > 0, columns, err, &
+                        [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes])
+                    if (.not. err%failed() .and. size(s%snap_step) > 0) &
+                        call write_xdmf(s, c, err)
+                else
+                    call output_open(r%out, c%output_dir, s%trace > 0, columns, err)
+                end if
+            end if
+            if (failed_anywhere(s, err)) return
+            if (s%comm%size > 1) call start_domain(s, c)
+            s%device = acc_select_device(comm_node_rank(s%comm))
+            call device_data(s, acc_enter)
 
+            call rebuild(s)
+            if (.not. s%restarted) then
+                if (c%integrator == integrator_verlet) then
+                    call compute_forces(s, c, time_of(s, c, s%step), err)
+                    call write_trace(s, c, r%out, time_of(s, c, s%step), err)
+                end if
+                if (.not. failed_anywhere(s, err)) call write_series(s, c, r%out, err)
+                if (r%every_snap > 0 .and. .not. err%failed()) call write_snapshot(s, c, err)
+            end if
+            s%steps_run = 0
+            s%dom%bytes = 0
+            s%timers = timers_t()
+            r%next_progress = wall_seconds() + c%progress_interval
+            r%last = wall_seconds()
+        end associate
+    contains
+        integer(i8) function steps_of(interval) result(k)
+            real(wp), intent(in) :: interval
+            k = 0
+            if (interval > 0.0_wp) k = max(1_i8, nint(interval / c%dt, i8))
+        end function steps_of
+    end subroutine solver_start
+
+    !> Steps up to step `until` (at most the run's last), or until a stop or an error,
+    !> writing the outputs that fall due.
+    subroutine solver_advance(s, c, until, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        integer(i8), intent(in) :: until
+        type(error_t), intent(inout) :: err
+        real(wp) :: dt, step_seconds
+        logical :: written, bad, show
         dt = c%dt
-        n_end = s%step0 + ceiling((c%t_end - s%time0) / dt - 1.0e-9_wp, i8)
-        every = steps_of(c%output_interval)
-        every_snap = steps_of(c%snapshot_interval)
-        every_ckpt = steps_of(c%checkpoint_interval)
-        s%stopped = stop_end
-        s%stop_message = ''
-        columns = ''
-        do k = 1, size(c%probes)
-            columns = columns // probe_header(c%probes(k), c%mats%name, .not. c%mats%rigid)
-        end do
-        if (s%comm%size > 1 .and. s%trace_id /= 0) call set_error(err, dem_err_runtime, &
-            c%source // ': &output trace_id: tracing runs on one MPI rank')
-        if (s%comm%rank == 0 .and. .not. err%failed()) then   ! the CSV files are rank 0's
-            if (s%restarted) then
-                call output_open(out, c%output_dir, s%trace > 0, columns, err, &
-                                 [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes])
-                if (.not. err%failed() .and. size(s%snap_step) > 0) call write_xdmf(s, c, err)
-            else
-                call output_open(out, c%output_dir, s%trace > 0, columns, err)
-            end if
-        end if
-        if (failed_anywhere(s, err)) return
-        if (s%comm%size > 1) call start_domain(s, c)
-        s%device = acc_select_device(comm_node_rank(s%comm))
-        call device_data(s, acc_enter)
-
-        call rebuild(s)
-        if (.not. s%restarted) then
-            if (c%integrator == integrator_verlet) then
-                call compute_forces(s, c, time_of(s, c, s%step), err)
-                call write_trace(s, c, out, time_of(s, c, s%step), err)
-            end if
-            if (.not. failed_anywhere(s, err)) call write_series(s, c, out, err)
-            if (every_snap > 0 .and. .not. err%failed()) call write_snapshot(s, c, err)
-        end if
-        s%steps_run = 0
-        s%dom%bytes = 0
-        s%timers = timers_t()
-        next_progress = wall_seconds() + c%progress_interval
-        step_seconds = 0.0_wp
-        last = wall_seconds()
         call timer_start(s%timers)
-        do while (s%step < n_end .and. .not. (err%failed() .or. s%settled))
+        associate (r => s%run)
+        do while (s%step < min(until, r%n_end) .and. .not. (err%failed() .or. s%settled &
+                  .or. s%stopped /= stop_end))
             associate (p => s%p, n => s%p%n_own)
                 if (c%integrator == integrator_verlet) then
                     call kick(n, 0.5_wp * dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
@@ -273,7 +316,7 @@ contains
                     call compute_forces(s, c, time_of(s, c, s%step + 1), err)
                 end if
                 if (c%integrator == integrator_euler .and. .not. err%failed()) then
-                    call write_trace(s, c, out, time_of(s, c, s%step), err)
+                    call write_trace(s, c, r%out, time_of(s, c, s%step), err)
                     call timer_stop(s%timers, phase_output)
                     call kick(n, dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
                     call drift(n, dt, p%v, p%x)
@@ -281,7 +324,7 @@ contains
                 else if (.not. err%failed()) then
                     call kick(n, 0.5_wp * dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
                     call timer_stop(s%timers, phase_integrate)
-                    call write_trace(s, c, out, time_of(s, c, s%step + 1), err)
+                    call write_trace(s, c, r%out, time_of(s, c, s%step + 1), err)
                 end if
                 bad = .false.
                 if (.not. err%failed()) bad = count_unstable(n, c%max_speed, p%radius, p%v, &
@@ -300,54 +343,60 @@ contains
             if (size(c%outlets) > 0) call remove_outlet_particles(s, c)
             call timer_stop(s%timers, phase_neighbors)
             written = .false.
-            if (due(every) .or. s%step == n_end) call write_series(s, c, out, err)
+            if (due(r%every) .or. s%step == r%n_end) call write_series(s, c, r%out, err)
             if (failed_anywhere(s, err)) exit
-            if (due(every_snap) .or. (every_snap > 0 .and. s%step == n_end)) &
+            if (due(r%every_snap) .or. (r%every_snap > 0 .and. s%step == r%n_end)) &
                 call write_snapshot(s, c, err)
-            if (due(every_ckpt) .or. s%step == n_end .or. s%settled) then
-                call write_checkpoint(s, c, out, err)
+            if (due(r%every_ckpt) .or. s%step == r%n_end .or. s%settled) then
+                call write_checkpoint(s, c, r%out, err)
                 written = .true.
             end if
             if (failed_anywhere(s, err)) exit
-            step_seconds = wall_seconds() - last
-            last = last + step_seconds
-            show = s%comm%rank == 0 .and. c%progress_interval > 0.0_wp .and. last >= next_progress
-            if (s%step < n_end) then
-                call run_control(s, c, out, started, step_seconds, written, show, err)
+            step_seconds = wall_seconds() - r%last
+            r%last = r%last + step_seconds
+            show = s%comm%rank == 0 .and. c%progress_interval > 0.0_wp &
+                   .and. r%last >= r%next_progress
+            if (s%step < r%n_end) then
+                call run_control(s, c, r%out, r%started, step_seconds, written, show, err)
             else
                 show = .false.
             end if
             if (s%stopped /= stop_end) exit
             if (show) then
-                call progress(s, c, n_end)
-                next_progress = next_progress + c%progress_interval    ! on a fixed schedule
-                if (next_progress <= last) next_progress = last + c%progress_interval
+                call progress(s, c, r%n_end)
+                r%next_progress = r%next_progress + c%progress_interval  ! on a fixed schedule
+                if (r%next_progress <= r%last) r%next_progress = r%last + c%progress_interval
             end if
             call timer_stop(s%timers, phase_output)
         end do
-        if (s%settled .and. s%stopped == stop_end) s%stopped = stop_settled
-
-        if (.not. err%failed() .and. (s%stopped == stop_end .or. s%stopped == stop_settled)) then
-            call capture(s, c, out, fr)
-            if (s%comm%rank == 0) call output_final(out, [(k, k = 1, fr%n)], fr%gid, &
-                c%mats%name(fr%mat), fr%radius, fr%x, fr%v, fr%w, err)
-            bad = failed_anywhere(s, err)
-        end if
-        if (s%comm%rank == 0) call output_close(out)
-        call device_data(s, acc_exit)
+        end associate
     contains
-        integer(i8) function steps_of(interval) result(k)
-            real(wp), intent(in) :: interval
-            k = 0
-            if (interval > 0.0_wp) k = max(1_i8, nint(interval / dt, i8))
-        end function steps_of
-
         logical function due(k)
             integer(i8), intent(in) :: k
             due = .false.
             if (k > 0) due = mod(s%step - s%step0, k) == 0
         end function due
-    end subroutine solver_run
+    end subroutine solver_advance
+
+    !> Write final.csv (when the run ended or settled without error), close the outputs and
+    !> take the state off the device.
+    subroutine solver_finish(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        type(frame_t) :: fr
+        logical :: bad
+        integer :: k
+        if (s%settled .and. s%stopped == stop_end) s%stopped = stop_settled
+        if (.not. err%failed() .and. (s%stopped == stop_end .or. s%stopped == stop_settled)) then
+            call capture(s, c, s%run%out, fr)
+            if (s%comm%rank == 0) call output_final(s%run%out, [(k, k = 1, fr%n)], fr%gid, &
+                c%mats%name(fr%mat), fr%radius, fr%x, fr%v, fr%w, err)
+            bad = failed_anywhere(s, err)
+        end if
+        if (s%comm%rank == 0) call output_close(s%run%out)
+        call device_data(s, acc_exit)
+    end subroutine solver_finish
 
     !> True on every rank when `err` is set, or `flag` is true, on any rank. When rank 0 has
     !> no error of its own, the other ranks print theirs (rank 0 prints its errors at the
