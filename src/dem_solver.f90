@@ -721,11 +721,15 @@ contains
     end subroutine write_series
 
     !> Particle contacts (pairs), wall contacts and particles, over the ranks (the ghosts
-    !> are brought to the owned particles' step first).
+    !> are brought to the owned particles' step first), counted on the host: the caller has
+    !> brought the particles there.
     function contact_counts(s) result(counts)
         type(solver_t), intent(inout) :: s
         integer(i8) :: counts(3)
-        if (s%comm%size > 1) call domain_update(s%dom, s%comm, s%p)
+        if (s%comm%size > 1) then                  ! refreshed on the device, counted here
+            call domain_update(s%dom, s%comm, s%p)
+            call acc_data(s%p%x, acc_to_host)
+        end if
         counts = [int(count_pp_sides(s%p%n_own, s%p%x, s%p%radius, s%nb%start, s%nb%list), i8), &
                   count(s%wc%tri(:, 1:s%p%n_own) > 0, kind=i8), int(s%p%n_own, i8)]
         call comm_sum(s%comm, counts)
@@ -779,6 +783,7 @@ contains
         integer(ip) :: i
         if (s%trace == 0 .or. err%failed()) return
         call particle_data(s, acc_to_host)
+        if (s%mesh%moving) call acc_data(s%mesh%vert, acc_to_host)   ! placed on the device
         i = s%trace
         associate (p => s%p)
             if (first_nonfinite(1_ip, p%x(:, i:i), p%v(:, i:i), p%w(:, i:i)) > 0) then
