@@ -11,9 +11,9 @@ module dem_comm
     use dem_kinds, only: wp, i8
     implicit none
     private
-    public :: comm_t, comm_init, comm_free, comm_node_rank, comm_offset, comm_any, comm_xor, &
-              comm_barrier, comm_info_null, comm_exchange, comm_counts, comm_sum, comm_max, comm_gather, &
-              comm_broadcast
+    public :: comm_t, comm_init, comm_from_handle, comm_free, comm_node_rank, comm_offset, &
+              comm_any, comm_xor, comm_barrier, comm_info_null, comm_exchange, comm_counts, &
+              comm_sum, comm_max, comm_gather, comm_broadcast
 
     !> Send parts of an array to every rank and receive theirs (MPI_Alltoallv).
     interface comm_exchange
@@ -71,6 +71,16 @@ contains
         call MPI_Comm_rank(c%comm, c%rank)
         call MPI_Comm_size(c%comm, c%size)
     end subroutine comm_init
+
+    !> Duplicate the communicator of Fortran handle `handle` (MPI_Comm_c2f of a C one),
+    !> which MPI must already be initialised for.
+    subroutine comm_from_handle(c, handle)
+        type(comm_t), intent(out) :: c
+        integer, intent(in) :: handle
+        type(MPI_Comm) :: parent
+        parent%mpi_val = handle
+        call comm_init(c, parent)
+    end subroutine comm_from_handle
 
     !> Free the communicator, and finalise MPI if this module started it.
     subroutine comm_free(c)

@@ -13,7 +13,7 @@ module dem_domain
     use dem_metis, only: metis_partition
     use dem_neighbors, only: neighbors_unique_pairs, fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
-                             n_pack_int, n_pack_real, order_by_id
+                             n_pack_int, particles_pack_reals, order_by_id
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_pack, wall_contacts_unpack, &
                                wall_contacts_permute, n_wall_pack_real
     implicit none
@@ -188,7 +188,7 @@ contains
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :), pbuf(:, :), precv(:, :)
         real(wp), allocatable :: rbuf(:, :), rrecv(:, :), xbuf(:, :), xrecv(:, :)
         logical, allocatable :: removed(:)
-        integer :: nr, np, i, m
+        integer :: nr, np, i, m, nreal
         allocate(dest(p%n_own + p%n_ghost))
         do i = 1, p%n_own + p%n_ghost
             dest(i) = d%owner(block_index(d, block_coords(d, p%x(:, i))))
@@ -227,19 +227,20 @@ contains
         ! the particles that leave
         idx = sorted_by_rank(merge(dest(1:p%n_own), -1, dest(1:p%n_own) /= comm%rank), comm%size, &
                              counts)
-        allocate(ibuf(n_pack_int, size(idx)), rbuf(n_pack_real + n_wall_pack_real, size(idx)))
-        call particles_pack(p, idx, ibuf, rbuf(1:n_pack_real, :))
-        call wall_contacts_pack(wc, idx, rbuf(n_pack_real + 1:, :))
+        nreal = particles_pack_reals(p)
+        allocate(ibuf(n_pack_int, size(idx)), rbuf(nreal + n_wall_pack_real, size(idx)))
+        call particles_pack(p, idx, ibuf, rbuf(1:nreal, :))
+        call wall_contacts_pack(wc, idx, rbuf(nreal + 1:, :))
         recv_counts = comm_counts(comm, counts)
         nr = sum(recv_counts)
-        allocate(irecv(n_pack_int, nr), rrecv(n_pack_real + n_wall_pack_real, nr))
+        allocate(irecv(n_pack_int, nr), rrecv(nreal + n_wall_pack_real, nr))
         call comm_exchange(comm, ibuf, counts, irecv, recv_counts)
         call comm_exchange(comm, rbuf, counts, rrecv, recv_counts)
         d%bytes = d%bytes + 8 * (size(ibuf) + size(rbuf))
         call particles_permute(p, stay)
         call wall_contacts_permute(wc, stay)
-        call particles_unpack(p, p%n_own + 1, irecv, rrecv(1:n_pack_real, :))
-        call wall_contacts_unpack(wc, p%n_own + 1, rrecv(n_pack_real + 1:, :))
+        call particles_unpack(p, p%n_own + 1, irecv, rrecv(1:nreal, :))
+        call wall_contacts_unpack(wc, p%n_own + 1, rrecv(nreal + 1:, :))
         p%n_own = p%n_own + nr
         p%n_ghost = 0
     contains
@@ -341,9 +342,10 @@ contains
         end do
         d%send = from(sorted_by_rank(to, comm%size, d%send_counts))
         d%recv_counts = comm_counts(comm, d%send_counts)
-        allocate(ibuf(n_pack_int, n_sent), rbuf(n_pack_real, n_sent))
+        allocate(ibuf(n_pack_int, n_sent), rbuf(particles_pack_reals(p), n_sent))
         call particles_pack(p, d%send, ibuf, rbuf)
-        allocate(irecv(n_pack_int, sum(d%recv_counts)), rrecv(n_pack_real, sum(d%recv_counts)))
+        allocate(irecv(n_pack_int, sum(d%recv_counts)), &
+                 rrecv(particles_pack_reals(p), sum(d%recv_counts)))
         call comm_exchange(comm, ibuf, d%send_counts, irecv, d%recv_counts)
         call comm_exchange(comm, rbuf, d%send_counts, rrecv, d%recv_counts)
         d%bytes = d%bytes + 8 * (size(ibuf) + size(rbuf))

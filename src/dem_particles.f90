@@ -5,12 +5,21 @@ module dem_particles
     implicit none
     private
     public :: particles_t, particles_init, particles_add, particles_permute, order_by_id, &
-              particles_pack, particles_unpack, n_pack_int, n_pack_real, sphere_mass, &
-              sphere_inv_inertia
+              particles_pack, particles_unpack, particles_pack_reals, particles_external, &
+              n_pack_int, sphere_mass, sphere_inv_inertia, ext_force, ext_torque, ext_beta, &
+              ext_fluid_v, ext_impulse, n_ext
 
     integer, parameter :: n_pack_int = 2    !< integers per packed particle: gid, material
     integer, parameter :: n_pack_real = 19  !< reals: radius, mass, 1/mass, 1/inertia, x, v, w,
-                                            !< force, torque
+                                            !< force, torque (and ext, when allocated)
+
+    ! rows of particles_t%ext: what a coupled fluid code sets and gets (doc/coupling.md)
+    integer, parameter :: ext_force = 1      !< 1:3 external force [N]
+    integer, parameter :: ext_torque = 4     !< 4:6 external torque [N m]
+    integer, parameter :: ext_beta = 7       !< drag coefficient beta [kg/s]
+    integer, parameter :: ext_fluid_v = 8    !< 8:10 fluid velocity at the particle [m/s]
+    integer, parameter :: ext_impulse = 11   !< 11:13 impulse of all these since the reset [N s]
+    integer, parameter :: n_ext = 13
 
     !> Structure of arrays for spheres. Kernels receive the arrays, never the type.
     type :: particles_t
@@ -27,6 +36,9 @@ module dem_particles
         real(wp), allocatable :: w(:, :)          !< angular velocity [rad/s]
         real(wp), allocatable :: f(:, :)          !< force [N]
         real(wp), allocatable :: t(:, :)          !< torque [N m]
+        real(wp), allocatable :: ext(:, :)        !< (n_ext, capacity): external forces and
+                                                  !< drag of a coupled run; unallocated in
+                                                  !< a run of its own
     end type particles_t
 
 contains
@@ -97,7 +109,23 @@ contains
         p%w(:, 1:n) = p%w(:, order)
         p%f(:, 1:n) = p%f(:, order)
         p%t(:, 1:n) = p%t(:, order)
+        if (allocated(p%ext)) p%ext(:, 1:n) = p%ext(:, order)
     end subroutine particles_permute
+
+    !> Give every particle the external-force block of a coupled run, at zero.
+    subroutine particles_external(p)
+        type(particles_t), intent(inout) :: p
+        if (allocated(p%ext)) return
+        allocate(p%ext(n_ext, size(p%gid)))
+        p%ext = 0.0_wp
+    end subroutine particles_external
+
+    !> Reals per particle that particles_pack writes.
+    pure integer function particles_pack_reals(p) result(n)
+        type(particles_t), intent(in) :: p
+        n = n_pack_real
+        if (allocated(p%ext)) n = n + n_ext
+    end function particles_pack_reals
 
     !> Every field of the particles idx, appended to the buffers that carry them to another
     !> rank (n_pack_int and n_pack_real values per particle, in the order of idx).
@@ -110,8 +138,9 @@ contains
         do a = 1, size(idx)
             i = idx(a)
             ibuf(:, a) = [p%gid(i), int(p%mat(i), i8)]
-            rbuf(:, a) = [p%radius(i), p%mass(i), p%inv_mass(i), p%inv_inertia(i), p%x(:, i), &
-                          p%v(:, i), p%w(:, i), p%f(:, i), p%t(:, i)]
+            rbuf(1:n_pack_real, a) = [p%radius(i), p%mass(i), p%inv_mass(i), p%inv_inertia(i), &
+                                      p%x(:, i), p%v(:, i), p%w(:, i), p%f(:, i), p%t(:, i)]
+            if (allocated(p%ext)) rbuf(n_pack_real + 1:n_pack_real + n_ext, a) = p%ext(:, i)
         end do
     end subroutine particles_pack
 
@@ -135,6 +164,7 @@ contains
             p%w(:, i) = rbuf(11:13, a)
             p%f(:, i) = rbuf(14:16, a)
             p%t(:, i) = rbuf(17:19, a)
+            if (allocated(p%ext)) p%ext(:, i) = rbuf(n_pack_real + 1:n_pack_real + n_ext, a)
         end do
     end subroutine particles_unpack
 

@@ -18,7 +18,7 @@ module dem_solver
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, wall_contacts_permute, &
                                pw_forces
-    use dem_forces, only: body_forces
+    use dem_forces, only: body_forces, external_forces
     use dem_mesh, only: mesh_t, mesh_move
     use dem_outlets, only: outlets_mark
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
@@ -42,7 +42,8 @@ module dem_solver
     implicit none
     private
     public :: solver_t, solver_init, solver_restore, solver_run, solver_start, solver_advance, &
-              solver_finish, solver_particles, solver_parallel_stats, &
+              solver_finish, solver_time, solver_retime, solver_particles, &
+              solver_parallel_stats, &
               stop_end, stop_settled, stop_wall_time, stop_signal
 
     ! why solver_run returned without an error
@@ -62,6 +63,8 @@ module dem_solver
         integer(i8) :: every = 0               !< steps between rows of series.csv (0: none)
         integer(i8) :: every_snap = 0          !< ... between snapshots
         integer(i8) :: every_ckpt = 0          !< ... between checkpoints
+        integer(i8) :: out0 = 0                !< the step they count from
+        real(wp) :: dt = 0.0_wp                !< the time step they were counted for [s]
         real(wp) :: started = 0.0_wp           !< wall-clock start of the program [s]
         real(wp) :: next_progress = 0.0_wp     !< wall-clock time of the next progress line [s]
         real(wp) :: last = 0.0_wp              !< wall-clock time of the last step's end [s]
@@ -240,10 +243,7 @@ contains
         integer :: k
         associate (r => s%run)
             r%started = started
-            r%n_end = s%step0 + ceiling((c%t_end - s%time0) / c%dt - 1.0e-9_wp, i8)
-            r%every = steps_of(c%output_interval)
-            r%every_snap = steps_of(c%snapshot_interval)
-            r%every_ckpt = steps_of(c%checkpoint_interval)
+            call plan_run(s, c)
             s%stopped = stop_end
             s%stop_message = ''
             columns = ''
@@ -282,13 +282,47 @@ contains
             r%next_progress = wall_seconds() + c%progress_interval
             r%last = wall_seconds()
         end associate
+    end subroutine solver_start
+
+    !> The run's last step and the steps between outputs, for dt = c%dt from step0.
+    subroutine plan_run(s, c)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        s%run%n_end = s%step0 + ceiling((c%t_end - s%time0) / c%dt - 1.0e-9_wp, i8)
+        s%run%out0 = s%step0
+        s%run%dt = c%dt
+        s%run%every = steps_of(c%output_interval)
+        s%run%every_snap = steps_of(c%snapshot_interval)
+        s%run%every_ckpt = steps_of(c%checkpoint_interval)
     contains
         integer(i8) function steps_of(interval) result(k)
             real(wp), intent(in) :: interval
             k = 0
             if (interval > 0.0_wp) k = max(1_i8, nint(interval / c%dt, i8))
         end function steps_of
-    end subroutine solver_start
+    end subroutine plan_run
+
+    !> The time now [s].
+    real(wp) function solver_time(s, c) result(time)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        time = time_of(s, c, s%step)
+    end function solver_time
+
+    !> Time counts on from `time` at step now, at dt = c%dt (which the caller may have
+    !> changed): the end is planned anew, and the outputs too if dt changed.
+    subroutine solver_retime(s, c, time)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        real(wp), intent(in) :: time   !! [s]
+        s%time0 = time
+        s%step0 = s%step
+        if (c%dt == s%run%dt) then
+            s%run%n_end = s%step0 + ceiling((c%t_end - s%time0) / c%dt - 1.0e-9_wp, i8)
+        else
+            call plan_run(s, c)
+        end if
+    end subroutine solver_retime
 
     !> Steps up to step `until` (at most the run's last), or until a stop or an error,
     !> writing the outputs that fall due.
@@ -374,7 +408,7 @@ contains
         logical function due(k)
             integer(i8), intent(in) :: k
             due = .false.
-            if (k > 0) due = mod(s%step - s%step0, k) == 0
+            if (k > 0) due = mod(s%step - s%run%out0, k) == 0
         end function due
     end subroutine solver_advance
 
@@ -544,6 +578,7 @@ contains
         call timer_stop(s%timers, phase_neighbors)
         associate (p => s%p, nb => s%nb, pc => s%pc, m => s%mesh, n => s%p%n_own)
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
+            if (allocated(p%ext)) call external_forces(n, c%dt, p%v, p%ext, p%f, p%t)
             call pp_forces(n, n + p%n_ghost, size(nb%list), c%mats%n, p%x, p%v, p%w, &
                            p%radius, p%mass, p%mat, nb%start, nb%list, nb%mirror, pc%kn, pc%sn, &
                            pc%st, pc%cn, pc%ct, pc%mu, pc%clamp_normal, c%dt, nb%xi, &
@@ -1054,6 +1089,7 @@ contains
         call acc_data(s%p%x, op)
         call acc_data(s%p%v, op)
         call acc_data(s%p%w, op)
+        if (allocated(s%p%ext)) call acc_data(s%p%ext, op)
         call acc_data(s%p%f, op)
         call acc_data(s%p%t, op)
         call acc_data(s%wc%tri, op)

@@ -1,0 +1,290 @@
+!> The interface a CFD code drives the DEM through (doc/coupling.md), in the style of MFiX's
+!> DES coupling: initialise from a case file on the caller's communicator, advance by the
+!> fluid's time step in uniform sub-steps that end exactly at t + dt, read the owned
+!> particles, set a force and torque or a drag coefficient and fluid velocity per particle,
+!> read back the impulse the fluid gave, finalise. Every entry point is collective on the
+!> communicator, returns a status (0: success, else a dem_err_* code) and a message rather
+!> than stopping the program, and has a bind(C) twin (src/dem_coupling.h). One coupled run
+!> per process at a time. SI units; gravity is the case's (&run gravity), applied by the
+!> DEM; buoyancy and drag come only through this interface.
+module dem_coupling
+    use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char, c_int64_t, c_null_char
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error, dem_err_input, dem_err_runtime
+    use dem_comm, only: comm_t, comm_from_handle, comm_free
+    use dem_case, only: case_t
+    use dem_input, only: read_case
+    use dem_solver, only: solver_t, solver_init, solver_start, solver_advance, solver_finish, &
+                          solver_time, solver_retime, stop_end
+    use dem_particles, only: particles_external, ext_force, ext_torque, ext_beta, ext_fluid_v, &
+                             ext_impulse
+    use dem_acc, only: acc_data, acc_to_host, acc_to_device
+    use dem_timers, only: wall_seconds
+    implicit none
+    private
+    public :: coupling_init, coupling_finalize, coupling_advance, coupling_time, &
+              coupling_count, coupling_get, coupling_set_force, coupling_set_drag, &
+              coupling_impulse
+    public :: dem_coupling_init, dem_coupling_finalize, dem_coupling_advance, dem_coupling_time, &
+              dem_coupling_count, dem_coupling_get, dem_coupling_set_force, &
+              dem_coupling_set_drag, dem_coupling_impulse
+
+    type(case_t), save :: c
+    type(solver_t), save :: s
+    type(comm_t), save :: comm
+    logical, save :: active = .false.
+    real(wp), save :: dt_case = 0.0_wp    !< the case's dt: the largest sub-step [s]
+
+contains
+
+    !> Read the case `file` and set up its run on a duplicate of the communicator of Fortran
+    !> handle `comm_handle` (MPI must be initialised; from C, MPI_Comm_c2f).
+    subroutine coupling_init(file, comm_handle, status, message)
+        character(len=*), intent(in) :: file
+        integer, intent(in) :: comm_handle
+        integer, intent(out) :: status
+        character(len=*), intent(out) :: message
+        type(error_t) :: err
+        if (active) then
+            call set_error(err, dem_err_runtime, 'dem_coupling: already initialised')
+        else
+            call comm_from_handle(comm, comm_handle)
+            call read_case(trim(file), c, err)
+            if (.not. err%failed()) then
+                call solver_init(s, c, comm)
+                call particles_external(s%p)
+                dt_case = c%dt
+                call solver_start(s, c, wall_seconds(), err)
+            end if
+            active = .not. err%failed()
+            if (.not. active) call comm_free(comm)
+        end if
+        call report(err, status, message)
+    end subroutine coupling_init
+
+    !> Write the run's final outputs and release it.
+    subroutine coupling_finalize(status, message)
+        integer, intent(out) :: status
+        character(len=*), intent(out) :: message
+        type(error_t) :: err
+        if (ready(err)) then
+            call solver_finish(s, c, err)
+            call comm_free(comm)
+            active = .false.
+        end if
+        call report(err, status, message)
+    end subroutine coupling_finalize
+
+    !> Advance from t to t + dt in n = ceiling(dt / dt_case) sub-steps of dt / n; forces,
+    !> torques and drag set before act on every sub-step (the drag at each sub-step's
+    !> velocities), and the impulse they give is summed from zero over the advance.
+    subroutine coupling_advance(dt, status, message)
+        real(wp), intent(in) :: dt       !! the fluid's time step [s]
+        integer, intent(out) :: status
+        character(len=*), intent(out) :: message
+        type(error_t) :: err
+        real(wp) :: t
+        integer(i8) :: n_sub
+        character(len=32) :: text
+        if (ready(err)) then
+            if (.not. dt > 0.0_wp) then
+                write(text, '(es12.5)') dt
+                call set_error(err, dem_err_input, 'dem_coupling_advance: dt = ' // &
+                               trim(adjustl(text)) // ' s: must be > 0')
+            end if
+        end if
+        if (.not. err%failed()) then
+            n_sub = max(1_i8, ceiling(dt / dt_case - 1.0e-9_wp, i8))
+            t = solver_time(s, c)
+            c%dt = dt / real(n_sub, wp)
+            call solver_retime(s, c, t)
+            if (s%step + n_sub > s%run%n_end) then
+                write(text, '(es12.5)') t + dt
+                call set_error(err, dem_err_input, c%source // ': &run t_end: the fluid ' // &
+                               'asks for t = ' // trim(adjustl(text)) // ' s, after it')
+            end if
+        end if
+        if (.not. err%failed()) then
+            s%p%ext(ext_impulse:ext_impulse + 2, :) = 0.0_wp
+            call acc_data(s%p%ext, acc_to_device)
+            call solver_advance(s, c, s%step + n_sub, err)
+            call acc_data(s%p%ext, acc_to_host)
+            call acc_data(s%p%x, acc_to_host)
+            call acc_data(s%p%v, acc_to_host)
+            call acc_data(s%p%w, acc_to_host)
+            call solver_retime(s, c, t + dt)       ! exactly t + dt: no drift over advances
+            if (.not. err%failed() .and. s%stopped /= stop_end) &
+                call set_error(err, dem_err_runtime, s%stop_message)
+        end if
+        call report(err, status, message)
+    end subroutine coupling_advance
+
+    !> The DEM's time [s] (0 before coupling_init).
+    real(wp) function coupling_time() result(t)
+        t = 0.0_wp
+        if (active) t = solver_time(s, c)
+    end function coupling_time
+
+    !> The particles this rank owns (each particle is owned by exactly one rank); their
+    !> local indices 1..n are valid until the next advance.
+    integer function coupling_count() result(n)
+        n = 0
+        if (active) n = s%p%n_own
+    end function coupling_count
+
+    !> Copies of the owned particles' global ids, materials (indices in the order of the
+    !> case's &material groups), radii [m], positions [m], velocities [m/s] and angular
+    !> velocities [rad/s], into arrays of at least coupling_count() columns.
+    subroutine coupling_get(gid, mat, radius, x, v, w)
+        integer(i8), intent(out) :: gid(:)
+        integer, intent(out) :: mat(:)
+        real(wp), intent(out) :: radius(:), x(:, :), v(:, :), w(:, :)
+        integer(ip) :: n
+        n = coupling_count()
+        gid(1:n) = s%p%gid(1:n)
+        mat(1:n) = s%p%mat(1:n)
+        radius(1:n) = s%p%radius(1:n)
+        x(:, 1:n) = s%p%x(:, 1:n)
+        v(:, 1:n) = s%p%v(:, 1:n)
+        w(:, 1:n) = s%p%w(:, 1:n)
+    end subroutine coupling_get
+
+    !> The external force [N] and torque [N m] on each owned particle (local index), for
+    !> the next advances until set again.
+    subroutine coupling_set_force(f, t)
+        real(wp), intent(in) :: f(:, :), t(:, :)
+        integer(ip) :: n
+        n = coupling_count()
+        s%p%ext(ext_force:ext_force + 2, 1:n) = f(:, 1:n)
+        s%p%ext(ext_torque:ext_torque + 2, 1:n) = t(:, 1:n)
+    end subroutine coupling_set_force
+
+    !> The drag coefficient beta [kg/s] and fluid velocity u_f [m/s] at each owned particle:
+    !> the drag beta (u_f - v) is evaluated at every sub-step.
+    subroutine coupling_set_drag(beta, u_f)
+        real(wp), intent(in) :: beta(:), u_f(:, :)
+        integer(ip) :: n
+        n = coupling_count()
+        s%p%ext(ext_beta, 1:n) = beta(1:n)
+        s%p%ext(ext_fluid_v:ext_fluid_v + 2, 1:n) = u_f(:, 1:n)
+    end subroutine coupling_set_drag
+
+    !> The impulse [N s] that force and drag gave each owned particle over the last advance:
+    !> the fluid's momentum changes by minus their sum.
+    subroutine coupling_impulse(j)
+        real(wp), intent(out) :: j(:, :)
+        integer(ip) :: n
+        n = coupling_count()
+        j(:, 1:n) = s%p%ext(ext_impulse:ext_impulse + 2, 1:n)
+    end subroutine coupling_impulse
+
+    !> True when a run is set up; else err says so.
+    logical function ready(err)
+        type(error_t), intent(inout) :: err
+        ready = active
+        if (.not. ready) call set_error(err, dem_err_runtime, &
+                                        'dem_coupling: not initialised (call dem_coupling_init)')
+    end function ready
+
+    subroutine report(err, status, message)
+        type(error_t), intent(in) :: err
+        integer, intent(out) :: status
+        character(len=*), intent(out) :: message
+        status = 0
+        message = ''
+        if (.not. err%failed()) return
+        status = err%code
+        message = err%message
+    end subroutine report
+
+    ! --- the C interface (src/dem_coupling.h): the same calls, C strings and arrays ---
+
+    integer(c_int) function dem_coupling_init(file, comm_f, message, message_len) &
+            result(status) bind(C, name='dem_coupling_init')
+        character(kind=c_char), intent(in) :: file(*)
+        integer(c_int), value :: comm_f, message_len
+        character(kind=c_char), intent(out) :: message(*)
+        character(len=:), allocatable :: path
+        character(len=1024) :: text
+        integer :: k
+        path = ''
+        k = 1
+        do while (file(k) /= c_null_char)
+            path = path // file(k)
+            k = k + 1
+        end do
+        call coupling_init(path, int(comm_f), status, text)
+        call c_message(text, message, message_len)
+    end function dem_coupling_init
+
+    integer(c_int) function dem_coupling_finalize(message, message_len) result(status) &
+            bind(C, name='dem_coupling_finalize')
+        integer(c_int), value :: message_len
+        character(kind=c_char), intent(out) :: message(*)
+        character(len=1024) :: text
+        call coupling_finalize(status, text)
+        call c_message(text, message, message_len)
+    end function dem_coupling_finalize
+
+    integer(c_int) function dem_coupling_advance(dt, message, message_len) result(status) &
+            bind(C, name='dem_coupling_advance')
+        real(c_double), value :: dt
+        integer(c_int), value :: message_len
+        character(kind=c_char), intent(out) :: message(*)
+        character(len=1024) :: text
+        call coupling_advance(dt, status, text)
+        call c_message(text, message, message_len)
+    end function dem_coupling_advance
+
+    real(c_double) function dem_coupling_time() result(t) bind(C, name='dem_coupling_time')
+        t = coupling_time()
+    end function dem_coupling_time
+
+    integer(c_int) function dem_coupling_count() result(n) bind(C, name='dem_coupling_count')
+        n = coupling_count()
+    end function dem_coupling_count
+
+    subroutine dem_coupling_get(gid, mat, radius, x, v, w) bind(C, name='dem_coupling_get')
+        integer(c_int64_t), intent(out) :: gid(*)
+        integer(c_int), intent(out) :: mat(*)
+        real(c_double), intent(out) :: radius(*), x(3, *), v(3, *), w(3, *)
+        integer :: n
+        n = coupling_count()
+        call coupling_get(gid(1:n), mat(1:n), radius(1:n), x(:, 1:n), v(:, 1:n), w(:, 1:n))
+    end subroutine dem_coupling_get
+
+    subroutine dem_coupling_set_force(f, t) bind(C, name='dem_coupling_set_force')
+        real(c_double), intent(in) :: f(3, *), t(3, *)
+        integer :: n
+        n = coupling_count()
+        call coupling_set_force(f(:, 1:n), t(:, 1:n))
+    end subroutine dem_coupling_set_force
+
+    subroutine dem_coupling_set_drag(beta, u_f) bind(C, name='dem_coupling_set_drag')
+        real(c_double), intent(in) :: beta(*), u_f(3, *)
+        integer :: n
+        n = coupling_count()
+        call coupling_set_drag(beta(1:n), u_f(:, 1:n))
+    end subroutine dem_coupling_set_drag
+
+    subroutine dem_coupling_impulse(j) bind(C, name='dem_coupling_impulse')
+        real(c_double), intent(out) :: j(3, *)
+        integer :: n
+        n = coupling_count()
+        call coupling_impulse(j(:, 1:n))
+    end subroutine dem_coupling_impulse
+
+    !> A Fortran message into a C buffer of `length` bytes, null-terminated.
+    subroutine c_message(text, message, length)
+        character(len=*), intent(in) :: text
+        character(kind=c_char), intent(out) :: message(*)
+        integer(c_int), intent(in) :: length
+        integer :: k, n
+        if (length < 1) return
+        n = min(len_trim(text), length - 1)
+        do k = 1, n
+            message(k) = text(k:k)
+        end do
+        message(n + 1) = c_null_char
+    end subroutine c_message
+end module dem_coupling

@@ -1,0 +1,52 @@
+/* The C interface of dem's CFD coupling (src/dem_coupling.f90, doc/coupling.md).
+ *
+ * Every call is collective on the communicator given to dem_coupling_init. Calls that can
+ * fail return 0 on success, else an error code (2: bad input, 3: the run cannot go on,
+ * 4: an output could not be written), with a null-terminated message in `message` (at most
+ * message_len bytes with the terminator). SI units. Arrays are of the particles this rank
+ * owns, n = dem_coupling_count(), in local order: vectors are 3 doubles per particle
+ * (x0 y0 z0 x1 y1 z1 ...). The local order may change at every advance: match particles
+ * by their global ids. */
+#ifndef DEM_COUPLING_H
+#define DEM_COUPLING_H
+
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Read the case file and set up its run on a duplicate of the communicator whose Fortran
+ * handle is comm_f (MPI_Comm_c2f(comm)); MPI must be initialised. */
+int dem_coupling_init(const char *file, int comm_f, char *message, int message_len);
+
+/* Write the run's final outputs and release it. */
+int dem_coupling_finalize(char *message, int message_len);
+
+/* Advance from t to t + dt in ceiling(dt / case dt) equal sub-steps, ending exactly at
+ * t + dt; forces, torques and drag act on every sub-step. */
+int dem_coupling_advance(double dt, char *message, int message_len);
+
+double dem_coupling_time(void);          /* the DEM's time [s] */
+int dem_coupling_count(void);            /* particles owned by this rank */
+
+/* Copies of the owned particles: global ids, material indices (the case's &material
+ * groups in order, from 1), radii [m], positions [m], velocities [m/s], angular
+ * velocities [rad/s]. */
+void dem_coupling_get(int64_t *gid, int *material, double *radius, double *x, double *v,
+                      double *w);
+
+/* External force [N] and torque [N m] per owned particle, until set again. */
+void dem_coupling_set_force(const double *force, const double *torque);
+
+/* Drag coefficient beta [kg/s] and fluid velocity [m/s] per owned particle: the drag
+ * beta (u_f - v) is evaluated at every sub-step. */
+void dem_coupling_set_drag(const double *beta, const double *fluid_velocity);
+
+/* The impulse [N s] force and drag gave each owned particle over the last advance. */
+void dem_coupling_impulse(double *impulse);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
