@@ -19,15 +19,17 @@ module dem_coupling
     use dem_particles, only: particles_external, ext_force, ext_torque, ext_beta, ext_fluid_v, &
                              ext_impulse
     use dem_acc, only: acc_data, acc_to_host, acc_to_device
+    use dem_deposit, only: deposit_grid, kernel_cell, kernel_trilinear, kernel_dpvm, n_deposit
     use dem_timers, only: wall_seconds
     implicit none
     private
     public :: coupling_init, coupling_finalize, coupling_advance, coupling_time, &
               coupling_count, coupling_get, coupling_set_force, coupling_set_drag, &
-              coupling_impulse
+              coupling_impulse, coupling_deposit, coupling_removed_count, coupling_removed
     public :: dem_coupling_init, dem_coupling_finalize, dem_coupling_advance, dem_coupling_time, &
               dem_coupling_count, dem_coupling_get, dem_coupling_set_force, &
-              dem_coupling_set_drag, dem_coupling_impulse
+              dem_coupling_set_drag, dem_coupling_impulse, dem_coupling_deposit, &
+              dem_coupling_removed_count, dem_coupling_removed
 
     type(case_t), save :: c
     type(solver_t), save :: s
@@ -53,6 +55,7 @@ contains
             if (.not. err%failed()) then
                 call solver_init(s, c, comm)
                 call particles_external(s%p)
+                allocate(s%removed_ids(0))               ! outlets record what they remove
                 dt_case = c%dt
                 call solver_start(s, c, wall_seconds(), err)
             end if
@@ -106,6 +109,7 @@ contains
         end if
         if (.not. err%failed()) then
             s%p%ext(ext_impulse:ext_impulse + 2, :) = 0.0_wp
+            s%removed_ids = s%removed_ids(1:0)
             call acc_data(s%p%ext, acc_to_device)
             call solver_advance(s, c, s%step + n_sub, err)
             call acc_data(s%p%ext, acc_to_host)
@@ -177,6 +181,72 @@ contains
         n = coupling_count()
         j(:, 1:n) = s%p%ext(ext_impulse:ext_impulse + 2, 1:n)
     end subroutine coupling_impulse
+
+    !> Deposit the particles of all ranks onto the Cartesian grid of nc(1) x nc(2) x nc(3)
+    !> cells of size h [m] from origin [m] (cell c = 1 + i + nc(1) (j + nc(2) k), x fastest),
+    !> with kernel 'cell', 'trilinear' or 'dpvm': the solids volume fraction eps, and the sums
+    !> per cell of the particle momentum [kg m/s], of the drag coefficients [kg/s] and of
+    !> beta v [N]. Every rank gets the whole grid, the same bit for bit on any number of
+    !> ranks. Particles outside the grid are left out (status 0; the message counts them).
+    subroutine coupling_deposit(origin, h, nc, kernel, eps, momentum, beta_sum, beta_v, status, &
+                                message)
+        real(wp), intent(in) :: origin(3), h(3)
+        integer, intent(in) :: nc(3)
+        character(len=*), intent(in) :: kernel
+        real(wp), intent(out) :: eps(:), momentum(:, :), beta_sum(:), beta_v(:, :)
+        integer, intent(out) :: status
+        character(len=*), intent(out) :: message
+        type(error_t) :: err
+        real(wp), allocatable :: sums(:, :)
+        integer(i8) :: n_outside
+        integer :: k
+        k = 0
+        if (ready(err)) then
+            select case (kernel)
+            case ('cell')
+                k = kernel_cell
+            case ('trilinear')
+                k = kernel_trilinear
+            case ('dpvm')
+                k = kernel_dpvm
+            case default
+                call set_error(err, dem_err_input, "dem_coupling_deposit: kernel '" // &
+                               trim(kernel) // "' is not known (cell, trilinear, dpvm)")
+            end select
+        end if
+        if (.not. err%failed() .and. (any(nc < 1) .or. any(.not. h > 0.0_wp))) &
+            call set_error(err, dem_err_input, 'dem_coupling_deposit: the grid needs ' // &
+                           'counts >= 1 and spacings > 0')
+        if (.not. err%failed() .and. (size(eps) < product(nc) .or. size(beta_sum) < product(nc) &
+            .or. size(momentum, 2) < product(nc) .or. size(beta_v, 2) < product(nc))) &
+            call set_error(err, dem_err_input, 'dem_coupling_deposit: arrays smaller ' // &
+                           'than the grid')
+        call report(err, status, message)
+        if (err%failed()) return
+        allocate(sums(n_deposit, product(nc)))
+        associate (p => s%p, n => s%p%n_own)
+            call deposit_grid(comm, n, p%x(:, 1:n), p%radius(1:n), p%mass(1:n), p%v(:, 1:n), &
+                              p%ext(ext_beta, 1:n), k, origin, h, nc, sums, n_outside)
+        end associate
+        eps(1:product(nc)) = sums(1, :) / product(h)
+        momentum(:, 1:product(nc)) = sums(2:4, :)
+        beta_sum(1:product(nc)) = sums(5, :)
+        beta_v(:, 1:product(nc)) = sums(6:8, :)
+        if (n_outside > 0) write(message, '(i0,a)') n_outside, ' particles outside the grid'
+    end subroutine coupling_deposit
+
+    !> How many particles the outlets removed from this rank during the last advance.
+    integer function coupling_removed_count() result(n)
+        n = 0
+        if (active) n = size(s%removed_ids)
+    end function coupling_removed_count
+
+    !> Their global ids (at least coupling_removed_count() of them); over all ranks, every
+    !> particle removed during the last advance, once.
+    subroutine coupling_removed(ids)
+        integer(i8), intent(out) :: ids(:)
+        ids(1:coupling_removed_count()) = s%removed_ids
+    end subroutine coupling_removed
 
     !> True when a run is set up; else err says so.
     logical function ready(err)
@@ -273,6 +343,36 @@ contains
         n = coupling_count()
         call coupling_impulse(j(:, 1:n))
     end subroutine dem_coupling_impulse
+
+    integer(c_int) function dem_coupling_deposit(origin, h, nc, kernel, eps, momentum, beta_sum, &
+            beta_v, message, message_len) result(status) bind(C, name='dem_coupling_deposit')
+        real(c_double), intent(in) :: origin(3), h(3)
+        integer(c_int), intent(in) :: nc(3)
+        integer(c_int), value :: kernel, message_len
+        real(c_double), intent(out) :: eps(*), momentum(3, *), beta_sum(*), beta_v(3, *)
+        character(kind=c_char), intent(out) :: message(*)
+        character(len=1024) :: text
+        character(len=16) :: name
+        integer :: m
+        m = max(0, product(nc))
+        name = 'unknown'
+        if (kernel == kernel_cell) name = 'cell'
+        if (kernel == kernel_trilinear) name = 'trilinear'
+        if (kernel == kernel_dpvm) name = 'dpvm'
+        call coupling_deposit(origin, h, nc, trim(name), eps(1:m), momentum(:, 1:m), &
+                              beta_sum(1:m), beta_v(:, 1:m), status, text)
+        call c_message(text, message, message_len)
+    end function dem_coupling_deposit
+
+    integer(c_int) function dem_coupling_removed_count() result(n) &
+            bind(C, name='dem_coupling_removed_count')
+        n = coupling_removed_count()
+    end function dem_coupling_removed_count
+
+    subroutine dem_coupling_removed(ids) bind(C, name='dem_coupling_removed')
+        integer(c_int64_t), intent(out) :: ids(*)
+        call coupling_removed(ids(1:coupling_removed_count()))
+    end subroutine dem_coupling_removed
 
     !> A Fortran message into a C buffer of `length` bytes, null-terminated.
     subroutine c_message(text, message, length)

@@ -46,6 +46,20 @@ void dem_coupling_set_drag(const double *beta, const double *fluid_velocity);
 /* The impulse [N s] force and drag gave each owned particle over the last advance. */
 void dem_coupling_impulse(double *impulse);
 
+/* The particles the outlets removed from this rank during the last advance: how many, and
+ * their global ids (over all ranks, each removed particle once). */
+int dem_coupling_removed_count(void);
+void dem_coupling_removed(int64_t *ids);
+
+/* Deposit the particles of all ranks onto the Cartesian grid of n[0] x n[1] x n[2] cells of
+ * size h from origin (cell c = i + n[0] (j + n[1] k), x fastest), with kernel 1 (cell),
+ * 2 (trilinear) or 3 (divided particle volume): the solids volume fraction eps, and per
+ * cell the sums of the particle momentum [kg m/s], of beta [kg/s] and of beta v [N]. Every
+ * rank gets the whole grid, the same bit for bit on any number of ranks. */
+int dem_coupling_deposit(const double origin[3], const double h[3], const int n[3], int kernel,
+                         double *eps, double *momentum, double *beta_sum, double *beta_v,
+                         char *message, int message_len);
+
 #ifdef __cplusplus
 }
 #endif

@@ -81,6 +81,7 @@ module dem_solver
         integer(ip) :: trace = 0       !< its local index
         real(wp) :: sort_cell = 0.0_wp !< cell size of the spatial order [m]
         integer(i8) :: removed = 0     !< particles removed by outlets
+        integer(i8), allocatable :: removed_ids(:)  !< their ids on this rank, when allocated
         logical :: settled = .false.   !< the kinetic energy fell below stop_kinetic_energy
         integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
         type(timers_t) :: timers       !< time per phase of those steps
@@ -608,6 +609,8 @@ contains
         call acc_data(gone, acc_exit)
         if (n_gone(1) == 0) return
         s%removed = s%removed + n_gone(1)
+        if (allocated(s%removed_ids)) s%removed_ids = [s%removed_ids, &
+                                                       pack(s%p%gid(1:s%p%n_own), gone)]
         call rebuild(s, .not. gone)
     end subroutine remove_outlet_particles
 
