@@ -2,8 +2,9 @@
  * a sphere in a fluid moving sideways at u with drag beta (no buoyancy). Across the flow
  * (x) symplectic Euler gives v_n = u (1 - (1 - h beta / m)^n) after n sub-steps of h, to
  * round-off; the impulses the interface reports sum to the particle's x momentum; the
- * particle's id, material and radius come back as the case sets them; errors come back as
- * a status and a message (truncated to the caller's buffer), never as a stop. */
+ * particle's id, material and radius come back as the case sets them; deposited with each
+ * kernel, the grid holds its volume, momentum and beta; errors come back as a status and a
+ * message (truncated to the caller's buffer), never as a stop. */
 #include <math.h>
 #include <mpi.h>
 #include <stdio.h>
@@ -83,6 +84,31 @@ int main(int argc, char **argv)
         check(fabs(vx - expected) <= 1e-9 * fabs(expected), "v_x = the discrete solution", NULL);
     }
     check(fabs(m * vx - impulse_x) <= 1e-9 * fabs(m * vx), "momentum: the impulses", NULL);
+
+    /* deposit onto 4 x 4 x 4 cells of 1 mm around the sphere, each kernel: every rank gets
+     * the sphere's volume and its x momentum in the whole grid */
+    {
+        const double origin[3] = {-0.002, -0.002, -0.003}, h[3] = {1e-3, 1e-3, 1e-3};
+        const int n[3] = {4, 4, 4};
+        double eps[64], mom[192], bsum[64], bv[192];
+        for (int kernel = 1; kernel <= 3; kernel++) {
+            st = dem_coupling_deposit(origin, h, n, kernel, eps, mom, bsum, bv, msg,
+                                      (int)sizeof msg);
+            check(st == 0 && msg[0] == '\0', "deposit:", msg);
+            double volume = 0.0, px = 0.0, b = 0.0;
+            for (int c = 0; c < 64; c++) {
+                volume += eps[c] * 1e-9;
+                px += mom[3 * c];
+                b += bsum[c];
+            }
+            check(fabs(volume - 4.0 / 3.0 * pi * pow(radius, 3)) <= 1e-12 * volume,
+                  "deposit: the sphere's volume", NULL);
+            check(fabs(px - m * vx) <= 1e-12 * fabs(m * vx), "deposit: its momentum", NULL);
+            check(fabs(b - beta) <= 1e-12 * beta, "deposit: its beta", NULL);
+        }
+        st = dem_coupling_deposit(origin, h, n, 4, eps, mom, bsum, bv, msg, (int)sizeof msg);
+        check(st == 2, "deposit with kernel 4:", msg);
+    }
     st = dem_coupling_finalize(msg, (int)sizeof msg);
     check(st == 0, "finalize:", msg);
     st = dem_coupling_advance(dt_fluid, msg, (int)sizeof msg);
