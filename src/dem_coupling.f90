@@ -11,13 +11,14 @@ module dem_coupling
     use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char, c_int64_t, c_null_char
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_runtime
-    use dem_comm, only: comm_t, comm_from_handle, comm_free
+    use dem_comm, only: comm_t, comm_from_handle, comm_free, comm_counts, comm_exchange, comm_sum
+    use dem_domain, only: sorted_by_rank
     use dem_case, only: case_t
     use dem_input, only: read_case
     use dem_solver, only: solver_t, solver_init, solver_start, solver_advance, solver_finish, &
                           solver_time, solver_retime, stop_end
-    use dem_particles, only: particles_external, ext_force, ext_torque, ext_beta, ext_fluid_v, &
-                             ext_impulse
+    use dem_particles, only: particles_external, order_by_id, ext_force, ext_torque, ext_beta, &
+                             ext_fluid_v, ext_impulse
     use dem_acc, only: acc_data, acc_to_host, acc_to_device
     use dem_deposit, only: deposit_grid, kernel_cell, kernel_trilinear, kernel_dpvm, n_deposit
     use dem_timers, only: wall_seconds
@@ -25,11 +26,13 @@ module dem_coupling
     private
     public :: coupling_init, coupling_finalize, coupling_advance, coupling_time, &
               coupling_count, coupling_get, coupling_set_force, coupling_set_drag, &
-              coupling_impulse, coupling_deposit, coupling_removed_count, coupling_removed
+              coupling_impulse, coupling_deposit, coupling_removed_count, coupling_removed, &
+              coupling_set_force_by_id, coupling_set_drag_by_id
     public :: dem_coupling_init, dem_coupling_finalize, dem_coupling_advance, dem_coupling_time, &
               dem_coupling_count, dem_coupling_get, dem_coupling_set_force, &
               dem_coupling_set_drag, dem_coupling_impulse, dem_coupling_deposit, &
-              dem_coupling_removed_count, dem_coupling_removed
+              dem_coupling_removed_count, dem_coupling_removed, dem_coupling_set_force_by_id, &
+              dem_coupling_set_drag_by_id
 
     type(case_t), save :: c
     type(solver_t), save :: s
@@ -172,6 +175,136 @@ contains
         s%p%ext(ext_beta, 1:n) = beta(1:n)
         s%p%ext(ext_fluid_v:ext_fluid_v + 2, 1:n) = u_f(:, 1:n)
     end subroutine coupling_set_drag
+
+    !> coupling_set_force for particles given by global id, on any rank (each id once over
+    !> all ranks): the values go to the particles' owners.
+    subroutine coupling_set_force_by_id(ids, f, t, status, message)
+        integer(i8), intent(in) :: ids(:)
+        real(wp), intent(in) :: f(:, :), t(:, :)
+        integer, intent(out) :: status
+        character(len=*), intent(out) :: message
+        real(wp) :: values(6, size(ids))
+        values(1:3, :) = f(:, 1:size(ids))
+        values(4:6, :) = t(:, 1:size(ids))
+        call set_by_id(ids, values, ext_force, status, message)
+    end subroutine coupling_set_force_by_id
+
+    !> coupling_set_drag for particles given by global id, on any rank (each id once over
+    !> all ranks): the values go to the particles' owners.
+    subroutine coupling_set_drag_by_id(ids, beta, u_f, status, message)
+        integer(i8), intent(in) :: ids(:)
+        real(wp), intent(in) :: beta(:), u_f(:, :)
+        integer, intent(out) :: status
+        character(len=*), intent(out) :: message
+        real(wp) :: values(4, size(ids))
+        values(1, :) = beta(1:size(ids))
+        values(2:4, :) = u_f(:, 1:size(ids))
+        call set_by_id(ids, values, ext_beta, status, message)
+    end subroutine coupling_set_drag_by_id
+
+    !> Rows row .. row + size(values, 1) - 1 of the external-force block of the particles
+    !> `ids`, routed to their owners: each id goes first to the rank mod(id, ranks), which
+    !> also hears from the owners which ids they hold, then on to its owner. Ids that are no
+    !> particle of the run, or that come twice, are an error on every rank.
+    subroutine set_by_id(ids, values, row, status, message)
+        integer(i8), intent(in) :: ids(:)
+        real(wp), intent(in) :: values(:, :)
+        integer, intent(in) :: row
+        integer, intent(out) :: status
+        character(len=*), intent(out) :: message
+        type(error_t) :: err
+        integer, allocatable :: cnt(:), own_cnt(:), req_cnt(:), dest(:)
+        integer(ip), allocatable :: idx(:), own_order(:), req_order(:)
+        integer(i8), allocatable :: own(:, :), req(:, :), got(:, :)
+        real(wp), allocatable :: vals(:, :), got_vals(:, :)
+        integer(i8) :: bad(1)
+        integer :: nv, ranks, r, k, a, i
+        character(len=64) :: text
+        if (.not. ready(err)) then
+            call report(err, status, message)
+            return
+        end if
+        nv = size(values, 1)
+        ranks = comm%size
+        ! the owned ids to their directory ranks (which learn their owners from the counts)
+        idx = sorted_by_rank(int(modulo(s%p%gid(1:s%p%n_own), int(ranks, i8))), ranks, cnt)
+        own_cnt = comm_counts(comm, cnt)
+        allocate(own(1, sum(own_cnt)))
+        call comm_exchange(comm, reshape(s%p%gid(idx), [1, size(idx)]), cnt, own, own_cnt)
+        ! the values to the directory ranks of their ids
+        idx = sorted_by_rank(int(modulo(ids, int(ranks, i8))), ranks, cnt)
+        req_cnt = comm_counts(comm, cnt)
+        allocate(req(1, sum(req_cnt)), vals(nv, sum(req_cnt)))
+        call comm_exchange(comm, reshape(ids(idx), [1, size(idx)]), cnt, req, req_cnt)
+        call comm_exchange(comm, values(:, idx), cnt, vals, req_cnt)
+        ! each value to the owner of its id
+        own_order = order_by_id(own(1, :))
+        req_order = order_by_id(req(1, :))
+        allocate(dest(size(req, 2)))
+        bad = 0
+        do a = 1, size(req_order)
+            k = req_order(a)
+            r = find(own(1, :), own_order, req(1, k))
+            if (a > 1) then
+                if (req(1, req_order(a - 1)) == req(1, k)) r = 0
+            end if
+            if (r == 0) then
+                bad = bad + 1
+                dest(k) = -1
+            else
+                dest(k) = rank_of_entry(r)
+            end if
+        end do
+        idx = sorted_by_rank(dest, ranks, cnt)
+        req_cnt = comm_counts(comm, cnt)
+        allocate(got(1, sum(req_cnt)), got_vals(nv, sum(req_cnt)))
+        call comm_exchange(comm, req(:, idx), cnt, got, req_cnt)
+        call comm_exchange(comm, vals(:, idx), cnt, got_vals, req_cnt)
+        own_order = order_by_id(s%p%gid(1:s%p%n_own))
+        do a = 1, size(got, 2)
+            i = find(s%p%gid(1:s%p%n_own), own_order, got(1, a))
+            s%p%ext(row:row + nv - 1, i) = got_vals(:, a)
+        end do
+        call comm_sum(comm, bad)
+        if (bad(1) > 0) then
+            write(text, '(i0)') bad(1)
+            call set_error(err, dem_err_input, 'dem_coupling: ' // trim(text) // ' of the ids ' // &
+                           'given are no particle of the run, or are given twice')
+        end if
+        call report(err, status, message)
+    contains
+        !> The rank that sent entry r of own (entries come in rank order, own_cnt per rank).
+        integer function rank_of_entry(r_) result(q)
+            integer, intent(in) :: r_
+            integer :: upto
+            upto = 0
+            do q = 0, ranks - 1
+                upto = upto + own_cnt(q + 1)         ! (own_cnt holds ranks 0.. from 1)
+                if (r_ <= upto) return
+            end do
+        end function rank_of_entry
+    end subroutine set_by_id
+
+    !> Position of `id` in `list` (searched through `order`, which sorts it), 0 if absent.
+    pure integer function find(list, order, id) result(pos)
+        integer(i8), intent(in) :: list(:), id
+        integer(ip), intent(in) :: order(:)
+        integer :: lo, hi, mid
+        pos = 0
+        lo = 1
+        hi = size(order)
+        do while (lo <= hi)
+            mid = (lo + hi) / 2
+            if (list(order(mid)) == id) then
+                pos = order(mid)
+                return
+            else if (list(order(mid)) < id) then
+                lo = mid + 1
+            else
+                hi = mid - 1
+            end if
+        end do
+    end function find
 
     !> The impulse [N s] that force and drag gave each owned particle over the last advance:
     !> the fluid's momentum changes by minus their sum.
@@ -373,6 +506,28 @@ contains
         integer(c_int64_t), intent(out) :: ids(*)
         call coupling_removed(ids(1:coupling_removed_count()))
     end subroutine dem_coupling_removed
+
+    integer(c_int) function dem_coupling_set_force_by_id(n, ids, f, t, message, message_len) &
+            result(status) bind(C, name='dem_coupling_set_force_by_id')
+        integer(c_int), value :: n, message_len
+        integer(c_int64_t), intent(in) :: ids(*)
+        real(c_double), intent(in) :: f(3, *), t(3, *)
+        character(kind=c_char), intent(out) :: message(*)
+        character(len=1024) :: text
+        call coupling_set_force_by_id(ids(1:n), f(:, 1:n), t(:, 1:n), status, text)
+        call c_message(text, message, message_len)
+    end function dem_coupling_set_force_by_id
+
+    integer(c_int) function dem_coupling_set_drag_by_id(n, ids, beta, u_f, message, &
+            message_len) result(status) bind(C, name='dem_coupling_set_drag_by_id')
+        integer(c_int), value :: n, message_len
+        integer(c_int64_t), intent(in) :: ids(*)
+        real(c_double), intent(in) :: beta(*), u_f(3, *)
+        character(kind=c_char), intent(out) :: message(*)
+        character(len=1024) :: text
+        call coupling_set_drag_by_id(ids(1:n), beta(1:n), u_f(:, 1:n), status, text)
+        call c_message(text, message, message_len)
+    end function dem_coupling_set_drag_by_id
 
     !> A Fortran message into a C buffer of `length` bytes, null-terminated.
     subroutine c_message(text, message, length)

@@ -43,6 +43,13 @@ void dem_coupling_set_force(const double *force, const double *torque);
  * beta (u_f - v) is evaluated at every sub-step. */
 void dem_coupling_set_drag(const double *beta, const double *fluid_velocity);
 
+/* The same for n particles given by global id, on any rank (each id once over all ranks):
+ * the values go to the owners. Ids that are no particle of the run, or come twice, fail. */
+int dem_coupling_set_force_by_id(int n, const int64_t *ids, const double *force,
+                                 const double *torque, char *message, int message_len);
+int dem_coupling_set_drag_by_id(int n, const int64_t *ids, const double *beta,
+                                const double *fluid_velocity, char *message, int message_len);
+
 /* The impulse [N s] force and drag gave each owned particle over the last advance. */
 void dem_coupling_impulse(double *impulse);
 

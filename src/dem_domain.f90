@@ -19,7 +19,7 @@ module dem_domain
     implicit none
     private
     public :: domain_t, domain_init, domain_balance, domain_imbalance, domain_migrate, &
-              domain_ghosts, domain_update, domain_data
+              domain_ghosts, domain_update, domain_data, sorted_by_rank
 
     integer, parameter :: blocks_per_rank = 64   !< target in the particles' box
     integer, parameter :: max_blocks_per_rank = 512  !< in the whole box (walls included)

@@ -6,7 +6,10 @@
 !>   particles' volume; the momentum and drag sums add up to the particles' (relative 1e-12).
 !> - The cell kernel agrees, cell by cell, with a brute-force deposit written here.
 !> - The trilinear and dpvm kernels spread a particle over more cells than the cell kernel.
-!> - The same fields, bit for bit, when each rank then runs the same case alone.
+!> - The same fields, bit for bit, when each rank then runs the same case alone, setting the
+!>   drag by local index, where the run on all ranks set it by global id, all of it from the
+!>   last rank (routed to the owners).
+!> - Ids given twice, or that are no particle, are refused.
 !> - Bad arguments come back as a status and a message.
 program test_deposit
     use mpi_f08, only: MPI_Init, MPI_Finalize, MPI_COMM_WORLD, MPI_Comm_rank, MPI_Comm_size, &
@@ -14,7 +17,8 @@ program test_deposit
                        MPI_Comm_split, MPI_Comm_free
     use dem_kinds, only: wp, i8
     use dem_coupling, only: coupling_init, coupling_finalize, coupling_advance, coupling_count, &
-                            coupling_get, coupling_set_drag, coupling_deposit
+                            coupling_get, coupling_set_drag, coupling_deposit, &
+                            coupling_set_drag_by_id
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp)
@@ -75,7 +79,11 @@ contains
             do i = 1, n
                 uf(:, i) = 0.01_wp * [cos(real(gid(i), wp)), sin(real(gid(i), wp)), 0.5_wp]
             end do
-            call coupling_set_drag(beta, uf)
+            if (checks) then             ! by id, all from the last rank, through the routing
+                call set_all_by_id()
+            else
+                call coupling_set_drag(beta, uf)
+            end if
             call coupling_advance(1.0e-3_wp, status, message)
             call assert_true(status == 0, 'advance: ' // trim(message))
             deallocate(x, v, w, r, gid, mat, beta, uf)
@@ -138,10 +146,33 @@ contains
             call coupling_deposit(origin, -h, nc, 'cell', e(:, 1), m(:, :, 1), b(:, 1), &
                                   bvel(:, :, 1), status, message)
             call assert_true(status == 2, 'negative spacing: ' // trim(message))
+            call coupling_set_drag_by_id([1_i8, 1_i8], [1.0_wp, 1.0_wp], &
+                                         reshape([(0.0_wp, j = 1, 6)], [3, 2]), status, message)
+            call assert_true(status == 2 .and. index(message, 'twice') > 0, &
+                             'an id given twice: ' // trim(message))
+            call coupling_set_drag_by_id([1000000_i8], [1.0_wp], reshape([0.0_wp, 0.0_wp, 0.0_wp], &
+                                         [3, 1]), status, message)
+            call assert_true(status == 2, 'an id that is no particle: ' // trim(message))
         end if
         call coupling_finalize(status, message)
         call assert_true(status == 0, 'finalize: ' // trim(message))
     end subroutine run_case
+
+    !> The drag of run_case for every particle (ids 1 .. 300), given on the last rank only.
+    subroutine set_all_by_id()
+        integer(i8) :: ids(300)
+        real(wp) :: beta_all(300), uf_all(3, 300)
+        integer :: i, n
+        n = 0
+        if (rank == ranks - 1) n = 300
+        do i = 1, n
+            ids(i) = i
+            beta_all(i) = 1.0e-4_wp * (1 + mod(ids(i), 5_i8))
+            uf_all(:, i) = 0.01_wp * [cos(real(ids(i), wp)), sin(real(ids(i), wp)), 0.5_wp]
+        end do
+        call coupling_set_drag_by_id(ids(1:n), beta_all(1:n), uf_all(:, 1:n), status, message)
+        call assert_true(status == 0, 'drag by id: ' // trim(message))
+    end subroutine set_all_by_id
 
     !> 300 spheres of radius 0.6 to 1 mm (density 2500) inserted in a box, no walls.
     subroutine write_case(path, out_dir)
