@@ -2,13 +2,15 @@
 !> device. Without -fopenacc the directives are comments and these wrappers do nothing.
 !> Preprocessed (.F90) for the one call of the OpenACC runtime library, under _OPENACC.
 module dem_acc
+    use, intrinsic :: iso_c_binding, only: c_ptr, c_loc
     use dem_kinds, only: wp, ip
 #ifdef _OPENACC
     use openacc, only: acc_get_num_devices, acc_set_device_num, acc_device_not_host
 #endif
     implicit none
     private
-    public :: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device, acc_select_device
+    public :: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device, acc_select_device, &
+              acc_device_address
 
     integer, parameter :: acc_enter = 1      !< create the device copy from the host's
     integer, parameter :: acc_exit = 2       !< delete the device copy
@@ -36,6 +38,15 @@ contains
         if (local_rank < 0) device = -1      ! (the rank counts in OpenACC builds only)
 #endif
     end function acc_select_device
+
+    !> The device address of an array that is on the device (its host address without
+    !> OpenACC, or in the host fallback).
+    type(c_ptr) function acc_device_address(a) result(p)
+        real(wp), intent(in), target, contiguous :: a(:, :)
+        !$acc host_data use_device(a)
+        p = c_loc(a)
+        !$acc end host_data
+    end function acc_device_address
 
     subroutine data_r1(a, op)
         real(wp), intent(inout) :: a(:)

@@ -8,7 +8,8 @@
 !> per process at a time. SI units; gravity is the case's (&run gravity), applied by the
 !> DEM; buoyancy and drag come only through this interface.
 module dem_coupling
-    use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char, c_int64_t, c_null_char
+    use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char, c_int64_t, c_null_char, &
+                                           c_ptr, c_loc
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_runtime
     use dem_comm, only: comm_t, comm_from_handle, comm_free, comm_counts, comm_exchange, comm_sum
@@ -19,7 +20,7 @@ module dem_coupling
                           solver_time, solver_retime, stop_end
     use dem_particles, only: particles_external, order_by_id, ext_force, ext_torque, ext_beta, &
                              ext_fluid_v, ext_impulse
-    use dem_acc, only: acc_data, acc_to_host, acc_to_device
+    use dem_acc, only: acc_data, acc_to_host, acc_to_device, acc_device_address
     use dem_deposit, only: deposit_grid, kernel_cell, kernel_trilinear, kernel_dpvm, n_deposit
     use dem_timers, only: wall_seconds
     implicit none
@@ -27,15 +28,15 @@ module dem_coupling
     public :: coupling_init, coupling_finalize, coupling_advance, coupling_time, &
               coupling_count, coupling_get, coupling_set_force, coupling_set_drag, &
               coupling_impulse, coupling_deposit, coupling_removed_count, coupling_removed, &
-              coupling_set_force_by_id, coupling_set_drag_by_id
+              coupling_set_force_by_id, coupling_set_drag_by_id, coupling_views
     public :: dem_coupling_init, dem_coupling_finalize, dem_coupling_advance, dem_coupling_time, &
               dem_coupling_count, dem_coupling_get, dem_coupling_set_force, &
               dem_coupling_set_drag, dem_coupling_impulse, dem_coupling_deposit, &
               dem_coupling_removed_count, dem_coupling_removed, dem_coupling_set_force_by_id, &
-              dem_coupling_set_drag_by_id
+              dem_coupling_set_drag_by_id, dem_coupling_views, dem_coupling_device_views
 
     type(case_t), save :: c
-    type(solver_t), save :: s
+    type(solver_t), save, target :: s
     type(comm_t), save :: comm
     logical, save :: active = .false.
     real(wp), save :: dt_case = 0.0_wp    !< the case's dt: the largest sub-step [s]
@@ -175,6 +176,20 @@ contains
         s%p%ext(ext_beta, 1:n) = beta(1:n)
         s%p%ext(ext_fluid_v:ext_fluid_v + 2, 1:n) = u_f(:, 1:n)
     end subroutine coupling_set_drag
+
+    !> Read-only views (no copy) of the owned particles' ids, radii, positions, velocities
+    !> and angular velocities, valid until the next advance. Do not write through them.
+    subroutine coupling_views(gid, radius, x, v, w)
+        integer(i8), pointer, intent(out) :: gid(:)
+        real(wp), pointer, intent(out) :: radius(:), x(:, :), v(:, :), w(:, :)
+        integer(ip) :: n
+        n = coupling_count()
+        gid => s%p%gid(1:n)
+        radius => s%p%radius(1:n)
+        x => s%p%x(:, 1:n)
+        v => s%p%v(:, 1:n)
+        w => s%p%w(:, 1:n)
+    end subroutine coupling_views
 
     !> coupling_set_force for particles given by global id, on any rank (each id once over
     !> all ranks): the values go to the particles' owners.
@@ -528,6 +543,22 @@ contains
         call coupling_set_drag_by_id(ids(1:n), beta(1:n), u_f(:, 1:n), status, text)
         call c_message(text, message, message_len)
     end function dem_coupling_set_drag_by_id
+
+    subroutine dem_coupling_views(gid, radius, x, v, w) bind(C, name='dem_coupling_views')
+        type(c_ptr), intent(out) :: gid, radius, x, v, w
+        gid = c_loc(s%p%gid)
+        radius = c_loc(s%p%radius)
+        x = c_loc(s%p%x)
+        v = c_loc(s%p%v)
+        w = c_loc(s%p%w)
+    end subroutine dem_coupling_views
+
+    subroutine dem_coupling_device_views(x, v, w) bind(C, name='dem_coupling_device_views')
+        type(c_ptr), intent(out) :: x, v, w
+        x = acc_device_address(s%p%x)
+        v = acc_device_address(s%p%v)
+        w = acc_device_address(s%p%w)
+    end subroutine dem_coupling_device_views
 
     !> A Fortran message into a C buffer of `length` bytes, null-terminated.
     subroutine c_message(text, message, length)

@@ -36,6 +36,17 @@ int dem_coupling_count(void);            /* particles owned by this rank */
 void dem_coupling_get(int64_t *gid, int *material, double *radius, double *x, double *v,
                       double *w);
 
+/* Read-only views (no copy) of the owned particles' ids, radii, positions, velocities and
+ * angular velocities: the first dem_coupling_count() entries (vectors: 3 doubles each),
+ * valid until the next advance. Do not write through them. */
+void dem_coupling_views(const int64_t **gid, const double **radius, const double **x,
+                        const double **v, const double **w);
+
+/* The device addresses of the positions, velocities and angular velocities in an OpenACC
+ * build that runs on a GPU (for the fluid code's own OpenACC or CUDA kernels: the state on
+ * the device at the end of the last advance); the host views otherwise. */
+void dem_coupling_device_views(const double **x, const double **v, const double **w);
+
 /* External force [N] and torque [N m] per owned particle, until set again. */
 void dem_coupling_set_force(const double *force, const double *torque);
 

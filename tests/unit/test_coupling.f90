@@ -8,6 +8,7 @@
 !>   Stokes' law within 0.5 %.
 !> - The impulses the interface reports, summed over the advances, plus gravity's m g t,
 !>   equal the particle's momentum m v (the fluid loses what the particle gains).
+!> - The read-only views show what the copies hold.
 !> - Errors come back as a status and a message naming the file, group or key.
 program test_coupling
     use mpi_f08, only: MPI_Init, MPI_Finalize, MPI_COMM_WORLD, MPI_Comm_rank, MPI_Comm_size, &
@@ -15,7 +16,7 @@ program test_coupling
     use dem_kinds, only: wp, i8
     use dem_coupling, only: coupling_init, coupling_finalize, coupling_advance, coupling_time, &
                             coupling_count, coupling_get, coupling_set_force, coupling_set_drag, &
-                            coupling_impulse
+                            coupling_impulse, coupling_views
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp), g = 9.81_wp
@@ -28,6 +29,8 @@ program test_coupling
     integer :: mat(1), status, rank, ranks, k, n, n_all
     character(len=256) :: message, case_file
     character(len=64) :: out_dir
+    integer(i8), pointer :: gid_view(:)
+    real(wp), pointer :: r_view(:), x_view(:, :), v_view(:, :), w_view(:, :)
 
     call MPI_Init()
     call MPI_Comm_rank(MPI_COMM_WORLD, rank)
@@ -73,6 +76,11 @@ program test_coupling
         n = coupling_count()
         call coupling_get(gid(1:n), mat(1:n), r(1:n), x(:, 1:n), v(:, 1:n), w(:, 1:n))
         call coupling_impulse(j(:, 1:n))
+        call coupling_views(gid_view, r_view, x_view, v_view, w_view)
+        call assert_true(size(gid_view) == n .and. all(gid_view == gid(1:n)) .and. &
+                         all(r_view == r(1:n)) .and. all(x_view == x(:, 1:n)) .and. &
+                         all(v_view == v(:, 1:n)) .and. all(w_view == w(:, 1:n)), &
+                         'the views show what the copies hold')
         sums = 0.0_wp
         if (n == 1) sums = [v(3, 1), j(3, 1), 1.0_wp]
         call sum_over_ranks(sums)

@@ -2,7 +2,8 @@
  * a sphere in a fluid moving sideways at u with drag beta (no buoyancy). Across the flow
  * (x) symplectic Euler gives v_n = u (1 - (1 - h beta / m)^n) after n sub-steps of h, to
  * round-off; the impulses the interface reports sum to the particle's x momentum; the
- * particle's id, material and radius come back as the case sets them; deposited with each
+ * particle's id, material and radius come back as the case sets them, and the views show
+ * what the copies hold; deposited with each
  * kernel, the grid holds its volume, momentum and beta; errors come back as a status and a
  * message (truncated to the caller's buffer), never as a stop. */
 #include <math.h>
@@ -71,6 +72,13 @@ int main(int argc, char **argv)
             double r[1], x[3], v[3], w[3], j[3];
             dem_coupling_get(gid, mat, r, x, v, w);
             dem_coupling_impulse(j);
+            const int64_t *gid_view;
+            const double *r_view, *x_view, *v_view, *w_view, *xd, *vd, *wd;
+            dem_coupling_views(&gid_view, &r_view, &x_view, &v_view, &w_view);
+            dem_coupling_device_views(&xd, &vd, &wd);
+            check(gid_view[0] == gid[0] && r_view[0] == r[0] && x_view[2] == x[2] &&
+                  v_view[0] == v[0] && w_view[1] == w[1], "views = copies", NULL);
+            check(xd != NULL && vd != NULL && wd != NULL, "device views", NULL);
             check(gid[0] == 7 && mat[0] == 1 && r[0] == radius, "id, material, radius", NULL);
             mine[0] = v[0];
             mine[1] = j[0];
