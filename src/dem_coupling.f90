@@ -345,7 +345,7 @@ contains
         integer, intent(out) :: status
         character(len=*), intent(out) :: message
         type(error_t) :: err
-        real(wp), allocatable :: sums(:, :)
+        real(wp), allocatable :: sums(:, :), beta(:)
         integer(i8) :: n_outside
         integer :: k
         k = 0
@@ -373,8 +373,9 @@ contains
         if (err%failed()) return
         allocate(sums(n_deposit, product(nc)))
         associate (p => s%p, n => s%p%n_own)
+            beta = p%ext(ext_beta, 1:n)                  ! a row: copied to be contiguous
             call deposit_grid(comm, n, p%x(:, 1:n), p%radius(1:n), p%mass(1:n), p%v(:, 1:n), &
-                              p%ext(ext_beta, 1:n), k, origin, h, nc, sums, n_outside)
+                              beta, k, origin, h, nc, sums, n_outside)
         end associate
         eps(1:product(nc)) = sums(1, :) / product(h)
         momentum(:, 1:product(nc)) = sums(2:4, :)
