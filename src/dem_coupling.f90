@@ -9,7 +9,7 @@
 !> DEM; buoyancy and drag come only through this interface.
 module dem_coupling
     use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char, c_int64_t, c_null_char, &
-                                           c_ptr, c_loc
+                                           c_ptr, c_loc, c_null_ptr
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_runtime
     use dem_comm, only: comm_t, comm_from_handle, comm_free, comm_counts, comm_exchange, comm_sum
@@ -148,6 +148,7 @@ contains
         integer, intent(out) :: mat(:)
         real(wp), intent(out) :: radius(:), x(:, :), v(:, :), w(:, :)
         integer(ip) :: n
+        if (.not. active) return               ! (nothing to do before init)
         n = coupling_count()
         gid(1:n) = s%p%gid(1:n)
         mat(1:n) = s%p%mat(1:n)
@@ -162,6 +163,7 @@ contains
     subroutine coupling_set_force(f, t)
         real(wp), intent(in) :: f(:, :), t(:, :)
         integer(ip) :: n
+        if (.not. active) return               ! (nothing to do before init)
         n = coupling_count()
         s%p%ext(ext_force:ext_force + 2, 1:n) = f(:, 1:n)
         s%p%ext(ext_torque:ext_torque + 2, 1:n) = t(:, 1:n)
@@ -172,6 +174,7 @@ contains
     subroutine coupling_set_drag(beta, u_f)
         real(wp), intent(in) :: beta(:), u_f(:, :)
         integer(ip) :: n
+        if (.not. active) return               ! (nothing to do before init)
         n = coupling_count()
         s%p%ext(ext_beta, 1:n) = beta(1:n)
         s%p%ext(ext_fluid_v:ext_fluid_v + 2, 1:n) = u_f(:, 1:n)
@@ -183,6 +186,8 @@ contains
         integer(i8), pointer, intent(out) :: gid(:)
         real(wp), pointer, intent(out) :: radius(:), x(:, :), v(:, :), w(:, :)
         integer(ip) :: n
+        nullify(gid, radius, x, v, w)
+        if (.not. active) return
         n = coupling_count()
         gid => s%p%gid(1:n)
         radius => s%p%radius(1:n)
@@ -326,6 +331,7 @@ contains
     subroutine coupling_impulse(j)
         real(wp), intent(out) :: j(:, :)
         integer(ip) :: n
+        if (.not. active) return               ! (nothing to do before init)
         n = coupling_count()
         j(:, 1:n) = s%p%ext(ext_impulse:ext_impulse + 2, 1:n)
     end subroutine coupling_impulse
@@ -394,7 +400,7 @@ contains
     !> particle removed during the last advance, once.
     subroutine coupling_removed(ids)
         integer(i8), intent(out) :: ids(:)
-        ids(1:coupling_removed_count()) = s%removed_ids
+        if (active) ids(1:coupling_removed_count()) = s%removed_ids
     end subroutine coupling_removed
 
     !> True when a run is set up; else err says so.
@@ -547,6 +553,12 @@ contains
 
     subroutine dem_coupling_views(gid, radius, x, v, w) bind(C, name='dem_coupling_views')
         type(c_ptr), intent(out) :: gid, radius, x, v, w
+        gid = c_null_ptr
+        radius = c_null_ptr
+        x = c_null_ptr
+        v = c_null_ptr
+        w = c_null_ptr
+        if (.not. active) return
         gid = c_loc(s%p%gid)
         radius = c_loc(s%p%radius)
         x = c_loc(s%p%x)
@@ -556,6 +568,10 @@ contains
 
     subroutine dem_coupling_device_views(x, v, w) bind(C, name='dem_coupling_device_views')
         type(c_ptr), intent(out) :: x, v, w
+        x = c_null_ptr
+        v = c_null_ptr
+        w = c_null_ptr
+        if (.not. active) return
         x = acc_device_address(s%p%x)
         v = acc_device_address(s%p%v)
         w = acc_device_address(s%p%w)

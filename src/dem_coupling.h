@@ -38,7 +38,7 @@ void dem_coupling_get(int64_t *gid, int *material, double *radius, double *x, do
 
 /* Read-only views (no copy) of the owned particles' ids, radii, positions, velocities and
  * angular velocities: the first dem_coupling_count() entries (vectors: 3 doubles each),
- * valid until the next advance. Do not write through them. */
+ * valid until the next advance (NULL before init). Do not write through them. */
 void dem_coupling_views(const int64_t **gid, const double **radius, const double **x,
                         const double **v, const double **w);
 
