@@ -21,19 +21,22 @@ module dem_coupling
     use dem_particles, only: particles_external, order_by_id, ext_force, ext_torque, ext_beta, &
                              ext_fluid_v, ext_impulse
     use dem_acc, only: acc_data, acc_to_host, acc_to_device, acc_device_address
-    use dem_deposit, only: deposit_grid, kernel_cell, kernel_trilinear, kernel_dpvm, n_deposit
+    use dem_deposit, only: deposit_grid, deposit_cells, kernel_cell, kernel_trilinear, &
+                           kernel_dpvm, n_deposit
     use dem_timers, only: wall_seconds
     implicit none
     private
     public :: coupling_init, coupling_finalize, coupling_advance, coupling_time, &
               coupling_count, coupling_get, coupling_set_force, coupling_set_drag, &
               coupling_impulse, coupling_deposit, coupling_removed_count, coupling_removed, &
-              coupling_set_force_by_id, coupling_set_drag_by_id, coupling_views
+              coupling_set_force_by_id, coupling_set_drag_by_id, coupling_views, &
+              coupling_deposit_cells
     public :: dem_coupling_init, dem_coupling_finalize, dem_coupling_advance, dem_coupling_time, &
               dem_coupling_count, dem_coupling_get, dem_coupling_set_force, &
               dem_coupling_set_drag, dem_coupling_impulse, dem_coupling_deposit, &
               dem_coupling_removed_count, dem_coupling_removed, dem_coupling_set_force_by_id, &
-              dem_coupling_set_drag_by_id, dem_coupling_views, dem_coupling_device_views
+              dem_coupling_set_drag_by_id, dem_coupling_views, dem_coupling_device_views, &
+              dem_coupling_deposit_cells
 
     type(case_t), save :: c
     type(solver_t), save, target :: s
@@ -390,6 +393,44 @@ contains
         if (n_outside > 0) write(message, '(i0,a)') n_outside, ' particles outside the grid'
     end subroutine coupling_deposit
 
+    !> Deposit the particles of all ranks onto a list of cells given by their centres [m] and
+    !> volumes [m^3] (an unstructured mesh): each particle goes whole to the cell of the
+    !> nearest centre. The same fields as coupling_deposit, on every rank, the same bit for
+    !> bit on any number of ranks.
+    subroutine coupling_deposit_cells(centres, volumes, eps, momentum, beta_sum, beta_v, status, &
+                                      message)
+        real(wp), intent(in) :: centres(:, :), volumes(:)
+        real(wp), intent(out) :: eps(:), momentum(:, :), beta_sum(:), beta_v(:, :)
+        integer, intent(out) :: status
+        character(len=*), intent(out) :: message
+        type(error_t) :: err
+        real(wp), allocatable :: sums(:, :), beta(:)
+        integer :: m
+        m = size(volumes)
+        if (ready(err)) then
+            if (m < 1 .or. size(centres, 2) /= m .or. any(.not. volumes > 0.0_wp)) then
+                call set_error(err, dem_err_input, 'dem_coupling_deposit_cells: the cells ' // &
+                               'need a centre and a volume > 0 each')
+            else if (size(eps) < m .or. size(beta_sum) < m .or. size(momentum, 2) < m .or. &
+                     size(beta_v, 2) < m) then
+                call set_error(err, dem_err_input, 'dem_coupling_deposit_cells: arrays ' // &
+                               'smaller than the list of cells')
+            end if
+        end if
+        call report(err, status, message)
+        if (err%failed()) return
+        allocate(sums(n_deposit, m))
+        associate (p => s%p, n => s%p%n_own)
+            beta = p%ext(ext_beta, 1:n)
+            call deposit_cells(comm, n, p%x(:, 1:n), p%radius(1:n), p%mass(1:n), p%v(:, 1:n), &
+                               beta, centres, sums)
+        end associate
+        eps(1:m) = sums(1, :) / volumes
+        momentum(:, 1:m) = sums(2:4, :)
+        beta_sum(1:m) = sums(5, :)
+        beta_v(:, 1:m) = sums(6:8, :)
+    end subroutine coupling_deposit_cells
+
     !> How many particles the outlets removed from this rank during the last advance.
     integer function coupling_removed_count() result(n)
         n = 0
@@ -576,6 +617,21 @@ contains
         v = acc_device_address(s%p%v)
         w = acc_device_address(s%p%w)
     end subroutine dem_coupling_device_views
+
+    integer(c_int) function dem_coupling_deposit_cells(n_cells, centres, volumes, eps, momentum, &
+            beta_sum, beta_v, message, message_len) result(status) &
+            bind(C, name='dem_coupling_deposit_cells')
+        integer(c_int), value :: n_cells, message_len
+        real(c_double), intent(in) :: centres(3, *), volumes(*)
+        real(c_double), intent(out) :: eps(*), momentum(3, *), beta_sum(*), beta_v(3, *)
+        character(kind=c_char), intent(out) :: message(*)
+        character(len=1024) :: text
+        integer :: m
+        m = max(0, n_cells)
+        call coupling_deposit_cells(centres(:, 1:m), volumes(1:m), eps(1:m), momentum(:, 1:m), &
+                                    beta_sum(1:m), beta_v(:, 1:m), status, text)
+        call c_message(text, message, message_len)
+    end function dem_coupling_deposit_cells
 
     !> A Fortran message into a C buffer of `length` bytes, null-terminated.
     subroutine c_message(text, message, length)

@@ -78,6 +78,12 @@ int dem_coupling_deposit(const double origin[3], const double h[3], const int n[
                          double *eps, double *momentum, double *beta_sum, double *beta_v,
                          char *message, int message_len);
 
+/* The same onto a list of n_cells cells given by their centres (3 doubles each) and volumes
+ * (an unstructured mesh): each particle goes whole to the cell of the nearest centre. */
+int dem_coupling_deposit_cells(int n_cells, const double *centres, const double *volumes,
+                               double *eps, double *momentum, double *beta_sum, double *beta_v,
+                               char *message, int message_len);
+
 #ifdef __cplusplus
 }
 #endif

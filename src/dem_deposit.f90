@@ -1,16 +1,17 @@
-!> Deposition of the particles onto a fluid code's Cartesian grid (doc/coupling.md; doc/theory.md,
-!> section 14): per cell, the solids volume, the particle momentum, and the drag sums
-!> (beta, beta v) a semi-implicit fluid solver needs. Each particle's weights over the cells
-!> are separable (a product of one weight per axis), renormalised to sum to one over the
-!> cells of the grid, so that the deposits conserve volume and momentum. The sums over
-!> particles and ranks are taken in 64-bit fixed point, where addition is exact and so does
-!> not depend on the order: the result is the same bit for bit on any number of ranks.
+!> Deposition of the particles onto a fluid code's cells, a Cartesian grid or a list of cell
+!> centres (doc/coupling.md; doc/theory.md, section 14): per cell, the solids volume, the
+!> particle momentum, and the drag sums (beta, beta v) a semi-implicit fluid solver needs. On
+!> a grid, each particle's weights over the cells are separable (a product of one weight per
+!> axis), renormalised to sum to one over the cells of the grid, so that the deposits
+!> conserve volume and momentum; on a list, a particle goes whole to its nearest centre. The
+!> sums over particles and ranks are taken in 64-bit fixed point, where addition is exact and
+!> so does not depend on the order: the result is the same bit for bit on any number of ranks.
 module dem_deposit
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_sum, comm_max
     implicit none
     private
-    public :: deposit_grid, kernel_cell, kernel_trilinear, kernel_dpvm, n_deposit
+    public :: deposit_grid, deposit_cells, kernel_cell, kernel_trilinear, kernel_dpvm, n_deposit
 
     integer, parameter :: kernel_cell = 1       !< all into the cell holding the centre
     integer, parameter :: kernel_trilinear = 2  !< tent weights of the 8 nearest cell centres
@@ -33,10 +34,139 @@ contains
         integer, intent(in) :: nc(3)
         real(wp), intent(out) :: sums(n_deposit, product(nc))
         integer(i8), intent(out) :: n_outside
+        call fixed_point_sums(comm, n, radius, mass, v, beta, product(nc), 512, grid_weights, &
+                              sums, n_outside)
+    contains
+        !> Particle i's cells and weights: the products of its weights on the three axes.
+        subroutine grid_weights(i, cells, weights, m_all)
+            integer(ip), intent(in) :: i
+            integer, intent(out) :: cells(:), m_all
+            real(wp), intent(out) :: weights(:)
+            real(wp) :: w(8, 3)
+            integer :: first(3), m(3), a, b, c3, d, cell
+            do d = 1, 3
+                call axis_weights(kernel, x(d, i), radius(i), origin(d), h(d), nc(d), &
+                                  first(d), m(d), w(:, d))
+            end do
+            m_all = product(m)
+            do cell = 0, m_all - 1
+                a = mod(cell, m(1))
+                b = mod(cell / m(1), m(2))
+                c3 = cell / (m(1) * m(2))
+                weights(cell + 1) = w(a + 1, 1) * w(b + 1, 2) * w(c3 + 1, 3)
+                cells(cell + 1) = 1 + first(1) + a &
+                                  + nc(1) * (first(2) + b + nc(2) * (first(3) + c3))
+            end do
+        end subroutine grid_weights
+    end subroutine deposit_grid
+
+    !> sums(:, c) over every rank's n particles for a list of cells given by their centres:
+    !> each particle goes whole to the cell of the nearest centre (of lowest index among
+    !> equals), found through a bucket grid of the centres.
+    subroutine deposit_cells(comm, n, x, radius, mass, v, beta, centres, sums)
+        type(comm_t), intent(in) :: comm
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: x(3, n), radius(n), mass(n), v(3, n), beta(n)
+        real(wp), intent(in) :: centres(:, :)     !! (3, cells) [m]
+        real(wp), intent(out) :: sums(n_deposit, size(centres, 2))
+        real(wp) :: lo(3), hi(3), hb
+        integer :: nb(3), k, b
+        integer, allocatable :: first(:), item(:), fill(:)
+        integer(i8) :: n_outside
+        lo = minval(centres, dim=2)
+        hi = maxval(centres, dim=2)
+        hb = max(maxval(hi - lo), tiny(1.0_wp)) / max(1.0_wp, real(size(centres, 2), wp) &
+             **(1.0_wp / 3.0_wp))
+        nb = max(1, min(1024, ceiling((hi - lo) / hb)))
+        allocate(first(product(nb) + 1), item(size(centres, 2)), fill(product(nb)))
+        first = 0                                ! the centres bucketed (counting sort)
+        do k = 1, size(centres, 2)
+            b = bucket(coords(centres(:, k)))
+            first(b + 1) = first(b + 1) + 1
+        end do
+        first(1) = 1
+        do b = 1, product(nb)
+            first(b + 1) = first(b + 1) + first(b)
+        end do
+        fill = first(1:product(nb))
+        do k = 1, size(centres, 2)
+            b = bucket(coords(centres(:, k)))
+            item(fill(b)) = k
+            fill(b) = fill(b) + 1
+        end do
+        call fixed_point_sums(comm, n, radius, mass, v, beta, size(centres, 2), 1, nearest, &
+                              sums, n_outside)
+    contains
+        pure function coords(p) result(c)
+            real(wp), intent(in) :: p(3)
+            integer :: c(3)
+            c = min(nb - 1, max(0, floor((p - lo) / hb)))
+        end function coords
+
+        pure integer function bucket(c)
+            integer, intent(in) :: c(3)
+            bucket = 1 + c(1) + nb(1) * (c(2) + nb(2) * c(3))
+        end function bucket
+
+        !> The nearest centre to particle i: buckets in growing shells around its own, until
+        !> the shell is farther than the best centre found.
+        subroutine nearest(i, cells, weights, m)
+            integer(ip), intent(in) :: i
+            integer, intent(out) :: cells(:), m
+            real(wp), intent(out) :: weights(:)
+            real(wp) :: best, d2
+            integer :: c(3), shell, cx, cy, cz, j, kk
+            c = coords(x(:, i))
+            best = huge(1.0_wp)
+            cells(1) = 0
+            do shell = 0, maxval(nb)
+                if (cells(1) > 0 .and. (real(shell - 1, wp) * hb)**2 > best) exit
+                do cz = max(0, c(3) - shell), min(nb(3) - 1, c(3) + shell)
+                    do cy = max(0, c(2) - shell), min(nb(2) - 1, c(2) + shell)
+                        do cx = max(0, c(1) - shell), min(nb(1) - 1, c(1) + shell)
+                            if (max(abs(cx - c(1)), abs(cy - c(2)), abs(cz - c(3))) /= shell) &
+                                cycle                        ! inside: an earlier shell
+                            j = bucket([cx, cy, cz])
+                            do kk = first(j), first(j + 1) - 1
+                                d2 = sum((centres(:, item(kk)) - x(:, i))**2)
+                                if (d2 < best .or. (d2 == best .and. item(kk) < cells(1))) then
+                                    best = d2
+                                    cells(1) = item(kk)
+                                end if
+                            end do
+                        end do
+                    end do
+                end do
+            end do
+            m = 1
+            weights(1) = 1.0_wp
+        end subroutine nearest
+    end subroutine deposit_cells
+
+    !> The deposits of every rank's n particles into n_cells cells, summed in 64-bit fixed
+    !> point (doc/theory.md, section 14): particle i gives weights(k) of its volume, momentum,
+    !> beta and beta v to cells(k), k = 1..m, from spread(i, cells, weights, m) (m <= max_m;
+    !> m = 0: the particle is left out, and counted in n_outside).
+    subroutine fixed_point_sums(comm, n, radius, mass, v, beta, n_cells, max_m, spread, sums, &
+                                n_outside)
+        type(comm_t), intent(in) :: comm
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: radius(n), mass(n), v(3, n), beta(n)
+        integer, intent(in) :: n_cells, max_m
+        interface
+            subroutine spread(i, cells, weights, m)
+                import :: ip, wp
+                integer(ip), intent(in) :: i
+                integer, intent(out) :: cells(:), m
+                real(wp), intent(out) :: weights(:)
+            end subroutine spread
+        end interface
+        real(wp), intent(out) :: sums(n_deposit, n_cells)
+        integer(i8), intent(out) :: n_outside
         real(wp), parameter :: pi = acos(-1.0_wp)
-        real(wp) :: q(n_deposit, n), bound(n_deposit), scale(n_deposit), w(8, 3), wc
-        integer(i8) :: fixed(n_deposit, product(nc)), tally(2)
-        integer :: first(3), m(3), a, b, c3, d, cell, idx
+        real(wp) :: q(n_deposit, n), bound(n_deposit), scale(n_deposit), weights(max_m)
+        integer(i8) :: fixed(n_deposit, n_cells), tally(2)
+        integer :: cells(max_m), m, k, d
         integer(ip) :: i
         do i = 1, n
             q(1, i) = 4.0_wp / 3.0_wp * pi * radius(i)**3
@@ -56,21 +186,10 @@ contains
         end do
         fixed = 0
         do i = 1, n
-            do d = 1, 3
-                call axis_weights(kernel, x(d, i), radius(i), origin(d), h(d), nc(d), &
-                                  first(d), m(d), w(:, d))
-            end do
-            if (any(m == 0)) then
-                tally(2) = tally(2) + 1
-                cycle
-            end if
-            do cell = 0, m(1) * m(2) * m(3) - 1              ! the cells of the weights
-                a = mod(cell, m(1))
-                b = mod(cell / m(1), m(2))
-                c3 = cell / (m(1) * m(2))
-                wc = w(a + 1, 1) * w(b + 1, 2) * w(c3 + 1, 3)
-                idx = 1 + first(1) + a + nc(1) * (first(2) + b + nc(2) * (first(3) + c3))
-                fixed(:, idx) = fixed(:, idx) + nint(wc * q(:, i) * scale, i8)
+            call spread(i, cells, weights, m)
+            if (m == 0) tally(2) = tally(2) + 1
+            do k = 1, m
+                fixed(:, cells(k)) = fixed(:, cells(k)) + nint(weights(k) * q(:, i) * scale, i8)
             end do
         end do
         call comm_sum(comm, tally(2:2))
@@ -89,7 +208,7 @@ contains
             call comm_sum(comm, flat)
             total = reshape(flat, shape(f))
         end function reshape_sum
-    end subroutine deposit_grid
+    end subroutine fixed_point_sums
 
     !> One axis: the particle at x (radius r) gives weights w(1:m) to the cells first ..
     !> first + m - 1 (0-based) of the nc cells of size h from o, summing to one; m = 0 when

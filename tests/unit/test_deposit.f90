@@ -9,6 +9,8 @@
 !> - The same fields, bit for bit, when each rank then runs the same case alone, setting the
 !>   drag by local index, where the run on all ranks set it by global id, all of it from the
 !>   last rank (routed to the owners).
+!> - The grid given as a shuffled list of cell centres and volumes (nearest centre) gives the
+!>   cell kernel's fields bit for bit.
 !> - Ids given twice, or that are no particle, are refused.
 !> - Bad arguments come back as a status and a message.
 program test_deposit
@@ -18,7 +20,7 @@ program test_deposit
     use dem_kinds, only: wp, i8
     use dem_coupling, only: coupling_init, coupling_finalize, coupling_advance, coupling_count, &
                             coupling_get, coupling_set_drag, coupling_deposit, &
-                            coupling_set_drag_by_id
+                            coupling_set_drag_by_id, coupling_deposit_cells
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp)
@@ -135,6 +137,7 @@ contains
                 call assert_close(e(c, 1), brute(c), 1.0e-12_wp, 'cell kernel = brute force', &
                                   atol=1.0e-15_wp)
             end do
+            call list_of_cells()
             call coupling_deposit(origin, h, [2, 2, 2], 'trilinear', small_eps, small_m, small_b, &
                                   small_bv, status, message)
             call assert_true(status == 0 .and. index(message, 'outside the grid') > 0, &
@@ -157,6 +160,32 @@ contains
         call coupling_finalize(status, message)
         call assert_true(status == 0, 'finalize: ' // trim(message))
     end subroutine run_case
+
+    !> The grid's cells as a list of centres and volumes (and in a shuffled order): every
+    !> particle's nearest centre is its cell's, so the fields are the cell kernel's, bit for
+    !> bit, in the list's order.
+    subroutine list_of_cells()
+        real(wp) :: centres(3, n_cells), volumes(n_cells), le(n_cells), lm(3, n_cells), &
+                    lb(n_cells), lbv(3, n_cells)
+        integer :: i, j, k, c, perm(n_cells)
+        do k = 0, nc(3) - 1
+            do j = 0, nc(2) - 1
+                do i = 0, nc(1) - 1
+                    c = 1 + i + nc(1) * (j + nc(2) * k)
+                    perm(c) = 1 + mod(37 * c, n_cells)           ! 37 and 120 coprime
+                    centres(:, perm(c)) = origin + h * ([i, j, k] + 0.5_wp)
+                end do
+            end do
+        end do
+        volumes = product(h)
+        call coupling_deposit_cells(centres, volumes, le, lm, lb, lbv, status, message)
+        call assert_true(status == 0, 'deposit onto a list: ' // trim(message))
+        call assert_true(all(le(perm) == eps(:, 1)) .and. all(lm(:, perm) == mom(:, :, 1)) .and. &
+                         all(lb(perm) == bsum(:, 1)) .and. all(lbv(:, perm) == bv(:, :, 1)), &
+                         'the grid as a list of cells: the cell kernel, bit for bit')
+        call coupling_deposit_cells(centres, -volumes, le, lm, lb, lbv, status, message)
+        call assert_true(status == 2, 'negative volumes: ' // trim(message))
+    end subroutine list_of_cells
 
     !> The drag of run_case for every particle (ids 1 .. 300), given on the last rank only.
     subroutine set_all_by_id()
