@@ -5,7 +5,8 @@ module dem_comm
                        MPI_Finalized, MPI_Comm_dup, MPI_Comm_free, MPI_Comm_rank, &
                        MPI_Comm_size, MPI_Abort, MPI_Exscan, MPI_Allreduce, MPI_Barrier, &
                        MPI_Alltoall, MPI_Alltoallv, MPI_Gather, MPI_Gatherv, MPI_Bcast, &
-                       MPI_Comm_split_type, MPI_COMM_TYPE_SHARED, &
+                       MPI_Comm_split_type, MPI_COMM_TYPE_SHARED, MPI_Request, MPI_Isend, &
+                       MPI_Irecv, MPI_Waitall, MPI_STATUSES_IGNORE, &
                        MPI_INTEGER, MPI_INTEGER8, MPI_DOUBLE_PRECISION, MPI_LOGICAL, MPI_SUM, &
                        MPI_MAX, MPI_LOR, MPI_BXOR, MPI_IN_PLACE, MPI_INFO_NULL
     use dem_kinds, only: wp, i8
@@ -13,7 +14,7 @@ module dem_comm
     private
     public :: comm_t, comm_init, comm_from_handle, comm_free, comm_node_rank, comm_offset, &
               comm_any, comm_xor, comm_barrier, comm_info_null, comm_exchange, comm_counts, &
-              comm_sum, comm_max, comm_gather, comm_broadcast
+              comm_sum, comm_max, comm_gather, comm_broadcast, comm_exchange_neighbours
 
     !> Send parts of an array to every rank and receive theirs (MPI_Alltoallv).
     interface comm_exchange
@@ -155,6 +156,35 @@ contains
                            recv, k * recv_counts, k * starts(recv_counts), MPI_DOUBLE_PRECISION, &
                            c%comm)
     end subroutine exchange_real
+
+    !> As comm_exchange for reals, with messages only between ranks that have something to
+    !> send (point to point: a few neighbours instead of all ranks, for the ghost refresh of
+    !> every step). The buffers may be device addresses (host_data) with a GPU-aware MPI.
+    subroutine comm_exchange_neighbours(c, send, send_counts, recv, recv_counts)
+        type(comm_t), intent(in) :: c
+        real(wp), intent(in), contiguous, target, asynchronous :: send(:, :)
+        integer, intent(in) :: send_counts(0:), recv_counts(0:)
+        real(wp), intent(inout), contiguous, target, asynchronous :: recv(:, :)
+        type(MPI_Request) :: requests(2 * c%size)
+        integer :: k, q, n, first_s(0:c%size - 1), first_r(0:c%size - 1)
+        k = size(send, 1)
+        first_s = starts(send_counts)
+        first_r = starts(recv_counts)
+        n = 0
+        do q = 0, c%size - 1
+            if (recv_counts(q) == 0) cycle
+            n = n + 1
+            call MPI_Irecv(recv(1, first_r(q) + 1), k * recv_counts(q), MPI_DOUBLE_PRECISION, q, &
+                           0, c%comm, requests(n))
+        end do
+        do q = 0, c%size - 1
+            if (send_counts(q) == 0) cycle
+            n = n + 1
+            call MPI_Isend(send(1, first_s(q) + 1), k * send_counts(q), MPI_DOUBLE_PRECISION, q, &
+                           0, c%comm, requests(n))
+        end do
+        call MPI_Waitall(n, requests(1:n), MPI_STATUSES_IGNORE)
+    end subroutine comm_exchange_neighbours
 
     !> As exchange_real, for 64-bit integers.
     subroutine exchange_i8(c, send, send_counts, recv, recv_counts)
