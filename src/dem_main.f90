@@ -167,6 +167,8 @@ contains
                 timer_seconds(s%timers, k), ' s ', &
                 100.0_wp * timer_seconds(s%timers, k) / max(total, tiny(1.0_wp)), ' %'
         end do
+        if (s%device >= 0) write(output_unit, '(a,i0,a)') &
+            'timing: the kernels ran on OpenACC device ', s%device, ' (rank 0)'
         if (peak_memory_kib() > 0) write(output_unit, '(a,f10.1,a,f10.1,a)') &
             'memory: peak resident ', peak_memory_kib() / 1024.0_wp, ' MiB, ', &
             1024.0_wp * peak_memory_kib() / max(1, s%p%n_own), ' bytes per particle' // &
