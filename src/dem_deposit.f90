@@ -9,6 +9,7 @@
 module dem_deposit
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_sum, comm_max
+    use dem_neighbors, only: grid_t, grid_shape, grid_fill, cell_of
     implicit none
     private
     public :: deposit_grid, deposit_cells, kernel_cell, kernel_trilinear, kernel_dpvm, n_deposit
@@ -69,76 +70,50 @@ contains
         real(wp), intent(in) :: x(3, n), radius(n), mass(n), v(3, n), beta(n)
         real(wp), intent(in) :: centres(:, :)     !! (3, cells) [m]
         real(wp), intent(out) :: sums(n_deposit, size(centres, 2))
-        real(wp) :: lo(3), hi(3), hb
-        integer :: nb(3), k, b
-        integer, allocatable :: first(:), item(:), fill(:)
+        type(grid_t) :: g
+        real(wp) :: lo(3), hi(3)
+        integer(ip) :: m, k
         integer(i8) :: n_outside
+        m = size(centres, 2, kind=ip)
         lo = minval(centres, dim=2)
         hi = maxval(centres, dim=2)
-        hb = max(maxval(hi - lo), tiny(1.0_wp)) / max(1.0_wp, real(size(centres, 2), wp) &
-             **(1.0_wp / 3.0_wp))
-        nb = max(1, min(1024, ceiling((hi - lo) / hb)))
-        allocate(first(product(nb) + 1), item(size(centres, 2)), fill(product(nb)))
-        first = 0                                ! the centres bucketed (counting sort)
-        do k = 1, size(centres, 2)
-            b = bucket(coords(centres(:, k)))
-            first(b + 1) = first(b + 1) + 1
-        end do
-        first(1) = 1
-        do b = 1, product(nb)
-            first(b + 1) = first(b + 1) + first(b)
-        end do
-        fill = first(1:product(nb))
-        do k = 1, size(centres, 2)
-            b = bucket(coords(centres(:, k)))
-            item(fill(b)) = k
-            fill(b) = fill(b) + 1
-        end do
+        call grid_shape(g, lo, hi, max(maxval(hi - lo), tiny(1.0_wp)) &
+                        / max(1.0_wp, real(m, wp))**(1.0_wp / 3.0_wp), m)
+        call grid_fill(g, m, [(k, k = 1, m)], centres)
         call fixed_point_sums(comm, n, radius, mass, v, beta, size(centres, 2), 1, nearest, &
                               sums, n_outside)
     contains
-        pure function coords(p) result(c)
-            real(wp), intent(in) :: p(3)
-            integer :: c(3)
-            c = min(nb - 1, max(0, floor((p - lo) / hb)))
-        end function coords
-
-        pure integer function bucket(c)
-            integer, intent(in) :: c(3)
-            bucket = 1 + c(1) + nb(1) * (c(2) + nb(2) * c(3))
-        end function bucket
-
         !> The nearest centre to particle i: buckets in growing shells around its own, until
         !> the shell is farther than the best centre found.
-        subroutine nearest(i, cells, weights, m)
+        subroutine nearest(i, cells, weights, m_)
             integer(ip), intent(in) :: i
-            integer, intent(out) :: cells(:), m
+            integer, intent(out) :: cells(:), m_
             real(wp), intent(out) :: weights(:)
             real(wp) :: best, d2
-            integer :: c(3), shell, cx, cy, cz, j, kk
-            c = coords(x(:, i))
+            integer(ip) :: c(3), shell, cx, cy, cz, j, kk
+            c = cell_of(g, x(:, i))
             best = huge(1.0_wp)
             cells(1) = 0
-            do shell = 0, maxval(nb)
-                if (cells(1) > 0 .and. (real(shell - 1, wp) * hb)**2 > best) exit
-                do cz = max(0, c(3) - shell), min(nb(3) - 1, c(3) + shell)
-                    do cy = max(0, c(2) - shell), min(nb(2) - 1, c(2) + shell)
-                        do cx = max(0, c(1) - shell), min(nb(1) - 1, c(1) + shell)
+            do shell = 0, maxval(g%n)
+                if (cells(1) > 0 .and. (real(shell - 1, wp) * g%h)**2 > best) exit
+                do cz = max(0, c(3) - shell), min(g%n(3) - 1, c(3) + shell)
+                    do cy = max(0, c(2) - shell), min(g%n(2) - 1, c(2) + shell)
+                        do cx = max(0, c(1) - shell), min(g%n(1) - 1, c(1) + shell)
                             if (max(abs(cx - c(1)), abs(cy - c(2)), abs(cz - c(3))) /= shell) &
                                 cycle                        ! inside: an earlier shell
-                            j = bucket([cx, cy, cz])
-                            do kk = first(j), first(j + 1) - 1
-                                d2 = sum((centres(:, item(kk)) - x(:, i))**2)
-                                if (d2 < best .or. (d2 == best .and. item(kk) < cells(1))) then
+                            j = 1 + cx + g%n(1) * (cy + g%n(2) * cz)
+                            do kk = g%start(j), g%start(j + 1) - 1
+                                d2 = sum((centres(:, g%item(kk)) - x(:, i))**2)
+                                if (d2 < best .or. (d2 == best .and. g%item(kk) < cells(1))) then
                                     best = d2
-                                    cells(1) = item(kk)
+                                    cells(1) = g%item(kk)
                                 end if
                             end do
                         end do
                     end do
                 end do
             end do
-            m = 1
+            m_ = 1
             weights(1) = 1.0_wp
         end subroutine nearest
     end subroutine deposit_cells

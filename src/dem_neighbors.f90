@@ -13,7 +13,8 @@ module dem_neighbors
     implicit none
     private
     public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order, &
-              neighbors_history, neighbors_set_history, neighbors_unique_pairs, fit_grid
+              neighbors_history, neighbors_set_history, neighbors_unique_pairs, fit_grid, &
+              grid_t, grid_shape, grid_fill, cell_of
 
     !> The lists, their per-entry tangential history, and the positions they were built at.
     type :: neighbors_t
