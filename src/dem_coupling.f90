@@ -236,7 +236,7 @@ contains
         integer, intent(out) :: status
         character(len=*), intent(out) :: message
         type(error_t) :: err
-        integer, allocatable :: cnt(:), own_cnt(:), req_cnt(:), dest(:)
+        integer, allocatable :: cnt(:), own_cnt(:), req_cnt(:), dest(:), owner(:)
         integer(ip), allocatable :: idx(:), own_order(:), req_order(:)
         integer(i8), allocatable :: own(:, :), req(:, :), got(:, :)
         real(wp), allocatable :: vals(:, :), got_vals(:, :)
@@ -260,7 +260,8 @@ contains
         allocate(req(1, sum(req_cnt)), vals(nv, sum(req_cnt)))
         call comm_exchange(comm, reshape(ids(idx), [1, size(idx)]), cnt, req, req_cnt)
         call comm_exchange(comm, values(:, idx), cnt, vals, req_cnt)
-        ! each value to the owner of its id
+        ! each value to the owner of its id (entries of own came in rank order)
+        owner = [(spread(r, 1, own_cnt(r + 1)), r = 0, ranks - 1)]
         own_order = order_by_id(own(1, :))
         req_order = order_by_id(req(1, :))
         allocate(dest(size(req, 2)))
@@ -275,7 +276,7 @@ contains
                 bad = bad + 1
                 dest(k) = -1
             else
-                dest(k) = rank_of_entry(r)
+                dest(k) = owner(r)
             end if
         end do
         idx = sorted_by_rank(dest, ranks, cnt)
@@ -295,17 +296,6 @@ contains
                            'given are no particle of the run, or are given twice')
         end if
         call report(err, status, message)
-    contains
-        !> The rank that sent entry r of own (entries come in rank order, own_cnt per rank).
-        integer function rank_of_entry(r_) result(q)
-            integer, intent(in) :: r_
-            integer :: upto
-            upto = 0
-            do q = 0, ranks - 1
-                upto = upto + own_cnt(q + 1)         ! (own_cnt holds ranks 0.. from 1)
-                if (r_ <= upto) return
-            end do
-        end function rank_of_entry
     end subroutine set_by_id
 
     !> Position of `id` in `list` (searched through `order`, which sorts it), 0 if absent.
