@@ -15,6 +15,7 @@ paths of the particle files are the outputs of the preparations there:
                                           MercuryDPM; probes: zone counts, centres of mass
   prepare_drum_slice_<1|2>.nml, drum_slice.nml  the same in a quarter of the drum's depth
                                           (0.015 m, 2 000 M2 and 7 500 M1), run here
+  drum_slice_smooth.nml                   that slice with frictionless end discs
   prepare_impact_<N>[_seed<k>].nml        N = 25 000, 50 000, 100 000 M1 of 2 mm settled in
                                           the box (ten 25 000 beds of different seeds)
   impact_<N>[_seed<k>].nml                the steel impactor (R = 10 mm) from z = 0.06 m at
@@ -135,12 +136,23 @@ def prepare_drum(stage, n_m2=8000, n_m1=30000, scale=1.0, t_end=1.0, drum="drum"
             + drum_walls(False, drum))
 
 
-def drum(scale=1.0, t_end=5.0, interval=0.1, drum="drum"):
+def drum(scale=1.0, t_end=5.0, interval=0.1, drum="drum", smooth_ends=False):
     """Zone 1: x > 0 and z > 0 (the upper quadrant on the rising side for omega = (0,-2,0));
-    Zone 2: x < 0 and z < 0 (MercuryDPM's definitions)."""
-    return (run(8e-7 / scale ** 0.5, t_end) + output(drum, interval, 1.0) + materials(scale)
+    Zone 2: x < 0 and z < 0 (MercuryDPM's definitions). `smooth_ends`: the end discs, apart
+    from the turning cylinder, of a steel without friction (a stand-in for a periodic depth:
+    they hold the bed in y without dragging it round)."""
+    walls, name = drum_walls(True, drum), drum
+    if smooth_ends:
+        name += "_smooth"
+        walls = (drum_walls(True, drum + "_shell")
+                 + f"&wall_mesh file = 'geometry/{drum}_ends.stl', material = 'smooth' /\n"
+                 + "&material name = 'smooth', density = 7200.0, "
+                   f"youngs_modulus = {210e9 * scale:g}, poisson_ratio = 0.2 /\n"
+                 + "".join(f"&pair materials = '{m}', 'smooth', restitution = 0.4, "
+                           "friction = 0 /\n" for m in ("M1", "M2")))
+    return (run(8e-7 / scale ** 0.5, t_end) + output(name, interval, 1.0) + materials(scale)
             + f"&particle_file file = '{FROM_HERE}/prepare_{drum}_2/final.csv' /\n"
-            + drum_walls(True, drum)
+            + walls
             + f"&probe name = 'zone1', kind = 'count', region = 'box', box_min = 0, -{BIG}, 0, "
               f"box_max = {BIG}, {BIG}, {BIG} /\n"
             + f"&probe name = 'zone2', kind = 'count', region = 'box', "
@@ -200,6 +212,7 @@ def cases():
     out["prepare_drum_slice_1.nml"] = prepare_drum(1, **slice_)
     out["prepare_drum_slice_2.nml"] = prepare_drum(2, **slice_)
     out["drum_slice.nml"] = drum(drum="drum_slice")
+    out["drum_slice_smooth.nml"] = drum(drum="drum_slice", smooth_ends=True)
     for n in (25000, 50000, 100000):
         out[f"prepare_{impact_name(n, 1)}.nml"] = prepare_impact(n)
         out[f"{impact_name(n, 1)}.nml"] = impact(n)

@@ -14,6 +14,8 @@ particle never reaches the outer skin of those 2 mm thick shells). z is vertical
                                    (fans of 98 triangles): 396 triangles.
   drum_slice.stl                   the same drum 0.015 m deep (y = -0.0075 .. 0.0075): a quarter
                                    of it, for the reduced drum run on a workstation.
+  drum_slice_shell.stl, drum_slice_ends.stl  its cylinder and its two end discs apart (the
+                                   slice with frictionless end discs).
   impact_box.stl                   the open-top box x = -0.049 .. 0.049, y = -0.03 .. 0.03,
                                    floor at z = -0.0902431, rim at z = 0.107757: 10 triangles.
 
@@ -61,12 +63,12 @@ def silo(r_o, z_o, c, top, cone_rings=20):
     return tris + band(rings[-1], ring(0.1, top))
 
 
-def drum(radius, half_depth):
+def drum(radius, half_depth, shell=True, ends=True):
     def about_y(points):                             # the z axis turned onto the y axis
         return [(x, z, y) for x, y, z in points]
     front, back = about_y(ring(radius, -half_depth)), about_y(ring(radius, half_depth))
-    tris = [(a, c, b) for a, b, c in band(front, back)]   # the turn mirrors: flip back
-    for k in range(1, SIDES - 1):
+    tris = [(a, c, b) for a, b, c in band(front, back)] if shell else []   # the turn mirrors
+    for k in range(1, SIDES - 1 if ends else 1):
         tris.append((front[0], front[k + 1], front[k]))     # disc at y = -d, normal +y
         tris.append((back[0], back[k], back[k + 1]))        # disc at y = +d, normal -y
     return tris
@@ -105,6 +107,10 @@ def main():
         write_stl(os.path.join(out, f"silo_{name}.stl"), silo(**dims), f"silo {name} orifice")
     write_stl(os.path.join(out, "drum.stl"), drum(**DRUM), "drum")
     write_stl(os.path.join(out, "drum_slice.stl"), drum(**DRUM_SLICE), "drum slice")
+    write_stl(os.path.join(out, "drum_slice_shell.stl"), drum(**DRUM_SLICE, ends=False),
+              "drum slice shell")
+    write_stl(os.path.join(out, "drum_slice_ends.stl"), drum(**DRUM_SLICE, shell=False),
+              "drum slice end discs")
     write_stl(os.path.join(out, "impact_box.stl"), box(**BOX), "impact box")
 
 
