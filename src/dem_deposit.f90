@@ -35,31 +35,44 @@ contains
         integer, intent(in) :: nc(3)
         real(wp), intent(out) :: sums(n_deposit, product(nc))
         integer(i8), intent(out) :: n_outside
-        call fixed_point_sums(comm, n, radius, mass, v, beta, product(nc), 512, grid_weights, &
-                              sums, n_outside)
-    contains
-        !> Particle i's cells and weights: the products of its weights on the three axes.
-        subroutine grid_weights(i, cells, weights, m_all)
-            integer(ip), intent(in) :: i
-            integer, intent(out) :: cells(:), m_all
-            real(wp), intent(out) :: weights(:)
-            real(wp) :: w(8, 3)
-            integer :: first(3), m(3), a, b, c3, d, cell
-            do d = 1, 3
-                call axis_weights(kernel, x(d, i), radius(i), origin(d), h(d), nc(d), &
-                                  first(d), m(d), w(:, d))
-            end do
-            m_all = product(m)
-            do cell = 0, m_all - 1
-                a = mod(cell, m(1))
-                b = mod(cell / m(1), m(2))
-                c3 = cell / (m(1) * m(2))
-                weights(cell + 1) = w(a + 1, 1) * w(b + 1, 2) * w(c3 + 1, 3)
-                cells(cell + 1) = 1 + first(1) + a &
-                                  + nc(1) * (first(2) + b + nc(2) * (first(3) + c3))
-            end do
-        end subroutine grid_weights
+        real(wp) :: q(n_deposit, n), scale(n_deposit), weights(512)
+        integer(i8) :: fixed(n_deposit, product(nc)), outside(1)
+        integer :: cells(512), m
+        integer(ip) :: i
+        call fixed_point_quantities(comm, n, radius, mass, v, beta, q, scale)
+        fixed = 0
+        outside = 0
+        do i = 1, n
+            call grid_weights(kernel, x(:, i), radius(i), origin, h, nc, cells, weights, m)
+            if (m == 0) outside = outside + 1
+            call fixed_point_add(q(:, i), scale, cells(1:m), weights(1:m), fixed)
+        end do
+        call comm_sum(comm, outside)
+        n_outside = outside(1)
+        call fixed_point_total(comm, fixed, scale, sums)
     end subroutine deposit_grid
+
+    !> The cells and weights of a particle at x (radius r) on the grid of deposit_grid: the
+    !> products of its weights on the three axes (m cells; 0: all outside).
+    pure subroutine grid_weights(kernel, x, r, origin, h, nc, cells, weights, m_all)
+        integer, intent(in) :: kernel, nc(3)
+        real(wp), intent(in) :: x(3), r, origin(3), h(3)
+        integer, intent(out) :: cells(:), m_all
+        real(wp), intent(out) :: weights(:)
+        real(wp) :: w(8, 3)
+        integer :: first(3), m(3), a, b, c3, d, cell
+        do d = 1, 3
+            call axis_weights(kernel, x(d), r, origin(d), h(d), nc(d), first(d), m(d), w(:, d))
+        end do
+        m_all = product(m)
+        do cell = 0, m_all - 1
+            a = mod(cell, m(1))
+            b = mod(cell / m(1), m(2))
+            c3 = cell / (m(1) * m(2))
+            weights(cell + 1) = w(a + 1, 1) * w(b + 1, 2) * w(c3 + 1, 3)
+            cells(cell + 1) = 1 + first(1) + a + nc(1) * (first(2) + b + nc(2) * (first(3) + c3))
+        end do
+    end subroutine grid_weights
 
     !> sums(:, c) over every rank's n particles for a list of cells given by their centres:
     !> each particle goes whole to the cell of the nearest centre (of lowest index among
@@ -71,78 +84,67 @@ contains
         real(wp), intent(in) :: centres(:, :)     !! (3, cells) [m]
         real(wp), intent(out) :: sums(n_deposit, size(centres, 2))
         type(grid_t) :: g
-        real(wp) :: lo(3), hi(3)
-        integer(ip) :: m, k
-        integer(i8) :: n_outside
+        real(wp) :: lo(3), hi(3), q(n_deposit, n), scale(n_deposit)
+        integer(i8) :: fixed(n_deposit, size(centres, 2))
+        integer(ip) :: m, k, i
         m = size(centres, 2, kind=ip)
         lo = minval(centres, dim=2)
         hi = maxval(centres, dim=2)
         call grid_shape(g, lo, hi, max(maxval(hi - lo), tiny(1.0_wp)) &
                         / max(1.0_wp, real(m, wp))**(1.0_wp / 3.0_wp), m)
         call grid_fill(g, m, [(k, k = 1, m)], centres)
-        call fixed_point_sums(comm, n, radius, mass, v, beta, size(centres, 2), 1, nearest, &
-                              sums, n_outside)
-    contains
-        !> The nearest centre to particle i: buckets in growing shells around its own, until
-        !> the shell is farther than the best centre found.
-        subroutine nearest(i, cells, weights, m_)
-            integer(ip), intent(in) :: i
-            integer, intent(out) :: cells(:), m_
-            real(wp), intent(out) :: weights(:)
-            real(wp) :: best, d2
-            integer(ip) :: c(3), shell, cx, cy, cz, j, kk
-            c = cell_of(g, x(:, i))
-            best = huge(1.0_wp)
-            cells(1) = 0
-            do shell = 0, maxval(g%n)
-                if (cells(1) > 0 .and. (real(shell - 1, wp) * g%h)**2 > best) exit
-                do cz = max(0, c(3) - shell), min(g%n(3) - 1, c(3) + shell)
-                    do cy = max(0, c(2) - shell), min(g%n(2) - 1, c(2) + shell)
-                        do cx = max(0, c(1) - shell), min(g%n(1) - 1, c(1) + shell)
-                            if (max(abs(cx - c(1)), abs(cy - c(2)), abs(cz - c(3))) /= shell) &
-                                cycle                        ! inside: an earlier shell
-                            j = 1 + cx + g%n(1) * (cy + g%n(2) * cz)
-                            do kk = g%start(j), g%start(j + 1) - 1
-                                d2 = sum((centres(:, g%item(kk)) - x(:, i))**2)
-                                if (d2 < best .or. (d2 == best .and. g%item(kk) < cells(1))) then
-                                    best = d2
-                                    cells(1) = g%item(kk)
-                                end if
-                            end do
+        call fixed_point_quantities(comm, n, radius, mass, v, beta, q, scale)
+        fixed = 0
+        do i = 1, n
+            call fixed_point_add(q(:, i), scale, [nearest(g, centres, x(:, i))], [1.0_wp], fixed)
+        end do
+        call fixed_point_total(comm, fixed, scale, sums)
+    end subroutine deposit_cells
+
+    !> The index of the centre nearest to x (the lowest among equals): the buckets of g in
+    !> growing shells around x's own, until the shell is farther than the best centre found.
+    pure integer function nearest(g, centres, x) result(best_k)
+        type(grid_t), intent(in) :: g
+        real(wp), intent(in) :: centres(:, :), x(3)
+        real(wp) :: best, d2
+        integer(ip) :: c(3), shell, cx, cy, cz, j, kk
+        c = cell_of(g, x)
+        best = huge(1.0_wp)
+        best_k = 0
+        do shell = 0, maxval(g%n)
+            if (best_k > 0 .and. (real(shell - 1, wp) * g%h)**2 > best) exit
+            do cz = max(0, c(3) - shell), min(g%n(3) - 1, c(3) + shell)
+                do cy = max(0, c(2) - shell), min(g%n(2) - 1, c(2) + shell)
+                    do cx = max(0, c(1) - shell), min(g%n(1) - 1, c(1) + shell)
+                        if (max(abs(cx - c(1)), abs(cy - c(2)), abs(cz - c(3))) /= shell) &
+                            cycle                        ! inside: an earlier shell
+                        j = 1 + cx + g%n(1) * (cy + g%n(2) * cz)
+                        do kk = g%start(j), g%start(j + 1) - 1
+                            d2 = sum((centres(:, g%item(kk)) - x)**2)
+                            if (d2 < best .or. (d2 == best .and. g%item(kk) < best_k)) then
+                                best = d2
+                                best_k = g%item(kk)
+                            end if
                         end do
                     end do
                 end do
             end do
-            m_ = 1
-            weights(1) = 1.0_wp
-        end subroutine nearest
-    end subroutine deposit_cells
+        end do
+    end function nearest
 
-    !> The deposits of every rank's n particles into n_cells cells, summed in 64-bit fixed
-    !> point (doc/theory.md, section 14): particle i gives weights(k) of its volume, momentum,
-    !> beta and beta v to cells(k), k = 1..m, from spread(i, cells, weights, m) (m <= max_m;
-    !> m = 0: the particle is left out, and counted in n_outside).
-    subroutine fixed_point_sums(comm, n, radius, mass, v, beta, n_cells, max_m, spread, sums, &
-                                n_outside)
+    !> The quantities each of the n particles deposits, q = (V, m v, beta, beta v), and the
+    !> scale of the 64-bit fixed point for each (doc/theory.md, section 14): 2^k with k such
+    !> that the largest |q| over the ranks times the particles stays below 2^61.
+    subroutine fixed_point_quantities(comm, n, radius, mass, v, beta, q, scale)
         type(comm_t), intent(in) :: comm
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: radius(n), mass(n), v(3, n), beta(n)
-        integer, intent(in) :: n_cells, max_m
-        interface
-            subroutine spread(i, cells, weights, m)
-                import :: ip, wp
-                integer(ip), intent(in) :: i
-                integer, intent(out) :: cells(:), m
-                real(wp), intent(out) :: weights(:)
-            end subroutine spread
-        end interface
-        real(wp), intent(out) :: sums(n_deposit, n_cells)
-        integer(i8), intent(out) :: n_outside
+        real(wp), intent(out) :: q(n_deposit, n), scale(n_deposit)
         real(wp), parameter :: pi = acos(-1.0_wp)
-        real(wp) :: q(n_deposit, n), bound(n_deposit), scale(n_deposit), weights(max_m)
-        integer(i8) :: fixed(n_deposit, n_cells), tally(2)
-        integer :: cells(max_m), m, k, d
+        real(wp) :: bound(n_deposit)
+        integer(i8) :: total(1)
         integer(ip) :: i
+        integer :: d
         do i = 1, n
             q(1, i) = 4.0_wp / 3.0_wp * pi * radius(i)**3
             q(2:4, i) = mass(i) * v(:, i)
@@ -152,38 +154,41 @@ contains
         bound = 0.0_wp                   ! the largest |q| times the particles: above any sum
         if (n > 0) bound = maxval(abs(q), dim=2)
         call comm_max(comm, bound)
-        tally = [int(n, i8), 0_i8]
-        call comm_sum(comm, tally(1:1))
-        bound = bound * real(max(1_i8, tally(1)), wp)
-        do d = 1, n_deposit                          ! |sum| * scale < 2^61
+        total = n
+        call comm_sum(comm, total)
+        bound = bound * real(max(1_i8, total(1)), wp)
+        do d = 1, n_deposit
             scale(d) = 1.0_wp
             if (bound(d) > 0.0_wp) scale(d) = 2.0_wp**(61 - exponent(bound(d)))
         end do
-        fixed = 0
-        do i = 1, n
-            call spread(i, cells, weights, m)
-            if (m == 0) tally(2) = tally(2) + 1
-            do k = 1, m
-                fixed(:, cells(k)) = fixed(:, cells(k)) + nint(weights(k) * q(:, i) * scale, i8)
-            end do
+    end subroutine fixed_point_quantities
+
+    !> Add weights(k) of one particle's quantities q to cell cells(k), in fixed point.
+    pure subroutine fixed_point_add(q, scale, cells, weights, fixed)
+        real(wp), intent(in) :: q(n_deposit), scale(n_deposit), weights(:)
+        integer, intent(in) :: cells(:)
+        integer(i8), intent(inout) :: fixed(:, :)
+        integer :: k
+        do k = 1, size(cells)
+            fixed(:, cells(k)) = fixed(:, cells(k)) + nint(weights(k) * q * scale, i8)
         end do
-        call comm_sum(comm, tally(2:2))
-        n_outside = tally(2)
-        fixed = reshape_sum(fixed)
+    end subroutine fixed_point_add
+
+    !> The fixed-point sums of all ranks, back to reals.
+    subroutine fixed_point_total(comm, fixed, scale, sums)
+        type(comm_t), intent(in) :: comm
+        integer(i8), intent(in) :: fixed(:, :)
+        real(wp), intent(in) :: scale(n_deposit)
+        real(wp), intent(out) :: sums(:, :)
+        integer(i8) :: flat(size(fixed))
+        integer :: d
+        flat = reshape(fixed, [size(fixed)])
+        call comm_sum(comm, flat)
+        sums = reshape(real(flat, wp), shape(fixed))
         do d = 1, n_deposit
-            sums(d, :) = real(fixed(d, :), wp) / scale(d)
+            sums(d, :) = sums(d, :) / scale(d)
         end do
-    contains
-        !> The fixed-point sums of all ranks.
-        function reshape_sum(f) result(total)
-            integer(i8), intent(in) :: f(:, :)
-            integer(i8) :: total(size(f, 1), size(f, 2))
-            integer(i8) :: flat(size(f))
-            flat = reshape(f, [size(f)])
-            call comm_sum(comm, flat)
-            total = reshape(flat, shape(f))
-        end function reshape_sum
-    end subroutine fixed_point_sums
+    end subroutine fixed_point_total
 
     !> One axis: the particle at x (radius r) gives weights w(1:m) to the cells first ..
     !> first + m - 1 (0-based) of the nc cells of size h from o, summing to one; m = 0 when
