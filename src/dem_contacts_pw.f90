@@ -8,9 +8,11 @@ module dem_contacts_pw
     use dem_contact_hm, only: hm_force
     use dem_mesh, only: closest_point_triangle, feature_face
     use dem_vector, only: cross
+    use dem_storage, only: storage_capacity, storage_resize
     implicit none
     private
     public :: wall_contacts_t, wall_contacts_init, wall_contacts_permute, pw_forces, &
+              wall_contacts_reserve, &
               max_wall_contacts, wall_contacts_pack, wall_contacts_unpack, n_wall_pack_real
 
     integer(ip), parameter :: max_wall_contacts = 8     !< per particle
@@ -34,6 +36,18 @@ contains
         wc%tri = 0
         wc%xi = 0.0_wp
     end subroutine wall_contacts_init
+
+    !> Room for the history of `need` particles; the first n_keep keep theirs (the rule of
+    !> storage_capacity, as for the particles).
+    subroutine wall_contacts_reserve(wc, n_keep, need)
+        type(wall_contacts_t), intent(inout) :: wc
+        integer(ip), intent(in) :: n_keep, need
+        integer(ip) :: capacity
+        capacity = storage_capacity(size(wc%tri, 2, kind=ip), need)
+        if (capacity == size(wc%tri, 2)) return
+        call storage_resize(wc%tri, n_keep, capacity)
+        call storage_resize(wc%xi, n_keep, capacity)
+    end subroutine wall_contacts_reserve
 
     !> Reorder the history with the particles: particle i becomes the one stored at order(i);
     !> the slots of particles left out are emptied.

@@ -14,9 +14,9 @@ module dem_domain
     use dem_metis, only: metis_partition
     use dem_neighbors, only: neighbors_unique_pairs, fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
-                             n_pack_int, particles_pack_reals, order_by_id
+                             n_pack_int, particles_pack_reals, order_by_id, particles_reserve
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_pack, wall_contacts_unpack, &
-                               wall_contacts_permute, n_wall_pack_real
+                               wall_contacts_permute, n_wall_pack_real, wall_contacts_reserve
     implicit none
     private
     public :: domain_t, domain_init, domain_balance, domain_imbalance, domain_migrate, &
@@ -174,7 +174,7 @@ contains
     !> that now own either particle; `pair` and `xi` come back as the pairs of this rank's
     !> particles, ordered by the two ids. With `everywhere`, every rank holds every particle
     !> and every pair (the start of a run): each keeps its own and sends nothing. Ghosts are
-    !> dropped.
+    !> dropped; the stores are resized to what the rank now holds (particles_reserve).
     subroutine domain_migrate(d, comm, p, wc, kept, pair, xi, everywhere)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
@@ -203,6 +203,8 @@ contains
             call particles_permute(p, stay)
             call wall_contacts_permute(wc, stay)
             p%n_ghost = 0
+            call particles_reserve(p, p%n_own)
+            call wall_contacts_reserve(wc, p%n_own, p%n_own)
             return
         end if
 
@@ -240,10 +242,12 @@ contains
         d%bytes = d%bytes + 8 * (size(ibuf) + size(rbuf))
         call particles_permute(p, stay)
         call wall_contacts_permute(wc, stay)
+        p%n_ghost = 0
+        call particles_reserve(p, p%n_own + nr)
+        call wall_contacts_reserve(wc, p%n_own, p%n_own + nr)
         call particles_unpack(p, p%n_own + 1, irecv, rrecv(1:nreal, :))
         call wall_contacts_unpack(wc, p%n_own + 1, rrecv(nreal + 1:, :))
         p%n_own = p%n_own + nr
-        p%n_ghost = 0
     contains
         !> Local index of a global id (owned or ghost), by binary search.
         integer function local(g)
@@ -350,6 +354,7 @@ contains
         call comm_exchange(comm, ibuf, d%send_counts, irecv, d%recv_counts)
         call comm_exchange(comm, rbuf, d%send_counts, rrecv, d%recv_counts)
         d%bytes = d%bytes + 8 * (size(ibuf) + size(rbuf))
+        call particles_reserve(p, p%n_own + size(irecv, 2, kind=ip))
         call particles_unpack(p, p%n_own + 1, irecv, rrecv)
         p%n_ghost = size(irecv, 2)
         if (allocated(d%sbuf)) deallocate(d%sbuf, d%rbuf)

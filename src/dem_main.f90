@@ -177,11 +177,12 @@ contains
 
     !> The decomposition's statistics (solver_parallel_stats).
     subroutine print_parallel(stats)
-        real(wp), intent(in) :: stats(4)
+        real(wp), intent(in) :: stats(5)
         if (comm%rank /= 0) return
-        write(output_unit, '(a,i0,a,f6.3,a,f7.3,a,es10.3,a,i0,a)') 'parallel: ', comm%size, &
-            ' ranks, load imbalance ', stats(1), ', ghosts per particle ', stats(2), ', ', &
-            stats(3), ' bytes sent per step, ', nint(stats(4)), ' partitions'
+        write(output_unit, '(a,i0,a,f6.3,a,f7.3,a,es10.3,a,i0,a,f6.3,a)') 'parallel: ', &
+            comm%size, ' ranks, load imbalance ', stats(1), ', ghosts per particle ', stats(2), &
+            ', ', stats(3), ' bytes sent per step, ', nint(stats(4)), ' partitions, ' // &
+            'largest store ', stats(5), ' of the particles'
     end subroutine print_parallel
 
     !> Peak resident memory of this process [KiB] from /proc/self/status (Linux); 0 if unknown.

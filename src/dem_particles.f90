@@ -2,9 +2,11 @@
 !> (n_own+1..n_own+n_ghost), no holes. Vectors are stored as (3, n).
 module dem_particles
     use dem_kinds, only: wp, ip, i8
+    use dem_storage, only: storage_capacity, storage_resize
     implicit none
     private
     public :: particles_t, particles_init, particles_add, particles_permute, order_by_id, &
+              particles_reserve, &
               particles_pack, particles_unpack, particles_pack_reals, particles_external, &
               n_pack_int, sphere_mass, sphere_inv_inertia, ext_force, ext_torque, ext_beta, &
               ext_fluid_v, ext_impulse, n_ext
@@ -54,6 +56,29 @@ contains
         p%f = 0.0_wp
         p%t = 0.0_wp
     end subroutine particles_init
+
+    !> Room for `need` particles, owned and ghosts (those stored keep their places): the
+    !> store grows or shrinks by storage_capacity's rule, so that a rank holds its share.
+    subroutine particles_reserve(p, need)
+        type(particles_t), intent(inout) :: p
+        integer(ip), intent(in) :: need
+        integer(ip) :: capacity, n
+        capacity = storage_capacity(size(p%gid, kind=ip), need)
+        if (capacity == size(p%gid)) return
+        n = p%n_own + p%n_ghost
+        call storage_resize(p%gid, n, capacity)
+        call storage_resize(p%mat, n, capacity)
+        call storage_resize(p%radius, n, capacity)
+        call storage_resize(p%mass, n, capacity)
+        call storage_resize(p%inv_mass, n, capacity)
+        call storage_resize(p%inv_inertia, n, capacity)
+        call storage_resize(p%x, n, capacity)
+        call storage_resize(p%v, n, capacity)
+        call storage_resize(p%w, n, capacity)
+        call storage_resize(p%f, n, capacity)
+        call storage_resize(p%t, n, capacity)
+        if (allocated(p%ext)) call storage_resize(p%ext, n, capacity)
+    end subroutine particles_reserve
 
     !> Append an owned sphere (there are no ghosts while particles are added).
     subroutine particles_add(p, gid, mat, radius, density, x, v, w)

@@ -9,7 +9,7 @@ module dem_solver
     use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather, comm_node_rank
     use dem_case, only: case_t, time_scales_t, case_time_scales
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
-                             order_by_id, sphere_mass, sphere_inv_inertia
+                             particles_reserve, order_by_id, sphere_mass, sphere_inv_inertia
     use dem_domain, only: domain_t, domain_init, domain_data, domain_balance, domain_imbalance, &
                           domain_migrate, domain_ghosts, domain_update
     use dem_materials, only: pair_constants_t, pair_constants_build
@@ -17,7 +17,7 @@ module dem_solver
                              neighbors_spatial_order, neighbors_history, neighbors_set_history
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, wall_contacts_permute, &
-                               pw_forces
+                               wall_contacts_reserve, pw_forces
     use dem_forces, only: body_forces, external_forces
     use dem_mesh, only: mesh_t, mesh_move
     use dem_outlets, only: outlets_mark
@@ -149,6 +149,8 @@ contains
         integer(i8), allocatable :: kept(:)
         integer(ip) :: i
         s%p%n_own = 0
+        call particles_reserve(s%p, fr%n)
+        call wall_contacts_reserve(s%wc, 0, fr%n)
         do i = 1, fr%n
             call particles_add(s%p, fr%gid(i), fr%mat(i), fr%radius(i), &
                                c%mats%density(fr%mat(i)), fr%x(:, i), fr%v(:, i), fr%w(:, i))
@@ -199,15 +201,20 @@ contains
 
     !> On several ranks: the load imbalance (largest particle count of a rank over the mean),
     !> ghosts per owned particle, bytes sent between ranks per step of the last run (all
-    !> ranks together) and the partitions computed.
+    !> ranks together), the partitions computed, and the largest particle store of a rank
+    !> (its capacity) over the particles of all ranks.
     function solver_parallel_stats(s) result(stats)
         type(solver_t), intent(in) :: s
-        real(wp) :: stats(4)
+        real(wp) :: stats(5)
         integer(i8) :: sums(3)
+        real(wp) :: store(1)
         sums = [int(s%p%n_own, i8), int(s%p%n_ghost, i8), s%dom%bytes]
         call comm_sum(s%comm, sums)
+        store = real(size(s%p%gid), wp)
+        call comm_max(s%comm, store)
         stats = [domain_imbalance(s%comm, s%p%n_own), real(sums(2), wp) / max(1_i8, sums(1)), &
-                 real(sums(3), wp) / max(1_i8, s%steps_run), real(s%dom%balances, wp)]
+                 real(sums(3), wp) / max(1_i8, s%steps_run), real(s%dom%balances, wp), &
+                 store(1) / max(1_i8, sums(1))]
     end function solver_parallel_stats
 
     !> The time of a step [s] (doc/theory.md, section 11).
@@ -618,13 +625,15 @@ contains
     !> history follows the particles, and the new state and lists go to the device. With
     !> `keep`, the particles not kept are removed. On several ranks, the particles first go
     !> to the ranks of their blocks (repartitioned when the load is out of balance), then
-    !> the ghosts are exchanged.
+    !> the ghosts are exchanged; the stores then follow the rank's share (they may be
+    !> reallocated, so their device copies are made anew).
     subroutine rebuild(s, keep)
         type(solver_t), intent(inout) :: s
         logical, intent(in), optional :: keep(:)
         integer(ip), allocatable :: order(:), kept(:)
         integer(ip) :: i
         call particle_data(s, acc_to_host)
+        call particle_data(s, acc_exit)
         if (s%mesh%moving) call acc_data(s%mesh%vert, acc_to_host)
         if (s%lists_on_device) then
             call acc_data(s%nb%xi, acc_to_host)
@@ -644,7 +653,7 @@ contains
         call particles_permute(s%p, order)
         call wall_contacts_permute(s%wc, order)
         if (s%comm%size > 1) call domain_ghosts(s%dom, s%comm, s%p)
-        call particle_data(s, acc_to_device)
+        call particle_data(s, acc_enter)
         if (s%comm%size > 1) call domain_data(s%dom, acc_enter)
         if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:s%p%n_own), s%trace_id, dim=1)
         if (s%trace_id /= 0 .and. s%trace == 0) s%trace_id = 0    ! it left through an outlet

@@ -14,8 +14,8 @@ particle never reaches the outer skin of those 2 mm thick shells). z is vertical
                                    (fans of 98 triangles): 396 triangles.
   drum_slice.stl                   the same drum 0.015 m deep (y = -0.0075 .. 0.0075): a quarter
                                    of it, for the reduced drum run on a workstation.
-  drum_slice_shell.stl, drum_slice_ends.stl  its cylinder and its two end discs apart (the
-                                   slice with frictionless end discs).
+  <drum>_shell.stl, <drum>_ends.stl  the cylinder and the two end discs of drum and
+                                   drum_slice apart (the drums with frictionless end discs).
   impact_box.stl                   the open-top box x = -0.049 .. 0.049, y = -0.03 .. 0.03,
                                    floor at z = -0.0902431, rim at z = 0.107757: 10 triangles.
 
@@ -105,12 +105,13 @@ def main():
     os.makedirs(out, exist_ok=True)
     for name, dims in SILOS.items():
         write_stl(os.path.join(out, f"silo_{name}.stl"), silo(**dims), f"silo {name} orifice")
-    write_stl(os.path.join(out, "drum.stl"), drum(**DRUM), "drum")
-    write_stl(os.path.join(out, "drum_slice.stl"), drum(**DRUM_SLICE), "drum slice")
-    write_stl(os.path.join(out, "drum_slice_shell.stl"), drum(**DRUM_SLICE, ends=False),
-              "drum slice shell")
-    write_stl(os.path.join(out, "drum_slice_ends.stl"), drum(**DRUM_SLICE, shell=False),
-              "drum slice end discs")
+    for name, dims in (("drum", DRUM), ("drum_slice", DRUM_SLICE)):
+        label = name.replace("_", " ")
+        write_stl(os.path.join(out, f"{name}.stl"), drum(**dims), label)
+        write_stl(os.path.join(out, f"{name}_shell.stl"), drum(**dims, ends=False),
+                  label + " shell")
+        write_stl(os.path.join(out, f"{name}_ends.stl"), drum(**dims, shell=False),
+                  label + " end discs")
     write_stl(os.path.join(out, "impact_box.stl"), box(**BOX), "impact box")
 
 
