@@ -172,10 +172,10 @@ contains
     !> blocks, with their wall-contact history, and send each pair's tangential history
     !> (lower id, higher id, displacement of the lower; from this rank's rows) to the ranks
     !> that now own either particle; `pair` and `xi` come back as the pairs of this rank's
-    !> particles, ordered by the two ids. With `everywhere`, every rank holds every particle
-    !> and every pair (the start of a run): each keeps its own and sends nothing. Ghosts are
-    !> dropped; the stores are resized to what the rank now holds (particles_reserve).
-    subroutine domain_migrate(d, comm, p, wc, kept, pair, xi, everywhere)
+    !> particles, ordered by the two ids. With `pairs_everywhere`, every rank holds every pair
+    !> (the start of a run from a checkpoint): they are kept as they are, not sent. Ghosts
+    !> are dropped; the stores are resized to what the rank now holds (particles_reserve).
+    subroutine domain_migrate(d, comm, p, wc, kept, pair, xi, pairs_everywhere)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         type(particles_t), intent(inout) :: p
@@ -183,7 +183,7 @@ contains
         integer(ip), intent(in) :: kept(:)
         integer(i8), allocatable, intent(inout) :: pair(:, :)   !! (2, pairs)
         real(wp), allocatable, intent(inout) :: xi(:, :)        !! (3, pairs) [m]
-        logical, intent(in) :: everywhere
+        logical, intent(in) :: pairs_everywhere
         integer, allocatable :: dest(:), pair_dest(:, :), counts(:), recv_counts(:)
         integer(ip), allocatable :: idx(:), stay(:), by_id(:)
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :), pbuf(:, :), precv(:, :)
@@ -199,33 +199,7 @@ contains
         removed(kept) = .false.
         where (removed) dest(1:p%n_own) = -1
         stay = pack([(i, i = 1, p%n_own)], dest(1:p%n_own) == comm%rank)
-        if (everywhere) then
-            call particles_permute(p, stay)
-            call wall_contacts_permute(wc, stay)
-            p%n_ghost = 0
-            call particles_reserve(p, p%n_own)
-            call wall_contacts_reserve(wc, p%n_own, p%n_own)
-            return
-        end if
-
-        ! the pairs: to the ranks of both particles (once if the same)
-        by_id = order_by_id(p%gid(1:p%n_own + p%n_ghost))
-        allocate(pair_dest(2, size(pair, 2)))
-        do m = 1, size(pair, 2)
-            pair_dest(:, m) = [dest(local(pair(1, m))), dest(local(pair(2, m)))]
-            if (pair_dest(2, m) == pair_dest(1, m)) pair_dest(2, m) = -1   ! once
-        end do
-        idx = sorted_by_rank([pair_dest(1, :), pair_dest(2, :)], comm%size, counts)
-        idx = merge(idx, idx - size(pair, 2), idx <= size(pair, 2))   ! back to pair numbers
-        pbuf = pair(:, idx)
-        xbuf = xi(:, idx)
-        recv_counts = comm_counts(comm, counts)
-        np = sum(recv_counts)
-        allocate(precv(2, np), xrecv(3, np))
-        call comm_exchange(comm, pbuf, counts, precv, recv_counts)
-        call comm_exchange(comm, xbuf, counts, xrecv, recv_counts)
-        d%bytes = d%bytes + 8 * (size(pbuf) + size(xbuf))
-        call neighbors_unique_pairs(precv, xrecv, pair, xi)
+        if (.not. pairs_everywhere) call send_pairs()
 
         ! the particles that leave
         idx = sorted_by_rank(merge(dest(1:p%n_own), -1, dest(1:p%n_own) /= comm%rank), comm%size, &
@@ -249,6 +223,27 @@ contains
         call wall_contacts_unpack(wc, p%n_own + 1, rrecv(nreal + 1:, :))
         p%n_own = p%n_own + nr
     contains
+        !> The pairs: to the ranks of both particles (once if the same).
+        subroutine send_pairs()
+            by_id = order_by_id(p%gid(1:p%n_own + p%n_ghost))
+            allocate(pair_dest(2, size(pair, 2)))
+            do m = 1, size(pair, 2)
+                pair_dest(:, m) = [dest(local(pair(1, m))), dest(local(pair(2, m)))]
+                if (pair_dest(2, m) == pair_dest(1, m)) pair_dest(2, m) = -1   ! once
+            end do
+            idx = sorted_by_rank([pair_dest(1, :), pair_dest(2, :)], comm%size, counts)
+            idx = merge(idx, idx - size(pair, 2), idx <= size(pair, 2))  ! back to pair numbers
+            pbuf = pair(:, idx)
+            xbuf = xi(:, idx)
+            recv_counts = comm_counts(comm, counts)
+            np = sum(recv_counts)
+            allocate(precv(2, np), xrecv(3, np))
+            call comm_exchange(comm, pbuf, counts, precv, recv_counts)
+            call comm_exchange(comm, xbuf, counts, xrecv, recv_counts)
+            d%bytes = d%bytes + 8 * (size(pbuf) + size(xbuf))
+            call neighbors_unique_pairs(precv, xrecv, pair, xi)
+        end subroutine send_pairs
+
         !> Local index of a global id (owned or ghost), by binary search.
         integer function local(g)
             integer(i8), intent(in) :: g

@@ -111,23 +111,25 @@ module dem_solver
 
 contains
 
-    !> Set up the state of a case at t = 0.
+    !> Set up the state of a case at t = 0. On P ranks, rank r takes particles r+1, r+1+P,
+    !> ...: the first rebuild sends each to the rank of its block.
     subroutine solver_init(s, c, comm)
         type(solver_t), intent(out) :: s
         type(case_t), intent(in) :: c
         type(comm_t), intent(in) :: comm
-        integer(ip) :: i
+        integer(ip) :: i, n_mine
         s%comm = comm
-        call particles_init(s%p, c%n_particles)
-        do i = 1, c%n_particles
+        n_mine = max(0, (c%n_particles - comm%rank + comm%size - 1) / comm%size)
+        call particles_init(s%p, n_mine)
+        do i = 1 + comm%rank, c%n_particles, comm%size
             call particles_add(s%p, c%gid(i), c%mat(i), c%radius(i), &
                                c%mats%density(c%mat(i)), c%x(:, i), c%v(:, i), c%w(:, i))
-            if (c%gid(i) == c%trace_id) s%trace = i
+            if (c%gid(i) == c%trace_id) s%trace = s%p%n_own
         end do
         s%trace_id = c%trace_id
         call pair_constants_build(c%mats, c%opts, s%pc)
         s%mesh = c%mesh
-        call wall_contacts_init(s%wc, c%n_particles)
+        call wall_contacts_init(s%wc, n_mine)
         s%nb%skin = c%skin
         s%imbalance_limit = c%imbalance_limit
         s%sort_cell = 2.0_wp * minval(c%radius(1:c%n_particles)) + c%skin
@@ -136,7 +138,8 @@ contains
         allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0), s%stale(0))
     end subroutine solver_init
 
-    !> Replace the state of a case just set up by solver_init with a checkpoint's. If dt is
+    !> Replace the state of a case just set up by solver_init with a checkpoint's (on P
+    !> ranks, rank r takes its particles r+1, r+1+P, ... as solver_init does). If dt is
     !> the checkpoint's, the times of the steps are those of the run that wrote it, so that
     !> the continuation is bit for bit the same; otherwise time counts on from its time.
     !> Checkpoints newer than this one (a continuation now abandoned) are removed once the
@@ -147,23 +150,28 @@ contains
         type(frame_t), intent(in) :: fr
         character(len=:), allocatable :: latest
         integer(i8), allocatable :: kept(:)
-        integer(ip) :: i
+        integer(ip), allocatable :: mine(:)
+        integer(ip) :: i, n
+        mine = [(i, i = 1 + s%comm%rank, fr%n, s%comm%size)]
+        n = size(mine)
         s%p%n_own = 0
-        call particles_reserve(s%p, fr%n)
-        call wall_contacts_reserve(s%wc, 0, fr%n)
-        do i = 1, fr%n
-            call particles_add(s%p, fr%gid(i), fr%mat(i), fr%radius(i), &
-                               c%mats%density(fr%mat(i)), fr%x(:, i), fr%v(:, i), fr%w(:, i))
+        call particles_reserve(s%p, n)
+        call wall_contacts_reserve(s%wc, 0, n)
+        do i = 1, n
+            associate (k => mine(i))
+                call particles_add(s%p, fr%gid(k), fr%mat(k), fr%radius(k), &
+                                   c%mats%density(fr%mat(k)), fr%x(:, k), fr%v(:, k), fr%w(:, k))
+            end associate
         end do
-        s%p%f(:, 1:fr%n) = fr%f
-        s%p%t(:, 1:fr%n) = fr%t
+        s%p%f(:, 1:n) = fr%f(:, mine)
+        s%p%t(:, 1:n) = fr%t(:, mine)
         s%wc%tri = 0
         s%wc%xi = 0.0_wp
-        s%wc%tri(:, 1:fr%n) = fr%wall_tri
-        s%wc%xi(:, :, 1:fr%n) = fr%wall_xi
-        call neighbors_set_history(s%nb, fr%n, s%p%gid, [(i, i = 1, fr%n)], fr%pair, fr%pair_xi)
+        s%wc%tri(:, 1:n) = fr%wall_tri(:, mine)
+        s%wc%xi(:, :, 1:n) = fr%wall_xi(:, :, mine)
+        call neighbors_set_history(s%nb, n, s%p%gid, [(i, i = 1, n)], fr%pair, fr%pair_xi)
         s%trace = 0
-        if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:fr%n), s%trace_id, dim=1)
+        if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:n), s%trace_id, dim=1)
         if (s%trace == 0) s%trace_id = 0
         s%step = fr%step
         if (fr%dt == c%dt) then
@@ -463,20 +471,24 @@ contains
                                                'of another rank (above)')
     end function failed_anywhere
 
-    !> The blocks of a run on several ranks, over the box of the particles (every rank holds
-    !> all of them now) and the walls.
+    !> The blocks of a run on several ranks, over the box of the particles of all ranks and
+    !> the walls.
     subroutine start_domain(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        real(wp) :: lo(3), hi(3), p_lo(3), p_hi(3), rmin
+        real(wp) :: lo(3), hi(3), p_lo(3), p_hi(3), rmin, extent(7)
+        integer(i8) :: total(1)
         integer(ip) :: n
         n = s%p%n_own
-        lo = huge(1.0_wp)
-        hi = -huge(1.0_wp)
-        if (n > 0) then
-            lo = minval(s%p%x(:, 1:n), dim=2)
-            hi = maxval(s%p%x(:, 1:n), dim=2)
-        end if
+        extent = -huge(1.0_wp)                   ! -lo, hi, -smallest radius
+        if (n > 0) extent = [-minval(s%p%x(:, 1:n), dim=2), maxval(s%p%x(:, 1:n), dim=2), &
+                             -minval(s%p%radius(1:n))]
+        call comm_max(s%comm, extent)
+        total = n
+        call comm_sum(s%comm, total)
+        n = int(total(1), ip)
+        lo = -extent(1:3)
+        hi = extent(4:6)
         p_lo = lo
         p_hi = hi
         if (s%mesh%n_tri > 0) then
@@ -492,7 +504,7 @@ contains
             p_hi = hi
         end if
         rmin = 0.0_wp
-        if (n > 0) rmin = minval(s%p%radius(1:n))
+        if (n > 0) rmin = -extent(7)
         call domain_init(s%dom, s%comm, lo, hi, p_lo, p_hi, 2.0_wp * (2.0_wp * rmin + c%skin), &
                          c%skin)
         s%dom%gpu_aware_mpi = c%gpu_aware_mpi
@@ -667,7 +679,7 @@ contains
     !> ranks of their blocks, rebalancing first when the load ratio exceeds the limit times
     !> the ratio the last partition achieved (blocks may not allow better, and a draining
     !> silo's last particles would be repartitioned at every rebuild); the first time, every
-    !> rank holds every particle and keeps its own. The history
+    !> rank holds every pair of a restored history, which is then not sent. The history
     !> of the particles now owned is left for the next neighbors_build. The particle count
     !> and the momentum are checked to be the same after the move (to round-off).
     subroutine distribute(s, kept)
@@ -675,7 +687,6 @@ contains
         integer(ip), intent(in) :: kept(:)
         integer(i8), allocatable :: pair(:, :)
         real(wp), allocatable :: xi(:, :)
-        integer(ip), allocatable :: mine(:)
         real(wp) :: imbalance, before(5), after(5)
         integer(ip) :: i
         integer :: status
@@ -692,38 +703,32 @@ contains
         imbalance = domain_imbalance(s%comm, size(kept, kind=ip))
         balance = .not. s%distributed .or. imbalance > s%imbalance_limit * s%balanced
         if (balance) then
-            mine = kept                      ! the first time, rank 0 speaks for every particle
-            if (.not. s%distributed .and. s%comm%rank > 0) mine = kept(1:0)
-            call domain_balance(s%dom, s%comm, size(mine, kind=ip), s%p%x(:, mine), &
-                                s%p%radius(mine), s%wc%tri(:, mine), status)
+            call domain_balance(s%dom, s%comm, size(kept, kind=ip), s%p%x(:, kept), &
+                                s%p%radius(kept), s%wc%tri(:, kept), status)
             if (status /= 1) error stop 'dem: METIS could not partition the blocks'
         end if
-        before = totals(kept, .not. s%distributed)
+        before = totals(kept)
         call domain_migrate(s%dom, s%comm, s%p, s%wc, kept, pair, xi, .not. s%distributed)
         s%distributed = .true.
         if (balance) s%balanced = domain_imbalance(s%comm, s%p%n_own)
-        after = totals([(i, i = 1, s%p%n_own)], .false.)
+        after = totals([(i, i = 1, s%p%n_own)])
         if (nint(after(1)) /= nint(before(1)) .or. any(abs(after(2:4) - before(2:4)) > &
             1.0e-9_wp * (before(5) + tiny(1.0_wp)))) &
             error stop 'dem: a migration did not conserve the particles or their momentum'
         call neighbors_set_history(s%nb, s%p%n_own, s%p%gid, order_by_id(s%p%gid(1:s%p%n_own)), &
                                    pair, xi)
     contains
-        !> Particles, momentum and sum of |momentum| of the particles idx over the ranks (only
-        !> rank 0's when every rank holds every particle).
-        function totals(idx, everywhere) result(t)
+        !> Particles, momentum and sum of |momentum| of the particles idx over the ranks.
+        function totals(idx) result(t)
             integer(ip), intent(in) :: idx(:)
-            logical, intent(in) :: everywhere
             real(wp) :: t(5)
             integer(ip) :: k
             t = 0.0_wp
-            if (.not. everywhere .or. s%comm%rank == 0) then
-                t(1) = size(idx)
-                do k = 1, size(idx)
-                    t(2:4) = t(2:4) + s%p%mass(idx(k)) * s%p%v(:, idx(k))
-                    t(5) = t(5) + s%p%mass(idx(k)) * norm2(s%p%v(:, idx(k)))
-                end do
-            end if
+            t(1) = size(idx)
+            do k = 1, size(idx)
+                t(2:4) = t(2:4) + s%p%mass(idx(k)) * s%p%v(:, idx(k))
+                t(5) = t(5) + s%p%mass(idx(k)) * norm2(s%p%v(:, idx(k)))
+            end do
             call comm_sum(s%comm, t)
         end function totals
     end subroutine distribute
