@@ -97,6 +97,7 @@ module dem_solver
         integer :: device = -1         !< OpenACC device of this rank (-1: the host)
         type(run_t) :: run             !< between solver_start and solver_finish
         logical :: lists_on_device = .false.
+        logical, allocatable :: gone(:)  !< outlet flags of the owned particles, on the device
         type(frame_t) :: good          !< the last state that passed the instability guard
         integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
         real(wp), allocatable :: snap_time(:)
@@ -615,37 +616,50 @@ contains
             'wall triangles than the contact store holds; the walls overlap or are too fine')
     end subroutine compute_forces
 
-    !> Remove the particles that entered an outlet (the lists are rebuilt without them).
+    !> Remove the particles that entered an outlet (the lists are rebuilt without them). The
+    !> flags stay on the device from step to step; they are made anew when the number of
+    !> owned particles has changed.
     subroutine remove_outlet_particles(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        logical :: gone(s%p%n_own)
         integer(i8) :: n_gone(1)
-        call acc_data(gone, acc_enter)
-        n_gone = outlets_mark(s%p%n_own, s%p%x, c%outlets, gone)
+        if (allocated(s%gone)) then
+            if (size(s%gone) /= s%p%n_own) call release_gone(s)
+        end if
+        if (.not. allocated(s%gone)) then
+            allocate(s%gone(s%p%n_own))
+            call acc_data(s%gone, acc_enter)
+        end if
+        n_gone = outlets_mark(s%p%n_own, s%p%x, c%outlets, s%gone)
         if (s%comm%size > 1) call comm_sum(s%comm, n_gone)
-        if (n_gone(1) > 0) call acc_data(gone, acc_to_host)
-        call acc_data(gone, acc_exit)
         if (n_gone(1) == 0) return
+        call acc_data(s%gone, acc_to_host)
         s%removed = s%removed + n_gone(1)
         if (allocated(s%removed_ids)) s%removed_ids = [s%removed_ids, &
-                                                       pack(s%p%gid(1:s%p%n_own), gone)]
-        call rebuild(s, .not. gone)
+                                                       pack(s%p%gid(1:s%p%n_own), s%gone)]
+        call rebuild(s, .not. s%gone)
     end subroutine remove_outlet_particles
+
+    !> Take the outlet flags off the device and free them.
+    subroutine release_gone(s)
+        type(solver_t), intent(inout) :: s
+        call acc_data(s%gone, acc_exit)
+        deallocate(s%gone)
+    end subroutine release_gone
 
     !> Re-sort the particles in space and rebuild the neighbour lists, on the host; the
     !> history follows the particles, and the new state and lists go to the device. With
     !> `keep`, the particles not kept are removed. On several ranks, the particles first go
     !> to the ranks of their blocks (repartitioned when the load is out of balance), then
     !> the ghosts are exchanged; the stores then follow the rank's share (they may be
-    !> reallocated, so their device copies are made anew).
+    !> reallocated, so their device copies are made anew; on one rank they stay).
     subroutine rebuild(s, keep)
         type(solver_t), intent(inout) :: s
         logical, intent(in), optional :: keep(:)
         integer(ip), allocatable :: order(:), kept(:)
         integer(ip) :: i
         call particle_data(s, acc_to_host)
-        call particle_data(s, acc_exit)
+        if (s%comm%size > 1) call particle_data(s, acc_exit)
         if (s%mesh%moving) call acc_data(s%mesh%vert, acc_to_host)
         if (s%lists_on_device) then
             call acc_data(s%nb%xi, acc_to_host)
@@ -664,9 +678,13 @@ contains
         order = kept(neighbors_spatial_order(size(kept), s%p%x(:, kept), s%sort_cell))
         call particles_permute(s%p, order)
         call wall_contacts_permute(s%wc, order)
-        if (s%comm%size > 1) call domain_ghosts(s%dom, s%comm, s%p)
-        call particle_data(s, acc_enter)
-        if (s%comm%size > 1) call domain_data(s%dom, acc_enter)
+        if (s%comm%size > 1) then
+            call domain_ghosts(s%dom, s%comm, s%p)
+            call particle_data(s, acc_enter)
+            call domain_data(s%dom, acc_enter)
+        else
+            call particle_data(s, acc_to_device)
+        end if
         if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:s%p%n_own), s%trace_id, dim=1)
         if (s%trace_id /= 0 .and. s%trace == 0) s%trace_id = 0    ! it left through an outlet
         call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
@@ -1087,6 +1105,7 @@ contains
         if (s%mesh%n_tri > 0) then
             call mesh_data(s%mesh, op)
         end if
+        if (op == acc_exit .and. allocated(s%gone)) call release_gone(s)
         if (op == acc_exit .and. s%lists_on_device) then
             call list_data(s%nb, op)
             if (s%comm%size > 1) call domain_data(s%dom, op)
