@@ -7,7 +7,8 @@
 module dem_output
     use dem_files, only: make_directory, file_truncate
     use dem_kinds, only: wp, ip, i8
-    use dem_error, only: error_t, set_error, dem_err_io
+    use dem_error, only: error_t, set_error, dem_err_io, dem_err_input
+    use dem_text, only: read_line
     implicit none
     private
     public :: output_t, output_open, output_series, output_contact, output_final, &
@@ -50,6 +51,11 @@ contains
         if (err%failed()) return
         bytes = 0
         if (present(keep)) bytes = keep
+        call check_header(dir // '/series.csv', series_header, bytes(1), err)
+        if (trace) call check_header(dir // '/contact.csv', contact_header, bytes(2), err)
+        if (len(probe_columns) > 0) call check_header(dir // '/probes.csv', 'time,step' // &
+                                                      probe_columns, bytes(3), err)
+        if (err%failed()) return
         call open_csv(dir // '/series.csv', series_header, out%series, err, bytes(1))
         if (err%failed()) return
         if (trace) call open_csv(dir // '/contact.csv', contact_header, out%contact, err, &
@@ -177,6 +183,32 @@ contains
         out%contact = -1
         out%probes = -1
     end subroutine output_close
+
+    !> A file that a continued run appends to (one of at least `keep` > 0 bytes) must have
+    !> the run's columns; checked for every file before any is cut back.
+    subroutine check_header(path, header, keep, err)
+        character(len=*), intent(in) :: path, header
+        integer(i8), intent(in) :: keep
+        type(error_t), intent(inout) :: err
+        character(len=:), allocatable :: first
+        integer(i8) :: bytes
+        integer :: u, ios
+        if (err%failed() .or. keep <= 0) return
+        bytes = -1
+        inquire(file=path, size=bytes)
+        if (bytes < keep) return                   ! not continued: written afresh
+        open(newunit=u, file=path, status='old', action='read', iostat=ios)
+        if (ios == 0) call read_line(u, first, ios)
+        if (ios == 0) close(u)
+        if (ios /= 0) then
+            call set_error(err, dem_err_io, path // ': cannot read its first line')
+        else if (first /= header) then
+            call set_error(err, dem_err_input, path // ': its columns (' // first // &
+                ') are not those of this run (' // header // '): the case changed since the ' &
+                // 'checkpoint (probes or materials); continue it with the case it started ' // &
+                'with, or start afresh in another output directory')
+        end if
+    end subroutine check_header
 
     !> Open a CSV file with its header; with keep > 0, an existing file of at least keep
     !> bytes is cut to keep bytes and appended to instead.

@@ -10,7 +10,7 @@ module dem_case
                             tangential_critical_dt
     implicit none
     private
-    public :: case_t, time_scales_t, case_time_scales, case_total_mass
+    public :: case_t, time_scales_t, case_time_scales, case_total_mass, case_particle_materials
 
     !> Everything a run needs to start.
     type :: case_t
@@ -62,6 +62,14 @@ module dem_case
     end type time_scales_t
 
 contains
+
+    !> The materials that particles of the case are made of (those the probes report).
+    function case_particle_materials(c) result(used)
+        type(case_t), intent(in) :: c
+        logical :: used(c%mats%n)
+        used = .false.
+        used(c%mat(1:c%n_particles)) = .true.
+    end function case_particle_materials
 
     !> Total particle mass [kg].
     real(wp) function case_total_mass(c) result(mass)

@@ -7,7 +7,7 @@ module dem_solver
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
     use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather, comm_node_rank
-    use dem_case, only: case_t, time_scales_t, case_time_scales
+    use dem_case, only: case_t, time_scales_t, case_time_scales, case_particle_materials
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
                              particles_reserve, order_by_id, sphere_mass, sphere_inv_inertia
     use dem_domain, only: domain_t, domain_init, domain_data, domain_balance, domain_imbalance, &
@@ -265,7 +265,8 @@ contains
             s%stop_message = ''
             columns = ''
             do k = 1, size(c%probes)
-                columns = columns // probe_header(c%probes(k), c%mats%name, .not. c%mats%rigid)
+                columns = columns // probe_header(c%probes(k), c%mats%name, &
+                                                  case_particle_materials(c))
             end do
             if (s%comm%size > 1 .and. s%trace_id /= 0) call set_error(err, dem_err_runtime, &
                 c%source // ': &output trace_id: tracing runs on one MPI rank')
@@ -822,7 +823,7 @@ contains
         values = [real(wp) ::]
         associate (fr => s%good)
             do k = 1, size(c%probes)
-                values = [values, probe_values(c%probes(k), .not. c%mats%rigid, &
+                values = [values, probe_values(c%probes(k), case_particle_materials(c), &
                                                [(i, i = 1, fr%n)], fr%gid, fr%mat, mass, fr%x, &
                                                fr%v, fr%w)]
                 if (c%probes(k)%kind == probe_histogram .and. histogram_due(c%probes(k)%time)) &

@@ -14,7 +14,10 @@ damaged known here, independently of the solver:
 - a copy of the checkpoint without the dataset /state/pair_history (made with h5py);
 - a snapshot of the run instead of a checkpoint;
 - a file that does not exist;
-- --restart with too few arguments (a usage error).
+- --restart with too few arguments (a usage error);
+- a run with a probe, restarted from its first checkpoint with the probe renamed: the
+  columns of its probes.csv are not those of the changed case, and neither probes.csv nor
+  series.csv (which would be cut back first) may change.
 Each must end with exit status 2 (bad input) or 4 (a file that cannot be read), with one
 error message that names the file and what is wrong (the dataset, or what differs between
 the cases), no crash (signal, backtrace, HDF5 library diagnostics), and no output written:
@@ -114,9 +117,9 @@ for name, (change, _) in others.items():
     check(r.returncode == 0, f"the case {name} is not valid: {r.stderr.strip()}")
 
 
-def refused(args, out_dirs, expect_codes, needles, what):
+def refused(args, out_dirs, expect_codes, needles, what, accepted=False):
     """Run dem with args; it must fail cleanly with an error containing all needles and
-    leave out_dirs as they were."""
+    leave out_dirs as they were (`accepted`: the checkpoint itself is good, and said so)."""
     before = {d: cu.tree_state(d) for d in out_dirs}
     r = subprocess.run([dem] + args, capture_output=True, text=True, cwd=work, timeout=120)
     message = r.stderr.strip()
@@ -130,7 +133,7 @@ def refused(args, out_dirs, expect_codes, needles, what):
         check(needle in message, f"{what}: the error does not say {needle!r}: {message!r}")
     signs = cu.crash_signs(r.stdout + r.stderr)
     check(not signs, f"{what}: signs of a crash: {signs}")
-    check("dem: done" not in r.stdout and "restarting from" not in r.stdout,
+    check("dem: done" not in r.stdout and (accepted or "restarting from" not in r.stdout),
           f"{what}: the run went on")
     for d in out_dirs:
         after = cu.tree_state(d)
@@ -162,6 +165,20 @@ for name, (_, differs) in others.items():
                 [good, "another case", cases[name], differs],
                 f"checkpoint of another case ({name})")
     check(not os.path.exists(out), f"checkpoint of another case ({name}): {out} was created")
+
+# a probe renamed between the run and its restart: probes.csv's columns differ
+out_p = os.path.join(work, "out_probe")
+probe = "&probe name = '{}', kind = 'center_of_mass' /\n"
+output = ", checkpoint_interval = 0.01"
+case_p = cu.write_box_case(os.path.join(work, "probe.nml"), out_p, T_END, DT, output=output,
+                           extra=probe.format("bed"))
+run_dem(dem, case_p, work)
+case_q = cu.write_box_case(os.path.join(work, "probe_renamed.nml"), out_p, T_END, DT,
+                           output=output, extra=probe.format("heap"))
+first = os.path.join(out_p, cu.checkpoint_name(round(0.01 / DT)))
+refused(["--restart", first, case_q], [out_p], (2,),
+        [os.path.join(out_p, "probes.csv"), "bed_soft_x", "heap_soft_x", "columns"],
+        "a restart whose probes.csv columns changed", accepted=True)
 
 # usage errors
 for args in (["--restart", case_a], ["--restart"], ["--restart", good, case_a, case_a]):
