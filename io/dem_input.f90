@@ -597,8 +597,8 @@ contains
                 return
             end if
             if (any(c%mats%rigid(mat))) then
-                call set_error(err, dem_err_input, at // ": key 'file': a particle has a rigid " // &
-                               'material (rigid materials are for walls)')
+                call set_error(err, dem_err_input, at // ": key 'file': a particle has a " // &
+                               'rigid material (rigid materials are for walls)')
                 return
             end if
             call append_particles(c, gid, mat, radius, x, v, w)
@@ -730,8 +730,9 @@ contains
             end if
             next_id = 1
             if (c%n_particles > 0) next_id = maxval(c%gid(1:c%n_particles)) + 1
-            call append_particles(c, [(next_id + k_item, k_item = 0, n - 1)], spread(im, 1, n), &
-                                  r, x, spread(velocity, 2, n), spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n))
+            call append_particles(c, [(next_id + k_item, k_item = 0, n - 1)], &
+                                  spread(im, 1, n), r, x, spread(velocity, 2, n), &
+                                  spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n))
             deallocate(x, r)
         end do
     end subroutine read_inserts

@@ -94,7 +94,8 @@ contains
             mat(n) = findloc(names, trim(fields(col(2))), dim=1)
             if (mat(n) == 0) then
                 call set_error(err, dem_err_input, path // ':' // trim(num) // &
-                    ": column 'material': '" // trim(fields(col(2))) // "' is not a defined material")
+                    ": column 'material': '" // trim(fields(col(2))) // &
+                    "' is not a defined material")
                 exit
             end if
             val = 0.0_wp

@@ -3,8 +3,9 @@
 !> the lower global id (or by the owned particle of a pair with a ghost), which stores the
 !> force and n x F_t in its own entry and the opposite force in the partner's entry of the
 !> same pair (each entry has one writer), and marks both entries as touching. Then each
-!> owned particle sums the touching entries of its row in order (partner ids). As the two sides of a contact are exact negatives, the sums equal those of
-!> evaluating every contact from both sides, bit for bit, at half the cost.
+!> owned particle sums the touching entries of its row in order (partner ids). As the two
+!> sides of a contact are exact negatives, the sums equal those of evaluating every contact
+!> from both sides, bit for bit, at half the cost.
 module dem_contacts_pp
     use dem_kinds, only: wp, ip
     use dem_contact_hm, only: hm_force

@@ -224,8 +224,8 @@ contains
                 cv(:, :, nc) = vert(:, :, tri)
             end do
             call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), cv(:, :, 1:nc), &
-                                     1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i))), &
-                                     keep(1:nc))
+                                     1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), &
+                                                      abs(x(3, i))), keep(1:nc))
             call history_slots(nc, keep(1:nc), ctri(1:nc), q(:, 1:nc), wtri(:, i), n_tri, &
                                vert, twall, slot(1:nc))
             fi = 0.0_wp
