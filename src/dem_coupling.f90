@@ -18,8 +18,8 @@ module dem_coupling
     use dem_input, only: read_case
     use dem_solver, only: solver_t, solver_init, solver_start, solver_advance, solver_finish, &
                           solver_time, solver_retime, stop_end
-    use dem_particles, only: particles_external, order_by_id, ext_force, ext_torque, ext_beta, &
-                             ext_fluid_v, ext_impulse
+    use dem_particles, only: particles_external, order_by_id, index_of_id, ext_force, &
+                             ext_torque, ext_beta, ext_fluid_v, ext_impulse
     use dem_acc, only: acc_data, acc_to_host, acc_to_device, acc_device_address
     use dem_deposit, only: deposit_grid, deposit_cells, kernel_cell, kernel_trilinear, &
                            kernel_dpvm, n_deposit
@@ -268,7 +268,7 @@ contains
         bad = 0
         do a = 1, size(req_order)
             k = req_order(a)
-            r = find(own(1, :), own_order, req(1, k))
+            r = index_of_id(own(1, :), own_order, req(1, k))
             if (a > 1) then
                 if (req(1, req_order(a - 1)) == req(1, k)) r = 0
             end if
@@ -286,7 +286,7 @@ contains
         call comm_exchange(comm, vals(:, idx), cnt, got_vals, req_cnt)
         own_order = order_by_id(s%p%gid(1:s%p%n_own))
         do a = 1, size(got, 2)
-            i = find(s%p%gid(1:s%p%n_own), own_order, got(1, a))
+            i = index_of_id(s%p%gid(1:s%p%n_own), own_order, got(1, a))
             s%p%ext(row:row + nv - 1, i) = got_vals(:, a)
         end do
         call comm_sum(comm, bad)
@@ -298,26 +298,6 @@ contains
         call report(err, status, message)
     end subroutine set_by_id
 
-    !> Position of `id` in `list` (searched through `order`, which sorts it), 0 if absent.
-    pure integer function find(list, order, id) result(pos)
-        integer(i8), intent(in) :: list(:), id
-        integer(ip), intent(in) :: order(:)
-        integer :: lo, hi, mid
-        pos = 0
-        lo = 1
-        hi = size(order)
-        do while (lo <= hi)
-            mid = (lo + hi) / 2
-            if (list(order(mid)) == id) then
-                pos = order(mid)
-                return
-            else if (list(order(mid)) < id) then
-                lo = mid + 1
-            else
-                hi = mid - 1
-            end if
-        end do
-    end function find
 
     !> The impulse [N s] that force and drag gave each owned particle over the last advance:
     !> the fluid's momentum changes by minus their sum.

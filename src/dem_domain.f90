@@ -14,7 +14,8 @@ module dem_domain
     use dem_metis, only: metis_partition
     use dem_neighbors, only: neighbors_unique_pairs, fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
-                             n_pack_int, particles_pack_reals, order_by_id, particles_reserve
+                             n_pack_int, particles_pack_reals, order_by_id, particles_reserve, &
+                             index_of_id
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_pack, wall_contacts_unpack, &
                                wall_contacts_permute, n_wall_pack_real, wall_contacts_reserve
     implicit none
@@ -244,25 +245,11 @@ contains
             call neighbors_unique_pairs(precv, xrecv, pair, xi)
         end subroutine send_pairs
 
-        !> Local index of a global id (owned or ghost), by binary search.
-        integer function local(g)
+        !> Local index of a global id (owned or ghost).
+        integer(ip) function local(g)
             integer(i8), intent(in) :: g
-            integer :: lo, hi, mid
-            lo = 1
-            hi = size(by_id)
-            local = 0
-            do while (lo <= hi)
-                mid = (lo + hi) / 2
-                if (p%gid(by_id(mid)) == g) then
-                    local = by_id(mid)
-                    return
-                else if (p%gid(by_id(mid)) < g) then
-                    lo = mid + 1
-                else
-                    hi = mid - 1
-                end if
-            end do
-            error stop 'dem_domain: a pair names a particle this rank does not hold'
+            local = index_of_id(p%gid, by_id, g)
+            if (local == 0) error stop 'dem_domain: a pair names a particle this rank does not hold'
         end function local
     end subroutine domain_migrate
 

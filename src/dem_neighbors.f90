@@ -8,7 +8,7 @@
 !> wall triangles, which are entered in every cell their reach covers.
 module dem_neighbors
     use dem_kinds, only: wp, ip, i8
-    use dem_particles, only: order_by_id
+    use dem_particles, only: order_by_id, index_of_id
     use dem_mesh, only: mesh_t, closest_point_triangle
     implicit none
     private
@@ -334,25 +334,12 @@ contains
                                   nb%xi(:, nb%start(i):nb%start(i + 1) - 1))
         end do
     contains
-        !> Local index of each id (0 if not owned), by binary search in `order`.
+        !> Local index of each id (0 if not owned).
         function local_index(ids) result(idx)
             integer(i8), intent(in) :: ids(:)
-            integer(ip) :: idx(size(ids)), lo, hi, mid, q
-            idx = 0
+            integer(ip) :: idx(size(ids)), q
             do q = 1, size(ids)
-                lo = 1
-                hi = n_own
-                do while (lo <= hi)
-                    mid = (lo + hi) / 2
-                    if (gid(order(mid)) == ids(q)) then
-                        idx(q) = order(mid)
-                        exit
-                    else if (gid(order(mid)) < ids(q)) then
-                        lo = mid + 1
-                    else
-                        hi = mid - 1
-                    end if
-                end do
+                idx(q) = index_of_id(gid, order(1:n_own), ids(q))
             end do
         end function local_index
     end subroutine neighbors_set_history

@@ -6,7 +6,7 @@ module dem_particles
     implicit none
     private
     public :: particles_t, particles_init, particles_add, particles_permute, order_by_id, &
-              particles_reserve, &
+              particles_reserve, index_of_id, &
               particles_pack, particles_unpack, particles_pack_reals, particles_external, &
               n_pack_int, sphere_mass, sphere_inv_inertia, ext_force, ext_torque, ext_beta, &
               ext_fluid_v, ext_impulse, n_ext
@@ -192,6 +192,28 @@ contains
             if (allocated(p%ext)) p%ext(:, i) = rbuf(n_pack_real + 1:n_pack_real + n_ext, a)
         end do
     end subroutine particles_unpack
+
+    !> The index i with gid(i) = id, by binary search through `order` (indices of gid in
+    !> increasing order of id, as order_by_id gives them); 0 when no entry has that id.
+    pure integer(ip) function index_of_id(gid, order, id) result(pos)
+        integer(i8), intent(in) :: gid(:), id
+        integer(ip), intent(in) :: order(:)
+        integer(ip) :: lo, hi, mid
+        pos = 0
+        lo = 1
+        hi = size(order)
+        do while (lo <= hi)
+            mid = (lo + hi) / 2
+            if (gid(order(mid)) == id) then
+                pos = order(mid)
+                return
+            else if (gid(order(mid)) < id) then
+                lo = mid + 1
+            else
+                hi = mid - 1
+            end if
+        end do
+    end function index_of_id
 
     !> The indices 1..size(gid) in increasing order of gid (merge sort, stable).
     function order_by_id(gid) result(idx)
