@@ -21,7 +21,8 @@ module dem_checkpoint
                       h5_dims, h5_text_length
     implicit none
     private
-    public :: frame_t, frame_write, frame_gather, checkpoint_read, snapshot_read_particles, &
+    public :: frame_t, frame_write, frame_gather, frame_select, checkpoint_read, &
+              snapshot_read_particles, &
               checkpoint_file, checkpoint_latest, checkpoint_kept
 
     character(len=*), parameter :: checkpoint_format = 'dem checkpoint 1'
@@ -66,6 +67,25 @@ module dem_checkpoint
 
 contains
 
+    !> Keep the particles idx of a frame (every per-particle field it has; the pairs and the
+    !> bookkeeping stay as they are).
+    subroutine frame_select(fr, idx)
+        type(frame_t), intent(inout) :: fr
+        integer(ip), intent(in) :: idx(:)
+        fr%n = size(idx)
+        fr%gid = fr%gid(idx)
+        fr%mat = fr%mat(idx)
+        fr%radius = fr%radius(idx)
+        fr%x = fr%x(:, idx)
+        fr%v = fr%v(:, idx)
+        fr%w = fr%w(:, idx)
+        if (allocated(fr%f)) fr%f = fr%f(:, idx)
+        if (allocated(fr%t)) fr%t = fr%t(:, idx)
+        if (allocated(fr%contacts)) fr%contacts = fr%contacts(idx)
+        if (allocated(fr%wall_tri)) fr%wall_tri = fr%wall_tri(:, idx)
+        if (allocated(fr%wall_xi)) fr%wall_xi = fr%wall_xi(:, :, idx)
+    end subroutine frame_select
+
     !> Collect on rank 0 the frames that every rank captured of its own particles: the
     !> particles ordered by id, each pair of the history once, ordered by the two ids; the
     !> other ranks keep no particles. The run bookkeeping is left as it is.
@@ -86,14 +106,15 @@ contains
         fr%x = gathered(reshape(fr%x, [3 * size(fr%x, 2)]), 3)
         fr%v = gathered(reshape(fr%v, [3 * size(fr%v, 2)]), 3)
         fr%w = gathered(reshape(fr%w, [3 * size(fr%w, 2)]), 3)
+        if (allocated(fr%contacts)) fr%contacts = int(reshape(gathered_int(fr%contacts, 1), &
+                                                              [n]), ip)
+        if (.not. allocated(fr%f)) return           ! a frame of the particle state only
         fr%f = gathered(reshape(fr%f, [3 * size(fr%f, 2)]), 3)
         fr%t = gathered(reshape(fr%t, [3 * size(fr%t, 2)]), 3)
         fr%wall_tri = int(gathered_int(reshape(fr%wall_tri, [size(fr%wall_tri)]), &
                                        max_wall_contacts), ip)
         fr%wall_xi = reshape(gathered(reshape(fr%wall_xi, [size(fr%wall_xi)]), &
                                       3 * max_wall_contacts), [3, max_wall_contacts, n])
-        if (allocated(fr%contacts)) fr%contacts = int(reshape(gathered_int(fr%contacts, 1), &
-                                                              [n]), ip)
         call comm_gather(comm, reshape(fr%pair, [size(fr%pair)]), pair)
         call comm_gather(comm, reshape(fr%pair_xi, [size(fr%pair_xi)]), pair_xi)
         call neighbors_unique_pairs(reshape(pair, [2, size(pair) / 2]), &

@@ -68,6 +68,7 @@ program dem_main
         call solver_restore(s, c, fr)
         if (comm%rank == 0) write(output_unit, '(a,es12.5,a)') 'dem: restarting from ' // &
             restart // ' (t = ', fr%time, ' s)'
+        fr = frame_t()                    ! the solver holds its share of it now
     end if
     call solver_run(s, c, started, err)
     if (err%failed()) call fail(err)

@@ -28,8 +28,8 @@ module dem_solver
                           output_final, output_close, output_sizes, output_probes, &
                           output_histogram
     use dem_probes, only: probe_header, probe_values, probe_histogram_counts, probe_histogram
-    use dem_checkpoint, only: frame_t, frame_write, frame_gather, checkpoint_file, &
-                              checkpoint_latest, checkpoint_kept
+    use dem_checkpoint, only: frame_t, frame_write, frame_gather, frame_select, &
+                              checkpoint_file, checkpoint_latest, checkpoint_kept
     use dem_xdmf, only: xdmf_write, snapshot_file
     use dem_files, only: make_directory, file_remove, file_rename
     use dem_signals, only: signal_received
@@ -195,7 +195,8 @@ contains
             s%stale = pack(kept, kept > fr%step)
         end if
         if (s%mesh%moving) call mesh_move(s%mesh, fr%time)
-        s%good = fr
+        s%good = fr                       ! this rank's particles, and every pair (distribute)
+        call frame_select(s%good, mine)
         s%restarted = .true.
     end subroutine solver_restore
 
@@ -754,8 +755,9 @@ contains
 
     !> One row of series.csv, its sums taken in the order of the particle ids (so that they
     !> depend neither on where particles are stored nor on the number of ranks); the state,
-    !> which has passed the instability guard, becomes the last good state. Rank 0 computes
-    !> the row from the state gathered there and writes it.
+    !> which has passed the instability guard, becomes the last good state (each rank keeps
+    !> its own particles'). Rank 0 computes the row, and that of probes.csv, from the
+    !> particles' ids, materials, radii, positions and velocities gathered there.
     subroutine write_series(s, c, out, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -764,6 +766,7 @@ contains
         real(wp) :: ke_t, ke_r, pe, vmax
         real(wp), allocatable :: mass(:)
         integer(i8) :: counts(3), bytes(3)
+        type(frame_t) :: row
         logical :: settled
         call particle_data(s, acc_to_host)
         if (comm_any(s%comm, first_nonfinite(s%p%n_own, s%p%x, s%p%v, s%p%w) > 0)) then
@@ -771,17 +774,18 @@ contains
             return
         end if
         counts = contact_counts(s)
-        call capture(s, c, out, s%good)
+        call capture(s, c, out, s%good, local=.true.)
+        call capture(s, c, out, row, light=.true.)
         settled = .false.
         if (s%comm%rank == 0) then
-            associate (fr => s%good)
+            associate (fr => row)
                 mass = sphere_mass(fr%radius, c%mats%density(fr%mat))
                 call energies(fr%n, mass, sphere_inv_inertia(mass, fr%radius), fr%x, fr%v, &
                               fr%w, c%gravity, ke_t, ke_r, pe, vmax)
                 call output_series(out, fr%time, s%step, fr%n, s%removed, int(counts(1), ip), &
                                    int(counts(2), ip), ke_t, ke_r, pe, vmax)
                 settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
-                call write_probes(s, c, out, mass, err)
+                call write_probes(c, out, fr, mass, err)
             end associate
             bytes = output_sizes(out)            ! the row just written belongs to the state
             s%good%series_bytes = bytes(1)
@@ -807,32 +811,30 @@ contains
         counts(1) = counts(1) / 2
     end function contact_counts
 
-    !> The probes' row of probes.csv, and the histograms due now, from the last good state
-    !> (particles by id; `mass` of each).
-    subroutine write_probes(s, c, out, mass, err)
-        type(solver_t), intent(in) :: s
+    !> The probes' row of probes.csv, and the histograms due now, from the state of the row
+    !> `fr` (particles by id; `mass` of each).
+    subroutine write_probes(c, out, fr, mass, err)
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
+        type(frame_t), intent(in) :: fr
         real(wp), intent(in) :: mass(:)
         type(error_t), intent(inout) :: err
         real(wp), allocatable :: values(:)
         real(wp) :: t
         integer :: k
         integer(ip) :: i
-        t = time_of(s, c, s%step)
+        t = fr%time
         values = [real(wp) ::]
-        associate (fr => s%good)
-            do k = 1, size(c%probes)
-                values = [values, probe_values(c%probes(k), case_particle_materials(c), &
-                                               [(i, i = 1, fr%n)], fr%gid, fr%mat, mass, fr%x, &
-                                               fr%v, fr%w)]
-                if (c%probes(k)%kind == probe_histogram .and. histogram_due(c%probes(k)%time)) &
-                    call output_histogram(c%output_dir, c%probes(k)%name, c%probes(k)%v_min, &
-                                          c%probes(k)%v_max, probe_histogram_counts( &
-                                          c%probes(k), fr%x, fr%v), err)
-            end do
-        end associate
-        call output_probes(out, t, s%step, values)
+        do k = 1, size(c%probes)
+            values = [values, probe_values(c%probes(k), case_particle_materials(c), &
+                                           [(i, i = 1, fr%n)], fr%gid, fr%mat, mass, fr%x, &
+                                           fr%v, fr%w)]
+            if (c%probes(k)%kind == probe_histogram .and. histogram_due(c%probes(k)%time)) &
+                call output_histogram(c%output_dir, c%probes(k)%name, c%probes(k)%v_min, &
+                                      c%probes(k)%v_max, probe_histogram_counts( &
+                                      c%probes(k), fr%x, fr%v), err)
+        end do
+        call output_probes(out, t, fr%step, values)
     contains
         !> A histogram at time t_h is written at the first row at or after it: this one if the
         !> row one output interval earlier was before it.
@@ -875,6 +877,7 @@ contains
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
         type(time_scales_t) :: ts
+        type(frame_t) :: good
         type(error_t) :: write_err
         character(len=:), allocatable :: what, saved
         integer(i8), allocatable :: ids(:)
@@ -919,7 +922,9 @@ contains
             saved = '; the last good state is in ' // c%output_dir // '/' // &
                     checkpoint_file(maxval(s%ckpt_step))
         else if (allocated(s%good%gid)) then
-            call write_frame_checkpoint(s, c, s%good, write_err)
+            good = s%good                         ! each rank's own particles: gathered
+            if (s%comm%size > 1) call frame_gather(good, s%comm)
+            call write_frame_checkpoint(s, c, good, write_err)
             saved = '; the last good state, at t = ' // real_text(s%good%time) // ' s, is in ' &
                     // c%output_dir // '/' // checkpoint_file(s%good%step)
             if (write_err%failed()) saved = '; the last good state could not be written: ' // &
@@ -934,17 +939,19 @@ contains
 
     !> The state now, particles by id, into `fr`, with the per-particle contact counts when
     !> the snapshots hold them; on several ranks, gathered on rank 0 (the others keep no
-    !> particles).
-    subroutine capture(s, c, out, fr)
+    !> particles). With `local`, each rank keeps its own particles (the last good state:
+    !> gathered only if it must be written); with `light`, only the ids, materials, radii,
+    !> positions and velocities (what the rows of series.csv and probes.csv need).
+    subroutine capture(s, c, out, fr, local, light)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
         type(frame_t), intent(out) :: fr
+        logical, intent(in), optional :: local, light
         integer(ip), allocatable :: order(:)
         integer(i8) :: bytes(3)
-        integer(ip) :: a, i
         call particle_data(s, acc_to_host)
-        if (s%lists_on_device) then
+        if (s%lists_on_device .and. .not. present(light)) then
             call acc_data(s%nb%xi, acc_to_host)
             call acc_data(s%nb%touching, acc_to_host)
         end if
@@ -959,21 +966,9 @@ contains
             fr%x = p%x(:, order)
             fr%v = p%v(:, order)
             fr%w = p%w(:, order)
-            fr%f = p%f(:, order)
-            fr%t = p%t(:, order)
-            fr%wall_tri = s%wc%tri(:, order)
-            fr%wall_xi = s%wc%xi(:, :, order)
-            call neighbors_history(s%nb, n, p%gid, order, fr%pair, fr%pair_xi)
-            if (c%snapshot_contacts) then
-                allocate(fr%contacts(n))
-                do a = 1, n
-                    i = order(a)
-                    fr%contacts(a) = count(s%nb%touching(s%nb%start(i):s%nb%start(i + 1) - 1)) &
-                                     + count(s%wc%tri(:, i) > 0)
-                end do
-            end if
         end associate
-        if (s%comm%size > 1) call frame_gather(fr, s%comm)
+        if (.not. present(light)) call capture_history(s, c, order, fr)
+        if (s%comm%size > 1 .and. .not. present(local)) call frame_gather(fr, s%comm)
         fr%time0 = s%time0
         fr%step0 = s%step0
         fr%dt = c%dt
@@ -990,6 +985,31 @@ contains
         fr%snap_time = s%snap_time
         fr%snap_n = s%snap_n
     end subroutine capture
+
+    !> Forces, torques and contact history of the owned particles `order` (by id) into
+    !> `fr`, and their contact counts when the snapshots hold them.
+    subroutine capture_history(s, c, order, fr)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        integer(ip), intent(in) :: order(:)
+        type(frame_t), intent(inout) :: fr
+        integer(ip) :: a, i
+        associate (p => s%p, n => s%p%n_own)
+            fr%f = p%f(:, order)
+            fr%t = p%t(:, order)
+            fr%wall_tri = s%wc%tri(:, order)
+            fr%wall_xi = s%wc%xi(:, :, order)
+            call neighbors_history(s%nb, n, p%gid, order, fr%pair, fr%pair_xi)
+            if (c%snapshot_contacts) then
+                allocate(fr%contacts(n))
+                do a = 1, n
+                    i = order(a)
+                    fr%contacts(a) = count(s%nb%touching(s%nb%start(i):s%nb%start(i + 1) - 1)) &
+                                     + count(s%wc%tri(:, i) > 0)
+                end do
+            end if
+        end associate
+    end subroutine capture_history
 
     !> The walls in their pose at `time`.
     function mesh_at(s, time) result(m)

@@ -10,7 +10,9 @@ checkpoints' particles and contact history, for
 3. the impact case at reduced size (a steel sphere into a settled bed), and on 2 ranks with
    the halo handed to MPI by device address (gpu_aware_mpi);
 4. a checkpoint written on 3 ranks, restarted on 2: the same final state as the
-   uninterrupted run on one rank; and a checkpoint written on 1 rank restarted on 3.
+   uninterrupted run on one rank; and a checkpoint written on 1 rank restarted on 3;
+5. a run that goes unstable: the last good state it writes (kept by each rank for its own
+   particles, gathered when written) is the same checkpoint on 1 and 2 ranks.
 
 The runs are independent: each rank count decomposes space differently (METIS on blocks),
 so equality means that the forces do not depend on the decomposition, that particles
@@ -180,4 +182,23 @@ for first, then in ((3, 2), (1, 3)):
     for f in ("final.csv", "series.csv"):
         same_file(os.path.join(work, "box_1", f), os.path.join(d, f),
                   f"checkpoint on {first} ranks, restarted on {then}")
+# 5. an unstable run (stiff spheres, dt far above the Rayleigh time): on 1 and 2 ranks it
+# stops at the same step, and the last good state it writes (each rank keeps its own
+# particles of it; they are gathered only to be written) is the same checkpoint
+unstable = {}
+for ranks in (1, 2):
+    d = os.path.join(work, f"unstable_{ranks}")
+    case = cu.write_box_case(d + ".nml", d, 0.2, 2.0e-5, interval=0.001, E="1e11",
+                             run=", allow_unstable = .true.")
+    r = run(case, ranks, code=3)
+    m = re.search(r"the last good state, at t = \S+ s, is in (\S+)", r.stderr)
+    check(m is not None, f"unstable run on {ranks} ranks: {r.stderr.strip()[-500:]}")
+    unstable[ranks] = m.group(1) if m else None
+if all(unstable.values()):
+    check(os.path.basename(unstable[1]) == os.path.basename(unstable[2]),
+          f"unstable run: last good states {unstable}")
+    same_state(unstable[1], unstable[2], "the last good state of an unstable run on 2 ranks")
+    with h5py.File(unstable[2]) as f:
+        check(f["particles/id"].shape[0] == 200, "unstable run on 2 ranks: the last good "
+              f"state holds {f['particles/id'].shape[0]} particles, not 200")
 finish()
