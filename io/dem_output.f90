@@ -198,8 +198,10 @@ contains
         inquire(file=path, size=bytes)
         if (bytes < keep) return                   ! not continued: written afresh
         open(newunit=u, file=path, status='old', action='read', iostat=ios)
-        if (ios == 0) call read_line(u, first, ios)
-        if (ios == 0) close(u)
+        if (ios == 0) then
+            call read_line(u, first, ios)
+            close(u)
+        end if
         if (ios /= 0) then
             call set_error(err, dem_err_io, path // ': cannot read its first line')
         else if (first /= header) then
