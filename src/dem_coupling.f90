@@ -298,7 +298,6 @@ contains
         call report(err, status, message)
     end subroutine set_by_id
 
-
     !> The impulse [N s] that force and drag gave each owned particle over the last advance:
     !> the fluid's momentum changes by minus their sum.
     subroutine coupling_impulse(j)

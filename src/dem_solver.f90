@@ -68,6 +68,8 @@ module dem_solver
         real(wp) :: started = 0.0_wp           !< wall-clock start of the program [s]
         real(wp) :: next_progress = 0.0_wp     !< wall-clock time of the next progress line [s]
         real(wp) :: last = 0.0_wp              !< wall-clock time of the last step's end [s]
+        logical, allocatable :: probed(:)      !< the materials the probes report (those the
+                                               !< case's particles are made of)
     end type run_t
 
     type :: solver_t
@@ -261,13 +263,13 @@ contains
         integer :: k
         associate (r => s%run)
             r%started = started
+            r%probed = case_particle_materials(c)
             call plan_run(s, c)
             s%stopped = stop_end
             s%stop_message = ''
             columns = ''
             do k = 1, size(c%probes)
-                columns = columns // probe_header(c%probes(k), c%mats%name, &
-                                                  case_particle_materials(c))
+                columns = columns // probe_header(c%probes(k), c%mats%name, r%probed)
             end do
             if (s%comm%size > 1 .and. s%trace_id /= 0) call set_error(err, dem_err_runtime, &
                 c%source // ': &output trace_id: tracing runs on one MPI rank')
@@ -785,7 +787,7 @@ contains
                 call output_series(out, fr%time, s%step, fr%n, s%removed, int(counts(1), ip), &
                                    int(counts(2), ip), ke_t, ke_r, pe, vmax)
                 settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
-                call write_probes(c, out, fr, mass, err)
+                call write_probes(c, out, fr, mass, s%run%probed, err)
             end associate
             bytes = output_sizes(out)            ! the row just written belongs to the state
             s%good%series_bytes = bytes(1)
@@ -812,12 +814,13 @@ contains
     end function contact_counts
 
     !> The probes' row of probes.csv, and the histograms due now, from the state of the row
-    !> `fr` (particles by id; `mass` of each).
-    subroutine write_probes(c, out, fr, mass, err)
+    !> `fr` (particles by id; `mass` of each), for the materials `probed`.
+    subroutine write_probes(c, out, fr, mass, probed, err)
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
         type(frame_t), intent(in) :: fr
         real(wp), intent(in) :: mass(:)
+        logical, intent(in) :: probed(:)
         type(error_t), intent(inout) :: err
         real(wp), allocatable :: values(:)
         real(wp) :: t
@@ -826,7 +829,7 @@ contains
         t = fr%time
         values = [real(wp) ::]
         do k = 1, size(c%probes)
-            values = [values, probe_values(c%probes(k), case_particle_materials(c), &
+            values = [values, probe_values(c%probes(k), probed, &
                                            [(i, i = 1, fr%n)], fr%gid, fr%mat, mass, fr%x, &
                                            fr%v, fr%w)]
             if (c%probes(k)%kind == probe_histogram .and. histogram_due(c%probes(k)%time)) &
