@@ -9,7 +9,7 @@ module dem_checkpoint
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_version, only: dem_version_string
-    use dem_comm, only: comm_t, comm_barrier, comm_gather
+    use dem_comm, only: comm_t, comm_barrier, comm_counts, comm_exchange, comm_max, comm_sum
     use dem_particles, only: order_by_id
     use dem_neighbors, only: neighbors_unique_pairs
     use dem_case, only: case_t
@@ -21,7 +21,7 @@ module dem_checkpoint
                       h5_dims, h5_text_length
     implicit none
     private
-    public :: frame_t, frame_write, frame_gather, frame_select, checkpoint_read, &
+    public :: frame_t, frame_write, frame_spread, frame_select, checkpoint_read, &
               snapshot_read_particles, &
               checkpoint_file, checkpoint_latest, checkpoint_kept
 
@@ -86,59 +86,153 @@ contains
         if (allocated(fr%wall_xi)) fr%wall_xi = fr%wall_xi(:, :, idx)
     end subroutine frame_select
 
-    !> Collect on rank 0 the frames that every rank captured of its own particles: the
-    !> particles ordered by id, each pair of the history once, ordered by the two ids; the
-    !> other ranks keep no particles. The run bookkeeping is left as it is.
-    subroutine frame_gather(fr, comm)
+    !> Spread over the ranks, in blocks of ids, the frames that every rank captured of its own
+    !> particles (each in id order): rank r then holds the particles at positions
+    !> r N / P + 1 ... (r + 1) N / P of the id order of all N, in id order, and the pairs of
+    !> the history whose lower id it holds, each once, ordered by the two ids. Written as
+    !> distributed rows, the blocks make the frame of the whole run in id order: the same
+    !> bytes on any number of ranks, and no rank holds more than its share. With `root`, every
+    !> particle goes to rank 0 instead (the rows of series.csv and probes.csv are computed
+    !> there). The run bookkeeping is left as it is.
+    subroutine frame_spread(fr, comm, root)
         type(frame_t), intent(inout) :: fr
         type(comm_t), intent(in) :: comm
-        integer(i8), allocatable :: gid(:), pair(:)
-        integer(ip), allocatable :: order(:)
-        real(wp), allocatable :: pair_xi(:)
-        integer :: n
-        call comm_gather(comm, fr%gid, gid)
-        order = order_by_id(gid)
-        n = size(gid)
-        fr%n = n
-        fr%gid = gid(order)
-        fr%mat = int(reshape(gathered_int(fr%mat, 1), [n]), ip)
-        fr%radius = reshape(gathered(fr%radius, 1), [n])
-        fr%x = gathered(reshape(fr%x, [3 * size(fr%x, 2)]), 3)
-        fr%v = gathered(reshape(fr%v, [3 * size(fr%v, 2)]), 3)
-        fr%w = gathered(reshape(fr%w, [3 * size(fr%w, 2)]), 3)
-        if (allocated(fr%contacts)) fr%contacts = int(reshape(gathered_int(fr%contacts, 1), &
-                                                              [n]), ip)
-        if (.not. allocated(fr%f)) return           ! a frame of the particle state only
-        fr%f = gathered(reshape(fr%f, [3 * size(fr%f, 2)]), 3)
-        fr%t = gathered(reshape(fr%t, [3 * size(fr%t, 2)]), 3)
-        fr%wall_tri = int(gathered_int(reshape(fr%wall_tri, [size(fr%wall_tri)]), &
-                                       max_wall_contacts), ip)
-        fr%wall_xi = reshape(gathered(reshape(fr%wall_xi, [size(fr%wall_xi)]), &
-                                      3 * max_wall_contacts), [3, max_wall_contacts, n])
-        call comm_gather(comm, reshape(fr%pair, [size(fr%pair)]), pair)
-        call comm_gather(comm, reshape(fr%pair_xi, [size(fr%pair_xi)]), pair_xi)
-        call neighbors_unique_pairs(reshape(pair, [2, size(pair) / 2]), &
-                                    reshape(pair_xi, [3, size(pair) / 2]), fr%pair, fr%pair_xi)
-    contains
-        !> Every rank's values (k per particle) as columns, in the order of the ids.
-        function gathered(a, k) result(b)
-            real(wp), intent(in) :: a(:)
-            integer, intent(in) :: k
-            real(wp), allocatable :: b(:, :), all(:)
-            call comm_gather(comm, a, all)
-            b = reshape(all, [k, n])
-            b = b(:, order)
-        end function gathered
+        logical, intent(in) :: root
+        integer(i8) :: bound(0:comm%size)
+        integer(i8), allocatable :: gid(:, :), pair(:, :)
+        integer(ip), allocatable :: order(:), dest(:)
+        real(wp), allocatable :: pair_xi(:, :)
+        integer :: send(0:comm%size - 1), recv(0:comm%size - 1), k, n
 
-        function gathered_int(a, k) result(b)
-            integer(ip), intent(in) :: a(:)
-            integer, intent(in) :: k
-            integer(i8), allocatable :: b(:, :), all(:)
-            call comm_gather(comm, int(a, i8), all)
-            b = reshape(all, [k, n])
+        if (comm%size == 1) return
+        if (root) then
+            bound = huge(1_i8)
+            bound(0) = -huge(1_i8)
+        else
+            bound = block_bounds(fr%gid, comm)
+        end if
+        ! the particles, in id order, are grouped by the rank of their block already
+        send = 0
+        do k = 1, fr%n
+            send(block_of(bound, fr%gid(k))) = send(block_of(bound, fr%gid(k))) + 1
+        end do
+        recv = comm_counts(comm, send)
+        n = sum(recv)
+        allocate(gid(1, n))
+        call comm_exchange(comm, reshape(fr%gid, [1, fr%n]), send, gid, recv)
+        order = order_by_id(gid(1, :))
+        fr%n = n
+        fr%gid = gid(1, order)
+        fr%mat = int(reshape(moved_int(reshape(fr%mat, [1, size(fr%mat)])), [n]), ip)
+        fr%radius = reshape(moved(reshape(fr%radius, [1, size(fr%radius)])), [n])
+        fr%x = moved(fr%x)
+        fr%v = moved(fr%v)
+        fr%w = moved(fr%w)
+        if (allocated(fr%contacts)) fr%contacts = int(reshape(moved_int(reshape(fr%contacts, &
+                                                  [1, size(fr%contacts)])), [n]), ip)
+        if (.not. allocated(fr%f)) return           ! a frame of the particle state only
+        fr%f = moved(fr%f)
+        fr%t = moved(fr%t)
+        fr%wall_tri = int(moved_int(fr%wall_tri), ip)
+        fr%wall_xi = reshape(moved(reshape(fr%wall_xi, [3 * max_wall_contacts, &
+                                                        size(fr%wall_xi, 3)])), &
+                             [3, max_wall_contacts, n])
+
+        ! each pair to the rank of its lower id (a pair split between ranks comes twice)
+        dest = [(block_of(bound, fr%pair(1, k)), k = 1, size(fr%pair, 2))]
+        order = order_by_id(int(dest, i8))
+        send = 0
+        do k = 1, size(dest)
+            send(dest(k)) = send(dest(k)) + 1
+        end do
+        recv = comm_counts(comm, send)
+        allocate(pair(2, sum(recv)), pair_xi(3, sum(recv)))
+        call comm_exchange(comm, fr%pair(:, order), send, pair, recv)
+        call comm_exchange(comm, fr%pair_xi(:, order), send, pair_xi, recv)
+        call neighbors_unique_pairs(pair, pair_xi, fr%pair, fr%pair_xi)
+    contains
+        !> Per-particle columns sent to the ranks of their blocks, received in id order.
+        function moved(a) result(b)
+            real(wp), intent(in) :: a(:, :)
+            real(wp), allocatable :: b(:, :)
+            allocate(b(size(a, 1), n))
+            call comm_exchange(comm, a, send, b, recv)
             b = b(:, order)
-        end function gathered_int
-    end subroutine frame_gather
+        end function moved
+
+        function moved_int(a) result(b)
+            integer(ip), intent(in) :: a(:, :)
+            integer(i8), allocatable :: b(:, :)
+            allocate(b(size(a, 1), n))
+            call comm_exchange(comm, int(a, i8), send, b, recv)
+            b = b(:, order)
+        end function moved_int
+    end subroutine frame_spread
+
+    !> Bounds of the id blocks of frame_spread: rank q gets the ids in (bound(q), bound(q+1)],
+    !> bound(q) being the (q N / P)-th smallest id of all ranks (below the smallest for 0).
+    !> Found by bisection on the id, every rank counting its ids (in increasing order) up to
+    !> the middle of each bracket, the counts summed.
+    function block_bounds(gid, comm) result(bound)
+        integer(i8), intent(in) :: gid(:)
+        type(comm_t), intent(in) :: comm
+        integer(i8) :: bound(0:comm%size)
+        integer(i8) :: ext(2), total(1), goal(comm%size - 1), lo(comm%size - 1), &
+                       hi(comm%size - 1), mid(comm%size - 1), below(comm%size - 1)
+        integer :: q
+        ext = -huge(1_i8)
+        if (size(gid) > 0) ext = [-gid(1), gid(size(gid))]
+        call comm_max(comm, ext)                    ! minus the smallest id, the largest
+        total = size(gid, kind=i8)
+        call comm_sum(comm, total)
+        goal = [(q * total(1) / comm%size, q = 1, comm%size - 1)]
+        lo = -ext(1) - 1                            ! fewer than goal ids up to lo
+        hi = ext(2)                                 ! at least goal ids up to hi
+        where (goal == 0) hi = lo
+        do while (any(hi - lo > 1))
+            mid = lo + (hi - lo) / 2
+            below = [(count_up_to(gid, mid(q)), q = 1, comm%size - 1)]
+            call comm_sum(comm, below)
+            where (hi - lo > 1 .and. below >= goal) hi = mid
+            where (hi - lo > 1 .and. below < goal) lo = mid
+        end do
+        bound(0) = -ext(1) - 1
+        bound(1:comm%size - 1) = hi
+        bound(comm%size) = ext(2)
+    end function block_bounds
+
+    !> How many of the increasing ids gid are at most v (bisection).
+    pure integer(i8) function count_up_to(gid, v) result(m)
+        integer(i8), intent(in) :: gid(:), v
+        integer(i8) :: lo, hi, mid
+        lo = 0                                       ! gid(1:lo) <= v
+        hi = size(gid, kind=i8)                      ! gid(hi+1:) > v
+        do while (lo < hi)
+            mid = (lo + hi + 1) / 2
+            if (gid(mid) <= v) then
+                lo = mid
+            else
+                hi = mid - 1
+            end if
+        end do
+        m = lo
+    end function count_up_to
+
+    !> The block (rank) of id g: the last q with bound(q) < g.
+    pure integer function block_of(bound, g) result(q)
+        integer(i8), intent(in) :: bound(0:), g
+        integer :: hi, mid
+        q = 0
+        hi = size(bound) - 2
+        do while (q < hi)
+            mid = (q + hi + 1) / 2
+            if (bound(mid) < g) then
+                q = mid
+            else
+                hi = mid - 1
+            end if
+        end do
+    end function block_of
 
     !> Write a snapshot (checkpoint false; force and contacts if allocated) or a checkpoint
     !> of frame `fr` of case `c`, with the walls in pose `mesh`, to `path`, atomically.

@@ -5,7 +5,8 @@
 !> run that stops loses nothing already written. A restarted run cuts series.csv,
 !> probes.csv and contact.csv back to their length at its checkpoint and appends to them.
 module dem_output
-    use dem_files, only: make_directory, file_truncate
+    use dem_files, only: make_directory, file_truncate, file_rename
+    use dem_comm, only: comm_t, comm_barrier, comm_any
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io, dem_err_input
     use dem_text, only: read_line
@@ -154,23 +155,40 @@ contains
             time, overlap, fn, ft, x, v, w
     end subroutine output_contact
 
-    !> final.csv: every owned particle, one row each, in the given order (by id).
-    subroutine output_final(out, order, gid, mat, radius, x, v, w, err)
-        type(output_t), intent(in) :: out
-        integer(ip), intent(in) :: order(:)    !! the particles to write, in this order
+    !> final.csv in directory `dir`: the particles of every rank, one row each, in the order
+    !> given (by id), rank 0's first. The ranks append their rows in turn to final.csv.part,
+    !> which becomes final.csv once all are written.
+    subroutine output_final(dir, comm, gid, mat, radius, x, v, w, err)
+        character(len=*), intent(in) :: dir
+        type(comm_t), intent(in) :: comm
         integer(i8), intent(in) :: gid(:)
         character(len=*), intent(in) :: mat(:) !! material names
         real(wp), intent(in) :: radius(:), x(:, :), v(:, :), w(:, :)
         type(error_t), intent(inout) :: err
-        integer :: u, k, i
-        call open_csv(out%dir // '/final.csv', final_header, u, err)
-        if (err%failed()) return
-        do k = 1, size(order)
-            i = order(k)
-            write(u, '(i0,",",a,10(",",' // real_fmt // '))') gid(i), trim(mat(i)), radius(i), &
-                x(:, i), v(:, i), w(:, i)
+        character(len=:), allocatable :: part
+        integer :: u, i, q, ios
+        part = dir // '/final.csv.part'
+        do q = 0, comm%size - 1
+            if (q == comm%rank) then
+                if (q == 0) then
+                    call open_csv(part, final_header, u, err)
+                else
+                    open(newunit=u, file=part, status='old', position='append', &
+                         action='write', iostat=ios)
+                    if (ios /= 0) call set_error(err, dem_err_io, part // ': cannot write')
+                end if
+                if (.not. err%failed()) then
+                    do i = 1, size(gid)
+                        write(u, '(i0,",",a,10(",",' // real_fmt // '))') gid(i), &
+                            trim(mat(i)), radius(i), x(:, i), v(:, i), w(:, i)
+                    end do
+                    close(u)
+                end if
+            end if
+            call comm_barrier(comm)
         end do
-        close(u)
+        if (comm_any(comm, err%failed())) return
+        if (comm%rank == 0) call file_rename(part, dir // '/final.csv', err)
     end subroutine output_final
 
     !> Close the open files.

@@ -28,7 +28,7 @@ module dem_comm
 
     !> Largest value over the ranks, element by element, in place (MPI_Allreduce).
     interface comm_max
-        module procedure max_real, max_int
+        module procedure max_real, max_int, max_i8
     end interface comm_max
 
     !> Sum over the ranks, in place (MPI_Allreduce).
@@ -231,6 +231,12 @@ contains
         integer, intent(inout) :: a(:)
         call MPI_Allreduce(MPI_IN_PLACE, a, size(a), MPI_INTEGER, MPI_MAX, c%comm)
     end subroutine max_int
+
+    subroutine max_i8(c, a)
+        type(comm_t), intent(in) :: c
+        integer(i8), intent(inout) :: a(:)
+        call MPI_Allreduce(MPI_IN_PLACE, a, size(a), MPI_INTEGER8, MPI_MAX, c%comm)
+    end subroutine max_i8
 
     !> Rank 0's value on every rank (MPI_Bcast).
     integer(i8) function comm_broadcast(c, value) result(v)

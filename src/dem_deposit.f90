@@ -96,14 +96,15 @@ contains
         call fixed_point_quantities(comm, n, radius, mass, v, beta, q, scale)
         fixed = 0
         do i = 1, n
-            call fixed_point_add(q(:, i), scale, [nearest(g, centres, x(:, i))], [1.0_wp], fixed)
+            call fixed_point_add(q(:, i), scale, [nearest_centre(g, centres, x(:, i))], &
+                                 [1.0_wp], fixed)
         end do
         call fixed_point_total(comm, fixed, scale, sums)
     end subroutine deposit_cells
 
     !> The index of the centre nearest to x (the lowest among equals): the buckets of g in
     !> growing shells around x's own, until the shell is farther than the best centre found.
-    pure integer function nearest(g, centres, x) result(best_k)
+    pure integer function nearest_centre(g, centres, x) result(best_k)
         type(grid_t), intent(in) :: g
         real(wp), intent(in) :: centres(:, :), x(3)
         real(wp) :: best, d2
@@ -130,7 +131,7 @@ contains
                 end do
             end do
         end do
-    end function nearest
+    end function nearest_centre
 
     !> The quantities each of the n particles deposits, q = (V, m v, beta, beta v), and the
     !> scale of the 64-bit fixed point for each (doc/theory.md, section 14): 2^k with k such

@@ -28,7 +28,7 @@ module dem_solver
                           output_final, output_close, output_sizes, output_probes, &
                           output_histogram
     use dem_probes, only: probe_header, probe_values, probe_histogram_counts, probe_histogram
-    use dem_checkpoint, only: frame_t, frame_write, frame_gather, frame_select, &
+    use dem_checkpoint, only: frame_t, frame_write, frame_spread, frame_select, &
                               checkpoint_file, checkpoint_latest, checkpoint_kept
     use dem_xdmf, only: xdmf_write, snapshot_file
     use dem_files, only: make_directory, file_remove, file_rename
@@ -441,12 +441,11 @@ contains
         type(error_t), intent(inout) :: err
         type(frame_t) :: fr
         logical :: bad
-        integer :: k
         if (s%settled .and. s%stopped == stop_end) s%stopped = stop_settled
         if (.not. err%failed() .and. (s%stopped == stop_end .or. s%stopped == stop_settled)) then
             call capture(s, c, s%run%out, fr)
-            if (s%comm%rank == 0) call output_final(s%run%out, [(k, k = 1, fr%n)], fr%gid, &
-                c%mats%name(fr%mat), fr%radius, fr%x, fr%v, fr%w, err)
+            call output_final(c%output_dir, s%comm, fr%gid, c%mats%name(fr%mat), fr%radius, fr%x, &
+                              fr%v, fr%w, err)
             bad = failed_anywhere(s, err)
         end if
         if (s%comm%rank == 0) call output_close(s%run%out)
@@ -925,8 +924,8 @@ contains
             saved = '; the last good state is in ' // c%output_dir // '/' // &
                     checkpoint_file(maxval(s%ckpt_step))
         else if (allocated(s%good%gid)) then
-            good = s%good                         ! each rank's own particles: gathered
-            if (s%comm%size > 1) call frame_gather(good, s%comm)
+            good = s%good                         ! each rank's own particles: spread
+            call frame_spread(good, s%comm, root=.false.)
             call write_frame_checkpoint(s, c, good, write_err)
             saved = '; the last good state, at t = ' // real_text(s%good%time) // ' s, is in ' &
                     // c%output_dir // '/' // checkpoint_file(s%good%step)
@@ -941,10 +940,11 @@ contains
     end subroutine unstable
 
     !> The state now, particles by id, into `fr`, with the per-particle contact counts when
-    !> the snapshots hold them; on several ranks, gathered on rank 0 (the others keep no
-    !> particles). With `local`, each rank keeps its own particles (the last good state:
-    !> gathered only if it must be written); with `light`, only the ids, materials, radii,
-    !> positions and velocities (what the rows of series.csv and probes.csv need).
+    !> the snapshots hold them; on several ranks, spread over the ranks in blocks of ids, as
+    !> the files are written (frame_spread). With `local`, each rank keeps its own particles
+    !> (the last good state: spread only if it must be written); with `light`, only the ids,
+    !> materials, radii, positions and velocities, gathered on rank 0 (which computes the rows
+    !> of series.csv and probes.csv from them).
     subroutine capture(s, c, out, fr, local, light)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -971,7 +971,7 @@ contains
             fr%w = p%w(:, order)
         end associate
         if (.not. present(light)) call capture_history(s, c, order, fr)
-        if (s%comm%size > 1 .and. .not. present(local)) call frame_gather(fr, s%comm)
+        if (.not. present(local)) call frame_spread(fr, s%comm, root=present(light))
         fr%time0 = s%time0
         fr%step0 = s%step0
         fr%dt = c%dt
