@@ -91,13 +91,11 @@ contains
     !> r N / P + 1 ... (r + 1) N / P of the id order of all N, in id order, and the pairs of
     !> the history whose lower id it holds, each once, ordered by the two ids. Written as
     !> distributed rows, the blocks make the frame of the whole run in id order: the same
-    !> bytes on any number of ranks, and no rank holds more than its share. With `root`, every
-    !> particle goes to rank 0 instead (the rows of series.csv and probes.csv are computed
-    !> there). The run bookkeeping is left as it is.
-    subroutine frame_spread(fr, comm, root)
+    !> bytes on any number of ranks, and no rank holds more than its share. The run
+    !> bookkeeping is left as it is.
+    subroutine frame_spread(fr, comm)
         type(frame_t), intent(inout) :: fr
         type(comm_t), intent(in) :: comm
-        logical, intent(in) :: root
         integer(i8) :: bound(0:comm%size)
         integer(i8), allocatable :: gid(:, :), pair(:, :)
         integer(ip), allocatable :: order(:), dest(:)
@@ -105,12 +103,7 @@ contains
         integer :: send(0:comm%size - 1), recv(0:comm%size - 1), k, n
 
         if (comm%size == 1) return
-        if (root) then
-            bound = huge(1_i8)
-            bound(0) = -huge(1_i8)
-        else
-            bound = block_bounds(fr%gid, comm)
-        end if
+        bound = block_bounds(fr%gid, comm)
         ! the particles, in id order, are grouped by the rank of their block already
         send = 0
         do k = 1, fr%n
@@ -130,7 +123,6 @@ contains
         fr%w = moved(fr%w)
         if (allocated(fr%contacts)) fr%contacts = int(reshape(moved_int(reshape(fr%contacts, &
                                                   [1, size(fr%contacts)])), [n]), ip)
-        if (.not. allocated(fr%f)) return           ! a frame of the particle state only
         fr%f = moved(fr%f)
         fr%t = moved(fr%t)
         fr%wall_tri = int(moved_int(fr%wall_tri), ip)

@@ -4,11 +4,13 @@
 !> a grid, each particle's weights over the cells are separable (a product of one weight per
 !> axis), renormalised to sum to one over the cells of the grid, so that the deposits
 !> conserve volume and momentum; on a list, a particle goes whole to its nearest centre. The
-!> sums over particles and ranks are taken in 64-bit fixed point, where addition is exact and
-!> so does not depend on the order: the result is the same bit for bit on any number of ranks.
+!> sums over particles and ranks are taken in fixed point (dem_fixed_sum), where addition is
+!> exact and so does not depend on the order: the result is the same bit for bit on any
+!> number of ranks.
 module dem_deposit
     use dem_kinds, only: wp, ip, i8
-    use dem_comm, only: comm_t, comm_sum, comm_max
+    use dem_comm, only: comm_t, comm_sum
+    use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total
     use dem_neighbors, only: grid_t, grid_shape, grid_fill, cell_of
     implicit none
     private
@@ -35,21 +37,24 @@ contains
         integer, intent(in) :: nc(3)
         real(wp), intent(out) :: sums(n_deposit, product(nc))
         integer(i8), intent(out) :: n_outside
-        real(wp) :: q(n_deposit, n), scale(n_deposit), weights(512)
-        integer(i8) :: fixed(n_deposit, product(nc)), outside(1)
-        integer :: cells(512), m
+        real(wp) :: q(n_deposit, n), weights(512)
+        type(fixed_sum_t) :: fixed
+        integer(i8) :: outside(1)
+        integer :: cells(512), m, k
         integer(ip) :: i
-        call fixed_point_quantities(comm, n, radius, mass, v, beta, q, scale)
-        fixed = 0
+        q = quantities(n, radius, mass, v, beta)
+        call fixed_sum_start(fixed, comm, bound(q), int(n), product(nc))
         outside = 0
         do i = 1, n
             call grid_weights(kernel, x(:, i), radius(i), origin, h, nc, cells, weights, m)
             if (m == 0) outside = outside + 1
-            call fixed_point_add(q(:, i), scale, cells(1:m), weights(1:m), fixed)
+            do k = 1, m
+                call fixed_sum_add(fixed, weights(k) * q(:, i), cells(k))
+            end do
         end do
         call comm_sum(comm, outside)
         n_outside = outside(1)
-        call fixed_point_total(comm, fixed, scale, sums)
+        call fixed_sum_total(fixed, comm, sums)
     end subroutine deposit_grid
 
     !> The cells and weights of a particle at x (radius r) on the grid of deposit_grid: the
@@ -84,8 +89,8 @@ contains
         real(wp), intent(in) :: centres(:, :)     !! (3, cells) [m]
         real(wp), intent(out) :: sums(n_deposit, size(centres, 2))
         type(grid_t) :: g
-        real(wp) :: lo(3), hi(3), q(n_deposit, n), scale(n_deposit)
-        integer(i8) :: fixed(n_deposit, size(centres, 2))
+        real(wp) :: lo(3), hi(3), q(n_deposit, n)
+        type(fixed_sum_t) :: fixed
         integer(ip) :: m, k, i
         m = size(centres, 2, kind=ip)
         lo = minval(centres, dim=2)
@@ -93,13 +98,12 @@ contains
         call grid_shape(g, lo, hi, max(maxval(hi - lo), tiny(1.0_wp)) &
                         / max(1.0_wp, real(m, wp))**(1.0_wp / 3.0_wp), m)
         call grid_fill(g, m, [(k, k = 1, m)], centres)
-        call fixed_point_quantities(comm, n, radius, mass, v, beta, q, scale)
-        fixed = 0
+        q = quantities(n, radius, mass, v, beta)
+        call fixed_sum_start(fixed, comm, bound(q), int(n), int(m))
         do i = 1, n
-            call fixed_point_add(q(:, i), scale, [nearest_centre(g, centres, x(:, i))], &
-                                 [1.0_wp], fixed)
+            call fixed_sum_add(fixed, q(:, i), nearest_centre(g, centres, x(:, i)))
         end do
-        call fixed_point_total(comm, fixed, scale, sums)
+        call fixed_sum_total(fixed, comm, sums)
     end subroutine deposit_cells
 
     !> The index of the centre nearest to x (the lowest among equals): the buckets of g in
@@ -133,63 +137,28 @@ contains
         end do
     end function nearest_centre
 
-    !> The quantities each of the n particles deposits, q = (V, m v, beta, beta v), and the
-    !> scale of the 64-bit fixed point for each (doc/theory.md, section 14): 2^k with k such
-    !> that the largest |q| over the ranks times the particles stays below 2^61.
-    subroutine fixed_point_quantities(comm, n, radius, mass, v, beta, q, scale)
-        type(comm_t), intent(in) :: comm
+    !> The quantities each of the n particles deposits, q = (V, m v, beta, beta v).
+    pure function quantities(n, radius, mass, v, beta) result(q)
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: radius(n), mass(n), v(3, n), beta(n)
-        real(wp), intent(out) :: q(n_deposit, n), scale(n_deposit)
+        real(wp) :: q(n_deposit, n)
         real(wp), parameter :: pi = acos(-1.0_wp)
-        real(wp) :: bound(n_deposit)
-        integer(i8) :: total(1)
         integer(ip) :: i
-        integer :: d
         do i = 1, n
             q(1, i) = 4.0_wp / 3.0_wp * pi * radius(i)**3
             q(2:4, i) = mass(i) * v(:, i)
             q(5, i) = beta(i)
             q(6:8, i) = beta(i) * v(:, i)
         end do
-        bound = 0.0_wp                   ! the largest |q| times the particles: above any sum
-        if (n > 0) bound = maxval(abs(q), dim=2)
-        call comm_max(comm, bound)
-        total = n
-        call comm_sum(comm, total)
-        bound = bound * real(max(1_i8, total(1)), wp)
-        do d = 1, n_deposit
-            scale(d) = 1.0_wp
-            if (bound(d) > 0.0_wp) scale(d) = 2.0_wp**(61 - exponent(bound(d)))
-        end do
-    end subroutine fixed_point_quantities
+    end function quantities
 
-    !> Add weights(k) of one particle's quantities q to cell cells(k), in fixed point.
-    pure subroutine fixed_point_add(q, scale, cells, weights, fixed)
-        real(wp), intent(in) :: q(n_deposit), scale(n_deposit), weights(:)
-        integer, intent(in) :: cells(:)
-        integer(i8), intent(inout) :: fixed(:, :)
-        integer :: k
-        do k = 1, size(cells)
-            fixed(:, cells(k)) = fixed(:, cells(k)) + nint(weights(k) * q * scale, i8)
-        end do
-    end subroutine fixed_point_add
-
-    !> The fixed-point sums of all ranks, back to reals.
-    subroutine fixed_point_total(comm, fixed, scale, sums)
-        type(comm_t), intent(in) :: comm
-        integer(i8), intent(in) :: fixed(:, :)
-        real(wp), intent(in) :: scale(n_deposit)
-        real(wp), intent(out) :: sums(:, :)
-        integer(i8) :: flat(size(fixed))
-        integer :: d
-        flat = reshape(fixed, [size(fixed)])
-        call comm_sum(comm, flat)
-        sums = reshape(real(flat, wp), shape(fixed))
-        do d = 1, n_deposit
-            sums(d, :) = sums(d, :) / scale(d)
-        end do
-    end subroutine fixed_point_total
+    !> The largest size of each quantity (a weight times it is no larger).
+    pure function bound(q) result(b)
+        real(wp), intent(in) :: q(:, :)
+        real(wp) :: b(size(q, 1))
+        b = 0.0_wp
+        if (size(q, 2) > 0) b = maxval(abs(q), dim=2)
+    end function bound
 
     !> One axis: the particle at x (radius r) gives weights w(1:m) to the cells first ..
     !> first + m - 1 (0-based) of the nc cells of size h from o, summing to one; m = 0 when

@@ -6,6 +6,8 @@ module dem_diagnostics
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t, closest_point_triangle
+    use dem_comm, only: comm_t, comm_max
+    use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total
     implicit none
     private
     public :: energies, count_pp_sides, first_nonfinite, count_unstable, contact_trace
@@ -13,23 +15,35 @@ module dem_diagnostics
 contains
 
     !> Kinetic (translational, rotational) and gravitational potential energy [J], and the
-    !> largest speed [m/s], of the owned particles.
-    subroutine energies(n, mass, inv_inertia, x, v, w, gravity, ke_t, ke_r, pe, vmax)
+    !> largest speed [m/s], of the particles of all ranks (each gives its n owned ones); the
+    !> sums in fixed point, the same on any number of ranks; collective.
+    subroutine energies(comm, n, mass, inv_inertia, x, v, w, gravity, ke_t, ke_r, pe, vmax)
+        type(comm_t), intent(in) :: comm
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: mass(:), inv_inertia(:), x(:, :), v(:, :), w(:, :)
         real(wp), intent(in) :: gravity(3)
         real(wp), intent(out) :: ke_t, ke_r, pe, vmax
+        real(wp) :: e(3, n), sums(3, 1), top(1)
+        type(fixed_sum_t) :: fixed
         integer(ip) :: i
-        ke_t = 0.0_wp
-        ke_r = 0.0_wp
-        pe = 0.0_wp
-        vmax = 0.0_wp
+        top = 0.0_wp
         do i = 1, n
-            ke_t = ke_t + 0.5_wp * mass(i) * dot_product(v(:, i), v(:, i))
-            ke_r = ke_r + 0.5_wp * dot_product(w(:, i), w(:, i)) / inv_inertia(i)
-            pe = pe - mass(i) * dot_product(gravity, x(:, i))
-            vmax = max(vmax, norm2(v(:, i)))
+            e(:, i) = [0.5_wp * mass(i) * dot_product(v(:, i), v(:, i)), &
+                       0.5_wp * dot_product(w(:, i), w(:, i)) / inv_inertia(i), &
+                       -mass(i) * dot_product(gravity, x(:, i))]
+            top = max(top, norm2(v(:, i)))
         end do
+        call fixed_sum_start(fixed, comm, [(max(0.0_wp, maxval(abs(e(i, :)))), i = 1, 3)], &
+                             int(n), 1)
+        do i = 1, n
+            call fixed_sum_add(fixed, e(:, i), 1)
+        end do
+        call fixed_sum_total(fixed, comm, sums)
+        call comm_max(comm, top)
+        ke_t = sums(1, 1)
+        ke_r = sums(2, 1)
+        pe = sums(3, 1)
+        vmax = top(1)
     end subroutine energies
 
     !> Number of overlapping particle pairs among the owned particles' list entries, counted

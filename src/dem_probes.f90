@@ -4,11 +4,14 @@
 !> (center_of_mass), or the state of one particle (track). A histogram probe counts, once,
 !> at the first output time at or after its time, the particles in its region by their
 !> velocity components about a vertical axis: radial, angular (about the axis) and vertical.
-!> Sums run over the particles in the order of their ids, so that the values do not depend
-!> on where the particles are stored. Host-side, at output times.
+!> Each rank looks at its own particles; counts are summed over the ranks, and centres of
+!> mass in fixed point (dem_fixed_sum), so that the values do not depend on where the
+!> particles are stored. Host-side, at output times; collective.
 module dem_probes
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use dem_kinds, only: wp, ip, i8
+    use dem_comm, only: comm_t, comm_sum, comm_gather
+    use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total
     implicit none
     private
     public :: probe_t, probe_count, probe_center_of_mass, probe_track, probe_histogram, &
@@ -72,68 +75,74 @@ contains
                  x2 <= p%hi(2) .and. x3 >= p%lo(3) .and. x3 <= p%hi(3)
     end function probe_in_region
 
-    !> A probe's values now (as many as its header has columns; NaN where there is nothing
-    !> to measure: a material absent from the region, a particle gone). `order` lists the n
-    !> particles by id.
-    function probe_values(p, used, order, gid, mat, mass, x, v, w) result(values)
+    !> A probe's values now over the particles of all ranks, each rank giving its own (as
+    !> many as the probe's header has columns; NaN where there is nothing to measure: a
+    !> material absent from the region, a particle gone); on rank 0, which writes them.
+    function probe_values(comm, p, used, gid, mat, mass, x, v, w) result(values)
+        type(comm_t), intent(in) :: comm
         type(probe_t), intent(in) :: p
         logical, intent(in) :: used(:)                 !! materials used by particles
-        integer(ip), intent(in) :: order(:)
         integer(i8), intent(in) :: gid(:)
         integer(ip), intent(in) :: mat(:)
         real(wp), intent(in) :: mass(:), x(:, :), v(:, :), w(:, :)
-        real(wp), allocatable :: values(:)
-        real(wp) :: msum(size(used)), mx(3, size(used)), counts(size(used))
-        integer(ip) :: a, i, m
+        real(wp), allocatable :: values(:), all(:)
+        real(wp) :: sums(4, size(used)), top(4), one(10)
+        integer(i8) :: counts(size(used))
+        logical :: inside(size(gid))
+        type(fixed_sum_t) :: fixed
+        integer(ip) :: i, m
+        inside = probe_in_region(p, x(1, :), x(2, :), x(3, :))
         select case (p%kind)
         case (probe_count)
-            counts = 0.0_wp
-            do a = 1, size(order)
-                i = order(a)
-                if (probe_in_region(p, x(1, i), x(2, i), x(3, i))) &
-                    counts(mat(i)) = counts(mat(i)) + 1.0_wp
+            counts = 0
+            do i = 1, size(gid)
+                if (inside(i)) counts(mat(i)) = counts(mat(i)) + 1
             end do
-            values = pack(counts, used)
-        case (probe_center_of_mass)
-            msum = 0.0_wp
-            mx = 0.0_wp
-            do a = 1, size(order)
-                i = order(a)
-                if (.not. probe_in_region(p, x(1, i), x(2, i), x(3, i))) cycle
-                m = mat(i)
-                msum(m) = msum(m) + mass(i)
-                mx(:, m) = mx(:, m) + mass(i) * x(:, i)
+            call comm_sum(comm, counts)
+            values = pack(real(counts, wp), used)
+        case (probe_center_of_mass)            ! sums of m and m x per material
+            top = 0.0_wp
+            do i = 1, size(gid)
+                if (inside(i)) top = max(top, mass(i) * [1.0_wp, abs(x(:, i))])
             end do
+            call fixed_sum_start(fixed, comm, top, size(gid), size(used))
+            do i = 1, size(gid)
+                if (inside(i)) call fixed_sum_add(fixed, mass(i) * [1.0_wp, x(:, i)], mat(i))
+            end do
+            call fixed_sum_total(fixed, comm, sums)
             do m = 1, size(used)
-                if (msum(m) > 0.0_wp) then
-                    mx(:, m) = mx(:, m) / msum(m)
+                if (sums(1, m) > 0.0_wp) then
+                    sums(2:4, m) = sums(2:4, m) / sums(1, m)
                 else
-                    mx(:, m) = ieee_value(1.0_wp, ieee_quiet_nan)
+                    sums(2:4, m) = ieee_value(1.0_wp, ieee_quiet_nan)
                 end if
             end do
-            values = pack(mx, spread(used, 1, 3))
-        case (probe_track)
+            values = pack(sums(2:4, :), spread(used, 1, 3))
+        case (probe_track)                     ! (found, x, v, w) of every rank, to rank 0
+            one = 0.0_wp
+            i = findloc(gid, p%id, dim=1)
+            if (i > 0) one = [1.0_wp, x(:, i), v(:, i), w(:, i)]
+            call comm_gather(comm, one, all)
             allocate(values(9))
             values = ieee_value(1.0_wp, ieee_quiet_nan)
-            do a = 1, size(order)
-                i = order(a)
-                if (gid(i) /= p%id) cycle
-                values = [x(:, i), v(:, i), w(:, i)]
-                exit
+            do i = 1, size(all) / 10
+                if (all(10 * i - 9) > 0.0_wp) values = all(10 * i - 8:10 * i)
             end do
         case default
             allocate(values(0))
         end select
     end function probe_values
 
-    !> Velocity histograms of the particles in a probe's region: counts(k, c) for bin k
+    !> Velocity histograms of the particles of all ranks in a probe's region (each rank
+    !> giving its own; collective): counts(k, c) for bin k
     !> (0: below v_min, bins + 1: at or above v_max) of component c (1 radial, 2 angular,
     !> 3 vertical) about the vertical axis through p%axis (e_r from the axis to the centre,
     !> e_theta = e_z x e_r; a centre on the axis takes e_r = e_x).
-    function probe_histogram_counts(p, x, v) result(counts)
+    function probe_histogram_counts(comm, p, x, v) result(counts)
+        type(comm_t), intent(in) :: comm
         type(probe_t), intent(in) :: p
         real(wp), intent(in) :: x(:, :), v(:, :)
-        integer(i8) :: counts(0:p%bins + 1, 3)
+        integer(i8) :: counts(0:p%bins + 1, 3), flat(3 * (p%bins + 2))
         real(wp) :: r(2), rn, er(2), comp(3), width
         integer(ip) :: i, c, k
         counts = 0
@@ -157,5 +166,8 @@ contains
                 counts(k, c) = counts(k, c) + 1
             end do
         end do
+        flat = reshape(counts, [size(counts)])
+        call comm_sum(comm, flat)
+        counts = reshape(flat, shape(counts))
     end function probe_histogram_counts
 end module dem_probes

@@ -754,11 +754,10 @@ contains
         end function totals
     end subroutine distribute
 
-    !> One row of series.csv, its sums taken in the order of the particle ids (so that they
-    !> depend neither on where particles are stored nor on the number of ranks); the state,
-    !> which has passed the instability guard, becomes the last good state (each rank keeps
-    !> its own particles'). Rank 0 computes the row, and that of probes.csv, from the
-    !> particles' ids, materials, radii, positions and velocities gathered there.
+    !> One row of series.csv and of probes.csv, every rank giving its own particles, the sums
+    !> in fixed point (so that they depend neither on where particles are stored nor on the
+    !> number of ranks); rank 0 writes them. The state, which has passed the instability
+    !> guard, becomes the last good state (each rank keeps its own particles').
     subroutine write_series(s, c, out, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -766,8 +765,7 @@ contains
         type(error_t), intent(inout) :: err
         real(wp) :: ke_t, ke_r, pe, vmax
         real(wp), allocatable :: mass(:)
-        integer(i8) :: counts(3), bytes(3)
-        type(frame_t) :: row
+        integer(i8) :: counts(3), bytes(3), n(1)
         logical :: settled
         call particle_data(s, acc_to_host)
         if (comm_any(s%comm, first_nonfinite(s%p%n_own, s%p%x, s%p%v, s%p%w) > 0)) then
@@ -776,24 +774,25 @@ contains
         end if
         counts = contact_counts(s)
         call capture(s, c, out, s%good, local=.true.)
-        call capture(s, c, out, row, light=.true.)
-        settled = .false.
+        associate (p => s%p, k => s%p%n_own)
+            mass = sphere_mass(p%radius(1:k), c%mats%density(p%mat(1:k)))
+            call energies(s%comm, k, mass, sphere_inv_inertia(mass, p%radius(1:k)), p%x, p%v, &
+                          p%w, c%gravity, ke_t, ke_r, pe, vmax)
+            n = k
+            call comm_sum(s%comm, n)
+            settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
+            if (s%comm%rank == 0) call output_series(out, time_of(s, c, s%step), s%step, &
+                int(n(1), ip), s%removed, int(counts(1), ip), int(counts(2), ip), ke_t, ke_r, pe, &
+                vmax)
+            call write_probes(s, c, out, mass, err)
+        end associate
         if (s%comm%rank == 0) then
-            associate (fr => row)
-                mass = sphere_mass(fr%radius, c%mats%density(fr%mat))
-                call energies(fr%n, mass, sphere_inv_inertia(mass, fr%radius), fr%x, fr%v, &
-                              fr%w, c%gravity, ke_t, ke_r, pe, vmax)
-                call output_series(out, fr%time, s%step, fr%n, s%removed, int(counts(1), ip), &
-                                   int(counts(2), ip), ke_t, ke_r, pe, vmax)
-                settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
-                call write_probes(c, out, fr, mass, s%run%probed, err)
-            end associate
             bytes = output_sizes(out)            ! the row just written belongs to the state
             s%good%series_bytes = bytes(1)
             s%good%contact_bytes = bytes(2)
             s%good%probes_bytes = bytes(3)
         end if
-        s%settled = comm_any(s%comm, settled)
+        s%settled = settled
     end subroutine write_series
 
     !> Particle contacts (pairs), wall contacts and particles, over the ranks (the ghosts
@@ -812,31 +811,34 @@ contains
         counts(1) = counts(1) / 2
     end function contact_counts
 
-    !> The probes' row of probes.csv, and the histograms due now, from the state of the row
-    !> `fr` (particles by id; `mass` of each), for the materials `probed`.
-    subroutine write_probes(c, out, fr, mass, probed, err)
+    !> The probes' row of probes.csv, and the histograms due now, from every rank's owned
+    !> particles (`mass` of each), for the materials the case's particles are made of;
+    !> collective, rank 0 writes.
+    subroutine write_probes(s, c, out, mass, err)
+        type(solver_t), intent(in) :: s
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
-        type(frame_t), intent(in) :: fr
-        real(wp), intent(in) :: mass(:)
-        logical, intent(in) :: probed(:)
+        real(wp), intent(in) :: mass(:)                 !! of the owned particles
         type(error_t), intent(inout) :: err
         real(wp), allocatable :: values(:)
+        integer(i8), allocatable :: counts(:, :)
         real(wp) :: t
         integer :: k
-        integer(ip) :: i
-        t = fr%time
+        t = time_of(s, c, s%step)
         values = [real(wp) ::]
-        do k = 1, size(c%probes)
-            values = [values, probe_values(c%probes(k), probed, &
-                                           [(i, i = 1, fr%n)], fr%gid, fr%mat, mass, fr%x, &
-                                           fr%v, fr%w)]
-            if (c%probes(k)%kind == probe_histogram .and. histogram_due(c%probes(k)%time)) &
-                call output_histogram(c%output_dir, c%probes(k)%name, c%probes(k)%v_min, &
-                                      c%probes(k)%v_max, probe_histogram_counts( &
-                                      c%probes(k), fr%x, fr%v), err)
-        end do
-        call output_probes(out, t, fr%step, values)
+        associate (p => s%p, n => s%p%n_own)
+            do k = 1, size(c%probes)
+                values = [values, probe_values(s%comm, c%probes(k), s%run%probed, p%gid(1:n), &
+                                               p%mat(1:n), mass, p%x(:, 1:n), p%v(:, 1:n), &
+                                               p%w(:, 1:n))]
+                if (c%probes(k)%kind /= probe_histogram .or. &
+                    .not. histogram_due(c%probes(k)%time)) cycle
+                counts = probe_histogram_counts(s%comm, c%probes(k), p%x(:, 1:n), p%v(:, 1:n))
+                if (s%comm%rank == 0) call output_histogram(c%output_dir, c%probes(k)%name, &
+                    c%probes(k)%v_min, c%probes(k)%v_max, counts, err)
+            end do
+        end associate
+        if (s%comm%rank == 0) call output_probes(out, t, s%step, values)
     contains
         !> A histogram at time t_h is written at the first row at or after it: this one if the
         !> row one output interval earlier was before it.
@@ -925,7 +927,7 @@ contains
                     checkpoint_file(maxval(s%ckpt_step))
         else if (allocated(s%good%gid)) then
             good = s%good                         ! each rank's own particles: spread
-            call frame_spread(good, s%comm, root=.false.)
+            call frame_spread(good, s%comm)
             call write_frame_checkpoint(s, c, good, write_err)
             saved = '; the last good state, at t = ' // real_text(s%good%time) // ' s, is in ' &
                     // c%output_dir // '/' // checkpoint_file(s%good%step)
@@ -942,19 +944,17 @@ contains
     !> The state now, particles by id, into `fr`, with the per-particle contact counts when
     !> the snapshots hold them; on several ranks, spread over the ranks in blocks of ids, as
     !> the files are written (frame_spread). With `local`, each rank keeps its own particles
-    !> (the last good state: spread only if it must be written); with `light`, only the ids,
-    !> materials, radii, positions and velocities, gathered on rank 0 (which computes the rows
-    !> of series.csv and probes.csv from them).
-    subroutine capture(s, c, out, fr, local, light)
+    !> (the last good state: spread only if it must be written).
+    subroutine capture(s, c, out, fr, local)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
         type(frame_t), intent(out) :: fr
-        logical, intent(in), optional :: local, light
+        logical, intent(in), optional :: local
         integer(ip), allocatable :: order(:)
         integer(i8) :: bytes(3)
         call particle_data(s, acc_to_host)
-        if (s%lists_on_device .and. .not. present(light)) then
+        if (s%lists_on_device) then
             call acc_data(s%nb%xi, acc_to_host)
             call acc_data(s%nb%touching, acc_to_host)
         end if
@@ -970,8 +970,8 @@ contains
             fr%v = p%v(:, order)
             fr%w = p%w(:, order)
         end associate
-        if (.not. present(light)) call capture_history(s, c, order, fr)
-        if (.not. present(local)) call frame_spread(fr, s%comm, root=present(light))
+        call capture_history(s, c, order, fr)
+        if (.not. present(local)) call frame_spread(fr, s%comm)
         fr%time0 = s%time0
         fr%step0 = s%step0
         fr%dt = c%dt
