@@ -9,7 +9,8 @@ module dem_checkpoint
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_version, only: dem_version_string
-    use dem_comm, only: comm_t, comm_barrier, comm_counts, comm_exchange, comm_max, comm_sum
+    use dem_comm, only: comm_t, comm_barrier, comm_counts, comm_exchange, comm_max, comm_sum, &
+                        comm_any
     use dem_particles, only: order_by_id
     use dem_neighbors, only: neighbors_unique_pairs
     use dem_case, only: case_t
@@ -21,7 +22,7 @@ module dem_checkpoint
                       h5_dims, h5_text_length
     implicit none
     private
-    public :: frame_t, frame_write, frame_spread, frame_select, checkpoint_read, &
+    public :: frame_t, frame_write, frame_spread, checkpoint_read, &
               snapshot_read_particles, &
               checkpoint_file, checkpoint_latest, checkpoint_kept
 
@@ -66,25 +67,6 @@ module dem_checkpoint
     end interface
 
 contains
-
-    !> Keep the particles idx of a frame (every per-particle field it has; the pairs and the
-    !> bookkeeping stay as they are).
-    subroutine frame_select(fr, idx)
-        type(frame_t), intent(inout) :: fr
-        integer(ip), intent(in) :: idx(:)
-        fr%n = size(idx)
-        fr%gid = fr%gid(idx)
-        fr%mat = fr%mat(idx)
-        fr%radius = fr%radius(idx)
-        fr%x = fr%x(:, idx)
-        fr%v = fr%v(:, idx)
-        fr%w = fr%w(:, idx)
-        if (allocated(fr%f)) fr%f = fr%f(:, idx)
-        if (allocated(fr%t)) fr%t = fr%t(:, idx)
-        if (allocated(fr%contacts)) fr%contacts = fr%contacts(idx)
-        if (allocated(fr%wall_tri)) fr%wall_tri = fr%wall_tri(:, idx)
-        if (allocated(fr%wall_xi)) fr%wall_xi = fr%wall_xi(:, :, idx)
-    end subroutine frame_select
 
     !> Spread over the ranks, in blocks of ids, the frames that every rank captured of its own
     !> particles (each in id order): rank r then holds the particles at positions
@@ -160,6 +142,41 @@ contains
             b = b(:, order)
         end function moved_int
     end subroutine frame_spread
+
+    !> Give each pair of the history (read in parts, ordered by the two ids) to the ranks
+    !> whose block of particles holds either of its ids (blocks as frame_spread's: the
+    !> particles were read in them); each rank's pairs come back ordered by the two ids.
+    subroutine pairs_to_particles(fr, comm)
+        type(frame_t), intent(inout) :: fr
+        type(comm_t), intent(in) :: comm
+        integer(i8) :: bound(0:comm%size)
+        integer(i8), allocatable :: pair(:, :)
+        integer(ip), allocatable :: order(:)
+        integer, allocatable :: dest(:)
+        real(wp), allocatable :: pair_xi(:, :)
+        integer :: send(0:comm%size - 1), recv(0:comm%size - 1), k, m
+        if (comm%size == 1) return
+        bound = block_bounds(fr%gid, comm)
+        m = size(fr%pair, 2)
+        allocate(dest(2 * m))
+        do k = 1, m
+            dest(k) = block_of(bound, fr%pair(1, k))
+            dest(m + k) = block_of(bound, fr%pair(2, k))
+            if (dest(m + k) == dest(k)) dest(m + k) = -1     ! once to a rank holding both
+        end do
+        order = order_by_id(int(dest, i8))
+        order = pack(order, dest(order) >= 0)
+        send = 0
+        do k = 1, size(order)
+            send(dest(order(k))) = send(dest(order(k))) + 1
+        end do
+        order = merge(order, order - m, order <= m)          ! back to pair numbers
+        recv = comm_counts(comm, send)
+        allocate(pair(2, sum(recv)), pair_xi(3, sum(recv)))
+        call comm_exchange(comm, fr%pair(:, order), send, pair, recv)
+        call comm_exchange(comm, fr%pair_xi(:, order), send, pair_xi, recv)
+        call neighbors_unique_pairs(pair, pair_xi, fr%pair, fr%pair_xi)
+    end subroutine pairs_to_particles
 
     !> Bounds of the id blocks of frame_spread: rank q gets the ids in (bound(q), bound(q+1)],
     !> bound(q) being the (q N / P)-th smallest id of all ranks (below the smallest for 0).
@@ -388,7 +405,9 @@ contains
 
     !> Read checkpoint `path` and check that it belongs to case `c` (same materials, walls
     !> and their motion, initial particle count); the errors name the file and what differs,
-    !> and count as bad input.
+    !> and count as bad input; collective. Each rank reads a block of the particles (rank r
+    !> those at positions r N / P + 1 ... (r + 1) N / P of the file, which is in id order)
+    !> and gets the pairs of the history that involve them, so no rank holds the whole file.
     subroutine checkpoint_read(path, c, comm, fr, err)
         character(len=*), intent(in) :: path
         type(case_t), intent(in) :: c
@@ -407,7 +426,7 @@ contains
         type(error_t), intent(inout) :: err
         type(h5_file_t) :: h
         integer(i8), allocatable :: dims(:)
-        integer(i8) :: n_case
+        integer(i8) :: n_case, first, n
         integer(ip) :: settled, nm
         character(len=:), allocatable :: format
         character(len=32), allocatable :: names(:)
@@ -477,32 +496,34 @@ contains
             call h5_close(h, err)
             return
         end if
-        fr%n = int(dims(1), ip)
-        if (fr%n > c%n_particles) call differs('particle count: ' // itoa(dims(1)) // &
-                                               ' now there, at most ' // &
-                                               itoa(int(c%n_particles, i8)) // ' here')
+        if (dims(1) > c%n_particles) call differs('particle count: ' // itoa(dims(1)) // &
+                                                  ' now there, at most ' // &
+                                                  itoa(int(c%n_particles, i8)) // ' here')
         if (err%failed()) then
             call h5_close(h, err)
             return
         end if
-        allocate(fr%gid(fr%n), fr%mat(fr%n), fr%radius(fr%n), fr%x(3, fr%n), fr%v(3, fr%n), &
-                 fr%w(3, fr%n), fr%f(3, fr%n), fr%t(3, fr%n), &
-                 fr%wall_tri(max_wall_contacts, fr%n), fr%wall_xi(3, max_wall_contacts, fr%n))
-        call h5_read(h, '/particles/id', fr%gid, err)
-        call h5_read(h, '/particles/material', fr%mat, err)
-        call h5_read(h, '/particles/radius', fr%radius, err)
-        call h5_read(h, '/particles/position', fr%x, err)
-        call h5_read(h, '/particles/velocity', fr%v, err)
-        call h5_read(h, '/particles/angular_velocity', fr%w, err)
-        call h5_read(h, '/particles/force', fr%f, err)
-        call h5_read(h, '/particles/torque', fr%t, err)
-        call h5_read(h, '/state/wall_contact_triangle', fr%wall_tri, err)
-        call h5_read(h, '/state/wall_contact_history', fr%wall_xi, err)
+        call share(dims(1), first, n)               ! this rank's block of particles (by id)
+        fr%n = int(n, ip)
+        allocate(fr%gid(n), fr%mat(n), fr%radius(n), fr%x(3, n), fr%v(3, n), fr%w(3, n), &
+                 fr%f(3, n), fr%t(3, n), fr%wall_tri(max_wall_contacts, n), &
+                 fr%wall_xi(3, max_wall_contacts, n))
+        call h5_read(h, '/particles/id', fr%gid, err, first)
+        call h5_read(h, '/particles/material', fr%mat, err, first)
+        call h5_read(h, '/particles/radius', fr%radius, err, first)
+        call h5_read(h, '/particles/position', fr%x, err, first)
+        call h5_read(h, '/particles/velocity', fr%v, err, first)
+        call h5_read(h, '/particles/angular_velocity', fr%w, err, first)
+        call h5_read(h, '/particles/force', fr%f, err, first)
+        call h5_read(h, '/particles/torque', fr%t, err, first)
+        call h5_read(h, '/state/wall_contact_triangle', fr%wall_tri, err, first)
+        call h5_read(h, '/state/wall_contact_history', fr%wall_xi, err, first)
         call h5_dims(h, '/state/pair', dims, err)
         if (.not. err%failed()) then
-            allocate(fr%pair(2, dims(2)), fr%pair_xi(3, dims(2)))
-            call h5_read(h, '/state/pair', fr%pair, err)
-            call h5_read(h, '/state/pair_history', fr%pair_xi, err)
+            call share(dims(2), first, n)           ! this rank's part of the pairs
+            allocate(fr%pair(2, n), fr%pair_xi(3, n))
+            call h5_read(h, '/state/pair', fr%pair, err, first)
+            call h5_read(h, '/state/pair_history', fr%pair_xi, err, first)
         end if
         call h5_read(h, '/state/time0', fr%time0, err)
         call h5_read(h, '/state/step0', fr%step0, err)
@@ -523,13 +544,24 @@ contains
             call h5_read(h, '/state/snapshot_time', fr%snap_time, err)
         end if
         if (.not. err%failed()) then
-            if (any(fr%mat < 1 .or. fr%mat > c%mats%n) .or. any(fr%radius <= 0.0_wp) .or. &
-                any(fr%wall_tri < 0 .or. fr%wall_tri > c%mesh%n_tri)) &
+            if (comm_any(comm, any(fr%mat < 1 .or. fr%mat > c%mats%n) .or. &
+                         any(fr%radius <= 0.0_wp) .or. &
+                         any(fr%wall_tri < 0 .or. fr%wall_tri > c%mesh%n_tri))) &
                 call set_error(err, dem_err_input, path // ': the particle data are not ' // &
                                'consistent (damaged file?)')
         end if
         call h5_close(h, err)
+        if (.not. err%failed()) call pairs_to_particles(fr, comm)
     contains
+        !> Rank r's part of m rows: rows first + 1 ... first + count, first = r m / P (as
+        !> the blocks of frame_spread).
+        subroutine share(m, first, count)
+            integer(i8), intent(in) :: m
+            integer(i8), intent(out) :: first, count
+            first = comm%rank * m / comm%size
+            count = (comm%rank + 1) * m / comm%size - first
+        end subroutine share
+
         subroutine differs(what)
             character(len=*), intent(in) :: what
             if (err%failed()) return

@@ -23,7 +23,7 @@ module dem_h5
                     H5T_STRING_F, H5_REAL_KIND, H5_INTEGER_KIND
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io
-    use dem_comm, only: comm_t, comm_offset, comm_xor, comm_broadcast, comm_info_null
+    use dem_comm, only: comm_t, comm_offset, comm_xor, comm_broadcast, comm_info_null, comm_any
     implicit none
     private
     public :: h5_file_t, h5_create, h5_open, h5_close, h5_group, h5_write, h5_read, h5_dims, &
@@ -42,8 +42,11 @@ module dem_h5
         module procedure write_real, write_int, write_i8, write_text
     end interface h5_write
 
-    !> h5_read(f, name, a, err): a whole dataset into `a`, whose shape (and string length)
-    !> must be the dataset's.
+    !> h5_read(f, name, a, err [, first]): a whole dataset into `a`, whose shape (and string
+    !> length) must be the dataset's; with `first` (numbers), the rows (last Fortran
+    !> dimension) first + 1 ... first + size(a, last) of a dataset that every rank of the file
+    !> reads a part of, together (collective), the parts covering it in rank order; the
+    !> checksum is then that of the whole dataset, combined over the ranks.
     interface h5_read
         module procedure read_real, read_int, read_i8, read_text
     end interface h5_read
@@ -344,31 +347,34 @@ contains
         call h5sclose_f(space, e2)
     end subroutine write_checksum
 
-    subroutine read_real(f, name, a, err)
+    subroutine read_real(f, name, a, err, first)
         type(h5_file_t), intent(in) :: f
         character(len=*), intent(in) :: name
         real(wp), intent(inout), target, contiguous :: a(..)
         type(error_t), intent(inout) :: err
+        integer(i8), intent(in), optional :: first
         call read_any(f, name, h5kind_to_type(wp, H5_REAL_KIND), H5T_FLOAT_F, 8, &
-                      int(shape(a), hsize_t), c_loc(a), err)
+                      int(shape(a), hsize_t), c_loc(a), err, first)
     end subroutine read_real
 
-    subroutine read_int(f, name, a, err)
+    subroutine read_int(f, name, a, err, first)
         type(h5_file_t), intent(in) :: f
         character(len=*), intent(in) :: name
         integer(ip), intent(inout), target, contiguous :: a(..)
         type(error_t), intent(inout) :: err
+        integer(i8), intent(in), optional :: first
         call read_any(f, name, h5kind_to_type(ip, H5_INTEGER_KIND), H5T_INTEGER_F, 4, &
-                      int(shape(a), hsize_t), c_loc(a), err)
+                      int(shape(a), hsize_t), c_loc(a), err, first)
     end subroutine read_int
 
-    subroutine read_i8(f, name, a, err)
+    subroutine read_i8(f, name, a, err, first)
         type(h5_file_t), intent(in) :: f
         character(len=*), intent(in) :: name
         integer(i8), intent(inout), target, contiguous :: a(..)
         type(error_t), intent(inout) :: err
+        integer(i8), intent(in), optional :: first
         call read_any(f, name, h5kind_to_type(i8, H5_INTEGER_KIND), H5T_INTEGER_F, 8, &
-                      int(shape(a), hsize_t), c_loc(a), err)
+                      int(shape(a), hsize_t), c_loc(a), err, first)
     end subroutine read_i8
 
     subroutine read_text(f, name, a, err)
@@ -386,11 +392,11 @@ contains
         call h5tclose_f(t, e)
     end subroutine read_text
 
-    !> Read the whole dataset `name` into `buf` after checking that it exists, that its
-    !> type is of class `class` with elements of `bytes` bytes and its shape `dims`; then
-    !> check its
-    !> checksum.
-    subroutine read_any(f, name, mem_type, class, bytes, dims, buf, err)
+    !> Read the whole dataset `name` into `buf` (of shape dims), or with `first` this rank's
+    !> rows of it (h5_read), after checking that it exists, that its type is of class
+    !> `class` with elements of `bytes` bytes and its shape dims (all rows: their sum over
+    !> the ranks); then check its checksum.
+    subroutine read_any(f, name, mem_type, class, bytes, dims, buf, err, first)
         type(h5_file_t), intent(in) :: f
         character(len=*), intent(in) :: name
         integer(hid_t), intent(in) :: mem_type
@@ -398,19 +404,37 @@ contains
         integer(hsize_t), intent(in) :: dims(:)
         type(c_ptr), intent(in) :: buf
         type(error_t), intent(inout) :: err
+        integer(i8), intent(in), optional :: first
         integer(i8), allocatable :: have(:)
         integer(i8), target :: stored
-        integer(hid_t) :: dset, t, attr
+        integer(i8) :: offset, total, sum, expect(size(dims))
+        integer(hid_t) :: dset, t, attr, fspace, mspace, xfer
+        integer(hsize_t) :: offs(size(dims))
         type(c_ptr) :: to, to_sum
         integer(size_t) :: tsize
-        integer :: e, tclass
+        integer :: e, e2, tclass, r
+        logical :: wrong
         character(len=40) :: s1, s2
 
+        if (err%failed()) return
         call h5_dims(f, name, have, err)
         if (err%failed()) return
-        if (size(have) /= size(dims) .or. any(have /= int(dims, i8))) then
+        r = size(dims)
+        expect = int(dims, i8)
+        wrong = .false.
+        if (present(first)) then                  ! the ranks' rows make the dataset's
+            call comm_offset(f%comm, expect(r), offset, total)
+            expect(r) = total
+            wrong = comm_any(f%comm, offset /= first)
+        end if
+        if (size(have) /= r) then
+            wrong = .true.
+        else
+            wrong = wrong .or. any(have /= expect)
+        end if
+        if (wrong) then
             write(s1, '(7(i0,:,","))') have
-            write(s2, '(7(i0,:,","))') dims
+            write(s2, '(7(i0,:,","))') expect
             call set_error(err, dem_err_io, f%path // ': dataset ' // name // ' has shape (' // &
                            trim(s1) // ') where (' // trim(s2) // ') is expected (Fortran order)')
             return
@@ -429,17 +453,46 @@ contains
         to = buf                          ! the library's argument is intent(inout)
         to_sum = c_loc(stored)
         e = 0
-        if (product(dims) > 0) call h5dread_f(dset, mem_type, to, e)
+        offset = 0
+        if (present(first)) then          ! this rank's rows, read together
+            offs = 0
+            offs(r) = int(first, hsize_t)
+            offset = first * product(have(1:r - 1)) * bytes     ! in bytes, for the checksum
+            call h5dget_space_f(dset, fspace, e)
+            call h5screate_simple_f(r, dims, mspace, e2)
+            e = ior(e, e2)
+            if (product(dims) == 0) then
+                call h5sselect_none_f(fspace, e2)
+                call h5sselect_none_f(mspace, e2)
+            else
+                call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offs, dims, e2)
+            end if
+            e = ior(e, e2)
+            call h5pcreate_f(H5P_DATASET_XFER_F, xfer, e2)
+            call h5pset_dxpl_mpio_f(xfer, H5FD_MPIO_COLLECTIVE_F, e2)
+            if (product(have) > 0) call h5dread_f(dset, mem_type, to, e2, mspace, fspace, xfer)
+            e = ior(e, e2)
+            call h5pclose_f(xfer, e2)
+            call h5sclose_f(mspace, e2)
+            call h5sclose_f(fspace, e2)
+        else if (product(dims) > 0) then
+            call h5dread_f(dset, mem_type, to, e)
+        end if
         if (e == 0) call h5aopen_f(dset, checksum_name, attr, e)
         if (e == 0) then
             call h5aread_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), to_sum, e)
             call h5aclose_f(attr, tclass)
         end if
         call h5dclose_f(dset, tclass)
+        sum = checksum(buf, product(dims) * bytes, offset)
+        if (present(first)) then
+            sum = comm_xor(f%comm, sum)
+            if (comm_any(f%comm, e /= 0)) e = 1
+        end if
         if (e /= 0) then
             call set_error(err, dem_err_io, f%path // ': dataset ' // name // ' cannot be ' // &
                            'read (damaged file?)')
-        else if (stored /= checksum(buf, product(dims) * bytes, 0_i8)) then
+        else if (stored /= sum) then
             call set_error(err, dem_err_io, f%path // ': dataset ' // name // ' is damaged ' // &
                            '(its checksum does not match)')
         end if

@@ -173,10 +173,11 @@ contains
     !> blocks, with their wall-contact history, and send each pair's tangential history
     !> (lower id, higher id, displacement of the lower; from this rank's rows) to the ranks
     !> that now own either particle; `pair` and `xi` come back as the pairs of this rank's
-    !> particles, ordered by the two ids. With `pairs_everywhere`, every rank holds every pair
-    !> (the start of a run from a checkpoint): they are kept as they are, not sent. Ghosts
-    !> are dropped; the stores are resized to what the rank now holds (particles_reserve).
-    subroutine domain_migrate(d, comm, p, wc, kept, pair, xi, pairs_everywhere)
+    !> particles, ordered by the two ids. A pair is sent for each of its particles that this
+    !> rank holds (both, but for a restart's pairs, which come with one of them at least).
+    !> Ghosts are dropped; the stores are resized to what the rank now holds
+    !> (particles_reserve).
+    subroutine domain_migrate(d, comm, p, wc, kept, pair, xi)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         type(particles_t), intent(inout) :: p
@@ -184,7 +185,6 @@ contains
         integer(ip), intent(in) :: kept(:)
         integer(i8), allocatable, intent(inout) :: pair(:, :)   !! (2, pairs)
         real(wp), allocatable, intent(inout) :: xi(:, :)        !! (3, pairs) [m]
-        logical, intent(in) :: pairs_everywhere
         integer, allocatable :: dest(:), pair_dest(:, :), counts(:), recv_counts(:)
         integer(ip), allocatable :: idx(:), stay(:), by_id(:)
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :), pbuf(:, :), precv(:, :)
@@ -200,7 +200,7 @@ contains
         removed(kept) = .false.
         where (removed) dest(1:p%n_own) = -1
         stay = pack([(i, i = 1, p%n_own)], dest(1:p%n_own) == comm%rank)
-        if (.not. pairs_everywhere) call send_pairs()
+        call send_pairs()
 
         ! the particles that leave
         idx = sorted_by_rank(merge(dest(1:p%n_own), -1, dest(1:p%n_own) /= comm%rank), comm%size, &
@@ -224,12 +224,19 @@ contains
         call wall_contacts_unpack(wc, p%n_own + 1, rrecv(nreal + 1:, :))
         p%n_own = p%n_own + nr
     contains
-        !> The pairs: to the ranks of both particles (once if the same).
+        !> The pairs: to the ranks of both particles (once if the same), for those held here.
         subroutine send_pairs()
+            integer(ip) :: a, b
             by_id = order_by_id(p%gid(1:p%n_own + p%n_ghost))
             allocate(pair_dest(2, size(pair, 2)))
             do m = 1, size(pair, 2)
-                pair_dest(:, m) = [dest(local(pair(1, m))), dest(local(pair(2, m)))]
+                a = index_of_id(p%gid, by_id, pair(1, m))
+                b = index_of_id(p%gid, by_id, pair(2, m))
+                if (a == 0 .and. b == 0) error stop 'dem_domain: a pair names no particle ' // &
+                                                    'of this rank'
+                pair_dest(:, m) = -1
+                if (a > 0) pair_dest(1, m) = dest(a)
+                if (b > 0) pair_dest(2, m) = dest(b)
                 if (pair_dest(2, m) == pair_dest(1, m)) pair_dest(2, m) = -1   ! once
             end do
             idx = sorted_by_rank([pair_dest(1, :), pair_dest(2, :)], comm%size, counts)
@@ -244,13 +251,6 @@ contains
             d%bytes = d%bytes + 8 * (size(pbuf) + size(xbuf))
             call neighbors_unique_pairs(precv, xrecv, pair, xi)
         end subroutine send_pairs
-
-        !> Local index of a global id (owned or ghost).
-        integer(ip) function local(g)
-            integer(i8), intent(in) :: g
-            local = index_of_id(p%gid, by_id, g)
-            if (local == 0) error stop 'dem_domain: a pair names a particle this rank does not hold'
-        end function local
     end subroutine domain_migrate
 
     !> The positions of the items with rank >= 0, grouped by rank (in their order within a

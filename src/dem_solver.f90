@@ -28,7 +28,7 @@ module dem_solver
                           output_final, output_close, output_sizes, output_probes, &
                           output_histogram
     use dem_probes, only: probe_header, probe_values, probe_histogram_counts, probe_histogram
-    use dem_checkpoint, only: frame_t, frame_write, frame_spread, frame_select, &
+    use dem_checkpoint, only: frame_t, frame_write, frame_spread, &
                               checkpoint_file, checkpoint_latest, checkpoint_kept
     use dem_xdmf, only: xdmf_write, snapshot_file
     use dem_files, only: make_directory, file_remove, file_rename
@@ -142,7 +142,7 @@ contains
     end subroutine solver_init
 
     !> Replace the state of a case just set up by solver_init with a checkpoint's (on P
-    !> ranks, rank r takes its particles r+1, r+1+P, ... as solver_init does). If dt is
+    !> ranks, each rank the particles it read: checkpoint_read). If dt is
     !> the checkpoint's, the times of the steps are those of the run that wrote it, so that
     !> the continuation is bit for bit the same; otherwise time counts on from its time.
     !> Checkpoints newer than this one (a continuation now abandoned) are removed once the
@@ -153,25 +153,21 @@ contains
         type(frame_t), intent(in) :: fr
         character(len=:), allocatable :: latest
         integer(i8), allocatable :: kept(:)
-        integer(ip), allocatable :: mine(:)
         integer(ip) :: i, n
-        mine = [(i, i = 1 + s%comm%rank, fr%n, s%comm%size)]
-        n = size(mine)
+        n = fr%n
         s%p%n_own = 0
         call particles_reserve(s%p, n)
         call wall_contacts_reserve(s%wc, 0, n)
         do i = 1, n
-            associate (k => mine(i))
-                call particles_add(s%p, fr%gid(k), fr%mat(k), fr%radius(k), &
-                                   c%mats%density(fr%mat(k)), fr%x(:, k), fr%v(:, k), fr%w(:, k))
-            end associate
+            call particles_add(s%p, fr%gid(i), fr%mat(i), fr%radius(i), &
+                               c%mats%density(fr%mat(i)), fr%x(:, i), fr%v(:, i), fr%w(:, i))
         end do
-        s%p%f(:, 1:n) = fr%f(:, mine)
-        s%p%t(:, 1:n) = fr%t(:, mine)
+        s%p%f(:, 1:n) = fr%f
+        s%p%t(:, 1:n) = fr%t
         s%wc%tri = 0
         s%wc%xi = 0.0_wp
-        s%wc%tri(:, 1:n) = fr%wall_tri(:, mine)
-        s%wc%xi(:, :, 1:n) = fr%wall_xi(:, :, mine)
+        s%wc%tri(:, 1:n) = fr%wall_tri
+        s%wc%xi(:, :, 1:n) = fr%wall_xi
         call neighbors_set_history(s%nb, n, s%p%gid, [(i, i = 1, n)], fr%pair, fr%pair_xi)
         s%trace = 0
         if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:n), s%trace_id, dim=1)
@@ -197,8 +193,7 @@ contains
             s%stale = pack(kept, kept > fr%step)
         end if
         if (s%mesh%moving) call mesh_move(s%mesh, fr%time)
-        s%good = fr                       ! this rank's particles, and every pair (distribute)
-        call frame_select(s%good, mine)
+        s%good = fr                       ! this rank's particles and their pairs (distribute)
         s%restarted = .true.
     end subroutine solver_restore
 
@@ -699,8 +694,8 @@ contains
     !> Give the particles `kept` (the others are removed) and their contact history to the
     !> ranks of their blocks, rebalancing first when the load ratio exceeds the limit times
     !> the ratio the last partition achieved (blocks may not allow better, and a draining
-    !> silo's last particles would be repartitioned at every rebuild); the first time, every
-    !> rank holds every pair of a restored history, which is then not sent. The history
+    !> silo's last particles would be repartitioned at every rebuild); the first time after a
+    !> restart, the pairs are those of the checkpoint that involve the rank's particles. The history
     !> of the particles now owned is left for the next neighbors_build. The particle count
     !> and the momentum are checked to be the same after the move (to round-off).
     subroutine distribute(s, kept)
@@ -729,7 +724,7 @@ contains
             if (status /= 1) error stop 'dem: METIS could not partition the blocks'
         end if
         before = totals(kept)
-        call domain_migrate(s%dom, s%comm, s%p, s%wc, kept, pair, xi, .not. s%distributed)
+        call domain_migrate(s%dom, s%comm, s%p, s%wc, kept, pair, xi)
         s%distributed = .true.
         if (balance) s%balanced = domain_imbalance(s%comm, s%p%n_own)
         after = totals([(i, i = 1, s%p%n_own)])

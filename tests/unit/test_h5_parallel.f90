@@ -2,7 +2,9 @@
 !> a distributed dataset (rank r holds r + 1 rows of (r, row, column) codes, some ranks
 !> none) collectively, and a replicated one; every rank then reads the whole file back
 !> and finds the rows of all ranks concatenated in rank order, and the checksums, which
-!> the ranks combined from their parts, equal those of the whole datasets.
+!> the ranks combined from their parts, equal those of the whole datasets; then each rank
+!> reads a part of the rows (other parts than it wrote), checked likewise, and parts that do
+!> not cover the dataset are refused.
 program test_h5_parallel
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t
@@ -13,8 +15,9 @@ program test_h5_parallel
     type(comm_t) :: comm
     type(h5_file_t) :: f
     type(error_t) :: err
-    real(wp), allocatable :: mine(:, :), all_rows(:, :)
-    integer(i8), allocatable :: ids(:), all_ids(:), dims(:)
+    real(wp), allocatable :: mine(:, :), all_rows(:, :), part_rows(:, :)
+    integer(i8), allocatable :: ids(:), all_ids(:), dims(:), part_ids(:)
+    integer(i8) :: first, count
     integer :: r, k, n_total, row
     character(len=16) :: name
 
@@ -56,6 +59,21 @@ program test_h5_parallel
                              .and. all_ids(row) == 1000_i8 * r + k, 'rows in rank order')
         end do
     end do
+
+    ! each rank reads another part than it wrote: rows r n / P + 1 ... (r + 1) n / P
+    first = comm%rank * n_total / comm%size
+    count = (comm%rank + 1) * n_total / comm%size - first
+    allocate(part_rows(3, count), part_ids(count))
+    call h5_read(f, '/rows', part_rows, err, first)
+    call h5_read(f, '/ids', part_ids, err, first)
+    call assert_true(.not. err%failed(), 'read in parts: the checksums combined over the ranks ' &
+                     // 'match')
+    call assert_true(all(part_rows == all_rows(:, first + 1:first + count)) .and. &
+                     all(part_ids == all_ids(first + 1:first + count)), 'read in parts: the rows')
+    deallocate(part_rows)
+    allocate(part_rows(3, count + merge(1, 0, comm%rank == 0)))
+    call h5_read(f, '/rows', part_rows, err, first)
+    call assert_true(err%failed(), 'read in parts that do not cover the dataset: refused')
     call h5_close(f, err)
     call comm_free(comm)
     call assert_finish()
