@@ -79,9 +79,8 @@ contains
         type(frame_t), intent(inout) :: fr
         type(comm_t), intent(in) :: comm
         integer(i8) :: bound(0:comm%size)
-        integer(i8), allocatable :: gid(:, :), pair(:, :)
-        integer(ip), allocatable :: order(:), dest(:)
-        real(wp), allocatable :: pair_xi(:, :)
+        integer(i8), allocatable :: gid(:, :)
+        integer(ip), allocatable :: order(:)
         integer :: send(0:comm%size - 1), recv(0:comm%size - 1), k, n
 
         if (comm%size == 1) return
@@ -112,18 +111,7 @@ contains
                                                         size(fr%wall_xi, 3)])), &
                              [3, max_wall_contacts, n])
 
-        ! each pair to the rank of its lower id (a pair split between ranks comes twice)
-        dest = [(block_of(bound, fr%pair(1, k)), k = 1, size(fr%pair, 2))]
-        order = order_by_id(int(dest, i8))
-        send = 0
-        do k = 1, size(dest)
-            send(dest(k)) = send(dest(k)) + 1
-        end do
-        recv = comm_counts(comm, send)
-        allocate(pair(2, sum(recv)), pair_xi(3, sum(recv)))
-        call comm_exchange(comm, fr%pair(:, order), send, pair, recv)
-        call comm_exchange(comm, fr%pair_xi(:, order), send, pair_xi, recv)
-        call neighbors_unique_pairs(pair, pair_xi, fr%pair, fr%pair_xi)
+        call route_pairs(fr, comm, bound, both=.false.)   ! to the rank of the lower id
     contains
         !> Per-particle columns sent to the ranks of their blocks, received in id order.
         function moved(a) result(b)
@@ -143,25 +131,34 @@ contains
         end function moved_int
     end subroutine frame_spread
 
-    !> Give each pair of the history (read in parts, ordered by the two ids) to the ranks
-    !> whose block of particles holds either of its ids (blocks as frame_spread's: the
-    !> particles were read in them); each rank's pairs come back ordered by the two ids.
+    !> Give each pair of the history (read in parts) to the ranks whose block of particles
+    !> holds either of its ids (blocks as frame_spread's: the particles were read in them).
     subroutine pairs_to_particles(fr, comm)
         type(frame_t), intent(inout) :: fr
         type(comm_t), intent(in) :: comm
-        integer(i8) :: bound(0:comm%size)
+        if (comm%size == 1) return
+        call route_pairs(fr, comm, block_bounds(fr%gid, comm), both=.true.)
+    end subroutine pairs_to_particles
+
+    !> Send each pair of the history to the rank of the block (bounds `bound`) of its lower id,
+    !> and with `both` also to that of its higher id; each rank's pairs come back once each,
+    !> ordered by the two ids.
+    subroutine route_pairs(fr, comm, bound, both)
+        type(frame_t), intent(inout) :: fr
+        type(comm_t), intent(in) :: comm
+        integer(i8), intent(in) :: bound(0:)
+        logical, intent(in) :: both
         integer(i8), allocatable :: pair(:, :)
         integer(ip), allocatable :: order(:)
         integer, allocatable :: dest(:)
         real(wp), allocatable :: pair_xi(:, :)
         integer :: send(0:comm%size - 1), recv(0:comm%size - 1), k, m
-        if (comm%size == 1) return
-        bound = block_bounds(fr%gid, comm)
         m = size(fr%pair, 2)
         allocate(dest(2 * m))
         do k = 1, m
             dest(k) = block_of(bound, fr%pair(1, k))
-            dest(m + k) = block_of(bound, fr%pair(2, k))
+            dest(m + k) = -1
+            if (both) dest(m + k) = block_of(bound, fr%pair(2, k))
             if (dest(m + k) == dest(k)) dest(m + k) = -1     ! once to a rank holding both
         end do
         order = order_by_id(int(dest, i8))
@@ -176,7 +173,7 @@ contains
         call comm_exchange(comm, fr%pair(:, order), send, pair, recv)
         call comm_exchange(comm, fr%pair_xi(:, order), send, pair_xi, recv)
         call neighbors_unique_pairs(pair, pair_xi, fr%pair, fr%pair_xi)
-    end subroutine pairs_to_particles
+    end subroutine route_pairs
 
     !> Bounds of the id blocks of frame_spread: rank q gets the ids in (bound(q), bound(q+1)],
     !> bound(q) being the (q N / P)-th smallest id of all ranks (below the smallest for 0).
