@@ -6,7 +6,7 @@ program dem_main
                    solver_run, stop_wall_time, stop_signal, frame_t, checkpoint_read, &
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
                    solver_particles, solver_parallel_stats, i8
-    use dem_comm, only: comm_t, comm_init, comm_free
+    use dem_comm, only: comm_t, comm_init, comm_free, comm_max
     use dem_signals, only: signals_install
     implicit none
     type(comm_t) :: comm
@@ -152,8 +152,12 @@ contains
     subroutine print_timing(s, n)
         type(solver_t), intent(in) :: s
         integer(i8), intent(in) :: n
-        real(wp) :: total, ns
+        real(wp) :: total, ns, most(n_phases), least(n_phases)
         integer :: k
+        most = [(timer_seconds(s%timers, k), k = 1, n_phases)]
+        least = -most
+        call comm_max(comm, most)                 ! the slowest and the fastest rank
+        call comm_max(comm, least)
         if (comm%rank /= 0) return
         total = sum([(timer_seconds(s%timers, k), k = 1, n_phases)])
         ns = 1.0e9_wp * total / max(1.0_wp, real(s%steps_run, wp) * n)
@@ -164,9 +168,12 @@ contains
             ' ranks'
         write(output_unit, '(a)') ''
         do k = 1, n_phases
-            write(output_unit, '(a,a12,es11.4,a,f6.1,a)') 'timing:   ', phase_names(k), &
-                timer_seconds(s%timers, k), ' s ', &
+            write(output_unit, '(a,a12,es11.4,a,f6.1,a)', advance='no') 'timing:   ', &
+                phase_names(k), timer_seconds(s%timers, k), ' s ', &
                 100.0_wp * timer_seconds(s%timers, k) / max(total, tiny(1.0_wp)), ' %'
+            if (comm%size > 1) write(output_unit, '(a,es11.4,a,es11.4,a)', advance='no') &
+                '  (ranks from', -least(k), ' to', most(k), ' s)'
+            write(output_unit, '(a)') ''
         end do
         if (s%device >= 0) write(output_unit, '(a,i0,a)') &
             'timing: the kernels ran on OpenACC device ', s%device, ' (rank 0)'
