@@ -348,7 +348,7 @@ contains
         integer(i8), intent(in) :: until
         type(error_t), intent(inout) :: err
         real(wp) :: dt, step_seconds
-        logical :: written, bad, show
+        logical :: written, snap, bad, show
         dt = c%dt
         call timer_start(s%timers)
         associate (r => s%run)
@@ -392,16 +392,22 @@ contains
             s%steps_run = s%steps_run + 1
             if (size(c%outlets) > 0) call remove_outlet_particles(s, c)
             call timer_stop(s%timers, phase_neighbors)
-            written = .false.
-            if (due(r%every) .or. s%step == r%n_end) call write_series(s, c, r%out, err)
-            if (failed_anywhere(s, err)) exit
-            if (due(r%every_snap) .or. (r%every_snap > 0 .and. s%step == r%n_end)) &
-                call write_snapshot(s, c, err)
-            if (due(r%every_ckpt) .or. s%step == r%n_end .or. s%settled) then
-                call write_checkpoint(s, c, r%out, err)
-                written = .true.
+            ! outputs fall due on the same steps on every rank; an error in one (a rank's
+            ! file) is shared by all ranks before the next collective, on those steps only
+            if (due(r%every) .or. s%step == r%n_end) then
+                call write_series(s, c, r%out, err)
+                if (failed_anywhere(s, err)) exit
             end if
-            if (failed_anywhere(s, err)) exit
+            snap = due(r%every_snap) .or. (r%every_snap > 0 .and. s%step == r%n_end)
+            written = due(r%every_ckpt) .or. s%step == r%n_end .or. s%settled
+            if (snap) then
+                call write_snapshot(s, c, err)
+                if (failed_anywhere(s, err)) exit
+            end if
+            if (written) then
+                call write_checkpoint(s, c, r%out, err)
+                if (failed_anywhere(s, err)) exit
+            end if
             step_seconds = wall_seconds() - r%last
             r%last = r%last + step_seconds
             show = s%comm%rank == 0 .and. c%progress_interval > 0.0_wp &
