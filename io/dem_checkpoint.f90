@@ -81,14 +81,15 @@ contains
         integer(i8) :: bound(0:comm%size)
         integer(i8), allocatable :: gid(:, :)
         integer(ip), allocatable :: order(:)
-        integer :: send(0:comm%size - 1), recv(0:comm%size - 1), k, n
+        integer :: send(0:comm%size - 1), recv(0:comm%size - 1), k, n, q
 
         if (comm%size == 1) return
         bound = block_bounds(fr%gid, comm)
         ! the particles, in id order, are grouped by the rank of their block already
         send = 0
         do k = 1, fr%n
-            send(block_of(bound, fr%gid(k))) = send(block_of(bound, fr%gid(k))) + 1
+            q = block_of(bound, fr%gid(k))
+            send(q) = send(q) + 1
         end do
         recv = comm_counts(comm, send)
         n = sum(recv)

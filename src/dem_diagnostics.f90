@@ -23,9 +23,11 @@ contains
         real(wp), intent(in) :: mass(:), inv_inertia(:), x(:, :), v(:, :), w(:, :)
         real(wp), intent(in) :: gravity(3)
         real(wp), intent(out) :: ke_t, ke_r, pe, vmax
-        real(wp) :: e(3, n), sums(3, 1), top(1)
+        real(wp), allocatable :: e(:, :)
+        real(wp) :: sums(3, 1), top(1)
         type(fixed_sum_t) :: fixed
         integer(ip) :: i
+        allocate(e(3, n))
         top = 0.0_wp
         do i = 1, n
             e(:, i) = [0.5_wp * mass(i) * dot_product(v(:, i), v(:, i)), &

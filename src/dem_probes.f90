@@ -88,10 +88,10 @@ contains
         real(wp), allocatable :: values(:), all(:)
         real(wp) :: sums(4, size(used)), top(4), one(10)
         integer(i8) :: counts(size(used))
-        logical :: inside(size(gid))
+        logical, allocatable :: inside(:)
         type(fixed_sum_t) :: fixed
         integer(ip) :: i, m
-        inside = probe_in_region(p, x(1, :), x(2, :), x(3, :))
+        inside = probe_in_region(p, x(1, :), x(2, :), x(3, :))   ! the n owned particles
         select case (p%kind)
         case (probe_count)
             counts = 0
