@@ -15,7 +15,8 @@ module dem_input
     use dem_outlets, only: outlet_t, outlet_plane, outlet_box
     use dem_probes, only: probe_t, probe_count, probe_center_of_mass, probe_track, &
                           probe_histogram
-    use dem_neighbors, only: neighbors_t, neighbors_build
+    use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_data, neighbors_free
+    use dem_acc, only: acc_data, acc_enter, acc_exit, acc_to_host
     use dem_mesh, only: mesh_t
     use dem_particles, only: order_by_id
     use dem_integrate, only: integrator_euler, integrator_verlet
@@ -761,9 +762,11 @@ contains
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
         integer(ip), allocatable :: order(:)
+        integer(i8), allocatable :: gid(:)
+        real(wp), allocatable :: x(:, :), radius(:)
         type(neighbors_t) :: nb
         type(mesh_t) :: no_walls
-        integer(ip) :: i, j, k, n
+        integer(ip) :: i, j, k, n, bad(2)
         character(len=24) :: s1, s2
         n = c%n_particles
         if (n == 0) then
@@ -780,20 +783,32 @@ contains
                 return
             end if
         end do
-        call neighbors_build(nb, n, n, c%gid, c%x, c%radius, no_walls)
+        gid = c%gid(1:n)                          ! the lists are built on the device
+        x = c%x(:, 1:n)
+        radius = c%radius(1:n)
+        call acc_data(gid, acc_enter)
+        call acc_data(x, acc_enter)
+        call acc_data(radius, acc_enter)
+        call neighbors_build(nb, n, n, gid, x, radius, no_walls)
+        call neighbors_data(nb, acc_to_host)
+        bad = 0
         do i = 1, n
             do k = nb%start(i), nb%start(i + 1) - 1
                 j = nb%list(k)
-                if (norm2(c%x(:, j) - c%x(:, i)) < c%radius(i) + c%radius(j) &
-                    - 0.5_wp * min(c%radius(i), c%radius(j))) then
-                    write(s1, '(i0)') min(c%gid(i), c%gid(j))
-                    write(s2, '(i0)') max(c%gid(i), c%gid(j))
-                    call set_error(err, dem_err_input, nf%path // ': particles ' // trim(s1) // &
-                        ' and ' // trim(s2) // ' overlap by more than half the smaller radius')
-                    return
-                end if
+                if (norm2(x(:, j) - x(:, i)) < radius(i) + radius(j) &
+                    - 0.5_wp * min(radius(i), radius(j))) bad = [i, j]
             end do
+            if (bad(1) > 0) exit
         end do
+        call neighbors_free(nb)
+        call acc_data(radius, acc_exit)
+        call acc_data(x, acc_exit)
+        call acc_data(gid, acc_exit)
+        if (bad(1) == 0) return
+        write(s1, '(i0)') minval(gid(bad))
+        write(s2, '(i0)') maxval(gid(bad))
+        call set_error(err, dem_err_input, nf%path // ': particles ' // trim(s1) // &
+            ' and ' // trim(s2) // ' overlap by more than half the smaller radius')
     end subroutine check_particles
 
     !> &outlet (repeated): particles whose centre enters the region are removed and counted.

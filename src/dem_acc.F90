@@ -3,23 +3,25 @@
 !> Preprocessed (.F90) for the one call of the OpenACC runtime library, under _OPENACC.
 module dem_acc
     use, intrinsic :: iso_c_binding, only: c_ptr, c_loc
-    use dem_kinds, only: wp, ip
+    use dem_kinds, only: wp, ip, i8
 #ifdef _OPENACC
     use openacc, only: acc_get_num_devices, acc_set_device_num, acc_device_not_host
 #endif
     implicit none
     private
-    public :: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device, acc_select_device, &
-              acc_device_address
+    public :: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device, acc_create, &
+              acc_select_device, acc_device_address
 
     integer, parameter :: acc_enter = 1      !< create the device copy from the host's
     integer, parameter :: acc_exit = 2       !< delete the device copy
     integer, parameter :: acc_to_host = 3    !< update the host from the device
     integer, parameter :: acc_to_device = 4  !< update the device from the host
+    integer, parameter :: acc_create = 5     !< make a device copy, not initialised (for
+                                             !< arrays that kernels fill on the device)
 
     !> acc_data(a, op): one of the operations above on a whole array.
     interface acc_data
-        module procedure data_r1, data_r2, data_r3, data_i1, data_i2, data_b1
+        module procedure data_r1, data_r2, data_r3, data_i1, data_i2, data_l1, data_b1
     end interface acc_data
 
 contains
@@ -60,6 +62,8 @@ contains
             !$acc update self(a)
         case (acc_to_device)
             !$acc update device(a)
+        case (acc_create)
+            !$acc enter data create(a)
         end select
     end subroutine data_r1
 
@@ -75,6 +79,8 @@ contains
             !$acc update self(a)
         case (acc_to_device)
             !$acc update device(a)
+        case (acc_create)
+            !$acc enter data create(a)
         end select
     end subroutine data_r2
 
@@ -90,6 +96,8 @@ contains
             !$acc update self(a)
         case (acc_to_device)
             !$acc update device(a)
+        case (acc_create)
+            !$acc enter data create(a)
         end select
     end subroutine data_r3
 
@@ -105,6 +113,8 @@ contains
             !$acc update self(a)
         case (acc_to_device)
             !$acc update device(a)
+        case (acc_create)
+            !$acc enter data create(a)
         end select
     end subroutine data_i1
 
@@ -120,8 +130,27 @@ contains
             !$acc update self(a)
         case (acc_to_device)
             !$acc update device(a)
+        case (acc_create)
+            !$acc enter data create(a)
         end select
     end subroutine data_i2
+
+    subroutine data_l1(a, op)
+        integer(i8), intent(inout) :: a(:)
+        integer, intent(in) :: op
+        select case (op)
+        case (acc_enter)
+            !$acc enter data copyin(a)
+        case (acc_exit)
+            !$acc exit data delete(a)
+        case (acc_to_host)
+            !$acc update self(a)
+        case (acc_to_device)
+            !$acc update device(a)
+        case (acc_create)
+            !$acc enter data create(a)
+        end select
+    end subroutine data_l1
 
     subroutine data_b1(a, op)
         logical, intent(inout) :: a(:)
@@ -135,6 +164,8 @@ contains
             !$acc update self(a)
         case (acc_to_device)
             !$acc update device(a)
+        case (acc_create)
+            !$acc enter data create(a)
         end select
     end subroutine data_b1
 end module dem_acc

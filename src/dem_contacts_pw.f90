@@ -8,7 +8,7 @@ module dem_contacts_pw
     use dem_contact_hm, only: hm_force
     use dem_mesh, only: closest_point_triangle, feature_face
     use dem_vector, only: cross
-    use dem_storage, only: storage_capacity, storage_resize
+    use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int
     implicit none
     private
     public :: wall_contacts_t, wall_contacts_init, wall_contacts_permute, pw_forces, &
@@ -54,12 +54,10 @@ contains
     subroutine wall_contacts_permute(wc, order)
         type(wall_contacts_t), intent(inout) :: wc
         integer(ip), intent(in) :: order(:)
-        integer(ip) :: n
-        n = size(order)
-        wc%tri(:, 1:n) = wc%tri(:, order)
-        wc%xi(:, :, 1:n) = wc%xi(:, :, order)
-        wc%tri(:, n + 1:) = 0
-        wc%xi(:, :, n + 1:) = 0.0_wp
+        call permute_int(max_wall_contacts, size(wc%tri, 2, kind=ip), size(order, kind=ip), &
+                         order, wc%tri)
+        call permute_real(3 * max_wall_contacts, size(wc%tri, 2, kind=ip), &
+                          size(order, kind=ip), order, wc%xi)
     end subroutine wall_contacts_permute
 
     !> The history of the particles idx, for another rank (n_wall_pack_real values each).

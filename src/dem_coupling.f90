@@ -119,7 +119,11 @@ contains
             s%removed_ids = s%removed_ids(1:0)
             call acc_data(s%p%ext, acc_to_device)
             call solver_advance(s, c, s%step + n_sub, err)
-            call acc_data(s%p%ext, acc_to_host)
+            call acc_data(s%p%ext, acc_to_host)  ! (a rebuild reorders the particles on
+            call acc_data(s%p%gid, acc_to_host)  ! the device: what the fluid reads of them)
+            call acc_data(s%p%mat, acc_to_host)
+            call acc_data(s%p%radius, acc_to_host)
+            call acc_data(s%p%mass, acc_to_host)
             call acc_data(s%p%x, acc_to_host)
             call acc_data(s%p%v, acc_to_host)
             call acc_data(s%p%w, acc_to_host)

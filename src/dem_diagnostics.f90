@@ -49,17 +49,21 @@ contains
     end subroutine energies
 
     !> Number of overlapping particle pairs among the owned particles' list entries, counted
-    !> from both sides: summed over the ranks, twice the number of contacts.
-    integer(ip) function count_pp_sides(n_own, x, radius, start, list) result(sides)
-        integer(ip), intent(in) :: n_own
-        real(wp), intent(in) :: x(:, :), radius(:)
-        integer(ip), intent(in) :: start(:), list(:)
+    !> from both sides: summed over the ranks, twice the number of contacts. A reduction, on
+    !> the device.
+    integer(ip) function count_pp_sides(n_own, n_all, n_entries, x, radius, start, list) &
+        result(sides)
+        integer(ip), intent(in) :: n_own, n_all, n_entries
+        real(wp), intent(in) :: x(3, n_all), radius(n_all)
+        integer(ip), intent(in) :: start(n_own + 1), list(n_entries)
         integer(ip) :: i, k, j
         sides = 0
+        !$acc parallel loop gang vector default(present) private(j) reduction(+:sides)
         do i = 1, n_own
             do k = start(i), start(i + 1) - 1
                 j = list(k)
-                if (sum((x(:, j) - x(:, i))**2) < (radius(i) + radius(j))**2) sides = sides + 1
+                if ((x(1, j) - x(1, i))**2 + (x(2, j) - x(2, i))**2 + (x(3, j) - x(3, i))**2 &
+                    < (radius(i) + radius(j))**2) sides = sides + 1
             end do
         end do
     end function count_pp_sides

@@ -8,13 +8,15 @@
 !> wall triangles, which are entered in every cell their reach covers.
 module dem_neighbors
     use dem_kinds, only: wp, ip, i8
+    use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host
+    use dem_cells, only: prefix_sum, bin_items, cell_coords, cell_number, fill_range
     use dem_particles, only: order_by_id, index_of_id
     use dem_mesh, only: mesh_t, closest_point_triangle
     implicit none
     private
     public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order, &
               neighbors_history, neighbors_set_history, neighbors_unique_pairs, fit_grid, &
-              grid_t, grid_shape, grid_fill, cell_of
+              neighbors_data, neighbors_free, grid_t, grid_shape, grid_fill, cell_of
 
     !> The lists, their per-entry tangential history, and the positions they were built at.
     type :: neighbors_t
@@ -77,23 +79,75 @@ contains
         end do
     end function max_displacement2
 
-    !> The particles 1..n in the order of the cells of a grid of size h (x fastest), for
-    !> cache locality: neighbours in space become neighbours in memory.
-    function neighbors_spatial_order(n, x, h) result(order)
-        integer(ip), intent(in) :: n
+    !> The particles kept(1:m) in the order of the cells of a grid of size h (x fastest), for
+    !> cache locality: neighbours in space become neighbours in memory. On the device: kept,
+    !> x and order are there.
+    subroutine neighbors_spatial_order(m, kept, x, h, order)
+        integer(ip), intent(in) :: m
+        integer(ip), intent(in) :: kept(m)
         real(wp), intent(in) :: x(:, :)     !! positions [m]
         real(wp), intent(in) :: h           !! cell size [m]
-        integer(ip) :: order(n)
-        type(grid_t) :: g
-        integer(ip) :: i
-        if (n == 0) return
-        call grid_shape(g, minval(x(:, 1:n), dim=2), maxval(x(:, 1:n), dim=2), h, n)
-        call grid_fill(g, n, [(i, i = 1, n)], x)
-        order = g%item
-    end function neighbors_spatial_order
+        integer(ip), intent(inout) :: order(m)
+        real(wp), allocatable :: xk(:, :)
+        integer(ip), allocatable :: level(:), cell(:), start(:), item(:), cnt(:)
+        real(wp) :: lo(3, 1), hi(3), hh(1)
+        integer(ip) :: n(3, 1), off(1)
+        if (m == 0) return
+        allocate(xk(3, m), level(m), cell(m), item(m))
+        call acc_data(xk, acc_create)
+        call acc_data(level, acc_create)
+        call acc_data(cell, acc_create)
+        call acc_data(item, acc_create)
+        call gather_columns(m, size(x, 2, kind=ip), kept, x, xk, level)
+        call bounds(m, xk, lo(:, 1), hi)
+        hh = h
+        off = 0
+        call fit_grid(lo(:, 1), hi, max(27.0_wp, 4.0_wp * m), hh(1), n(:, 1))
+        allocate(start(product(n) + 1), cnt(product(n)))
+        call acc_data(start, acc_create)
+        call acc_data(cnt, acc_create)
+        call grid_cells(m, 1, xk, level, lo, hh, n, off, cell)
+        call bin_items(m, product(n), cell, start, item, cnt)
+        call gather_items(m, kept, item, order)
+        call acc_data(cnt, acc_exit)
+        call acc_data(start, acc_exit)
+        call acc_data(item, acc_exit)
+        call acc_data(cell, acc_exit)
+        call acc_data(level, acc_exit)
+        call acc_data(xk, acc_exit)
+    end subroutine neighbors_spatial_order
 
-    !> Rebuild both lists. The history of pairs still listed is kept, matched by global id;
-    !> old_index(i) is where particle i was stored at the last build (identity if absent).
+    !> xk(:, k) = x(:, kept(k)), and level(k) = 0 (one grid), for k = 1..m.
+    subroutine gather_columns(m, n_x, kept, x, xk, level)
+        integer(ip), intent(in) :: m, n_x
+        integer(ip), intent(in) :: kept(m)
+        real(wp), intent(in) :: x(3, n_x)
+        real(wp), intent(inout) :: xk(3, m)
+        integer(ip), intent(inout) :: level(m)
+        integer(ip) :: k
+        !$acc parallel loop gang vector default(present)
+        do k = 1, m
+            xk(:, k) = x(:, kept(k))
+            level(k) = 0
+        end do
+    end subroutine gather_columns
+
+    !> order(k) = kept(item(k)), k = 1..m.
+    subroutine gather_items(m, kept, item, order)
+        integer(ip), intent(in) :: m
+        integer(ip), intent(in) :: kept(m), item(m)
+        integer(ip), intent(inout) :: order(m)
+        integer(ip) :: k
+        !$acc parallel loop gang vector default(present)
+        do k = 1, m
+            order(k) = kept(item(k))
+        end do
+    end subroutine gather_items
+
+    !> Rebuild both lists, on the device: gid, x, radius, the walls' vertices and old_index
+    !> are there, and the lists are left there (neighbors_data brings them to the host). The
+    !> history of pairs still listed is kept, matched by global id; old_index(i) is where
+    !> particle i was stored at the last build (identity if absent).
     subroutine neighbors_build(nb, n_own, n_all, gid, x, radius, mesh, old_index)
         type(neighbors_t), intent(inout) :: nb
         integer(ip), intent(in) :: n_own       !! owned particles (rows)
@@ -103,153 +157,559 @@ contains
         real(wp), intent(in) :: radius(:)      !! [m]
         type(mesh_t), intent(in) :: mesh
         integer(ip), intent(in), optional :: old_index(:)
-        integer(ip), allocatable :: old_start(:), level(:)
+        integer(ip), allocatable :: old_start(:), same(:), level(:), cell(:), gstart(:), &
+                                    gitem(:), cnt(:), n_of(:, :), off(:)
         integer(i8), allocatable :: old_partner(:)
-        real(wp), allocatable :: old_xi(:, :), rmax(:)
-        type(grid_t), allocatable :: grids(:)
-        real(wp) :: lo(3), hi(3), rmin, margin
-        integer(ip) :: i, l, pass, k
+        real(wp), allocatable :: old_xi(:, :), rmax(:), origin(:, :), h(:)
+        real(wp) :: lo(3), hi(3), margin
+        integer(ip) :: l, n_levels, n_cells, n_entries
         logical :: keep_history
 
         keep_history = allocated(nb%start)       ! old rows, matched by old_index if given
         if (keep_history .and. .not. present(old_index)) &
             keep_history = size(nb%start) == n_own + 1
-        if (keep_history) then
+        if (keep_history) then                   ! (their device copies go with them)
             call move_alloc(nb%start, old_start)
             call move_alloc(nb%partner, old_partner)
             call move_alloc(nb%xi, old_xi)
         end if
-        if (allocated(nb%start)) deallocate(nb%start, nb%partner, nb%xi)
-        if (allocated(nb%list)) deallocate(nb%list, nb%mirror, nb%touching, nb%fpair, nb%cpair)
-        if (allocated(nb%wstart)) deallocate(nb%wstart, nb%wlist)
-        allocate(nb%start(n_own + 1), nb%wstart(n_own + 1))
-        nb%start(1) = 1
-        nb%wstart(1) = 1
-        nb%tri_tests = 0
-        if (n_all == 0) then
-            allocate(nb%list(0), nb%partner(0), nb%xi(3, 0), nb%wlist(0), nb%mirror(0), &
-                     nb%touching(0), nb%fpair(3, 0), nb%cpair(3, 0))
-            nb%x_ref = x(:, 1:n_own)
-            if (mesh%moving) nb%vert_ref = mesh%vert
-            return
+        call neighbors_free(nb)
+        allocate(nb%start(n_own + 1), nb%wstart(n_own + 1), nb%x_ref(3, n_own))
+        call acc_data(nb%start, acc_create)
+        call acc_data(nb%wstart, acc_create)
+        call acc_data(nb%x_ref, acc_create)
+        call copy_columns(3, n_own, x, nb%x_ref)
+        if (mesh%moving) then
+            allocate(nb%vert_ref, mold=mesh%vert)
+            call acc_data(nb%vert_ref, acc_create)
+            call copy_columns(9, mesh%n_tri, mesh%vert, nb%vert_ref)
         end if
 
-        ! size levels: radii in [rmin 2^l, rmin 2^(l+1)) share level l
-        rmin = minval(radius(1:n_all))
-        allocate(level(n_all))
-        do i = 1, n_all
-            level(i) = min(30, int(log(radius(i) / rmin) / log(2.0_wp) + 1.0e-9_wp))
+        ! size levels: radii in [rmin 2^l, rmin 2^(l+1)) share level l, with a grid each
+        allocate(level(max(1, n_all)))
+        call acc_data(level, acc_create)
+        call size_levels(n_all, radius, level, n_levels)
+        allocate(rmax(0:n_levels - 1), origin(3, 0:n_levels - 1), h(0:n_levels - 1), &
+                 n_of(3, 0:n_levels - 1), off(0:n_levels - 1))
+        do l = 0, n_levels - 1
+            rmax(l) = level_radius(n_all, radius, level, l)
         end do
-        nb%n_levels = maxval(level) + 1
-        allocate(rmax(0:nb%n_levels - 1), grids(0:nb%n_levels - 1))
-        rmax = 0.0_wp
-        do i = 1, n_all
-            rmax(level(i)) = max(rmax(level(i)), radius(i))
-        end do
+        call bounds(n_all, x, lo, hi)
         margin = maxval(rmax) + nb%skin
-        lo = minval(x(:, 1:n_all), dim=2) - margin
-        hi = maxval(x(:, 1:n_all), dim=2) + margin
-        do l = 0, nb%n_levels - 1
-            if (rmax(l) == 0.0_wp) cycle
-            call grid_shape(grids(l), lo, hi, 2.0_wp * rmax(l) + nb%skin, n_all)
-            call grid_fill(grids(l), count(level == l), pack([(i, i = 1, n_all)], level == l), x)
+        lo = lo - margin
+        hi = hi + margin
+        n_cells = 0
+        do l = 0, n_levels - 1
+            origin(:, l) = lo
+            h(l) = 2.0_wp * rmax(l) + nb%skin
+            n_of(:, l) = 1
+            if (rmax(l) > 0.0_wp) call fit_grid(lo, hi, max(27.0_wp, 4.0_wp * n_all), h(l), &
+                                                 n_of(:, l))
+            off(l) = n_cells
+            n_cells = n_cells + product(n_of(:, l))
         end do
+        nb%n_levels = merge(n_levels, 0, n_all > 0)
 
-        ! particle pairs within R_i + R_j + skin: count, then fill
-        do pass = 1, 2
-            do i = 1, n_own
-                k = nb%start(i)
-                do l = 0, nb%n_levels - 1
-                    if (rmax(l) == 0.0_wp) cycle
-                    call scan_level(i, grids(l), rmax(l), pass == 2, k)
-                end do
-                if (pass == 1) nb%start(i + 1) = k
-            end do
-            if (pass == 1) allocate(nb%list(nb%start(n_own + 1) - 1))
-        end do
-        allocate(nb%partner(size(nb%list)), nb%xi(3, size(nb%list)))
-        do i = 1, n_own
-            call sort_row(nb%list(nb%start(i):nb%start(i + 1) - 1), gid)
-        end do
-        nb%partner = gid(nb%list)
-        nb%xi = 0.0_wp
-        allocate(nb%mirror(size(nb%list)), nb%touching(size(nb%list)), &
-                 nb%fpair(3, size(nb%list)), nb%cpair(3, size(nb%list)))
-        nb%touching = .false.
-        do i = 1, n_own
-            do k = nb%start(i), nb%start(i + 1) - 1
-                nb%mirror(k) = find_entry(nb%list(k), gid(i))
-                if (nb%partner(k) < gid(i)) nb%mirror(k) = -nb%mirror(k)
-            end do
-        end do
-        if (keep_history) then
-            do i = 1, n_own
-                l = i
-                if (present(old_index)) l = old_index(i)
-                call carry_history(nb%partner(nb%start(i):nb%start(i + 1) - 1), &
-                                   nb%xi(:, nb%start(i):nb%start(i + 1) - 1), &
-                                   old_partner(old_start(l):old_start(l + 1) - 1), &
-                                   old_xi(:, old_start(l):old_start(l + 1) - 1))
-            end do
+        ! the particles into the cells of their level's grid (one numbering for all levels)
+        allocate(cell(max(1, n_all)), gitem(max(1, n_all)), gstart(n_cells + 1), &
+                 cnt(max(n_cells, n_own)))
+        call acc_data(cell, acc_create)
+        call acc_data(gitem, acc_create)
+        call acc_data(gstart, acc_create)
+        call acc_data(cnt, acc_create)
+        call grid_cells(n_all, n_levels, x, level, origin, h, n_of, off, cell)
+        call bin_items(n_all, n_cells, cell, gstart, gitem, cnt)
+
+        ! particle pairs within R_i + R_j + skin: count, then fill, then each row by id
+        call pair_rows(.false., n_own, n_all, n_levels, x, radius, nb%skin, rmax, origin, h, &
+                       n_of, off, n_cells, gstart, gitem, nb%start, size(cnt, kind=ip), cnt)
+        call prefix_sum(n_own, cnt, nb%start)
+        call acc_data(nb%start(n_own + 1:n_own + 1), acc_to_host)
+        n_entries = nb%start(n_own + 1) - 1
+        allocate(nb%list(n_entries), nb%partner(n_entries), nb%xi(3, n_entries), &
+                 nb%mirror(n_entries), nb%touching(n_entries), nb%fpair(3, n_entries), &
+                 nb%cpair(3, n_entries))
+        call acc_data(nb%list, acc_create)
+        call acc_data(nb%partner, acc_create)
+        call acc_data(nb%xi, acc_create)
+        call acc_data(nb%mirror, acc_create)
+        call acc_data(nb%touching, acc_create)
+        call acc_data(nb%fpair, acc_create)
+        call acc_data(nb%cpair, acc_create)
+        call pair_rows(.true., n_own, n_all, n_levels, x, radius, nb%skin, rmax, origin, h, &
+                       n_of, off, n_cells, gstart, gitem, nb%start, n_entries, nb%list)
+        call pair_partners(n_own, n_all, n_entries, gid, nb%start, nb%list, nb%partner, &
+                           nb%mirror, nb%xi, nb%touching)
+        if (keep_history .and. present(old_index)) then
+            call carry_history(n_own, size(old_start, kind=ip), n_entries, &
+                               size(old_partner, kind=ip), old_index, nb%start, nb%partner, &
+                               nb%xi, old_start, old_partner, old_xi)
+        else if (keep_history) then              ! the particles kept their places
+            allocate(same(n_own))
+            call acc_data(same, acc_create)
+            call fill_range(n_own, same, 1, 1)
+            call carry_history(n_own, size(old_start, kind=ip), n_entries, &
+                               size(old_partner, kind=ip), same, nb%start, nb%partner, &
+                               nb%xi, old_start, old_partner, old_xi)
+            call acc_data(same, acc_exit)
         end if
+        if (keep_history) then
+            call acc_data(old_start, acc_exit)
+            call acc_data(old_partner, acc_exit)
+            call acc_data(old_xi, acc_exit)
+        end if
+        call acc_data(cnt, acc_exit)
+        call acc_data(gstart, acc_exit)
+        call acc_data(gitem, acc_exit)
+        call acc_data(cell, acc_exit)
+        call acc_data(level, acc_exit)
 
-        call build_wall_list(nb, n_own, x, radius, mesh, lo, hi, &
-                             2.0_wp * rmax(0) + nb%skin, n_all)
-        nb%x_ref = x(:, 1:n_own)
-        if (mesh%moving) nb%vert_ref = mesh%vert
+        call build_wall_list(nb, n_own, n_all, x, radius, mesh, lo, hi, &
+                             2.0_wp * rmax(0) + nb%skin)
         nb%n_builds = nb%n_builds + 1
-    contains
-        !> The entry of row j_ whose partner has id g_ (0 if j_ is a ghost): rows are ordered
-        !> by partner id, so a binary search finds it.
-        integer(ip) function find_entry(j_, g_) result(e)
-            integer(ip), intent(in) :: j_
-            integer(i8), intent(in) :: g_
-            integer(ip) :: lo_, hi_
-            e = 0
-            if (j_ > n_own) return
-            lo_ = nb%start(j_)
-            hi_ = nb%start(j_ + 1) - 1
-            do while (lo_ <= hi_)
-                e = (lo_ + hi_) / 2
-                if (nb%partner(e) == g_) return
-                if (nb%partner(e) < g_) then
-                    lo_ = e + 1
-                else
-                    hi_ = e - 1
-                end if
-            end do
-            e = 0
-        end function find_entry
+    end subroutine neighbors_build
 
-        !> Partners of particle i in one level's grid: count them (k advances) or also list them.
-        subroutine scan_level(i_, g, rmax_l, fill, k_)
-            integer(ip), intent(in) :: i_
-            type(grid_t), intent(in) :: g
-            real(wp), intent(in) :: rmax_l
-            logical, intent(in) :: fill
-            integer(ip), intent(inout) :: k_
-            integer(ip) :: c0(3), c1(3), cx, cy, cz, cell, m, j
-            real(wp) :: reach
-            reach = radius(i_) + rmax_l + nb%skin
-            c0 = cell_of(g, x(:, i_) - reach)
-            c1 = cell_of(g, x(:, i_) + reach)
-            do cz = c0(3), c1(3)
-                do cy = c0(2), c1(2)
-                    do cx = c0(1), c1(1)
-                        cell = 1 + cx + g%n(1) * (cy + g%n(2) * cz)
-                        do m = g%start(cell), g%start(cell + 1) - 1
-                            j = g%item(m)
-                            if (j == i_) cycle
-                            if (sum((x(:, j) - x(:, i_))**2) &
-                                >= (radius(i_) + radius(j) + nb%skin)**2) cycle
-                            if (fill) nb%list(k_) = j
-                            k_ = k_ + 1
+    !> b(:, i) = a(:, i), i = 1..n, for columns of `rows` values.
+    subroutine copy_columns(rows, n, a, b)
+        integer(ip), intent(in) :: rows, n
+        real(wp), intent(in) :: a(rows, n)
+        real(wp), intent(inout) :: b(rows, n)
+        integer(ip) :: i
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n
+            b(:, i) = a(:, i)
+        end do
+    end subroutine copy_columns
+
+    !> Size level of each particle, l = floor(log2(R / R_min)) (at most 30), and the number
+    !> of levels (at least 1).
+    subroutine size_levels(n, radius, level, n_levels)
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: radius(n)
+        integer(ip), intent(inout) :: level(n)
+        integer(ip), intent(out) :: n_levels
+        real(wp) :: rmin
+        integer(ip) :: i
+        rmin = huge(1.0_wp)
+        !$acc parallel loop gang vector default(present) reduction(min:rmin)
+        do i = 1, n
+            rmin = min(rmin, radius(i))
+        end do
+        n_levels = 1
+        !$acc parallel loop gang vector default(present) reduction(max:n_levels)
+        do i = 1, n
+            level(i) = min(30, int(log(radius(i) / rmin) / log(2.0_wp) + 1.0e-9_wp))
+            n_levels = max(n_levels, level(i) + 1)
+        end do
+    end subroutine size_levels
+
+    !> The largest radius of level l (0 if it has no particle) [m].
+    real(wp) function level_radius(n, radius, level, l) result(r)
+        integer(ip), intent(in) :: n, l
+        real(wp), intent(in) :: radius(n)
+        integer(ip), intent(in) :: level(n)
+        integer(ip) :: i
+        r = 0.0_wp
+        !$acc parallel loop gang vector default(present) reduction(max:r)
+        do i = 1, n
+            if (level(i) == l) r = max(r, radius(i))
+        end do
+    end function level_radius
+
+    !> Box [lo, hi] of the positions x(:, 1:n) (lo = hi = 0 when n = 0), a reduction.
+    subroutine bounds(n, x, lo, hi)
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: x(3, n)
+        real(wp), intent(out) :: lo(3), hi(3)
+        real(wp) :: lo1, lo2, lo3, hi1, hi2, hi3
+        integer(ip) :: i
+        lo1 = huge(1.0_wp)
+        lo2 = lo1
+        lo3 = lo1
+        hi1 = -lo1
+        hi2 = hi1
+        hi3 = hi1
+        !$acc parallel loop gang vector default(present) &
+        !$acc reduction(min:lo1, lo2, lo3) reduction(max:hi1, hi2, hi3)
+        do i = 1, n
+            lo1 = min(lo1, x(1, i))
+            lo2 = min(lo2, x(2, i))
+            lo3 = min(lo3, x(3, i))
+            hi1 = max(hi1, x(1, i))
+            hi2 = max(hi2, x(2, i))
+            hi3 = max(hi3, x(3, i))
+        end do
+        lo = [lo1, lo2, lo3]
+        hi = [hi1, hi2, hi3]
+        if (n == 0) then
+            lo = 0.0_wp
+            hi = 0.0_wp
+        end if
+    end subroutine bounds
+
+    !> The cell of each particle in its level's grid, numbered over all the grids (level l's
+    !> cells after off(l)).
+    subroutine grid_cells(n, n_levels, x, level, origin, h, n_of, off, cell)
+        integer(ip), intent(in) :: n, n_levels
+        real(wp), intent(in) :: x(3, n), origin(3, 0:n_levels - 1), h(0:n_levels - 1)
+        integer(ip), intent(in) :: level(n), n_of(3, 0:n_levels - 1), off(0:n_levels - 1)
+        integer(ip), intent(inout) :: cell(n)
+        integer(ip) :: i, l
+        !$acc parallel loop gang vector default(present) copyin(origin, h, n_of, off) private(l)
+        do i = 1, n
+            l = level(i)
+            cell(i) = off(l) + cell_number(cell_coords(x(:, i), origin(:, l), h(l), n_of(:, l)), &
+                                           n_of(:, l))
+        end do
+    end subroutine grid_cells
+
+    !> The partners of each owned particle i (within R_i + R_j + skin) from the cells of
+    !> every level's grid its reach covers: their number into out(i) (fill false), or the
+    !> partners into out(start(i):start(i + 1) - 1) (fill true).
+    subroutine pair_rows(fill, n_own, n_all, n_levels, x, radius, skin, rmax, origin, h, n_of, &
+                         off, n_cells, gstart, gitem, start, n_out, out)
+        logical, intent(in) :: fill
+        integer(ip), intent(in) :: n_own, n_all, n_levels, n_cells, n_out
+        real(wp), intent(in) :: x(3, n_all), radius(n_all), skin
+        real(wp), intent(in) :: rmax(0:n_levels - 1), origin(3, 0:n_levels - 1), &
+                                h(0:n_levels - 1)
+        integer(ip), intent(in) :: n_of(3, 0:n_levels - 1), off(0:n_levels - 1)
+        integer(ip), intent(in) :: gstart(n_cells + 1), gitem(max(1, n_all)), start(n_own + 1)
+        integer(ip), intent(inout) :: out(n_out)
+        integer(ip) :: i, j, k, l, m, cx, cy, cz, c0(3), c1(3), c(3), cell
+        real(wp) :: reach, lo(3), hi(3)
+        !$acc parallel loop gang vector default(present) copyin(rmax, origin, h, n_of, off) &
+        !$acc private(j, k, l, m, cx, cy, cz, c0, c1, c, cell, reach, lo, hi)
+        do i = 1, n_own
+            k = 0
+            do l = 0, n_levels - 1
+                if (rmax(l) == 0.0_wp) cycle
+                reach = radius(i) + rmax(l) + skin
+                lo = x(:, i) - reach
+                hi = x(:, i) + reach
+                c0 = cell_coords(lo, origin(:, l), h(l), n_of(:, l))
+                c1 = cell_coords(hi, origin(:, l), h(l), n_of(:, l))
+                do cz = c0(3), c1(3)
+                    do cy = c0(2), c1(2)
+                        do cx = c0(1), c1(1)
+                            c(1) = cx
+                            c(2) = cy
+                            c(3) = cz
+                            cell = off(l) + cell_number(c, n_of(:, l))
+                            do m = gstart(cell), gstart(cell + 1) - 1
+                                j = gitem(m)
+                                if (j == i) cycle
+                                if ((x(1, j) - x(1, i))**2 + (x(2, j) - x(2, i))**2 &
+                                    + (x(3, j) - x(3, i))**2 &
+                                    >= (radius(i) + radius(j) + skin)**2) cycle
+                                if (fill) out(start(i) + k) = j
+                                k = k + 1
+                            end do
                         end do
                     end do
                 end do
             end do
-        end subroutine scan_level
-    end subroutine neighbors_build
+            if (.not. fill) out(i) = k
+        end do
+    end subroutine pair_rows
+
+    !> Each row ordered by the partners' global ids (insertion sort: rows are short), the
+    !> partners' ids, no history yet, and the mirror entries: the partner's entry for the
+    !> same pair (a binary search of its row), negated when the partner has the lower id,
+    !> 0 for a ghost partner.
+    subroutine pair_partners(n_own, n_all, n_entries, gid, start, list, partner, mirror, xi, &
+                             touching)
+        integer(ip), intent(in) :: n_own, n_all, n_entries
+        integer(i8), intent(in) :: gid(n_all)
+        integer(ip), intent(in) :: start(n_own + 1)
+        integer(ip), intent(inout) :: list(n_entries)
+        integer(i8), intent(inout) :: partner(n_entries)
+        integer(ip), intent(inout) :: mirror(n_entries)
+        real(wp), intent(inout) :: xi(3, n_entries)
+        logical, intent(inout) :: touching(n_entries)
+        integer(ip) :: i, j, a, b, key, lo, hi, e
+        !$acc parallel loop gang vector default(present) private(a, b, key)
+        do i = 1, n_own
+            do a = start(i) + 1, start(i + 1) - 1
+                key = list(a)
+                b = a - 1
+                do while (b >= start(i))
+                    if (gid(list(b)) <= gid(key)) exit
+                    list(b + 1) = list(b)
+                    b = b - 1
+                end do
+                list(b + 1) = key
+            end do
+        end do
+        !$acc parallel loop gang vector default(present)
+        do a = 1, n_entries
+            partner(a) = gid(list(a))
+            xi(:, a) = 0.0_wp
+            touching(a) = .false.
+        end do
+        !$acc parallel loop gang vector default(present) private(j, a, lo, hi, e)
+        do i = 1, n_own
+            do a = start(i), start(i + 1) - 1
+                j = list(a)
+                e = 0
+                if (j <= n_own) then
+                    lo = start(j)
+                    hi = start(j + 1) - 1
+                    do while (lo <= hi)
+                        e = (lo + hi) / 2
+                        if (partner(e) == gid(i)) exit
+                        if (partner(e) < gid(i)) then
+                            lo = e + 1
+                        else
+                            hi = e - 1
+                        end if
+                    end do
+                    if (lo > hi) e = 0
+                end if
+                mirror(a) = e
+                if (partner(a) < gid(i)) mirror(a) = -e
+            end do
+        end do
+    end subroutine pair_partners
+
+    !> Copy the history of the partners a new row shares with the particle's old row
+    !> (old_row(i)); both rows are ordered by partner id, so one merge pass finds them.
+    subroutine carry_history(n_own, n_old_rows, n_entries, n_old, old_row, start, partner, xi, &
+                             old_start, old_partner, old_xi)
+        integer(ip), intent(in) :: n_own, n_old_rows, n_entries, n_old
+        integer(ip), intent(in) :: old_row(n_own), start(n_own + 1), old_start(n_old_rows)
+        integer(i8), intent(in) :: partner(n_entries), old_partner(n_old)
+        real(wp), intent(inout) :: xi(3, n_entries)
+        real(wp), intent(in) :: old_xi(3, n_old)
+        integer(ip) :: i, a, b, b_end
+        !$acc parallel loop gang vector default(present) private(a, b, b_end)
+        do i = 1, n_own
+            b = old_start(old_row(i))
+            b_end = old_start(old_row(i) + 1) - 1
+            do a = start(i), start(i + 1) - 1
+                do while (b <= b_end)
+                    if (old_partner(b) >= partner(a)) exit
+                    b = b + 1
+                end do
+                if (b > b_end) exit
+                if (old_partner(b) == partner(a)) xi(:, a) = old_xi(:, b)
+            end do
+        end do
+    end subroutine carry_history
+
+    !> Wall triangles within R_i + skin of each owned particle. Each triangle is entered in
+    !> the cells of a grid (sized for the smallest particles) that its bounding box covers; a
+    !> particle tests the triangles of the cells its reach covers, each once: in the first
+    !> cell that both boxes share. Rows ordered by triangle.
+    subroutine build_wall_list(nb, n_own, n_all, x, radius, mesh, lo, hi, h)
+        type(neighbors_t), intent(inout) :: nb
+        integer(ip), intent(in) :: n_own, n_all
+        real(wp), intent(in) :: x(:, :), radius(:), lo(3), hi(3)
+        type(mesh_t), intent(in) :: mesh
+        real(wp), intent(in) :: h                !! cell size [m]
+        integer(ip), allocatable :: box(:, :), tcount(:), toff(:), ecell(:), etri(:), &
+                                    gstart(:), gitem(:), cnt(:)
+        integer(ip) :: n(3), n_tri, n_e, n_found
+        real(wp) :: hh
+
+        n_tri = mesh%n_tri
+        if (n_tri == 0) then
+            allocate(nb%wlist(0))
+            call acc_data(nb%wlist, acc_create)
+            call fill_range(n_own + 1, nb%wstart, 1, 0)
+            return
+        end if
+        hh = h
+        call fit_grid(lo, hi, max(27.0_wp, 4.0_wp * max(n_all, n_tri)), hh, n)
+
+        ! each triangle's box of cells (none when it lies outside the particles' box), and
+        ! one entry per cell of it, binned by cell
+        allocate(box(6, n_tri), tcount(n_tri), toff(n_tri + 1))
+        call acc_data(box, acc_create)
+        call acc_data(tcount, acc_create)
+        call acc_data(toff, acc_create)
+        call triangle_boxes(n_tri, mesh%vert, lo, hi, hh, n, box, tcount)
+        call prefix_sum(n_tri, tcount, toff)
+        call acc_data(toff(n_tri + 1:n_tri + 1), acc_to_host)
+        n_e = toff(n_tri + 1) - 1
+        allocate(ecell(max(1, n_e)), etri(max(1, n_e)), gitem(max(1, n_e)), &
+                 gstart(product(n) + 1), cnt(max(product(n), n_own)))
+        call acc_data(ecell, acc_create)
+        call acc_data(etri, acc_create)
+        call acc_data(gitem, acc_create)
+        call acc_data(gstart, acc_create)
+        call acc_data(cnt, acc_create)
+        call triangle_entries(n_tri, n_e, n, box, tcount, toff, ecell, etri)
+        call bin_items(n_e, product(n), ecell, gstart, gitem, cnt)
+
+        ! candidates of each particle: count, then fill (each row by triangle)
+        call wall_rows(.false., n_own, n_all, n_tri, n_e, product(n), x, radius, nb%skin, lo, &
+                       hh, n, mesh%vert, box, etri, gstart, gitem, nb%wstart, &
+                       size(cnt, kind=ip), cnt, nb%tri_tests)
+        call prefix_sum(n_own, cnt, nb%wstart)
+        call acc_data(nb%wstart(n_own + 1:n_own + 1), acc_to_host)
+        n_found = nb%wstart(n_own + 1) - 1
+        allocate(nb%wlist(n_found))
+        call acc_data(nb%wlist, acc_create)
+        call wall_rows(.true., n_own, n_all, n_tri, n_e, product(n), x, radius, nb%skin, lo, &
+                       hh, n, mesh%vert, box, etri, gstart, gitem, nb%wstart, n_found, &
+                       nb%wlist, nb%tri_tests)
+        call acc_data(cnt, acc_exit)
+        call acc_data(gstart, acc_exit)
+        call acc_data(gitem, acc_exit)
+        call acc_data(etri, acc_exit)
+        call acc_data(ecell, acc_exit)
+        call acc_data(toff, acc_exit)
+        call acc_data(tcount, acc_exit)
+        call acc_data(box, acc_exit)
+    end subroutine build_wall_list
+
+    !> The box of cells (lowest, highest coordinates) each triangle's bounding box covers,
+    !> and its number of cells (0 when the triangle lies outside [lo, hi]).
+    subroutine triangle_boxes(n_tri, vert, lo, hi, h, n, box, tcount)
+        integer(ip), intent(in) :: n_tri, n(3)
+        real(wp), intent(in) :: vert(3, 3, n_tri), lo(3), hi(3), h
+        integer(ip), intent(inout) :: box(6, n_tri), tcount(n_tri)
+        real(wp) :: vmin(3), vmax(3)
+        integer(ip) :: t, d
+        !$acc parallel loop gang vector default(present) copyin(lo, hi, n) private(vmin, vmax)
+        do t = 1, n_tri
+            do d = 1, 3
+                vmin(d) = min(vert(d, 1, t), vert(d, 2, t), vert(d, 3, t))
+                vmax(d) = max(vert(d, 1, t), vert(d, 2, t), vert(d, 3, t))
+            end do
+            box(1:3, t) = cell_coords(vmin, lo, h, n)
+            box(4:6, t) = cell_coords(vmax, lo, h, n)
+            tcount(t) = (box(4, t) - box(1, t) + 1) * (box(5, t) - box(2, t) + 1) &
+                        * (box(6, t) - box(3, t) + 1)
+            if (any(vmax < lo) .or. any(vmin > hi)) tcount(t) = 0
+        end do
+    end subroutine triangle_boxes
+
+    !> One entry (cell, triangle) per cell of each triangle's box, at toff(t) onwards.
+    subroutine triangle_entries(n_tri, n_e, n, box, tcount, toff, ecell, etri)
+        integer(ip), intent(in) :: n_tri, n_e, n(3)
+        integer(ip), intent(in) :: box(6, n_tri), tcount(n_tri), toff(n_tri + 1)
+        integer(ip), intent(inout) :: ecell(max(1, n_e)), etri(max(1, n_e))
+        integer(ip) :: t, e, cx, cy, cz, c(3)
+        !$acc parallel loop gang vector default(present) copyin(n) private(e, cx, cy, cz, c)
+        do t = 1, n_tri
+            if (tcount(t) == 0) cycle
+            e = toff(t)
+            do cz = box(3, t), box(6, t)
+                do cy = box(2, t), box(5, t)
+                    do cx = box(1, t), box(4, t)
+                        c(1) = cx
+                        c(2) = cy
+                        c(3) = cz
+                        ecell(e) = cell_number(c, n)
+                        etri(e) = t
+                        e = e + 1
+                    end do
+                end do
+            end do
+        end do
+    end subroutine triangle_entries
+
+    !> The triangles within R_i + skin of each owned particle i: their number into out(i)
+    !> (fill false), with the number of closest-point tests made, or the triangles, in
+    !> increasing order, into out(start(i):start(i + 1) - 1) (fill true). A triangle is
+    !> tested in the first cell (lowest coordinates) shared by its box and the particle's
+    !> reach, so once.
+    subroutine wall_rows(fill, n_own, n_all, n_tri, n_e, n_cells, x, radius, skin, origin, h, &
+                         n, vert, box, etri, gstart, gitem, start, n_out, out, tests)
+        logical, intent(in) :: fill
+        integer(ip), intent(in) :: n_own, n_all, n_tri, n_e, n_cells, n(3), n_out
+        real(wp), intent(in) :: x(3, n_all), radius(n_all), skin, origin(3), h
+        real(wp), intent(in) :: vert(3, 3, n_tri)
+        integer(ip), intent(in) :: box(6, n_tri), etri(max(1, n_e)), gstart(n_cells + 1), &
+                                   gitem(max(1, n_e)), start(n_own + 1)
+        integer(ip), intent(inout) :: out(n_out)
+        integer(i8), intent(inout) :: tests
+        integer(ip) :: i, k, m, t, a, b, key, cx, cy, cz, c(3), c0(3), c1(3), cell, feature
+        real(wp) :: reach, lo(3), hi(3), q(3)
+        integer(i8) :: tested
+        tested = 0
+        !$acc parallel loop gang vector default(present) copyin(origin, n) &
+        !$acc private(k, m, t, cx, cy, cz, c, c0, c1, cell, feature, reach, lo, hi, q) &
+        !$acc reduction(+:tested)
+        do i = 1, n_own
+            k = 0
+            reach = radius(i) + skin
+            lo = x(:, i) - reach
+            hi = x(:, i) + reach
+            c0 = cell_coords(lo, origin, h, n)
+            c1 = cell_coords(hi, origin, h, n)
+            do cz = c0(3), c1(3)
+                do cy = c0(2), c1(2)
+                    do cx = c0(1), c1(1)
+                        c(1) = cx
+                        c(2) = cy
+                        c(3) = cz
+                        cell = cell_number(c, n)
+                        do m = gstart(cell), gstart(cell + 1) - 1
+                            t = etri(gitem(m))
+                            if (cx /= max(c0(1), box(1, t)) .or. &
+                                cy /= max(c0(2), box(2, t)) .or. &
+                                cz /= max(c0(3), box(3, t))) cycle
+                            call closest_point_triangle(x(:, i), vert(:, 1, t), vert(:, 2, t), &
+                                                        vert(:, 3, t), q, feature)
+                            tested = tested + 1
+                            if ((q(1) - x(1, i))**2 + (q(2) - x(2, i))**2 &
+                                + (q(3) - x(3, i))**2 >= reach**2) cycle
+                            if (fill) out(start(i) + k) = t
+                            k = k + 1
+                        end do
+                    end do
+                end do
+            end do
+            if (.not. fill) out(i) = k
+        end do
+        if (.not. fill) then
+            tests = tested
+            return
+        end if
+        !$acc parallel loop gang vector default(present) private(a, b, key)
+        do i = 1, n_own                          ! each row in increasing order (insertion)
+            do a = start(i) + 1, start(i + 1) - 1
+                key = out(a)
+                b = a - 1
+                do while (b >= start(i))
+                    if (out(b) <= key) exit
+                    out(b + 1) = out(b)
+                    b = b - 1
+                end do
+                out(b + 1) = key
+            end do
+        end do
+    end subroutine wall_rows
+
+    !> One operation of dem_acc on the lists: acc_to_host brings what the host reads (rows,
+    !> partners, history, contacts); acc_exit (and the others) acts on every array allocated.
+    subroutine neighbors_data(nb, op)
+        type(neighbors_t), intent(inout) :: nb
+        integer, intent(in) :: op
+        if (allocated(nb%start)) call acc_data(nb%start, op)
+        if (allocated(nb%partner)) call acc_data(nb%partner, op)
+        if (allocated(nb%xi)) call acc_data(nb%xi, op)
+        if (allocated(nb%list)) call acc_data(nb%list, op)
+        if (allocated(nb%mirror)) call acc_data(nb%mirror, op)
+        if (allocated(nb%touching)) call acc_data(nb%touching, op)
+        if (allocated(nb%wstart)) call acc_data(nb%wstart, op)
+        if (allocated(nb%wlist)) call acc_data(nb%wlist, op)
+        if (op == acc_to_host) return
+        if (allocated(nb%fpair)) call acc_data(nb%fpair, op)
+        if (allocated(nb%cpair)) call acc_data(nb%cpair, op)
+        if (allocated(nb%x_ref)) call acc_data(nb%x_ref, op)
+        if (allocated(nb%vert_ref)) call acc_data(nb%vert_ref, op)
+    end subroutine neighbors_data
+
+    !> Take the lists off the device and free them (the skin and the build count stay).
+    subroutine neighbors_free(nb)
+        type(neighbors_t), intent(inout) :: nb
+        call neighbors_data(nb, acc_exit)
+        nb = neighbors_t(skin=nb%skin, n_builds=nb%n_builds)
+    end subroutine neighbors_free
 
     !> The tangential history of the pairs in contact that this rank evaluates, each once, as
     !> (lower id, higher id) and the displacement of the lower id's side; `order` lists the
@@ -302,7 +762,7 @@ contains
         do k = 1, 2
             row(k, :) = local_index(pair(k, :))
         end do
-        if (allocated(nb%start)) deallocate(nb%start, nb%partner, nb%xi)
+        call neighbors_free(nb)
         allocate(nb%start(n_own + 1))
         nb%start = 0
         do m = 1, size(pair, 2)
@@ -333,6 +793,9 @@ contains
             call sort_history_row(nb%partner(nb%start(i):nb%start(i + 1) - 1), &
                                   nb%xi(:, nb%start(i):nb%start(i + 1) - 1))
         end do
+        call acc_data(nb%start, acc_enter)       ! for the next build, on the device
+        call acc_data(nb%partner, acc_enter)
+        call acc_data(nb%xi, acc_enter)
     contains
         !> Local index of each id (0 if not owned).
         function local_index(ids) result(idx)
@@ -389,145 +852,6 @@ contains
         end do
     end subroutine sort_history_row
 
-    !> Wall triangles within R_i + skin of each owned particle. Each triangle is entered in
-    !> the cells of a grid (sized for the smallest particles) that its bounding box covers; a
-    !> particle tests the triangles of the cells its reach covers, each once.
-    subroutine build_wall_list(nb, n_own, x, radius, mesh, lo, hi, h, n_all)
-        type(neighbors_t), intent(inout) :: nb
-        integer(ip), intent(in) :: n_own, n_all
-        real(wp), intent(in) :: x(:, :), radius(:), lo(3), hi(3)
-        real(wp), intent(in) :: h                !! cell size [m]
-        type(mesh_t), intent(in) :: mesh
-        type(grid_t) :: g
-        integer(ip), allocatable :: cnt(:), fill(:), seen(:)
-        integer(ip) :: t, i, cell, m, pass, k, c0(3), c1(3), cx, cy, cz, feature
-        real(wp) :: q(3), reach
-
-        if (mesh%n_tri == 0) then
-            nb%wstart = 1
-            allocate(nb%wlist(0))
-            return
-        end if
-        call grid_shape(g, lo, hi, h, max(n_all, mesh%n_tri))
-        allocate(cnt(product(g%n)), g%start(product(g%n) + 1), seen(mesh%n_tri))
-        cnt = 0
-        do pass = 1, 2
-            if (pass == 2) then
-                g%start(1) = 1
-                do cell = 1, size(cnt)
-                    g%start(cell + 1) = g%start(cell) + cnt(cell)
-                end do
-                allocate(g%item(g%start(size(cnt) + 1) - 1))
-                fill = g%start(1:size(cnt))
-            end if
-            do t = 1, mesh%n_tri
-                if (any(maxval(mesh%vert(:, :, t), dim=2) < lo) .or. &
-                    any(minval(mesh%vert(:, :, t), dim=2) > hi)) cycle
-                c0 = cell_of(g, minval(mesh%vert(:, :, t), dim=2))
-                c1 = cell_of(g, maxval(mesh%vert(:, :, t), dim=2))
-                do cz = c0(3), c1(3)
-                    do cy = c0(2), c1(2)
-                        do cx = c0(1), c1(1)
-                            cell = 1 + cx + g%n(1) * (cy + g%n(2) * cz)
-                            if (pass == 1) then
-                                cnt(cell) = cnt(cell) + 1
-                            else
-                                g%item(fill(cell)) = t
-                                fill(cell) = fill(cell) + 1
-                            end if
-                        end do
-                    end do
-                end do
-            end do
-        end do
-
-        do pass = 1, 2
-            if (pass == 2) allocate(nb%wlist(nb%wstart(n_own + 1) - 1))
-            seen = 0
-            do i = 1, n_own
-                k = nb%wstart(i)
-                reach = radius(i) + nb%skin
-                c0 = cell_of(g, x(:, i) - reach)
-                c1 = cell_of(g, x(:, i) + reach)
-                do cz = c0(3), c1(3)
-                    do cy = c0(2), c1(2)
-                        do cx = c0(1), c1(1)
-                            cell = 1 + cx + g%n(1) * (cy + g%n(2) * cz)
-                            do m = g%start(cell), g%start(cell + 1) - 1
-                                t = g%item(m)
-                                if (seen(t) == i) cycle
-                                seen(t) = i
-                                call closest_point_triangle(x(:, i), mesh%vert(:, 1, t), &
-                                    mesh%vert(:, 2, t), mesh%vert(:, 3, t), q, feature)
-                                if (pass == 1) nb%tri_tests = nb%tri_tests + 1
-                                if (sum((q - x(:, i))**2) >= reach**2) cycle
-                                if (pass == 2) nb%wlist(k) = t
-                                k = k + 1
-                            end do
-                        end do
-                    end do
-                end do
-                if (pass == 1) nb%wstart(i + 1) = k
-            end do
-        end do
-        do i = 1, n_own
-            call sort_triangles(nb%wlist(nb%wstart(i):nb%wstart(i + 1) - 1))
-        end do
-    end subroutine build_wall_list
-
-    !> Order a row of triangle indices (insertion sort), so that the wall contacts of a
-    !> particle are evaluated in an order that does not depend on the grid.
-    pure subroutine sort_triangles(row)
-        integer(ip), intent(inout) :: row(:)
-        integer(ip) :: a, b, key
-        do a = 2, size(row)
-            key = row(a)
-            b = a - 1
-            do while (b >= 1)
-                if (row(b) <= key) exit
-                row(b + 1) = row(b)
-                b = b - 1
-            end do
-            row(b + 1) = key
-        end do
-    end subroutine sort_triangles
-
-    !> Order a row of partner indices by the partners' global ids (insertion sort: rows are
-    !> short and mostly ordered already).
-    subroutine sort_row(row, gid)
-        integer(ip), intent(inout) :: row(:)
-        integer(i8), intent(in) :: gid(:)
-        integer(ip) :: a, b, key
-        do a = 2, size(row)
-            key = row(a)
-            b = a - 1
-            do while (b >= 1)
-                if (gid(row(b)) <= gid(key)) exit
-                row(b + 1) = row(b)
-                b = b - 1
-            end do
-            row(b + 1) = key
-        end do
-    end subroutine sort_row
-
-    !> Copy the history of the partners a new row shares with the old one; both rows are
-    !> ordered by partner id, so one merge pass finds them.
-    subroutine carry_history(partner, xi, old_partner, old_xi)
-        integer(i8), intent(in) :: partner(:), old_partner(:)
-        real(wp), intent(inout) :: xi(:, :)
-        real(wp), intent(in) :: old_xi(:, :)
-        integer(ip) :: a, b
-        b = 1
-        do a = 1, size(partner)
-            do while (b <= size(old_partner))
-                if (old_partner(b) >= partner(a)) exit
-                b = b + 1
-            end do
-            if (b > size(old_partner)) exit
-            if (old_partner(b) == partner(a)) xi(:, a) = old_xi(:, b)
-        end do
-    end subroutine carry_history
-
     !> Cells of size about h over the box [lo, hi]; the size grows until there are at most
     !> max(27, 4 n_items) cells, so that sparse scenes do not allocate empty space.
     subroutine grid_shape(g, lo, hi, h, n_items)
@@ -552,31 +876,31 @@ contains
         end do
     end subroutine fit_grid
 
-    !> Sort the given items into the cells of their positions (counting sort, stable).
+    !> Sort the given items, which are on the host, into the cells of their positions, in
+    !> the order given (bin_items, through the device).
     subroutine grid_fill(g, n_items, items, x)
         type(grid_t), intent(inout) :: g
         integer(ip), intent(in) :: n_items, items(:)
         real(wp), intent(in) :: x(:, :)
-        integer(ip), allocatable :: cell(:), fill(:)
-        integer(ip) :: k, c(3), n_cells
-        n_cells = product(g%n)
-        allocate(cell(n_items), g%start(n_cells + 1), fill(n_cells))
-        g%start = 0
+        integer(ip), allocatable :: cell(:), item(:), cnt(:)
+        integer(ip) :: k
+        allocate(cell(max(1, n_items)), item(max(1, n_items)), g%start(product(g%n) + 1), &
+                 cnt(product(g%n)))
         do k = 1, n_items
-            c = cell_of(g, x(:, items(k)))
-            cell(k) = 1 + c(1) + g%n(1) * (c(2) + g%n(2) * c(3))
-            g%start(cell(k) + 1) = g%start(cell(k) + 1) + 1
+            cell(k) = cell_number(cell_of(g, x(:, items(k))), g%n)
         end do
-        g%start(1) = 1
-        do k = 1, n_cells
-            g%start(k + 1) = g%start(k + 1) + g%start(k)
-        end do
-        fill = g%start(1:n_cells)
-        allocate(g%item(n_items))
-        do k = 1, n_items
-            g%item(fill(cell(k))) = items(k)
-            fill(cell(k)) = fill(cell(k)) + 1
-        end do
+        call acc_data(cell, acc_enter)
+        call acc_data(item, acc_create)
+        call acc_data(g%start, acc_create)
+        call acc_data(cnt, acc_create)
+        call bin_items(n_items, product(g%n), cell, g%start, item, cnt)
+        call acc_data(item, acc_to_host)
+        call acc_data(g%start, acc_to_host)
+        call acc_data(cnt, acc_exit)
+        call acc_data(g%start, acc_exit)
+        call acc_data(item, acc_exit)
+        call acc_data(cell, acc_exit)
+        g%item = items(item(1:n_items))
     end subroutine grid_fill
 
     !> Cell coordinates (0-based) of a point, clamped to the grid.
@@ -584,6 +908,6 @@ contains
         type(grid_t), intent(in) :: g
         real(wp), intent(in) :: p(3)
         integer(ip) :: c(3)
-        c = min(g%n - 1, max(0, floor((p - g%origin) / g%h)))
+        c = cell_coords(p, g%origin, g%h, g%n)
     end function cell_of
 end module dem_neighbors

@@ -2,11 +2,12 @@
 !> (n_own+1..n_own+n_ghost), no holes. Vectors are stored as (3, n).
 module dem_particles
     use dem_kinds, only: wp, ip, i8
-    use dem_storage, only: storage_capacity, storage_resize
+    use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int, &
+                           permute_i8
     implicit none
     private
     public :: particles_t, particles_init, particles_add, particles_permute, order_by_id, &
-              particles_reserve, index_of_id, &
+              particles_reserve, index_of_id, particles_find, &
               particles_pack, particles_unpack, particles_pack_reals, particles_external, &
               n_pack_int, sphere_mass, sphere_inv_inertia, ext_force, ext_torque, ext_beta, &
               ext_fluid_v, ext_impulse, n_ext
@@ -116,26 +117,42 @@ contains
     end function sphere_inv_inertia
 
     !> Reorder the owned particles: particle i becomes the one stored at order(i). Particles
-    !> that `order` leaves out are removed.
+    !> that `order` leaves out are removed (the places after the last are zeroed). On the
+    !> device when the arrays are there (storage's permute kernels).
     subroutine particles_permute(p, order)
         type(particles_t), intent(inout) :: p
         integer(ip), intent(in) :: order(:)   !! distinct indices in 1..n_own
-        integer(ip) :: n
+        integer(ip) :: n, cap
         n = size(order)
+        cap = size(p%gid)
         p%n_own = n
-        p%gid(1:n) = p%gid(order)
-        p%mat(1:n) = p%mat(order)
-        p%radius(1:n) = p%radius(order)
-        p%mass(1:n) = p%mass(order)
-        p%inv_mass(1:n) = p%inv_mass(order)
-        p%inv_inertia(1:n) = p%inv_inertia(order)
-        p%x(:, 1:n) = p%x(:, order)
-        p%v(:, 1:n) = p%v(:, order)
-        p%w(:, 1:n) = p%w(:, order)
-        p%f(:, 1:n) = p%f(:, order)
-        p%t(:, 1:n) = p%t(:, order)
-        if (allocated(p%ext)) p%ext(:, 1:n) = p%ext(:, order)
+        call permute_i8(cap, n, order, p%gid)
+        call permute_int(1, cap, n, order, p%mat)
+        call permute_real(1, cap, n, order, p%radius)
+        call permute_real(1, cap, n, order, p%mass)
+        call permute_real(1, cap, n, order, p%inv_mass)
+        call permute_real(1, cap, n, order, p%inv_inertia)
+        call permute_real(3, cap, n, order, p%x)
+        call permute_real(3, cap, n, order, p%v)
+        call permute_real(3, cap, n, order, p%w)
+        call permute_real(3, cap, n, order, p%f)
+        call permute_real(3, cap, n, order, p%t)
+        if (allocated(p%ext)) call permute_real(n_ext, cap, n, order, p%ext)
     end subroutine particles_permute
+
+    !> The place of the particle of global id `id` among gid(1:n) (0 if absent), on the
+    !> device: a reduction.
+    integer(ip) function particles_find(n, gid, id) result(pos)
+        integer(ip), intent(in) :: n
+        integer(i8), intent(in) :: gid(n)
+        integer(i8), intent(in) :: id
+        integer(ip) :: i
+        pos = 0
+        !$acc parallel loop gang vector default(present) reduction(max:pos)
+        do i = 1, n
+            if (gid(i) == id) pos = max(pos, i)
+        end do
+    end function particles_find
 
     !> Give every particle the external-force block of a coupled run, at zero.
     subroutine particles_external(p)

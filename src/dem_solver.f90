@@ -9,12 +9,15 @@ module dem_solver
     use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather, comm_node_rank
     use dem_case, only: case_t, time_scales_t, case_time_scales, case_particle_materials
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
-                             particles_reserve, order_by_id, sphere_mass, sphere_inv_inertia
+                             particles_reserve, order_by_id, sphere_mass, sphere_inv_inertia, &
+                             particles_find
     use dem_domain, only: domain_t, domain_init, domain_data, domain_balance, domain_imbalance, &
                           domain_migrate, domain_ghosts, domain_update
     use dem_materials, only: pair_constants_t, pair_constants_build
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
-                             neighbors_spatial_order, neighbors_history, neighbors_set_history
+                             neighbors_spatial_order, neighbors_history, neighbors_set_history, &
+                             neighbors_data, neighbors_free
+    use dem_cells, only: fill_range, kept_indices
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, wall_contacts_permute, &
                                wall_contacts_reserve, pw_forces
@@ -35,7 +38,7 @@ module dem_solver
     use dem_signals, only: signal_received
     use dem_text, only: itoa, real_text, duration_text
     use dem_acc, only: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device, &
-                       acc_select_device
+                       acc_create, acc_select_device
     use dem_timers, only: timers_t, timer_start, timer_stop, phase_neighbors, &
                           phase_contacts_pp, phase_contacts_pw, phase_integrate, phase_output, &
                           wall_seconds, timer_seconds
@@ -637,11 +640,13 @@ contains
         n_gone = outlets_mark(s%p%n_own, s%p%x, c%outlets, s%gone)
         if (s%comm%size > 1) call comm_sum(s%comm, n_gone)
         if (n_gone(1) == 0) return
-        call acc_data(s%gone, acc_to_host)
         s%removed = s%removed + n_gone(1)
-        if (allocated(s%removed_ids)) s%removed_ids = [s%removed_ids, &
-                                                       pack(s%p%gid(1:s%p%n_own), s%gone)]
-        call rebuild(s, .not. s%gone)
+        if (allocated(s%removed_ids)) then        ! (a coupled run: their ids, on the host)
+            call acc_data(s%gone, acc_to_host)
+            call acc_data(s%p%gid, acc_to_host)
+            s%removed_ids = [s%removed_ids, pack(s%p%gid(1:s%p%n_own), s%gone)]
+        end if
+        call rebuild(s, outlets=.true.)
     end subroutine remove_outlet_particles
 
     !> Take the outlet flags off the device and free them.
@@ -651,50 +656,69 @@ contains
         deallocate(s%gone)
     end subroutine release_gone
 
-    !> Re-sort the particles in space and rebuild the neighbour lists, on the host; the
-    !> history follows the particles, and the new state and lists go to the device. With
-    !> `keep`, the particles not kept are removed. On several ranks, the particles first go
-    !> to the ranks of their blocks (repartitioned when the load is out of balance), then
-    !> the ghosts are exchanged; the stores then follow the rank's share (they may be
-    !> reallocated, so their device copies are made anew; on one rank they stay).
-    subroutine rebuild(s, keep)
+    !> Re-sort the particles in space and rebuild the neighbour lists; the history follows
+    !> the particles. With `outlets`, the particles the outlet flags mark are removed. On one
+    !> rank all of it runs on the device. On several ranks the particles first go to the
+    !> ranks of their blocks (repartitioned when the load is out of balance), on the host,
+    !> and the ghosts are exchanged after the re-sort, on the host too; the stores then
+    !> follow the rank's share (they may be reallocated, so their device copies are made
+    !> anew).
+    subroutine rebuild(s, outlets)
         type(solver_t), intent(inout) :: s
-        logical, intent(in), optional :: keep(:)
+        logical, intent(in), optional :: outlets
         integer(ip), allocatable :: order(:), kept(:)
-        integer(ip) :: i
-        call particle_data(s, acc_to_host)
-        if (s%comm%size > 1) call particle_data(s, acc_exit)
-        if (s%mesh%moving) call acc_data(s%mesh%vert, acc_to_host)
-        if (s%lists_on_device) then
-            call acc_data(s%nb%xi, acc_to_host)
-            call list_data(s%nb, acc_exit)
-            if (s%comm%size > 1) call domain_data(s%dom, acc_exit)
-        end if
-        if (present(keep)) then
-            kept = pack([(i, i = 1, s%p%n_own)], keep)
-        else
-            kept = [(i, i = 1, s%p%n_own)]
-        end if
+        integer(ip) :: m
+        logical :: removing
+        removing = .false.
+        if (present(outlets)) removing = outlets
+        allocate(kept(max(1, s%p%n_own)))
         if (s%comm%size > 1) then
+            call particle_data(s, acc_to_host)
+            call neighbors_data(s%nb, acc_to_host)
+            if (removing) call acc_data(s%gone, acc_to_host)
+            call particle_data(s, acc_exit)
+            if (s%lists_on_device) call domain_data(s%dom, acc_exit)
+            m = s%p%n_own
+            if (removing) then
+                kept = pack([(m, m = 1, s%p%n_own)], .not. s%gone)
+            else
+                kept = [(m, m = 1, s%p%n_own)]
+            end if
             call distribute(s, kept)
-            kept = [(i, i = 1, s%p%n_own)]
+            call particle_data(s, acc_enter)
+            deallocate(kept)
+            allocate(kept(max(1, s%p%n_own)))
+            call acc_data(kept, acc_create)
+            m = s%p%n_own
+            call fill_range(m, kept, 1, 1)
+        else
+            call acc_data(kept, acc_create)
+            if (removing) then
+                call kept_indices(s%p%n_own, s%gone, kept, m)
+            else
+                m = s%p%n_own
+                call fill_range(m, kept, 1, 1)
+            end if
         end if
-        order = kept(neighbors_spatial_order(size(kept), s%p%x(:, kept), s%sort_cell))
-        call particles_permute(s%p, order)
-        call wall_contacts_permute(s%wc, order)
+        allocate(order(max(1, m)))
+        call acc_data(order, acc_create)
+        call neighbors_spatial_order(m, kept, s%p%x, s%sort_cell, order)
+        call particles_permute(s%p, order(1:m))
+        call wall_contacts_permute(s%wc, order(1:m))
         if (s%comm%size > 1) then
+            call particle_data(s, acc_to_host)
+            call particle_data(s, acc_exit)
             call domain_ghosts(s%dom, s%comm, s%p)
             call particle_data(s, acc_enter)
             call domain_data(s%dom, acc_enter)
-        else
-            call particle_data(s, acc_to_device)
         end if
-        if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:s%p%n_own), s%trace_id, dim=1)
+        if (s%trace_id /= 0) s%trace = particles_find(s%p%n_own, s%p%gid, s%trace_id)
         if (s%trace_id /= 0 .and. s%trace == 0) s%trace_id = 0    ! it left through an outlet
         call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
                              s%p%radius, s%mesh, old_index=order)
-        call list_data(s%nb, acc_enter)
         s%lists_on_device = .true.
+        call acc_data(order, acc_exit)
+        call acc_data(kept, acc_exit)
     end subroutine rebuild
 
     !> Give the particles `kept` (the others are removed) and their contact history to the
@@ -797,17 +821,17 @@ contains
     end subroutine write_series
 
     !> Particle contacts (pairs), wall contacts and particles, over the ranks (the ghosts
-    !> are brought to the owned particles' step first), counted on the host: the caller has
-    !> brought the particles there.
+    !> are brought to the owned particles' step first): the pairs counted on the device, the
+    !> wall contacts on the host (the caller has brought the particles there).
     function contact_counts(s) result(counts)
         type(solver_t), intent(inout) :: s
         integer(i8) :: counts(3)
-        if (s%comm%size > 1) then                  ! refreshed on the device, counted here
-            call domain_update(s%dom, s%comm, s%p)
-            call acc_data(s%p%x, acc_to_host)
-        end if
-        counts = [int(count_pp_sides(s%p%n_own, s%p%x, s%p%radius, s%nb%start, s%nb%list), i8), &
-                  count(s%wc%tri(:, 1:s%p%n_own) > 0, kind=i8), int(s%p%n_own, i8)]
+        if (s%comm%size > 1) call domain_update(s%dom, s%comm, s%p)   ! on the device
+        associate (p => s%p, n => s%p%n_own)
+            counts(1) = count_pp_sides(n, n + p%n_ghost, size(s%nb%list, kind=ip), p%x, &
+                                       p%radius, s%nb%start, s%nb%list)
+        end associate
+        counts(2:3) = [count(s%wc%tri(:, 1:s%p%n_own) > 0, kind=i8), int(s%p%n_own, i8)]
         call comm_sum(s%comm, counts)
         counts(1) = counts(1) / 2
     end function contact_counts
@@ -955,10 +979,7 @@ contains
         integer(ip), allocatable :: order(:)
         integer(i8) :: bytes(3)
         call particle_data(s, acc_to_host)
-        if (s%lists_on_device) then
-            call acc_data(s%nb%xi, acc_to_host)
-            call acc_data(s%nb%touching, acc_to_host)
-        end if
+        call neighbors_data(s%nb, acc_to_host)
         associate (p => s%p, n => s%p%n_own)
             order = order_by_id(p%gid(1:n))
             fr%time = time_of(s, c, s%step)
@@ -1132,7 +1153,7 @@ contains
         end if
         if (op == acc_exit .and. allocated(s%gone)) call release_gone(s)
         if (op == acc_exit .and. s%lists_on_device) then
-            call list_data(s%nb, op)
+            call neighbors_free(s%nb)
             if (s%comm%size > 1) call domain_data(s%dom, op)
             s%lists_on_device = .false.
         end if
@@ -1142,6 +1163,7 @@ contains
     subroutine particle_data(s, op)
         type(solver_t), intent(inout) :: s
         integer, intent(in) :: op
+        call acc_data(s%p%gid, op)
         call acc_data(s%p%mat, op)
         call acc_data(s%p%radius, op)
         call acc_data(s%p%mass, op)
@@ -1176,21 +1198,4 @@ contains
         call acc_data(m%wall_w, op)
         call acc_data(m%wall_c, op)
     end subroutine wall_motion_data
-
-    !> The neighbour lists, to or from the device.
-    subroutine list_data(nb, op)
-        type(neighbors_t), intent(inout) :: nb
-        integer, intent(in) :: op
-        call acc_data(nb%start, op)
-        call acc_data(nb%list, op)
-        call acc_data(nb%mirror, op)
-        call acc_data(nb%xi, op)
-        call acc_data(nb%touching, op)
-        call acc_data(nb%fpair, op)
-        call acc_data(nb%cpair, op)
-        call acc_data(nb%wstart, op)
-        call acc_data(nb%wlist, op)
-        call acc_data(nb%x_ref, op)
-        if (allocated(nb%vert_ref)) call acc_data(nb%vert_ref, op)
-    end subroutine list_data
 end module dem_solver

@@ -1,12 +1,13 @@
 !> Per-particle storage that follows a rank's share of the particles: the capacity policy
 !> (grow to 5/4 of the need when it is short, shrink to that when the store is more than
-!> 3/2 of the need; doc/parallel.md) and the reallocation of arrays whose last index is the
-!> particle, keeping the first rows.
+!> 3/2 of the need; doc/parallel.md), the reallocation of arrays whose last index is the
+!> particle, keeping the first rows, and their reordering (a kernel, on the device when the
+!> array is there, otherwise on the host's copy).
 module dem_storage
     use dem_kinds, only: wp, ip, i8
     implicit none
     private
-    public :: storage_capacity, storage_resize
+    public :: storage_capacity, storage_resize, permute_real, permute_int, permute_i8
 
     !> storage_resize(a, n_keep, capacity): a reallocated with `capacity` entries along its
     !> last dimension; entries 1..n_keep keep their values, the others are zero.
@@ -85,4 +86,77 @@ contains
         b(:, :, 1:n_keep) = a(:, :, 1:n_keep)
         call move_alloc(b, a)
     end subroutine resize_wp_3
+    !> Reorder the columns of a(rows, capacity): column k becomes the one at order(k),
+    !> k = 1..n; the columns after n are zeroed. On the device if a and order are there
+    !> (present or copied: a stays where it is).
+    subroutine permute_real(rows, capacity, n, order, a)
+        integer(ip), intent(in) :: rows, capacity, n
+        integer(ip), intent(in) :: order(n)
+        real(wp), intent(inout) :: a(rows, capacity)
+        real(wp), allocatable :: work(:, :)
+        integer(ip) :: k
+        allocate(work, mold=a(:, 1:n))
+        !$acc data copyin(order) copy(a) create(work)
+        !$acc parallel loop gang vector
+        do k = 1, n
+            work(:, k) = a(:, order(k))
+        end do
+        !$acc parallel loop gang vector
+        do k = 1, capacity
+            if (k <= n) then
+                a(:, k) = work(:, k)
+            else
+                a(:, k) = 0.0_wp
+            end if
+        end do
+        !$acc end data
+    end subroutine permute_real
+
+    !> permute_real for integers.
+    subroutine permute_int(rows, capacity, n, order, a)
+        integer(ip), intent(in) :: rows, capacity, n
+        integer(ip), intent(in) :: order(n)
+        integer(ip), intent(inout) :: a(rows, capacity)
+        integer(ip), allocatable :: work(:, :)
+        integer(ip) :: k
+        allocate(work, mold=a(:, 1:n))
+        !$acc data copyin(order) copy(a) create(work)
+        !$acc parallel loop gang vector
+        do k = 1, n
+            work(:, k) = a(:, order(k))
+        end do
+        !$acc parallel loop gang vector
+        do k = 1, capacity
+            if (k <= n) then
+                a(:, k) = work(:, k)
+            else
+                a(:, k) = 0
+            end if
+        end do
+        !$acc end data
+    end subroutine permute_int
+
+    !> permute_real for global ids (one per particle).
+    subroutine permute_i8(capacity, n, order, a)
+        integer(ip), intent(in) :: capacity, n
+        integer(ip), intent(in) :: order(n)
+        integer(i8), intent(inout) :: a(capacity)
+        integer(i8), allocatable :: work(:)
+        integer(ip) :: k
+        allocate(work(n))
+        !$acc data copyin(order) copy(a) create(work)
+        !$acc parallel loop gang vector
+        do k = 1, n
+            work(k) = a(order(k))
+        end do
+        !$acc parallel loop gang vector
+        do k = 1, capacity
+            if (k <= n) then
+                a(k) = work(k)
+            else
+                a(k) = 0
+            end if
+        end do
+        !$acc end data
+    end subroutine permute_i8
 end module dem_storage

@@ -88,7 +88,7 @@ program test_neighbors
                          'most pairs kept their history')
 
         ! re-sort the particles in space and rebuild: the history follows the pairs
-        order = neighbors_spatial_order(n, x, 0.03_wp)
+        call neighbors_spatial_order(n, [(i, i = 1, n)], x, 0.03_wp, order)
         call assert_true(all(order(2:) /= order(1:n - 1)) .and. minval(order) == 1 .and. &
                          maxval(order) == n, 'spatial order is a permutation')
         x = x(:, order)

@@ -1,0 +1,159 @@
+!> Cell binning as kernels on the device (or the host, without OpenACC): a counting sort of
+!> items by cell, and the prefix sum it needs. The cell counts are taken with atomics, and
+!> each cell's items are then put in increasing order, so the result is the same whatever
+!> order the threads ran in (the one of a sequential, stable counting sort). Every array
+!> passed in must be on the device (doc/gpu.md).
+module dem_cells
+    use dem_kinds, only: wp, ip
+    use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host
+    implicit none
+    private
+    public :: prefix_sum, bin_items, cell_number, cell_coords, fill_range, kept_indices
+
+    integer(ip), parameter :: chunk = 256    !< counts summed by one thread in prefix_sum
+
+contains
+
+    !> start(1) = 1, start(k + 1) = start(k) + cnt(k) for k = 1..n: the sums of chunks in
+    !> parallel, the chunks' offsets in sequence, then each chunk from its offset.
+    subroutine prefix_sum(n, cnt, start)
+        integer(ip), intent(in) :: n
+        integer(ip), intent(in) :: cnt(n)
+        integer(ip), intent(inout) :: start(n + 1)
+        integer(ip), allocatable :: base(:)
+        integer(ip) :: n_chunks, c, k, total
+        n_chunks = (n + chunk - 1) / chunk
+        allocate(base(n_chunks + 1))
+        call acc_data(base, acc_create)
+        !$acc parallel loop gang vector default(present) private(total)
+        do c = 1, n_chunks
+            total = 0
+            do k = (c - 1) * chunk + 1, min(n, c * chunk)
+                total = total + cnt(k)
+            end do
+            base(c + 1) = total
+        end do
+        !$acc parallel num_gangs(1) vector_length(32) default(present)
+        base(1) = 1
+        start(1) = 1
+        do c = 1, n_chunks
+            base(c + 1) = base(c + 1) + base(c)
+        end do
+        !$acc end parallel
+        !$acc parallel loop gang vector default(present) private(total)
+        do c = 1, n_chunks
+            total = base(c)
+            do k = (c - 1) * chunk + 1, min(n, c * chunk)
+                total = total + cnt(k)
+                start(k + 1) = total
+            end do
+        end do
+        call acc_data(base, acc_exit)
+    end subroutine prefix_sum
+
+    !> Counting sort of the items k = 1..m into cells 1..n_cells by cell(k) (0: the item is
+    !> left out): cell c holds item(start(c):start(c + 1) - 1), in increasing k. `cnt` is
+    !> work space.
+    subroutine bin_items(m, n_cells, cell, start, item, cnt)
+        integer(ip), intent(in) :: m, n_cells
+        integer(ip), intent(in) :: cell(m)
+        integer(ip), intent(inout) :: start(n_cells + 1)
+        integer(ip), intent(inout) :: item(m)
+        integer(ip), intent(inout) :: cnt(n_cells)
+        integer(ip) :: k, c, slot, a, b, key
+        !$acc parallel loop gang vector default(present)
+        do c = 1, n_cells
+            cnt(c) = 0
+        end do
+        !$acc parallel loop gang vector default(present)
+        do k = 1, m
+            if (cell(k) > 0) then
+                !$acc atomic update
+                cnt(cell(k)) = cnt(cell(k)) + 1
+            end if
+        end do
+        call prefix_sum(n_cells, cnt, start)
+        !$acc parallel loop gang vector default(present)
+        do c = 1, n_cells
+            cnt(c) = start(c)
+        end do
+        !$acc parallel loop gang vector default(present) private(slot)
+        do k = 1, m
+            if (cell(k) > 0) then
+                !$acc atomic capture
+                slot = cnt(cell(k))
+                cnt(cell(k)) = cnt(cell(k)) + 1
+                !$acc end atomic
+                item(slot) = k
+            end if
+        end do
+        !$acc parallel loop gang vector default(present) private(a, b, key)
+        do c = 1, n_cells                        ! each cell in increasing order (insertion)
+            do a = start(c) + 1, start(c + 1) - 1
+                key = item(a)
+                b = a - 1
+                do while (b >= start(c))
+                    if (item(b) <= key) exit
+                    item(b + 1) = item(b)
+                    b = b - 1
+                end do
+                item(b + 1) = key
+            end do
+        end do
+    end subroutine bin_items
+
+    !> a(i) = first + step (i - 1), i = 1..n.
+    subroutine fill_range(n, a, first, step)
+        integer(ip), intent(in) :: n, first, step
+        integer(ip), intent(inout) :: a(n)
+        integer(ip) :: i
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n
+            a(i) = first + step * (i - 1)
+        end do
+    end subroutine fill_range
+
+    !> The indices i = 1..n with drop(i) false, in increasing order, into kept(1:m).
+    subroutine kept_indices(n, drop, kept, m)
+        integer(ip), intent(in) :: n
+        logical, intent(in) :: drop(n)
+        integer(ip), intent(inout) :: kept(n)
+        integer(ip), intent(out) :: m
+        integer(ip), allocatable :: cnt(:), pos(:)
+        integer(ip) :: i, last(1)
+        allocate(cnt(max(1, n)), pos(n + 1))
+        call acc_data(cnt, acc_create)
+        call acc_data(pos, acc_create)
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n
+            cnt(i) = merge(0, 1, drop(i))
+        end do
+        call prefix_sum(n, cnt, pos)
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n
+            if (.not. drop(i)) kept(pos(i)) = i
+        end do
+        call acc_data(pos(n + 1:n + 1), acc_to_host)
+        last = pos(n + 1:n + 1)
+        m = last(1) - 1
+        call acc_data(pos, acc_exit)
+        call acc_data(cnt, acc_exit)
+    end subroutine kept_indices
+
+    !> Cell coordinates (0-based) of a point in the grid of n cells of size h from origin,
+    !> clamped to the grid.
+    pure function cell_coords(p, origin, h, n) result(c)
+        !$acc routine seq
+        real(wp), intent(in) :: p(3), origin(3), h
+        integer(ip), intent(in) :: n(3)
+        integer(ip) :: c(3)
+        c = min(n - 1, max(0, floor((p - origin) / h)))
+    end function cell_coords
+
+    !> Number (from 1, x fastest) of the cell of coordinates c in a grid of n cells.
+    pure integer(ip) function cell_number(c, n) result(cell)
+        !$acc routine seq
+        integer(ip), intent(in) :: c(3), n(3)
+        cell = 1 + c(1) + n(1) * (c(2) + n(2) * c(3))
+    end function cell_number
+end module dem_cells
