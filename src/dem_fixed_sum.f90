@@ -8,7 +8,8 @@ module dem_fixed_sum
     use dem_comm, only: comm_t, comm_sum, comm_max
     implicit none
     private
-    public :: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total
+    public :: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total, fixed_split, &
+              fixed_sum_add_words
 
     !> Running sums of quantities into bins: sum(q, bin) = (hi + lo / scale2) / scale(q).
     type :: fixed_sum_t
@@ -45,19 +46,41 @@ contains
         s%lo = 0
     end subroutine fixed_sum_start
 
-    !> Add the terms t(:) (one per quantity) to bin `bin`. y = t scale is exact (a power of
-    !> two), and so is its remainder y - nint(y), in [-1/2, 1/2], kept to 61 - e_N bits.
+    !> Add the terms t(:) (one per quantity) to bin `bin`.
     pure subroutine fixed_sum_add(s, t, bin)
         type(fixed_sum_t), intent(inout) :: s
         real(wp), intent(in) :: t(:)
         integer, intent(in) :: bin
-        real(wp) :: y(size(t))
-        integer(i8) :: k(size(t))
-        y = t * s%scale
-        k = nint(y, i8)
-        s%hi(:, bin) = s%hi(:, bin) + k
-        s%lo(:, bin) = s%lo(:, bin) + nint((y - real(k, wp)) * s%scale2, i8)
+        integer(i8) :: k, r
+        integer :: q
+        do q = 1, size(t)
+            call fixed_split(t(q), s%scale(q), s%scale2, k, r)
+            s%hi(q, bin) = s%hi(q, bin) + k
+            s%lo(q, bin) = s%lo(q, bin) + r
+        end do
     end subroutine fixed_sum_add
+
+    !> The two words of a term t: y = t scale is exact (a power of two), k = nint(y), and so
+    !> is its remainder y - k, in [-1/2, 1/2], kept to 61 - e_N bits as r. (For kernels that
+    !> sum the words themselves, as integers: fixed_sum_add_words.)
+    pure subroutine fixed_split(t, scale, scale2, k, r)
+        !$acc routine seq
+        real(wp), intent(in) :: t, scale, scale2
+        integer(i8), intent(out) :: k, r
+        real(wp) :: y
+        y = t * scale
+        k = nint(y, i8)
+        r = nint((y - real(k, wp)) * scale2, i8)
+    end subroutine fixed_split
+
+    !> Add to bin `bin` the sums of the two words (fixed_split) of terms, one per quantity.
+    pure subroutine fixed_sum_add_words(s, hi, lo, bin)
+        type(fixed_sum_t), intent(inout) :: s
+        integer(i8), intent(in) :: hi(:), lo(:)
+        integer, intent(in) :: bin
+        s%hi(:, bin) = s%hi(:, bin) + hi
+        s%lo(:, bin) = s%lo(:, bin) + lo
+    end subroutine fixed_sum_add_words
 
     !> The sums of every rank's terms, (quantity, bin); collective.
     subroutine fixed_sum_total(s, comm, sums)

@@ -6,16 +6,19 @@
 !> velocity components about a vertical axis: radial, angular (about the axis) and vertical.
 !> Each rank looks at its own particles; counts are summed over the ranks, and centres of
 !> mass in fixed point (dem_fixed_sum), so that the values do not depend on where the
-!> particles are stored. Host-side, at output times; collective.
+!> particles are stored. Reductions on the device, at output times; collective.
 module dem_probes
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_sum, comm_gather
-    use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total
+    use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_total, fixed_split, &
+                             fixed_sum_add_words
+    use dem_particles, only: particles_find
+    use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host
     implicit none
     private
     public :: probe_t, probe_count, probe_center_of_mass, probe_track, probe_histogram, &
-              probe_header, probe_values, probe_histogram_counts, probe_in_region
+              probe_header, probe_values, probe_histogram_counts
 
     integer(ip), parameter :: probe_count = 1           !< particles per material in a region
     integer(ip), parameter :: probe_center_of_mass = 2  !< centre of mass per material
@@ -67,47 +70,38 @@ contains
         end select
     end function probe_header
 
-    !> True for the particles whose centre lies in the probe's region.
-    elemental logical function probe_in_region(p, x1, x2, x3) result(inside)
-        type(probe_t), intent(in) :: p
-        real(wp), intent(in) :: x1, x2, x3       !! centre [m]
-        inside = x1 >= p%lo(1) .and. x1 <= p%hi(1) .and. x2 >= p%lo(2) .and. &
-                 x2 <= p%hi(2) .and. x3 >= p%lo(3) .and. x3 <= p%hi(3)
-    end function probe_in_region
-
-    !> A probe's values now over the particles of all ranks, each rank giving its own (as
-    !> many as the probe's header has columns; NaN where there is nothing to measure: a
-    !> material absent from the region, a particle gone); on rank 0, which writes them.
-    function probe_values(comm, p, used, gid, mat, mass, x, v, w) result(values)
+    !> A probe's values now over the particles of all ranks, each rank giving its n owned
+    !> ones (as many values as the probe's header has columns; NaN where there is nothing to
+    !> measure: a material absent from the region, a particle gone); on rank 0, which writes
+    !> them. The reductions run on the device, where the arrays are.
+    function probe_values(comm, p, used, n, gid, mat, mass, x, v, w) result(values)
         type(comm_t), intent(in) :: comm
         type(probe_t), intent(in) :: p
         logical, intent(in) :: used(:)                 !! materials used by particles
-        integer(i8), intent(in) :: gid(:)
-        integer(ip), intent(in) :: mat(:)
-        real(wp), intent(in) :: mass(:), x(:, :), v(:, :), w(:, :)
+        integer(ip), intent(in) :: n
+        integer(i8), intent(in) :: gid(n)
+        integer(ip), intent(in) :: mat(n)
+        real(wp), intent(in) :: mass(n)
+        real(wp), intent(inout) :: x(3, n), v(3, n), w(3, n)   !! (one comes to the host)
         real(wp), allocatable :: values(:), all(:)
-        real(wp) :: sums(4, size(used)), top(4), one(10)
-        integer(i8) :: counts(size(used))
-        logical, allocatable :: inside(:)
+        real(wp) :: sums(4, size(used)), one(10)
+        integer(i8) :: counts(size(used)), hi(4), lo(4)
         type(fixed_sum_t) :: fixed
         integer(ip) :: i, m
-        inside = probe_in_region(p, x(1, :), x(2, :), x(3, :))   ! the n owned particles
         select case (p%kind)
         case (probe_count)
-            counts = 0
-            do i = 1, size(gid)
-                if (inside(i)) counts(mat(i)) = counts(mat(i)) + 1
+            do m = 1, size(used)
+                counts(m) = region_count(n, p%lo, p%hi, m, mat, x)
             end do
             call comm_sum(comm, counts)
             values = pack(real(counts, wp), used)
         case (probe_center_of_mass)            ! sums of m and m x per material
-            top = 0.0_wp
-            do i = 1, size(gid)
-                if (inside(i)) top = max(top, mass(i) * [1.0_wp, abs(x(:, i))])
-            end do
-            call fixed_sum_start(fixed, comm, top, size(gid), size(used))
-            do i = 1, size(gid)
-                if (inside(i)) call fixed_sum_add(fixed, mass(i) * [1.0_wp, x(:, i)], mat(i))
+            call fixed_sum_start(fixed, comm, region_bound(n, p%lo, p%hi, mass, x), int(n), &
+                                 size(used))
+            do m = 1, size(used)
+                call region_moments(n, p%lo, p%hi, m, mat, mass, x, fixed%scale, fixed%scale2, &
+                                    hi, lo)
+                call fixed_sum_add_words(fixed, hi, lo, int(m))
             end do
             call fixed_sum_total(fixed, comm, sums)
             do m = 1, size(used)
@@ -120,8 +114,13 @@ contains
             values = pack(sums(2:4, :), spread(used, 1, 3))
         case (probe_track)                     ! (found, x, v, w) of every rank, to rank 0
             one = 0.0_wp
-            i = findloc(gid, p%id, dim=1)
-            if (i > 0) one = [1.0_wp, x(:, i), v(:, i), w(:, i)]
+            i = particles_find(n, gid, p%id)
+            if (i > 0) then
+                call acc_data(x(:, i:i), acc_to_host)
+                call acc_data(v(:, i:i), acc_to_host)
+                call acc_data(w(:, i:i), acc_to_host)
+                one = [1.0_wp, x(:, i), v(:, i), w(:, i)]
+            end if
             call comm_gather(comm, one, all)
             allocate(values(9))
             values = ieee_value(1.0_wp, ieee_quiet_nan)
@@ -133,41 +132,148 @@ contains
         end select
     end function probe_values
 
+    !> True when the point c lies in the box [lo, hi].
+    pure logical function in_box(c, lo, hi) result(inside)
+        !$acc routine seq
+        real(wp), intent(in) :: c(3), lo(3), hi(3)
+        inside = c(1) >= lo(1) .and. c(1) <= hi(1) .and. c(2) >= lo(2) .and. &
+                 c(2) <= hi(2) .and. c(3) >= lo(3) .and. c(3) <= hi(3)
+    end function in_box
+
+    !> The particles of material m in the box [lo, hi], a count on the device.
+    integer(i8) function region_count(n, lo, hi, m, mat, x) result(k)
+        integer(ip), intent(in) :: n, m
+        real(wp), intent(in) :: lo(3), hi(3), x(3, n)
+        integer(ip), intent(in) :: mat(n)
+        integer(ip) :: i
+        k = 0
+        !$acc parallel loop gang vector default(present) copyin(lo, hi) reduction(+:k)
+        do i = 1, n
+            if (mat(i) == m .and. in_box(x(:, i), lo, hi)) k = k + 1
+        end do
+    end function region_count
+
+    !> The largest m and m |x_k| of the particles in the box [lo, hi]: the bounds of the
+    !> centre-of-mass sums' terms; maxima on the device.
+    function region_bound(n, lo, hi, mass, x) result(top)
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: lo(3), hi(3), mass(n), x(3, n)
+        real(wp) :: top(4), t1, t2, t3, t4
+        integer(ip) :: i
+        t1 = 0.0_wp
+        t2 = 0.0_wp
+        t3 = 0.0_wp
+        t4 = 0.0_wp
+        !$acc parallel loop gang vector default(present) copyin(lo, hi) &
+        !$acc reduction(max:t1, t2, t3, t4)
+        do i = 1, n
+            if (.not. in_box(x(:, i), lo, hi)) cycle
+            t1 = max(t1, mass(i))
+            t2 = max(t2, mass(i) * abs(x(1, i)))
+            t3 = max(t3, mass(i) * abs(x(2, i)))
+            t4 = max(t4, mass(i) * abs(x(3, i)))
+        end do
+        top = [t1, t2, t3, t4]
+    end function region_bound
+
+    !> The fixed-point words (fixed_split) of m and m x, summed over the particles of
+    !> material mt in the box [lo, hi]: integer sums on the device, exact in any order.
+    subroutine region_moments(n, lo, hi, mt, mat, mass, x, scale, scale2, hi_sum, lo_sum)
+        integer(ip), intent(in) :: n, mt
+        real(wp), intent(in) :: lo(3), hi(3), mass(n), x(3, n), scale(4), scale2
+        integer(ip), intent(in) :: mat(n)
+        integer(i8), intent(out) :: hi_sum(4), lo_sum(4)
+        integer(i8) :: h1, h2, h3, h4, l1, l2, l3, l4, k, r
+        integer(ip) :: i
+        h1 = 0
+        h2 = 0
+        h3 = 0
+        h4 = 0
+        l1 = 0
+        l2 = 0
+        l3 = 0
+        l4 = 0
+        !$acc parallel loop gang vector default(present) copyin(lo, hi, scale) private(k, r) &
+        !$acc reduction(+:h1, h2, h3, h4, l1, l2, l3, l4)
+        do i = 1, n
+            if (mat(i) /= mt .or. .not. in_box(x(:, i), lo, hi)) cycle
+            call fixed_split(mass(i), scale(1), scale2, k, r)
+            h1 = h1 + k
+            l1 = l1 + r
+            call fixed_split(mass(i) * x(1, i), scale(2), scale2, k, r)
+            h2 = h2 + k
+            l2 = l2 + r
+            call fixed_split(mass(i) * x(2, i), scale(3), scale2, k, r)
+            h3 = h3 + k
+            l3 = l3 + r
+            call fixed_split(mass(i) * x(3, i), scale(4), scale2, k, r)
+            h4 = h4 + k
+            l4 = l4 + r
+        end do
+        hi_sum = [h1, h2, h3, h4]
+        lo_sum = [l1, l2, l3, l4]
+    end subroutine region_moments
+
     !> Velocity histograms of the particles of all ranks in a probe's region (each rank
-    !> giving its own; collective): counts(k, c) for bin k
+    !> giving its n owned ones; collective): counts(k, c) for bin k
     !> (0: below v_min, bins + 1: at or above v_max) of component c (1 radial, 2 angular,
     !> 3 vertical) about the vertical axis through p%axis (e_r from the axis to the centre,
-    !> e_theta = e_z x e_r; a centre on the axis takes e_r = e_x).
-    function probe_histogram_counts(comm, p, x, v) result(counts)
+    !> e_theta = e_z x e_r; a centre on the axis takes e_r = e_x). Counted on the device,
+    !> with atomic increments of integer bins (exact in any order).
+    function probe_histogram_counts(comm, p, n, x, v) result(counts)
         type(comm_t), intent(in) :: comm
         type(probe_t), intent(in) :: p
-        real(wp), intent(in) :: x(:, :), v(:, :)
-        integer(i8) :: counts(0:p%bins + 1, 3), flat(3 * (p%bins + 2))
-        real(wp) :: r(2), rn, er(2), comp(3), width
-        integer(ip) :: i, c, k
-        counts = 0
-        width = (p%v_max - p%v_min) / p%bins
-        do i = 1, size(x, 2)
-            if (.not. probe_in_region(p, x(1, i), x(2, i), x(3, i))) cycle
-            r = x(1:2, i) - p%axis(1:2)
-            rn = norm2(r)
-            er = [1.0_wp, 0.0_wp]
-            if (rn > 0.0_wp) er = r / rn
-            comp = [er(1) * v(1, i) + er(2) * v(2, i), -er(2) * v(1, i) + er(1) * v(2, i), &
-                    v(3, i)]
-            do c = 1, 3
-                if (comp(c) < p%v_min) then
-                    k = 0
-                else if (comp(c) >= p%v_max) then
-                    k = p%bins + 1
-                else
-                    k = min(p%bins, 1 + int((comp(c) - p%v_min) / width))
-                end if
-                counts(k, c) = counts(k, c) + 1
-            end do
-        end do
-        flat = reshape(counts, [size(counts)])
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: x(3, n), v(3, n)
+        integer(i8) :: counts(0:p%bins + 1, 3)
+        integer(i8), allocatable :: flat(:)
+        allocate(flat(3 * (p%bins + 2)))
+        call acc_data(flat, acc_create)
+        call histogram_bins(n, p%lo, p%hi, p%axis, p%v_min, p%v_max, p%bins, x, v, flat)
+        call acc_data(flat, acc_to_host)
+        call acc_data(flat, acc_exit)
         call comm_sum(comm, flat)
         counts = reshape(flat, shape(counts))
     end function probe_histogram_counts
+
+    !> The kernel of probe_histogram_counts: flat(k + 1 + (c - 1) (bins + 2)) for bin k of
+    !> component c.
+    subroutine histogram_bins(n, lo, hi, axis, v_min, v_max, bins, x, v, flat)
+        integer(ip), intent(in) :: n, bins
+        real(wp), intent(in) :: lo(3), hi(3), axis(3), v_min, v_max, x(3, n), v(3, n)
+        integer(i8), intent(inout) :: flat(3 * (bins + 2))
+        real(wp) :: rn, er(2), comp(3), width
+        integer(ip) :: i, c, k
+        width = (v_max - v_min) / bins
+        !$acc parallel loop gang vector default(present)
+        do k = 1, 3 * (bins + 2)
+            flat(k) = 0
+        end do
+        !$acc parallel loop gang vector default(present) copyin(lo, hi, axis) &
+        !$acc private(rn, er, comp, c, k)
+        do i = 1, n
+            if (.not. in_box(x(:, i), lo, hi)) cycle
+            rn = sqrt((x(1, i) - axis(1))**2 + (x(2, i) - axis(2))**2)
+            er(1) = 1.0_wp
+            er(2) = 0.0_wp
+            if (rn > 0.0_wp) then
+                er(1) = (x(1, i) - axis(1)) / rn
+                er(2) = (x(2, i) - axis(2)) / rn
+            end if
+            comp(1) = er(1) * v(1, i) + er(2) * v(2, i)
+            comp(2) = -er(2) * v(1, i) + er(1) * v(2, i)
+            comp(3) = v(3, i)
+            do c = 1, 3
+                if (comp(c) < v_min) then
+                    k = 0
+                else if (comp(c) >= v_max) then
+                    k = bins + 1
+                else
+                    k = min(bins, 1 + int((comp(c) - v_min) / width))
+                end if
+                !$acc atomic update
+                flat(k + 1 + (c - 1) * (bins + 2)) = flat(k + 1 + (c - 1) * (bins + 2)) + 1
+            end do
+        end do
+    end subroutine histogram_bins
 end module dem_probes

@@ -9,8 +9,7 @@ module dem_solver
     use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather, comm_node_rank
     use dem_case, only: case_t, time_scales_t, case_time_scales, case_particle_materials
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
-                             particles_reserve, order_by_id, sphere_mass, sphere_inv_inertia, &
-                             particles_find
+                             particles_reserve, order_by_id, particles_find
     use dem_domain, only: domain_t, domain_init, domain_data, domain_balance, domain_imbalance, &
                           domain_migrate, domain_ghosts, domain_update
     use dem_materials, only: pair_constants_t, pair_constants_build
@@ -789,7 +788,6 @@ contains
         type(output_t), intent(in) :: out
         type(error_t), intent(inout) :: err
         real(wp) :: ke_t, ke_r, pe, vmax
-        real(wp), allocatable :: mass(:)
         integer(i8) :: counts(3), bytes(3), n(1)
         logical :: settled
         call particle_data(s, acc_to_host)
@@ -800,16 +798,15 @@ contains
         counts = contact_counts(s)
         call capture(s, c, out, s%good, local=.true.)
         associate (p => s%p, k => s%p%n_own)
-            mass = sphere_mass(p%radius(1:k), c%mats%density(p%mat(1:k)))
-            call energies(s%comm, k, mass, sphere_inv_inertia(mass, p%radius(1:k)), p%x, p%v, &
-                          p%w, c%gravity, ke_t, ke_r, pe, vmax)
+            call energies(s%comm, k, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, ke_t, &
+                          ke_r, pe, vmax)
             n = k
             call comm_sum(s%comm, n)
             settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
             if (s%comm%rank == 0) call output_series(out, time_of(s, c, s%step), s%step, &
                 int(n(1), ip), s%removed, int(counts(1), ip), int(counts(2), ip), ke_t, ke_r, pe, &
                 vmax)
-            call write_probes(s, c, out, mass, err)
+            call write_probes(s, c, out, err)
         end associate
         if (s%comm%rank == 0) then
             bytes = output_sizes(out)            ! the row just written belongs to the state
@@ -837,13 +834,12 @@ contains
     end function contact_counts
 
     !> The probes' row of probes.csv, and the histograms due now, from every rank's owned
-    !> particles (`mass` of each), for the materials the case's particles are made of;
-    !> collective, rank 0 writes.
-    subroutine write_probes(s, c, out, mass, err)
-        type(solver_t), intent(in) :: s
+    !> particles (reductions on the device), for the materials the case's particles are made
+    !> of; collective, rank 0 writes.
+    subroutine write_probes(s, c, out, err)
+        type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(output_t), intent(in) :: out
-        real(wp), intent(in) :: mass(:)                 !! of the owned particles
         type(error_t), intent(inout) :: err
         real(wp), allocatable :: values(:)
         integer(i8), allocatable :: counts(:, :)
@@ -853,12 +849,11 @@ contains
         values = [real(wp) ::]
         associate (p => s%p, n => s%p%n_own)
             do k = 1, size(c%probes)
-                values = [values, probe_values(s%comm, c%probes(k), s%run%probed, p%gid(1:n), &
-                                               p%mat(1:n), mass, p%x(:, 1:n), p%v(:, 1:n), &
-                                               p%w(:, 1:n))]
+                values = [values, probe_values(s%comm, c%probes(k), s%run%probed, n, p%gid, &
+                                               p%mat, p%mass, p%x, p%v, p%w)]
                 if (c%probes(k)%kind /= probe_histogram .or. &
                     .not. histogram_due(c%probes(k)%time)) cycle
-                counts = probe_histogram_counts(s%comm, c%probes(k), p%x(:, 1:n), p%v(:, 1:n))
+                counts = probe_histogram_counts(s%comm, c%probes(k), n, p%x, p%v)
                 if (s%comm%rank == 0) call output_histogram(c%output_dir, c%probes(k)%name, &
                     c%probes(k)%v_min, c%probes(k)%v_max, counts, err)
             end do
