@@ -8,7 +8,8 @@ module dem_cells
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host
     implicit none
     private
-    public :: prefix_sum, bin_items, cell_number, cell_coords, fill_range, kept_indices
+    public :: prefix_sum, bin_items, cell_number, cell_coords, fill_range, kept_indices, &
+              sort_segment
 
     integer(ip), parameter :: chunk = 256    !< counts summed by one thread in prefix_sum
 
@@ -60,7 +61,7 @@ contains
         integer(ip), intent(inout) :: start(n_cells + 1)
         integer(ip), intent(inout) :: item(m)
         integer(ip), intent(inout) :: cnt(n_cells)
-        integer(ip) :: k, c, slot, a, b, key
+        integer(ip) :: k, c, slot
         !$acc parallel loop gang vector default(present)
         do c = 1, n_cells
             cnt(c) = 0
@@ -87,20 +88,29 @@ contains
                 item(slot) = k
             end if
         end do
-        !$acc parallel loop gang vector default(present) private(a, b, key)
-        do c = 1, n_cells                        ! each cell in increasing order (insertion)
-            do a = start(c) + 1, start(c + 1) - 1
-                key = item(a)
-                b = a - 1
-                do while (b >= start(c))
-                    if (item(b) <= key) exit
-                    item(b + 1) = item(b)
-                    b = b - 1
-                end do
-                item(b + 1) = key
-            end do
+        !$acc parallel loop gang vector default(present)
+        do c = 1, n_cells                        ! each cell in increasing order
+            call sort_segment(m, item, start(c), start(c + 1) - 1)
         end do
     end subroutine bin_items
+
+    !> a(first:last) in increasing order (insertion sort: the segments are short).
+    pure subroutine sort_segment(n, a, first, last)
+        !$acc routine seq
+        integer(ip), intent(in) :: n, first, last
+        integer(ip), intent(inout) :: a(n)
+        integer(ip) :: i, j, key
+        do i = first + 1, last
+            key = a(i)
+            j = i - 1
+            do while (j >= first)
+                if (a(j) <= key) exit
+                a(j + 1) = a(j)
+                j = j - 1
+            end do
+            a(j + 1) = key
+        end do
+    end subroutine sort_segment
 
     !> a(i) = first + step (i - 1), i = 1..n.
     subroutine fill_range(n, a, first, step)

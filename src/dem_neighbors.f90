@@ -9,7 +9,8 @@
 module dem_neighbors
     use dem_kinds, only: wp, ip, i8
     use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host
-    use dem_cells, only: prefix_sum, bin_items, cell_coords, cell_number, fill_range
+    use dem_cells, only: prefix_sum, bin_items, cell_coords, cell_number, fill_range, &
+                         sort_segment
     use dem_particles, only: order_by_id, index_of_id
     use dem_mesh, only: mesh_t, closest_point_triangle
     implicit none
@@ -626,7 +627,7 @@ contains
                                    gitem(max(1, n_e)), start(n_own + 1)
         integer(ip), intent(inout) :: out(n_out)
         integer(i8), intent(inout) :: tests
-        integer(ip) :: i, k, m, t, a, b, key, cx, cy, cz, c(3), c0(3), c1(3), cell, feature
+        integer(ip) :: i, k, m, t, cx, cy, cz, c(3), c0(3), c1(3), cell, feature
         real(wp) :: reach, lo(3), hi(3), q(3)
         integer(i8) :: tested
         tested = 0
@@ -669,18 +670,9 @@ contains
             tests = tested
             return
         end if
-        !$acc parallel loop gang vector default(present) private(a, b, key)
-        do i = 1, n_own                          ! each row in increasing order (insertion)
-            do a = start(i) + 1, start(i + 1) - 1
-                key = out(a)
-                b = a - 1
-                do while (b >= start(i))
-                    if (out(b) <= key) exit
-                    out(b + 1) = out(b)
-                    b = b - 1
-                end do
-                out(b + 1) = key
-            end do
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n_own                          ! each row in increasing order
+            call sort_segment(n_out, out, start(i), start(i + 1) - 1)
         end do
     end subroutine wall_rows
 
