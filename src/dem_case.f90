@@ -10,7 +10,8 @@ module dem_case
                             tangential_critical_dt
     implicit none
     private
-    public :: case_t, time_scales_t, case_time_scales, case_total_mass, case_particle_materials
+    public :: case_t, time_scales_t, case_time_scales, case_total_mass, case_particle_materials, &
+              case_release_particles
 
     !> Everything a run needs to start.
     type :: case_t
@@ -70,6 +71,13 @@ contains
         used = .false.
         used(c%mat(1:c%n_particles)) = .true.
     end function case_particle_materials
+
+    !> Free the case's particles (the count stays): once the solver has taken its share of
+    !> them, a rank needs no more than that share (doc/parallel.md).
+    subroutine case_release_particles(c)
+        type(case_t), intent(inout) :: c
+        deallocate(c%gid, c%mat, c%radius, c%x, c%v, c%w)
+    end subroutine case_release_particles
 
     !> Total particle mass [kg].
     real(wp) function case_total_mass(c) result(mass)

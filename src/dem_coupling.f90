@@ -14,7 +14,7 @@ module dem_coupling
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_runtime
     use dem_comm, only: comm_t, comm_from_handle, comm_free, comm_counts, comm_exchange, comm_sum
     use dem_domain, only: sorted_by_rank
-    use dem_case, only: case_t
+    use dem_case, only: case_t, case_release_particles
     use dem_input, only: read_case
     use dem_solver, only: solver_t, solver_init, solver_start, solver_advance, solver_finish, &
                           solver_time, solver_retime, stop_end
@@ -61,6 +61,7 @@ contains
             call read_case(trim(file), c, err)
             if (.not. err%failed()) then
                 call solver_init(s, c, comm)
+                call case_release_particles(c)
                 call particles_external(s%p)
                 allocate(s%removed_ids(0))               ! outlets record what they remove
                 dt_case = c%dt

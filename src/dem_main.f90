@@ -2,7 +2,7 @@
 program dem_main
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use dem, only: wp, dem_version_string, error_t, case_t, time_scales_t, case_time_scales, &
-                   case_total_mass, read_case, solver_t, solver_init, solver_restore, &
+                   case_total_mass, case_release_particles, read_case, solver_t, solver_init, solver_restore, &
                    solver_run, stop_wall_time, stop_signal, frame_t, checkpoint_read, &
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
                    solver_particles, solver_parallel_stats, i8
@@ -61,6 +61,7 @@ program dem_main
     if (comm%rank == 0) call print_check(c)
     if (check_only) call finish(0)
     call solver_init(s, c, comm)
+    call case_release_particles(c)     ! each rank keeps its share, in the solver
     if (resume) restart = checkpoint_latest(c%output_dir)
     if (len(restart) > 0) then
         call checkpoint_read(restart, c, comm, fr, err)

@@ -101,6 +101,7 @@ module dem_solver
         integer :: device = -1         !< OpenACC device of this rank (-1: the host)
         type(run_t) :: run             !< between solver_start and solver_finish
         logical :: lists_on_device = .false.
+        type(time_scales_t) :: scales     !< of the case's particles (an unstable run's message)
         logical, allocatable :: gone(:)  !< outlet flags of the owned particles, on the device
         type(frame_t) :: good          !< the last state that passed the instability guard
         integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
@@ -117,7 +118,9 @@ module dem_solver
 contains
 
     !> Set up the state of a case at t = 0. On P ranks, rank r takes particles r+1, r+1+P,
-    !> ...: the first rebuild sends each to the rank of its block.
+    !> ...: the first rebuild sends each to the rank of its block. What the run needs of the
+    !> case's particles is taken here, so that the caller can free them
+    !> (case_release_particles).
     subroutine solver_init(s, c, comm)
         type(solver_t), intent(out) :: s
         type(case_t), intent(in) :: c
@@ -138,6 +141,8 @@ contains
         s%nb%skin = c%skin
         s%imbalance_limit = c%imbalance_limit
         s%sort_cell = 2.0_wp * minval(c%radius(1:c%n_particles)) + c%skin
+        s%run%probed = case_particle_materials(c)
+        call case_time_scales(c, s%scales)
         s%step = 0
         s%rng_state = c%rng_state
         allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0), s%stale(0))
@@ -260,7 +265,6 @@ contains
         integer :: k
         associate (r => s%run)
             r%started = started
-            r%probed = case_particle_materials(c)
             call plan_run(s, c)
             s%stopped = stop_end
             s%stop_message = ''
@@ -900,7 +904,6 @@ contains
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
-        type(time_scales_t) :: ts
         type(frame_t) :: good
         type(error_t) :: write_err
         character(len=:), allocatable :: what, saved
@@ -954,11 +957,10 @@ contains
             if (write_err%failed()) saved = '; the last good state could not be written: ' // &
                                             write_err%message
         end if
-        call case_time_scales(c, ts)
         call set_error(err, dem_err_runtime, what // ' at t = ' // &
             real_text(time_of(s, c, s%step)) // ' s; dt is ' // &
-            real_text(c%dt / ts%rayleigh) // ' of the Rayleigh time (' // &
-            real_text(ts%rayleigh) // ' s): reduce dt' // saved)
+            real_text(c%dt / s%scales%rayleigh) // ' of the Rayleigh time (' // &
+            real_text(s%scales%rayleigh) // ' s): reduce dt' // saved)
     end subroutine unstable
 
     !> The state now, particles by id, into `fr`, with the per-particle contact counts when
