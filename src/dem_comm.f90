@@ -4,19 +4,22 @@ module dem_comm
     use mpi_f08, only: MPI_Comm, MPI_COMM_WORLD, MPI_Init, MPI_Initialized, MPI_Finalize, &
                        MPI_Finalized, MPI_Comm_dup, MPI_Comm_free, MPI_Comm_rank, &
                        MPI_Comm_size, MPI_Abort, MPI_Exscan, MPI_Allreduce, MPI_Barrier, &
-                       MPI_Alltoall, MPI_Alltoallv, MPI_Gather, MPI_Gatherv, MPI_Bcast, &
-                       MPI_Comm_split_type, MPI_COMM_TYPE_SHARED, MPI_Request, MPI_Isend, &
-                       MPI_Irecv, MPI_Waitall, MPI_STATUSES_IGNORE, &
+                       MPI_Reduce_scatter_block, MPI_Gather, MPI_Gatherv, MPI_Bcast, &
+                       MPI_Comm_split_type, MPI_COMM_TYPE_SHARED, MPI_Request, MPI_Status, &
+                       MPI_Isend, MPI_Irecv, MPI_Recv, MPI_Waitall, MPI_STATUSES_IGNORE, &
+                       MPI_ANY_SOURCE, &
                        MPI_INTEGER, MPI_INTEGER8, MPI_DOUBLE_PRECISION, MPI_LOGICAL, MPI_SUM, &
                        MPI_MAX, MPI_LOR, MPI_BXOR, MPI_IN_PLACE, MPI_INFO_NULL
     use dem_kinds, only: wp, i8
     implicit none
     private
+    integer, parameter :: tag_counts = 1     !< comm_counts' messages
+    integer, parameter :: tag_data = 0       !< comm_exchange's messages
     public :: comm_t, comm_init, comm_from_handle, comm_free, comm_node_rank, comm_offset, &
               comm_any, comm_xor, comm_barrier, comm_info_null, comm_exchange, comm_counts, &
-              comm_sum, comm_max, comm_gather, comm_broadcast, comm_exchange_neighbours
+              comm_sum, comm_max, comm_gather, comm_broadcast
 
-    !> Send parts of an array to every rank and receive theirs (MPI_Alltoallv).
+    !> Send parts of an array to other ranks and receive theirs (point to point).
     interface comm_exchange
         module procedure exchange_real, exchange_i8
     end interface comm_exchange
@@ -134,35 +137,43 @@ contains
         call MPI_Comm_free(node)
     end function comm_node_rank
 
-    !> How many items each rank sends this one, from how many this one sends each (MPI_Alltoall).
+    !> How many items each rank sends this one, from how many this one sends each: a message
+    !> to each rank this one sends to, after a reduction has told each rank how many messages
+    !> to expect (MPI_Reduce_scatter_block), so a rank exchanges messages with its
+    !> neighbours only, not with all P ranks. (A rank receives the messages of the next call
+    !> only after the next reduction, which needs it to have finished this one.)
     function comm_counts(c, send_counts) result(recv_counts)
         type(comm_t), intent(in) :: c
-        integer, intent(in) :: send_counts(0:)   !! items for each rank
+        integer, intent(in), asynchronous :: send_counts(0:)   !! items for each rank
         integer :: recv_counts(0:c%size - 1)
-        call MPI_Alltoall(send_counts, 1, MPI_INTEGER, recv_counts, 1, MPI_INTEGER, c%comm)
+        type(MPI_Request) :: requests(c%size)
+        type(MPI_Status) :: status
+        integer :: senders(1), value, n, q, k
+        call MPI_Reduce_scatter_block(merge(1, 0, send_counts > 0), senders, 1, MPI_INTEGER, &
+                                      MPI_SUM, c%comm)
+        n = 0
+        do q = 0, c%size - 1
+            if (send_counts(q) == 0) cycle
+            n = n + 1
+            call MPI_Isend(send_counts(q), 1, MPI_INTEGER, q, tag_counts, c%comm, requests(n))
+        end do
+        recv_counts = 0
+        do k = 1, senders(1)
+            call MPI_Recv(value, 1, MPI_INTEGER, MPI_ANY_SOURCE, tag_counts, c%comm, status)
+            recv_counts(status%MPI_SOURCE) = value
+        end do
+        call MPI_Waitall(n, requests(1:n), MPI_STATUSES_IGNORE)
     end function comm_counts
 
     !> `send` holds the columns for rank 0, then those for rank 1, ... (send_counts of them);
     !> `recv` gets those of every rank for this one, in rank order (recv_counts, from
-    !> comm_counts). The columns have the same length everywhere.
+    !> comm_counts). The columns have the same length everywhere. Point to point, with the
+    !> ranks that have something to send or receive only (the ghost refresh of every step,
+    !> the migration and the ghost set-up of a rebuild, the spread of the written state).
+    !> The buffers may be device addresses (host_data) with a GPU-aware MPI.
     subroutine exchange_real(c, send, send_counts, recv, recv_counts)
         type(comm_t), intent(in) :: c
-        real(wp), intent(in) :: send(:, :)
-        integer, intent(in) :: send_counts(0:), recv_counts(0:)
-        real(wp), intent(out) :: recv(:, :)
-        integer :: k
-        k = size(send, 1)
-        call MPI_Alltoallv(send, k * send_counts, k * starts(send_counts), MPI_DOUBLE_PRECISION, &
-                           recv, k * recv_counts, k * starts(recv_counts), MPI_DOUBLE_PRECISION, &
-                           c%comm)
-    end subroutine exchange_real
-
-    !> As comm_exchange for reals, with messages only between ranks that have something to
-    !> send (point to point: a few neighbours instead of all ranks, for the ghost refresh of
-    !> every step). The buffers may be device addresses (host_data) with a GPU-aware MPI.
-    subroutine comm_exchange_neighbours(c, send, send_counts, recv, recv_counts)
-        type(comm_t), intent(in) :: c
-        real(wp), intent(in), contiguous, target, asynchronous :: send(:, :)
+        real(wp), intent(in), contiguous, target :: send(:, :)
         integer, intent(in) :: send_counts(0:), recv_counts(0:)
         real(wp), intent(inout), contiguous, target, asynchronous :: recv(:, :)
         type(MPI_Request) :: requests(2 * c%size)
@@ -175,27 +186,42 @@ contains
             if (recv_counts(q) == 0) cycle
             n = n + 1
             call MPI_Irecv(recv(1, first_r(q) + 1), k * recv_counts(q), MPI_DOUBLE_PRECISION, q, &
-                           0, c%comm, requests(n))
+                           tag_data, c%comm, requests(n))
         end do
         do q = 0, c%size - 1
             if (send_counts(q) == 0) cycle
             n = n + 1
             call MPI_Isend(send(1, first_s(q) + 1), k * send_counts(q), MPI_DOUBLE_PRECISION, q, &
-                           0, c%comm, requests(n))
+                           tag_data, c%comm, requests(n))
         end do
         call MPI_Waitall(n, requests(1:n), MPI_STATUSES_IGNORE)
-    end subroutine comm_exchange_neighbours
+    end subroutine exchange_real
 
     !> As exchange_real, for 64-bit integers.
     subroutine exchange_i8(c, send, send_counts, recv, recv_counts)
         type(comm_t), intent(in) :: c
-        integer(i8), intent(in) :: send(:, :)
+        integer(i8), intent(in), contiguous, target :: send(:, :)
         integer, intent(in) :: send_counts(0:), recv_counts(0:)
-        integer(i8), intent(out) :: recv(:, :)
-        integer :: k
+        integer(i8), intent(inout), contiguous, target, asynchronous :: recv(:, :)
+        type(MPI_Request) :: requests(2 * c%size)
+        integer :: k, q, n, first_s(0:c%size - 1), first_r(0:c%size - 1)
         k = size(send, 1)
-        call MPI_Alltoallv(send, k * send_counts, k * starts(send_counts), MPI_INTEGER8, &
-                           recv, k * recv_counts, k * starts(recv_counts), MPI_INTEGER8, c%comm)
+        first_s = starts(send_counts)
+        first_r = starts(recv_counts)
+        n = 0
+        do q = 0, c%size - 1
+            if (recv_counts(q) == 0) cycle
+            n = n + 1
+            call MPI_Irecv(recv(1, first_r(q) + 1), k * recv_counts(q), MPI_INTEGER8, q, &
+                           tag_data, c%comm, requests(n))
+        end do
+        do q = 0, c%size - 1
+            if (send_counts(q) == 0) cycle
+            n = n + 1
+            call MPI_Isend(send(1, first_s(q) + 1), k * send_counts(q), MPI_INTEGER8, q, &
+                           tag_data, c%comm, requests(n))
+        end do
+        call MPI_Waitall(n, requests(1:n), MPI_STATUSES_IGNORE)
     end subroutine exchange_i8
 
     !> 0-based offsets of consecutive parts of the given sizes.

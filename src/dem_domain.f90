@@ -8,7 +8,7 @@
 !> data: the physics does not know about ranks.
 module dem_domain
     use dem_kinds, only: wp, ip, i8
-    use dem_comm, only: comm_t, comm_exchange, comm_exchange_neighbours, comm_counts, comm_sum, &
+    use dem_comm, only: comm_t, comm_exchange, comm_counts, comm_sum, &
                         comm_max
     use dem_acc, only: acc_data, acc_to_host, acc_to_device
     use dem_metis, only: metis_partition
@@ -364,11 +364,11 @@ contains
         logical, intent(in) :: gpu_aware_mpi
         if (gpu_aware_mpi) then
             !$acc host_data use_device(sbuf, rbuf)
-            call comm_exchange_neighbours(comm, sbuf, send_counts, rbuf, recv_counts)
+            call comm_exchange(comm, sbuf, send_counts, rbuf, recv_counts)
             !$acc end host_data
         else
             call acc_data(sbuf, acc_to_host)
-            call comm_exchange_neighbours(comm, sbuf, send_counts, rbuf, recv_counts)
+            call comm_exchange(comm, sbuf, send_counts, rbuf, recv_counts)
             call acc_data(rbuf, acc_to_device)
         end if
     end subroutine exchange_halo
