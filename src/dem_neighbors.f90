@@ -17,7 +17,8 @@ module dem_neighbors
     private
     public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order, &
               neighbors_history, neighbors_set_history, neighbors_unique_pairs, fit_grid, &
-              neighbors_data, neighbors_free, grid_t, grid_shape, grid_fill, cell_of
+              neighbors_data, neighbors_free, neighbors_moved, grid_t, grid_shape, grid_fill, &
+              cell_of
 
     !> The lists, their per-entry tangential history, and the positions they were built at.
     type :: neighbors_t
@@ -66,6 +67,28 @@ contains
         if (stale .or. .not. mesh%moving) return
         stale = max_displacement2(3 * mesh%n_tri, mesh%vert, nb%vert_ref) > (0.5_wp * nb%skin)**2
     end function neighbors_stale
+
+    !> The flagged particles' reference positions set to where they are now (particles moved
+    !> on purpose, which need no rebuild: parked ones).
+    subroutine neighbors_moved(nb, n, flag, x)
+        type(neighbors_t), intent(inout) :: nb
+        integer(ip), intent(in) :: n
+        logical, intent(in) :: flag(n)
+        real(wp), intent(in) :: x(:, :)
+        call reset_reference(n, flag, x, nb%x_ref)
+    end subroutine neighbors_moved
+
+    subroutine reset_reference(n, flag, x, x_ref)
+        integer(ip), intent(in) :: n
+        logical, intent(in) :: flag(n)
+        real(wp), intent(in) :: x(3, n)
+        real(wp), intent(inout) :: x_ref(3, n)
+        integer(ip) :: i
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n
+            if (flag(i)) x_ref(:, i) = x(:, i)
+        end do
+    end subroutine reset_reference
 
     !> Largest squared displacement between two sets of positions (or vertices) [m^2].
     real(wp) function max_displacement2(n, x, x_ref) result(d2max)

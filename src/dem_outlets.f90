@@ -18,30 +18,34 @@ module dem_outlets
 
 contains
 
-    !> Mark the owned particles whose centre lies in an outlet; return how many (on the
-    !> device during a run: x and gone are there).
-    integer(ip) function outlets_mark(n, x, outlets, gone) result(n_gone)
+    !> Mark the owned particles whose centre lies in an outlet and that were not marked
+    !> already: fresh(i) for those, gone(i) for all marked since the flags were made; return
+    !> how many are fresh (on the device during a run: x and the flags are there).
+    integer(ip) function outlets_mark(n, x, outlets, gone, fresh) result(n_fresh)
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: x(3, n)            !! positions [m]
         type(outlet_t), intent(in) :: outlets(:)
-        logical, intent(out) :: gone(n)
+        logical, intent(inout) :: gone(n)
+        logical, intent(inout) :: fresh(n)
         integer(ip) :: i, k
         !$acc parallel loop default(present)
         do i = 1, n
-            gone(i) = .false.
+            fresh(i) = .false.
         end do
         do k = 1, size(outlets)
             select case (outlets(k)%kind)
             case (outlet_plane)
-                call mark(n, x, outlet_plane, outlets(k)%point, outlets(k)%normal, gone)
+                call mark(n, x, outlet_plane, outlets(k)%point, outlets(k)%normal, fresh)
             case (outlet_box)
-                call mark(n, x, outlet_box, outlets(k)%lo, outlets(k)%hi, gone)
+                call mark(n, x, outlet_box, outlets(k)%lo, outlets(k)%hi, fresh)
             end select
         end do
-        n_gone = 0
-        !$acc parallel loop default(present) reduction(+:n_gone)
+        n_fresh = 0
+        !$acc parallel loop default(present) reduction(+:n_fresh)
         do i = 1, n
-            if (gone(i)) n_gone = n_gone + 1
+            fresh(i) = fresh(i) .and. .not. gone(i)
+            gone(i) = gone(i) .or. fresh(i)
+            if (fresh(i)) n_fresh = n_fresh + 1
         end do
     end function outlets_mark
 

@@ -7,7 +7,7 @@ module dem_particles
     implicit none
     private
     public :: particles_t, particles_init, particles_add, particles_permute, order_by_id, &
-              particles_reserve, index_of_id, particles_find, &
+              particles_reserve, index_of_id, particles_find, particles_park, &
               particles_pack, particles_unpack, particles_pack_reals, particles_external, &
               n_pack_int, sphere_mass, sphere_inv_inertia, ext_force, ext_torque, ext_beta, &
               ext_fluid_v, ext_impulse, n_ext
@@ -139,6 +139,28 @@ contains
         call permute_real(3, cap, n, order, p%t)
         if (allocated(p%ext)) call permute_real(n_ext, cap, n, order, p%ext)
     end subroutine particles_permute
+
+    !> Take the particles flagged out of the dynamics until they are removed (at the next
+    !> rebuild): at rest, massless for the integrator (1/m = 1/I = 0), and placed far away,
+    !> each at its own place, where nothing touches them (doc/theory.md, section 7).
+    subroutine particles_park(n, flag, x, v, w, inv_mass, inv_inertia)
+        integer(ip), intent(in) :: n
+        logical, intent(in) :: flag(n)
+        real(wp), intent(inout) :: x(3, n), v(3, n), w(3, n), inv_mass(n), inv_inertia(n)
+        real(wp), parameter :: far = 1.0e9_wp    !< [m]
+        integer(ip) :: i
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n
+            if (.not. flag(i)) cycle
+            x(1, i) = far
+            x(2, i) = far
+            x(3, i) = far + 1.0e3_wp * i
+            v(:, i) = 0.0_wp
+            w(:, i) = 0.0_wp
+            inv_mass(i) = 0.0_wp
+            inv_inertia(i) = 0.0_wp
+        end do
+    end subroutine particles_park
 
     !> The place of the particle of global id `id` among gid(1:n) (0 if absent), on the
     !> device: a reduction.

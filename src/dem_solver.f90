@@ -9,13 +9,13 @@ module dem_solver
     use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather, comm_node_rank
     use dem_case, only: case_t, time_scales_t, case_time_scales, case_particle_materials
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
-                             particles_reserve, order_by_id, particles_find
+                             particles_reserve, order_by_id, particles_find, particles_park
     use dem_domain, only: domain_t, domain_init, domain_data, domain_balance, domain_imbalance, &
                           domain_migrate, domain_ghosts, domain_update
     use dem_materials, only: pair_constants_t, pair_constants_build
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
                              neighbors_spatial_order, neighbors_history, neighbors_set_history, &
-                             neighbors_data, neighbors_free
+                             neighbors_data, neighbors_free, neighbors_moved
     use dem_cells, only: fill_range, kept_indices
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, wall_contacts_permute, &
@@ -101,8 +101,11 @@ module dem_solver
         integer :: device = -1         !< OpenACC device of this rank (-1: the host)
         type(run_t) :: run             !< between solver_start and solver_finish
         logical :: lists_on_device = .false.
+        integer(i8) :: parked = 0         !< particles taken out by outlets, not yet removed
+                                          !< (over the ranks)
         type(time_scales_t) :: scales     !< of the case's particles (an unstable run's message)
         logical, allocatable :: gone(:)  !< outlet flags of the owned particles, on the device
+        logical, allocatable :: fresh(:) !< those flagged at the last step
         type(frame_t) :: good          !< the last state that passed the instability guard
         integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
         real(wp), allocatable :: snap_time(:)
@@ -432,6 +435,7 @@ contains
             call timer_stop(s%timers, phase_output)
         end do
         end associate
+        if (.not. err%failed()) call settle_outlets(s)     ! the state as it is, for the caller
     contains
         logical function due(k)
             integer(i8), intent(in) :: k
@@ -569,6 +573,7 @@ contains
         real(wp) :: run_seconds, rate, left
         integer(i8) :: counts(3)
         integer :: k
+        call settle_outlets(s)
         call particle_data(s, acc_to_host)
         counts = contact_counts(s)
         if (s%comm%rank /= 0) return
@@ -602,7 +607,7 @@ contains
         stale = neighbors_stale(s%nb, s%p%n_own, s%p%x, s%mesh)
         if (s%comm%size > 1) stale = comm_any(s%comm, stale)
         if (stale) then
-            call rebuild(s)
+            call rebuild(s, outlets=s%parked > 0)
         else if (s%comm%size > 1) then                ! only x, v, w of the ghosts change
             call domain_update(s%dom, s%comm, s%p)
         end if
@@ -626,41 +631,62 @@ contains
             'wall triangles than the contact store holds; the walls overlap or are too fine')
     end subroutine compute_forces
 
-    !> Remove the particles that entered an outlet (the lists are rebuilt without them). The
-    !> flags stay on the device from step to step; they are made anew when the number of
-    !> owned particles has changed.
+    !> Take the particles that entered an outlet out of the run: they are counted removed and
+    !> parked at once (particles_park: nothing touches them any more), and compacted away at
+    !> the next rebuild, or before the next output (settle_outlets), so that the lists are
+    !> not rebuilt for every particle that leaves. The flags stay on the device from step to
+    !> step, until that compaction.
     subroutine remove_outlet_particles(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        integer(i8) :: n_gone(1)
-        if (allocated(s%gone)) then
-            if (size(s%gone) /= s%p%n_own) call release_gone(s)
-        end if
+        integer(i8) :: n_fresh(1)
         if (.not. allocated(s%gone)) then
-            allocate(s%gone(s%p%n_own))
+            allocate(s%gone(s%p%n_own), s%fresh(s%p%n_own))
+            s%gone = .false.
             call acc_data(s%gone, acc_enter)
+            call acc_data(s%fresh, acc_create)
         end if
-        n_gone = outlets_mark(s%p%n_own, s%p%x, c%outlets, s%gone)
-        if (s%comm%size > 1) call comm_sum(s%comm, n_gone)
-        if (n_gone(1) == 0) return
-        s%removed = s%removed + n_gone(1)
-        if (allocated(s%removed_ids)) then        ! (a coupled run: their ids, on the host)
-            call acc_data(s%gone, acc_to_host)
-            call acc_data(s%p%gid, acc_to_host)
-            s%removed_ids = [s%removed_ids, pack(s%p%gid(1:s%p%n_own), s%gone)]
-        end if
-        call rebuild(s, outlets=.true.)
+        associate (p => s%p, n => s%p%n_own)
+            n_fresh = outlets_mark(n, p%x, c%outlets, s%gone, s%fresh)
+            if (s%comm%size > 1) call comm_sum(s%comm, n_fresh)
+            if (n_fresh(1) == 0) return
+            s%removed = s%removed + n_fresh(1)
+            s%parked = s%parked + n_fresh(1)
+            if (allocated(s%removed_ids)) then    ! (a coupled run: their ids, on the host)
+                call acc_data(s%fresh, acc_to_host)
+                call acc_data(p%gid, acc_to_host)
+                s%removed_ids = [s%removed_ids, pack(p%gid(1:n), s%fresh)]
+            end if
+            if (s%trace > 0) then                 ! a traced particle that left: no more trace
+                call acc_data(s%fresh(s%trace:s%trace), acc_to_host)
+                if (s%fresh(s%trace)) then
+                    s%trace = 0
+                    s%trace_id = 0
+                end if
+            end if
+            call particles_park(n, s%fresh, p%x, p%v, p%w, p%inv_mass, p%inv_inertia)
+            call neighbors_moved(s%nb, n, s%fresh, p%x)
+        end associate
     end subroutine remove_outlet_particles
+
+    !> Remove the parked particles now (a rebuild), if there are any: before an output, and
+    !> at the end of an advance; collective.
+    subroutine settle_outlets(s)
+        type(solver_t), intent(inout) :: s
+        if (s%parked > 0) call rebuild(s, outlets=.true.)
+    end subroutine settle_outlets
 
     !> Take the outlet flags off the device and free them.
     subroutine release_gone(s)
         type(solver_t), intent(inout) :: s
+        call acc_data(s%fresh, acc_exit)
         call acc_data(s%gone, acc_exit)
-        deallocate(s%gone)
+        deallocate(s%gone, s%fresh)
     end subroutine release_gone
 
     !> Re-sort the particles in space and rebuild the neighbour lists; the history follows
-    !> the particles. With `outlets`, the particles the outlet flags mark are removed. On one
+    !> the particles. With `outlets`, the particles the outlet flags mark (parked) are
+    !> removed. On one
     !> rank all of it runs on the device. On several ranks the particles first go to the
     !> ranks of their blocks (repartitioned when the load is out of balance), on the host,
     !> and the ghosts are exchanged after the re-sort, on the host too; the stores then
@@ -722,6 +748,8 @@ contains
         s%lists_on_device = .true.
         call acc_data(order, acc_exit)
         call acc_data(kept, acc_exit)
+        if (allocated(s%gone)) call release_gone(s)   ! made anew for the new order
+        s%parked = 0
     end subroutine rebuild
 
     !> Give the particles `kept` (the others are removed) and their contact history to the
@@ -794,6 +822,7 @@ contains
         real(wp) :: ke_t, ke_r, pe, vmax
         integer(i8) :: counts(3), bytes(3), n(1)
         logical :: settled
+        call settle_outlets(s)
         call particle_data(s, acc_to_host)
         if (comm_any(s%comm, first_nonfinite(s%p%n_own, s%p%x, s%p%v, s%p%w) > 0)) then
             call unstable(s, c, err)
@@ -1053,6 +1082,7 @@ contains
         if (err%failed()) return
         call make_directory(c%output_dir // '/snapshots', err)
         if (err%failed()) return
+        call settle_outlets(s)
         call capture(s, c, none, fr)
         n_total = size(fr%gid, kind=i8)
         call comm_sum(s%comm, n_total)
@@ -1083,6 +1113,7 @@ contains
         type(error_t), intent(inout) :: err
         type(frame_t) :: fr
         if (err%failed()) return
+        call settle_outlets(s)
         call capture(s, c, out, fr)
         call write_frame_checkpoint(s, c, fr, err)
     end subroutine write_checkpoint
