@@ -151,13 +151,14 @@ contains
     end subroutine kept_indices
 
     !> Cell coordinates (0-based) of a point in the grid of n cells of size h from origin,
-    !> clamped to the grid.
+    !> clamped to the grid (before the conversion to integers, so that any finite point has
+    !> some).
     pure function cell_coords(p, origin, h, n) result(c)
         !$acc routine seq
         real(wp), intent(in) :: p(3), origin(3), h
         integer(ip), intent(in) :: n(3)
         integer(ip) :: c(3)
-        c = min(n - 1, max(0, floor((p - origin) / h)))
+        c = int(min(real(n - 1, wp), max(0.0_wp, (p - origin) / h)), ip)
     end function cell_coords
 
     !> Number (from 1, x fastest) of the cell of coordinates c in a grid of n cells.

@@ -69,12 +69,13 @@ contains
         d%recv_counts = 0
     end subroutine domain_init
 
-    !> Block coordinates (0-based) of a point, clamped to the grid.
+    !> Block coordinates (0-based) of a point, clamped to the grid (before the conversion to
+    !> integers, so that any finite point has some, a parked particle's too).
     pure function block_coords(d, x) result(c)
         type(domain_t), intent(in) :: d
         real(wp), intent(in) :: x(3)
         integer(ip) :: c(3)
-        c = min(d%n - 1, max(0, floor((x - d%origin) / d%h)))
+        c = int(min(real(d%n - 1, wp), max(0.0_wp, (x - d%origin) / d%h)), ip)
     end function block_coords
 
     pure integer(ip) function block_index(d, c) result(b)

@@ -78,6 +78,7 @@ contains
         call reset_reference(n, flag, x, nb%x_ref)
     end subroutine neighbors_moved
 
+    !> The kernel of neighbors_moved.
     subroutine reset_reference(n, flag, x, x_ref)
         integer(ip), intent(in) :: n
         logical, intent(in) :: flag(n)

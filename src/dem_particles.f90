@@ -142,7 +142,7 @@ contains
 
     !> Take the particles flagged out of the dynamics until they are removed (at the next
     !> rebuild): at rest, massless for the integrator (1/m = 1/I = 0), and placed far away,
-    !> each at its own place, where nothing touches them (doc/theory.md, section 7).
+    !> each at its own place, where nothing touches them (doc/theory.md, section 10).
     subroutine particles_park(n, flag, x, v, w, inv_mass, inv_inertia)
         integer(ip), intent(in) :: n
         logical, intent(in) :: flag(n)

@@ -86,6 +86,7 @@ contains
         b(:, :, 1:n_keep) = a(:, :, 1:n_keep)
         call move_alloc(b, a)
     end subroutine resize_wp_3
+
     !> Reorder the columns of a(rows, capacity): column k becomes the one at order(k),
     !> k = 1..n; the columns after n are zeroed. On the device if a and order are there
     !> (present or copied: a stays where it is).
