@@ -292,7 +292,7 @@ contains
             s%device = acc_select_device(comm_node_rank(s%comm))
             call device_data(s, acc_enter)
 
-            call rebuild(s)
+            call rebuild(s, outlets=.false.)
             if (.not. s%restarted) then
                 if (c%integrator == integrator_verlet) then
                     call compute_forces(s, c, time_of(s, c, s%step), err)
@@ -694,40 +694,29 @@ contains
     !> anew).
     subroutine rebuild(s, outlets)
         type(solver_t), intent(inout) :: s
-        logical, intent(in), optional :: outlets
+        logical, intent(in) :: outlets           !! remove the parked particles
         integer(ip), allocatable :: order(:), kept(:)
         integer(ip) :: m
-        logical :: removing
-        removing = .false.
-        if (present(outlets)) removing = outlets
-        allocate(kept(max(1, s%p%n_own)))
-        if (s%comm%size > 1) then
+        if (s%comm%size > 1) then               ! the migration, on the host, drops them
             call particle_data(s, acc_to_host)
             call neighbors_data(s%nb, acc_to_host)
-            if (removing) call acc_data(s%gone, acc_to_host)
+            if (outlets) call acc_data(s%gone, acc_to_host)
             call particle_data(s, acc_exit)
             if (s%lists_on_device) call domain_data(s%dom, acc_exit)
-            m = s%p%n_own
-            if (removing) then
-                kept = pack([(m, m = 1, s%p%n_own)], .not. s%gone)
+            if (outlets) then
+                call distribute(s, pack([(m, m = 1, s%p%n_own)], .not. s%gone))
             else
-                kept = [(m, m = 1, s%p%n_own)]
+                call distribute(s, [(m, m = 1, s%p%n_own)])
             end if
-            call distribute(s, kept)
             call particle_data(s, acc_enter)
-            deallocate(kept)
-            allocate(kept(max(1, s%p%n_own)))
-            call acc_data(kept, acc_create)
+        end if
+        allocate(kept(max(1, s%p%n_own)))
+        call acc_data(kept, acc_create)
+        if (outlets .and. s%comm%size == 1) then
+            call kept_indices(s%p%n_own, s%gone, kept, m)
+        else
             m = s%p%n_own
             call fill_range(m, kept, 1, 1)
-        else
-            call acc_data(kept, acc_create)
-            if (removing) then
-                call kept_indices(s%p%n_own, s%gone, kept, m)
-            else
-                m = s%p%n_own
-                call fill_range(m, kept, 1, 1)
-            end if
         end if
         allocate(order(max(1, m)))
         call acc_data(order, acc_create)
@@ -742,7 +731,6 @@ contains
             call domain_data(s%dom, acc_enter)
         end if
         if (s%trace_id /= 0) s%trace = particles_find(s%p%n_own, s%p%gid, s%trace_id)
-        if (s%trace_id /= 0 .and. s%trace == 0) s%trace_id = 0    ! it left through an outlet
         call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
                              s%p%radius, s%mesh, old_index=order)
         s%lists_on_device = .true.
