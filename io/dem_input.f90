@@ -6,7 +6,8 @@ module dem_input
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_namelist_scan, only: nml_file_t, nml_block_t, nml_scan, nml_items, nml_location
-    use dem_case, only: case_t, time_scales_t, case_time_scales
+    use dem_case, only: case_t, time_scales_t, case_time_scales, case_summarize
+    use dem_comm, only: comm_t, comm_any
     use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion
     use dem_stl, only: stl_read
     use dem_particle_file, only: read_particle_file
@@ -15,10 +16,6 @@ module dem_input
     use dem_outlets, only: outlet_t, outlet_plane, outlet_box
     use dem_probes, only: probe_t, probe_count, probe_center_of_mass, probe_track, &
                           probe_histogram
-    use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_data, neighbors_free
-    use dem_acc, only: acc_data, acc_enter, acc_exit, acc_to_host
-    use dem_mesh, only: mesh_t
-    use dem_particles, only: order_by_id
     use dem_integrate, only: integrator_euler, integrator_verlet
     implicit none
     private
@@ -50,13 +47,19 @@ module dem_input
 
 contains
 
-    !> Read and validate the case in `path`. On error `c` is incomplete and must not be run.
-    subroutine read_case(path, c, err)
+    !> Read and validate the case in `path`; collective over the ranks of `comm`. Each rank
+    !> keeps a share of the particles: of each source, every P-th one from its rank on (P
+    !> ranks; doc/parallel.md). A case that inserts particles holds them all until they are
+    !> placed (a sphere is placed clear of all the others), then its share. That the ids are
+    !> unique and no two particles overlap is checked where the particles are spread by place
+    !> (solver_prepare). On error `c` is incomplete and must not be run.
+    subroutine read_case(path, c, err, comm)
         character(len=*), intent(in) :: path
         type(case_t), intent(out) :: c
         type(error_t), intent(inout) :: err
+        type(comm_t), intent(in) :: comm
         type(nml_file_t) :: nf
-        integer :: k, g
+        integer :: k, g, share(2)
         logical :: known
 
         c%source = path
@@ -84,27 +87,32 @@ contains
         if (err%failed()) return
         call read_contact_model(nf, c, err)
         if (err%failed()) return
-        call read_particles(nf, c, err)
+        share = [comm%rank, comm%size]
+        if (count_blocks(nf, 'insert') > 0) share = [0, 1]
+        call read_particles(nf, share, c, err)
         if (err%failed()) return
-        call read_particle_files(nf, c, err)
+        call read_particle_files(nf, share, c, err)
         if (err%failed()) return
         call read_inserts(nf, c, err)
         if (err%failed()) return
-        call check_particles(nf, c, err)
-        if (err%failed()) return
+        if (share(2) /= comm%size) call keep_share(c, comm%rank, comm%size)
+        if (c%n_particles == 0) then
+            call fail(nf%path // ': no particles (give &particle, &particle_file or &insert)')
+            return
+        end if
         call read_walls(nf, c, err)
         if (err%failed()) return
         call read_meshes(nf, c, err)
         if (err%failed()) return
+        call read_run(nf, c, comm, err)
+        if (err%failed()) return
         call check_pairs_used(nf, c, err)
         if (err%failed()) return
-        call read_run(nf, c, err)
-        if (err%failed()) return
-        call read_output(nf, c, err)
+        call read_output(nf, c, comm, err)
         if (err%failed()) return
         call read_outlets(nf, c, err)
         if (err%failed()) return
-        call read_probes(nf, c, err)
+        call read_probes(nf, c, comm, err)
     contains
         subroutine fail(msg)
             character(len=*), intent(in) :: msg
@@ -113,9 +121,10 @@ contains
     end subroutine read_case
 
     !> &run: time stepping and global physics.
-    subroutine read_run(nf, c, err)
+    subroutine read_run(nf, c, comm, err)
         type(nml_file_t), intent(in) :: nf
         type(case_t), intent(inout) :: c
+        type(comm_t), intent(in) :: comm
         type(error_t), intent(inout) :: err
         real(wp) :: dt              ! time step [s], > 0, required
         real(wp) :: t_end           ! end time [s], > 0, required
@@ -187,15 +196,16 @@ contains
             return
         end select
         if (.not. check_vector(at, gravity, 'gravity', .false., err)) return
+        c%gravity = gravity
+        call case_summarize(c, comm)            ! (collective: every rank is here)
         if (.not. in_range(expected_speed, 0.0_wp, unset, .true., .false.)) then
             call set_error(err, dem_err_input, at // ": key 'expected_speed': must be >= 0 [m/s]")
             return
         end if
-        if (skin == unset) skin = 0.4_wp * minval(c%radius(1:c%n_particles))
+        if (skin == unset) skin = 0.4_wp * minval(c%summary%rmin)
         if (.not. check_positive(at, skin, 'skin', '[m]', err)) return
         c%dt = dt
         c%t_end = t_end
-        c%gravity = gravity
         c%expected_speed = expected_speed
         c%skin = skin
         c%allow_unstable = allow_unstable
@@ -227,8 +237,8 @@ contains
         c%gpu_aware_mpi = gpu_aware_mpi
 
         call case_time_scales(c, ts)
-        if (max_speed == unset .and. c%n_particles > 0) max_speed = &
-            max(0.1_wp * minval(c%radius(1:c%n_particles)) / dt, 10.0_wp * ts%speed)
+        if (max_speed == unset) max_speed = &
+            max(0.1_wp * minval(c%summary%rmin) / dt, 10.0_wp * ts%speed)
         c%max_speed = max_speed
         if (dt > ts%bound .and. .not. allow_unstable) then
             write(s1, '(es10.3)') dt
@@ -241,9 +251,10 @@ contains
     end subroutine read_run
 
     !> &output: where and how often results are written.
-    subroutine read_output(nf, c, err)
+    subroutine read_output(nf, c, comm, err)
         type(nml_file_t), intent(in) :: nf
         type(case_t), intent(inout) :: c
+        type(comm_t), intent(in) :: comm
         type(error_t), intent(inout) :: err
         character(len=512) :: dir   ! output directory, default 'output/<file stem>'
         real(wp) :: interval        ! series.csv interval [s], > 0, default t_end/100
@@ -287,10 +298,12 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'dir': must not be empty")
                 return
             end if
-            if (trace_id /= 0 .and. .not. any(c%gid(1:c%n_particles) == trace_id)) then
-                call set_error(err, dem_err_input, at // ": key 'trace_id': no particle " // &
-                               'has this id')
-                return
+            if (trace_id /= 0) then              ! (the same on every rank)
+                if (.not. comm_any(comm, any(c%gid(1:c%n_held) == trace_id))) then
+                    call set_error(err, dem_err_input, at // ": key 'trace_id': no particle " // &
+                                   'has this id')
+                    return
+                end if
             end if
             if (.not. in_range(snapshot_interval, 0.0_wp, unset, .true., .false.)) then
                 call set_error(err, dem_err_input, at // ": key 'snapshot_interval': must " // &
@@ -506,9 +519,10 @@ contains
         end do
     end subroutine read_pairs
 
-    !> &particle (one per sphere).
-    subroutine read_particles(nf, c, err)
+    !> &particle (one per sphere): all checked, those of the share (rank, ranks) kept.
+    subroutine read_particles(nf, share, c, err)
         type(nml_file_t), intent(in) :: nf
+        integer, intent(in) :: share(2)
         type(case_t), intent(inout) :: c
         type(error_t), intent(inout) :: err
         integer(i8) :: id                  ! global id, > 0, unique, default: the group's rank
@@ -523,11 +537,13 @@ contains
         character(len=512) :: msg
         character(len=:), allocatable :: text
         character(len=:), allocatable :: at
-        integer :: k, n, im
+        integer :: k, n, im, i
 
         n = count_blocks(nf, 'particle')
-        allocate(c%gid(n), c%mat(n), c%radius(n), c%x(3, n), c%v(3, n), c%w(3, n))
         c%n_particles = n
+        c%n_held = count([(mod(k - 1, share(2)) == share(1), k = 1, n)])
+        allocate(c%gid(c%n_held), c%mat(c%n_held), c%radius(c%n_held), c%x(3, c%n_held), &
+                 c%v(3, c%n_held), c%w(3, c%n_held))
         do k = 1, n
             id = k
             material = ''
@@ -553,24 +569,29 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'id': must be > 0")
                 return
             end if
-            c%gid(k) = id
-            c%mat(k) = im
-            c%radius(k) = radius
-            c%x(:, k) = position
-            c%v(:, k) = velocity
-            c%w(:, k) = angular_velocity
+            if (mod(k - 1, share(2)) /= share(1)) cycle
+            i = (k - 1) / share(2) + 1
+            c%gid(i) = id
+            c%mat(i) = im
+            c%radius(i) = radius
+            c%x(:, i) = position
+            c%v(:, i) = velocity
+            c%w(:, i) = angular_velocity
         end do
     end subroutine read_particles
 
-    !> &particle_file (repeated): particles read from a CSV or HDF5 file (dem_particle_file).
-    subroutine read_particle_files(nf, c, err)
+    !> &particle_file (repeated): particles read from a CSV or HDF5 file (dem_particle_file),
+    !> the share (rank, ranks) of each kept.
+    subroutine read_particle_files(nf, share, c, err)
         type(nml_file_t), intent(in) :: nf
+        integer, intent(in) :: share(2)
         type(case_t), intent(inout) :: c
         type(error_t), intent(inout) :: err
         character(len=512) :: file  ! CSV or HDF5 particle file, relative to the case file, required
         namelist /particle_file/ file
         type(nml_block_t) :: b
         integer :: k_item, ios, k
+        integer(ip) :: n_rows
         character(len=512) :: msg
         character(len=:), allocatable :: text, at
         integer(i8), allocatable :: gid(:)
@@ -591,18 +612,13 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'file' is required")
                 return
             end if
-            call read_particle_file(relative_to(nf%path, trim(file)), c%mats%name, gid, mat, &
-                                    radius, x, v, w, err)
+            call read_particle_file(relative_to(nf%path, trim(file)), c%mats%name, &
+                                    c%mats%rigid, share, gid, mat, radius, x, v, w, n_rows, err)
             if (err%failed()) then
                 err%message = at // ": key 'file': " // err%message
                 return
             end if
-            if (any(c%mats%rigid(mat))) then
-                call set_error(err, dem_err_input, at // ": key 'file': a particle has a " // &
-                               'rigid material (rigid materials are for walls)')
-                return
-            end if
-            call append_particles(c, gid, mat, radius, x, v, w)
+            call append_particles(c, gid, mat, radius, x, v, w, n_rows)
         end do
     end subroutine read_particle_files
 
@@ -718,8 +734,8 @@ contains
             end select
             rng = rng_seed(seed)
             allocate(x(3, n), r(n))
-            call insert_random(rng, reg, n, radius_min, radius_max, c%x(:, 1:c%n_particles), &
-                               c%radius(1:c%n_particles), 10000, x, r, placed)
+            call insert_random(rng, reg, n, radius_min, radius_max, c%x(:, 1:c%n_held), &
+                               c%radius(1:c%n_held), 10000, x, r, placed)
             c%rng_state = rng%state
             if (placed < n) then
                 write(s1, '(i0)') placed
@@ -730,86 +746,48 @@ contains
                 return
             end if
             next_id = 1
-            if (c%n_particles > 0) next_id = maxval(c%gid(1:c%n_particles)) + 1
+            if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
             call append_particles(c, [(next_id + k_item, k_item = 0, n - 1)], &
                                   spread(im, 1, n), r, x, spread(velocity, 2, n), &
-                                  spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n))
+                                  spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n), n)
             deallocate(x, r)
         end do
     end subroutine read_inserts
 
-    !> Append particles to the case.
-    subroutine append_particles(c, gid, mat, radius, x, v, w)
+    !> Append particles to the case's: those held here, of n_rows of all ranks.
+    subroutine append_particles(c, gid, mat, radius, x, v, w, n_rows)
         type(case_t), intent(inout) :: c
         integer(i8), intent(in) :: gid(:)
         integer(ip), intent(in) :: mat(:)
         real(wp), intent(in) :: radius(:), x(:, :), v(:, :), w(:, :)
+        integer(ip), intent(in) :: n_rows
         integer(ip) :: n
-        n = c%n_particles
+        n = c%n_held
         c%gid = [c%gid(1:n), gid]
         c%mat = [c%mat(1:n), mat]
         c%radius = [c%radius(1:n), radius]
         c%x = reshape([c%x(:, 1:n), x], [3, n + size(gid)])
         c%v = reshape([c%v(:, 1:n), v], [3, n + size(gid)])
         c%w = reshape([c%w(:, 1:n), w], [3, n + size(gid)])
-        c%n_particles = n + size(gid)
+        c%n_held = n + size(gid)
+        c%n_particles = c%n_particles + n_rows
     end subroutine append_particles
 
-    !> All particles together: at least one, ids unique, and no two overlapping by more than
-    !> half the smaller radius (found with the neighbour grid).
-    subroutine check_particles(nf, c, err)
-        type(nml_file_t), intent(in) :: nf
-        type(case_t), intent(in) :: c
-        type(error_t), intent(inout) :: err
-        integer(ip), allocatable :: order(:)
-        integer(i8), allocatable :: gid(:)
-        real(wp), allocatable :: x(:, :), radius(:)
-        type(neighbors_t) :: nb
-        type(mesh_t) :: no_walls
-        integer(ip) :: i, j, k, n, bad(2)
-        character(len=24) :: s1, s2
-        n = c%n_particles
-        if (n == 0) then
-            call set_error(err, dem_err_input, nf%path // ': no particles (give &particle, ' // &
-                           '&particle_file or &insert)')
-            return
-        end if
-        order = order_by_id(c%gid(1:n))
-        do k = 2, n
-            if (c%gid(order(k)) == c%gid(order(k - 1))) then
-                write(s1, '(i0)') c%gid(order(k))
-                call set_error(err, dem_err_input, nf%path // ': particle id ' // trim(s1) // &
-                               ' is given twice')
-                return
-            end if
-        end do
-        gid = c%gid(1:n)                          ! the lists are built on the device
-        x = c%x(:, 1:n)
-        radius = c%radius(1:n)
-        call acc_data(gid, acc_enter)
-        call acc_data(x, acc_enter)
-        call acc_data(radius, acc_enter)
-        call neighbors_build(nb, n, n, gid, x, radius, no_walls)
-        call neighbors_data(nb, acc_to_host)
-        bad = 0
-        do i = 1, n
-            do k = nb%start(i), nb%start(i + 1) - 1
-                j = nb%list(k)
-                if (norm2(x(:, j) - x(:, i)) < radius(i) + radius(j) &
-                    - 0.5_wp * min(radius(i), radius(j))) bad = [i, j]
-            end do
-            if (bad(1) > 0) exit
-        end do
-        call neighbors_free(nb)
-        call acc_data(radius, acc_exit)
-        call acc_data(x, acc_exit)
-        call acc_data(gid, acc_exit)
-        if (bad(1) == 0) return
-        write(s1, '(i0)') minval(gid(bad))
-        write(s2, '(i0)') maxval(gid(bad))
-        call set_error(err, dem_err_input, nf%path // ': particles ' // trim(s1) // &
-            ' and ' // trim(s2) // ' overlap by more than half the smaller radius')
-    end subroutine check_particles
+    !> Keep of all the case's particles (held here) every ranks-th from rank + 1 on.
+    subroutine keep_share(c, rank, ranks)
+        type(case_t), intent(inout) :: c
+        integer, intent(in) :: rank, ranks
+        integer(ip), allocatable :: kept(:)
+        integer(ip) :: i
+        kept = [(i, i = rank + 1, c%n_held, ranks)]
+        c%gid = c%gid(kept)
+        c%mat = c%mat(kept)
+        c%radius = c%radius(kept)
+        c%x = c%x(:, kept)
+        c%v = c%v(:, kept)
+        c%w = c%w(:, kept)
+        c%n_held = size(kept)
+    end subroutine keep_share
 
     !> &outlet (repeated): particles whose centre enters the region are removed and counted.
     subroutine read_outlets(nf, c, err)
@@ -871,9 +849,10 @@ contains
 
     !> &probe (repeated): counts, centres of mass, a tracked particle, velocity histograms
     !> (dem_probes; doc/output.md).
-    subroutine read_probes(nf, c, err)
+    subroutine read_probes(nf, c, comm, err)
         type(nml_file_t), intent(in) :: nf
         type(case_t), intent(inout) :: c
+        type(comm_t), intent(in) :: comm
         type(error_t), intent(inout) :: err
         character(len=name_len) :: name    ! column prefix in probes.csv, required, unique
         character(len=name_len) :: kind    ! 'count' | 'center_of_mass' | 'track' | 'histogram'
@@ -949,7 +928,7 @@ contains
                 p%kind = probe_center_of_mass
             case ('track')
                 p%kind = probe_track
-                if (.not. any(c%gid(1:c%n_particles) == id)) then
+                if (.not. comm_any(comm, any(c%gid(1:c%n_held) == id))) then
                     call fail("key 'id': no particle has this id")
                     return
                 end if
@@ -1134,7 +1113,7 @@ contains
         integer :: a, b
         used = .false.
         wall = .false.
-        used(c%mat(1:c%n_particles)) = .true.
+        used = c%summary%rmin < huge(1.0_wp)
         if (c%mesh%n_tri > 0) wall(c%mesh%mat(1:c%mesh%n_tri)) = .true.
         do a = 1, c%mats%n
             if (.not. used(a)) cycle

@@ -2,7 +2,8 @@
 !> and optionally vx, vy, vz, wx, wy, wz (any order; others are ignored). `final.csv` of a
 !> run is such a file, so a run's end state can start another case; another code's state can
 !> be loaded exactly (numbers are read to full precision). Materials are given by name.
-!> HDF5 snapshots and checkpoints of a run are particle files too (dem_checkpoint).
+!> HDF5 snapshots and checkpoints of a run are particle files too (dem_checkpoint). Every
+!> row is checked; a rank of a parallel run keeps its share of them.
 module dem_particle_file
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
@@ -20,24 +21,48 @@ module dem_particle_file
 
 contains
 
-    !> Read every particle of a file. `names` are the materials a row may name; mat(k) is the
-    !> index of row k's material in them.
-    subroutine read_particle_file(path, names, gid, mat, radius, x, v, w, err)
+    !> Check every particle of a file and keep the share (rank, ranks) of them: rows
+    !> rank + 1, rank + 1 + ranks, ... of the n_rows. `names` are the materials a row may name
+    !> (not those `rigid`, which are for walls); mat(k) is the index of row k's material in
+    !> them.
+    subroutine read_particle_file(path, names, rigid, share, gid, mat, radius, x, v, w, &
+                                  n_rows, err)
         character(len=*), intent(in) :: path
         character(len=*), intent(in) :: names(:)
+        logical, intent(in) :: rigid(:)
+        integer, intent(in) :: share(2)
         integer(i8), allocatable, intent(out) :: gid(:)
         integer(ip), allocatable, intent(out) :: mat(:)
         real(wp), allocatable, intent(out) :: radius(:), x(:, :), v(:, :), w(:, :)
+        integer(ip), intent(out) :: n_rows
         type(error_t), intent(inout) :: err
         character(len=:), allocatable :: line
         character(len=64), allocatable :: fields(:)
         character(len=16) :: num
         integer :: u, ios, lineno, col(12), k, n, j
+        integer(ip), allocatable :: kept(:)
+        integer(i8) :: id
+        integer(ip) :: m
         real(wp) :: val(10)
 
+        n_rows = 0
         if (is_hdf5(path)) then
             call snapshot_read_particles(path, names, gid, mat, radius, x, v, w, err)
-            if (err%failed()) err%code = dem_err_input
+            if (err%failed()) then
+                err%code = dem_err_input
+            else if (any(rigid(mat))) then
+                call set_error(err, dem_err_input, path // ': a particle has a rigid ' // &
+                               'material (rigid materials are for walls)')
+            else
+                n_rows = size(gid)
+                kept = [(k, k = share(1) + 1, n_rows, share(2))]
+                gid = gid(kept)
+                mat = mat(kept)
+                radius = radius(kept)
+                x = x(:, kept)
+                v = v(:, kept)
+                w = w(:, kept)
+            end if
             return
         end if
         allocate(gid(0), mat(0), radius(0), x(3, 0), v(3, 0), w(3, 0))
@@ -83,19 +108,24 @@ contains
                                'fewer columns than the header')
                 exit
             end if
-            n = n + 1
-            if (n > size(gid)) call grow(max(1024, 2 * n))
-            read(fields(col(1)), *, iostat=ios) gid(n)
-            if (ios /= 0 .or. gid(n) <= 0) then
+            n_rows = n_rows + 1
+            read(fields(col(1)), *, iostat=ios) id
+            if (ios /= 0 .or. id <= 0) then
                 call set_error(err, dem_err_input, path // ':' // trim(num) // &
                                ": column 'id': '" // trim(fields(col(1))) // "' is not an id > 0")
                 exit
             end if
-            mat(n) = findloc(names, trim(fields(col(2))), dim=1)
-            if (mat(n) == 0) then
+            m = findloc(names, trim(fields(col(2))), dim=1)
+            if (m == 0) then
                 call set_error(err, dem_err_input, path // ':' // trim(num) // &
                     ": column 'material': '" // trim(fields(col(2))) // &
                     "' is not a defined material")
+                exit
+            end if
+            if (rigid(m)) then
+                call set_error(err, dem_err_input, path // ':' // trim(num) // &
+                    ": column 'material': '" // trim(fields(col(2))) // &
+                    "' is rigid (rigid materials are for walls)")
                 exit
             end if
             val = 0.0_wp
@@ -118,6 +148,11 @@ contains
                                ": column 'radius': must be > 0")
                 exit
             end if
+            if (mod(n_rows - 1, share(2)) /= share(1)) cycle
+            n = n + 1
+            if (n > size(gid)) call grow(max(1024, 2 * n))
+            gid(n) = id
+            mat(n) = m
             radius(n) = val(1)
             x(:, n) = val(2:4)
             v(:, n) = val(5:7)
@@ -125,7 +160,7 @@ contains
         end do
         close(u)
         if (err%failed()) return
-        if (n == 0) then
+        if (n_rows == 0) then
             call set_error(err, dem_err_input, path // ': no particles after the header')
             return
         end if

@@ -4,10 +4,9 @@ module dem
     use dem_kinds, only: wp, ip, i8
     use dem_version, only: dem_version_string
     use dem_error, only: error_t
-    use dem_case, only: case_t, time_scales_t, case_time_scales, case_total_mass, &
-                        case_release_particles
+    use dem_case, only: case_t, time_scales_t, case_time_scales, case_release_particles
     use dem_input, only: read_case
-    use dem_solver, only: solver_t, solver_init, solver_restore, solver_run, solver_particles, &
+    use dem_solver, only: solver_t, solver_init, solver_prepare, solver_restore, solver_run, solver_particles, &
                           solver_parallel_stats, &
                           stop_end, stop_settled, stop_wall_time, stop_signal
     use dem_checkpoint, only: frame_t, checkpoint_read, checkpoint_file, checkpoint_latest
@@ -15,8 +14,8 @@ module dem
     implicit none
     private
     public :: wp, ip, i8, dem_version_string, error_t, case_t, time_scales_t, &
-              case_time_scales, case_total_mass, case_release_particles, read_case, &
-              solver_t, solver_init, &
+              case_time_scales, case_release_particles, read_case, &
+              solver_t, solver_init, solver_prepare, &
               solver_restore, solver_run, solver_particles, solver_parallel_stats, &
               checkpoint_file, stop_end, stop_settled, &
               stop_wall_time, stop_signal, frame_t, checkpoint_read, checkpoint_latest, &

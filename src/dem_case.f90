@@ -8,10 +8,21 @@ module dem_case
     use dem_probes, only: probe_t
     use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt, &
                             tangential_critical_dt
+    use dem_comm, only: comm_t, comm_sum, comm_max
     implicit none
     private
-    public :: case_t, time_scales_t, case_time_scales, case_total_mass, case_particle_materials, &
+    public :: case_t, time_scales_t, case_time_scales, case_summarize, case_particle_materials, &
               case_release_particles
+
+    !> What the time scales and the checks need of the particles of all ranks
+    !> (case_summarize).
+    type :: summary_t
+        real(wp), allocatable :: rmin(:)    !< smallest radius of each material, huge if none [m]
+        real(wp) :: mass = 0.0_wp           !< total mass [kg]
+        real(wp) :: speed = 0.0_wp          !< largest initial speed [m/s]
+        real(wp) :: low = 0.0_wp            !< lowest and highest centre along gravity [m]
+        real(wp) :: high = 0.0_wp
+    end type summary_t
 
     !> Everything a run needs to start.
     type :: case_t
@@ -41,13 +52,15 @@ module dem_case
         integer(ip) :: checkpoint_keep = 2            !< checkpoints kept on disk
         type(materials_t) :: mats
         type(contact_options_t) :: opts
-        integer(ip) :: n_particles = 0
-        integer(i8), allocatable :: gid(:)
+        integer(ip) :: n_particles = 0                !< over all ranks
+        integer(ip) :: n_held = 0                     !< held here, a rank's share of them
+        integer(i8), allocatable :: gid(:)            !< (the particles held, as the others)
         integer(ip), allocatable :: mat(:)
         real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :)
         type(mesh_t) :: mesh
         type(outlet_t), allocatable :: outlets(:)
         type(probe_t), allocatable :: probes(:)
+        type(summary_t) :: summary                    !< of the particles of all ranks
     end type case_t
 
     !> Time scales of a case and the bound they put on dt.
@@ -68,8 +81,7 @@ contains
     function case_particle_materials(c) result(used)
         type(case_t), intent(in) :: c
         logical :: used(c%mats%n)
-        used = .false.
-        used(c%mat(1:c%n_particles)) = .true.
+        used = c%summary%rmin < huge(1.0_wp)
     end function case_particle_materials
 
     !> Free the case's particles (the count stays): once the solver has taken its share of
@@ -79,16 +91,42 @@ contains
         deallocate(c%gid, c%mat, c%radius, c%x, c%v, c%w)
     end subroutine case_release_particles
 
-    !> Total particle mass [kg].
-    real(wp) function case_total_mass(c) result(mass)
-        type(case_t), intent(in) :: c
+    !> The summary of the particles that the ranks hold, over all ranks (collective; after
+    !> the materials and gravity are set).
+    subroutine case_summarize(c, comm)
+        type(case_t), intent(inout) :: c
+        type(comm_t), intent(in) :: comm
         real(wp), parameter :: pi = acos(-1.0_wp)
-        integer(ip) :: i
-        mass = 0.0_wp
-        do i = 1, c%n_particles
-            mass = mass + 4.0_wp / 3.0_wp * pi * c%radius(i)**3 * c%mats%density(c%mat(i))
-        end do
-    end function case_total_mass
+        real(wp) :: e(3), g, big(c%mats%n + 3), mass(1)
+        integer(ip) :: i, a
+        associate (sm => c%summary)
+            sm%rmin = spread(huge(1.0_wp), 1, c%mats%n)
+            sm%mass = 0.0_wp
+            sm%speed = 0.0_wp
+            sm%low = huge(1.0_wp)
+            sm%high = -huge(1.0_wp)
+            g = norm2(c%gravity)
+            e = 0.0_wp
+            if (g > 0.0_wp) e = c%gravity / g
+            do i = 1, c%n_held
+                a = c%mat(i)
+                sm%rmin(a) = min(sm%rmin(a), c%radius(i))
+                sm%mass = sm%mass + 4.0_wp / 3.0_wp * pi * c%radius(i)**3 * c%mats%density(a)
+                sm%speed = max(sm%speed, norm2(c%v(:, i)))
+                sm%low = min(sm%low, dot_product(e, c%x(:, i)))
+                sm%high = max(sm%high, dot_product(e, c%x(:, i)))
+            end do
+            big = [-sm%rmin, sm%speed, -sm%low, sm%high]
+            call comm_max(comm, big)
+            sm%rmin = -big(1:c%mats%n)
+            sm%speed = big(c%mats%n + 1)
+            sm%low = -big(c%mats%n + 2)
+            sm%high = big(c%mats%n + 3)
+            mass = sm%mass
+            call comm_sum(comm, mass)
+            sm%mass = mass(1)
+        end associate
+    end subroutine case_summarize
 
     !> Speed of a free fall across the scene, sqrt(2 |g| h), with h the extent of the
     !> particles and walls along gravity [m/s].
@@ -100,12 +138,8 @@ contains
         v = 0.0_wp
         if (g == 0.0_wp .or. c%n_particles == 0) return
         e = c%gravity / g
-        lo = huge(1.0_wp)
-        hi = -huge(1.0_wp)
-        do i = 1, c%n_particles
-            lo = min(lo, dot_product(e, c%x(:, i)))
-            hi = max(hi, dot_product(e, c%x(:, i)))
-        end do
+        lo = c%summary%low
+        hi = c%summary%high
         do i = 1, c%mesh%n_tri
             do k = 1, 3
                 lo = min(lo, dot_product(e, c%mesh%vert(:, k, i)))
@@ -119,25 +153,24 @@ contains
     !> pairs present (smallest radius of each material; particle pairs meet at twice the
     !> expected speed, particles hit walls at it), and the stability bound on dt. The expected
     !> speed is the largest of expected_speed, the initial speeds and the free-fall speed.
+    !> From the case's summary (case_summarize): the Rayleigh time grows with the radius, so
+    !> the smallest sphere of each material has the shortest of its material.
     subroutine case_time_scales(c, ts)
         type(case_t), intent(in) :: c
         type(time_scales_t), intent(out) :: ts
         real(wp), parameter :: pi = acos(-1.0_wp)
         real(wp) :: rmin(c%mats%n), tr, estar, gstar, ma, mb, mstar, rstar
         logical :: wall_mat(c%mats%n)
-        integer(ip) :: i, a, b
+        integer(ip) :: a, b
 
-        rmin = huge(1.0_wp)
-        ts%speed = max(c%expected_speed, fall_speed(c))
-        do i = 1, c%n_particles
-            a = c%mat(i)
-            rmin(a) = min(rmin(a), c%radius(i))
-            ts%speed = max(ts%speed, norm2(c%v(:, i)))
-            tr = rayleigh_time(c%radius(i), c%mats%density(a), c%mats%youngs(a), &
-                               c%mats%poisson(a))
+        rmin = c%summary%rmin
+        ts%speed = max(c%expected_speed, fall_speed(c), c%summary%speed)
+        do a = 1, c%mats%n
+            if (rmin(a) == huge(1.0_wp)) cycle
+            tr = rayleigh_time(rmin(a), c%mats%density(a), c%mats%youngs(a), c%mats%poisson(a))
             if (tr < ts%rayleigh) then
                 ts%rayleigh = tr
-                ts%rayleigh_radius = c%radius(i)
+                ts%rayleigh_radius = rmin(a)
                 ts%rayleigh_mat = a
             end if
         end do

@@ -58,7 +58,7 @@ contains
             call set_error(err, dem_err_runtime, 'dem_coupling: already initialised')
         else
             call comm_from_handle(comm, comm_handle)
-            call read_case(trim(file), c, err)
+            call read_case(trim(file), c, err, comm)
             if (.not. err%failed()) then
                 call solver_init(s, c, comm)
                 call case_release_particles(c)

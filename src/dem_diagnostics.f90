@@ -10,7 +10,8 @@ module dem_diagnostics
     use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total
     implicit none
     private
-    public :: energies, count_pp_sides, first_nonfinite, count_unstable, contact_trace
+    public :: energies, count_pp_sides, deep_overlap_id, first_nonfinite, count_unstable, &
+              contact_trace
 
 contains
 
@@ -47,6 +48,37 @@ contains
         pe = sums(3, 1)
         vmax = top(1)
     end subroutine energies
+
+    !> Of the pairs in the owned particles' list entries that overlap by more than half the
+    !> smaller radius (deeper than any contact of a sound state: bad input), the smallest
+    !> lower id (lower = 0), or the smallest higher id of those whose lower id is `lower`; 0
+    !> if there is none. A reduction, on the device.
+    integer(i8) function deep_overlap_id(n_own, n_all, n_entries, gid, x, radius, start, list, &
+                                         lower) result(id)
+        integer(ip), intent(in) :: n_own, n_all, n_entries
+        integer(i8), intent(in) :: gid(n_all)
+        real(wp), intent(in) :: x(3, n_all), radius(n_all)
+        integer(ip), intent(in) :: start(n_own + 1), list(n_entries)
+        integer(i8), intent(in) :: lower
+        integer(ip) :: i, k, j
+        integer(i8) :: low
+        id = huge(1_i8)
+        !$acc parallel loop gang vector default(present) private(j, low) reduction(min:id)
+        do i = 1, n_own
+            do k = start(i), start(i + 1) - 1
+                j = list(k)
+                if (norm2(x(:, j) - x(:, i)) >= radius(i) + radius(j) &
+                    - 0.5_wp * min(radius(i), radius(j))) cycle
+                low = min(gid(i), gid(j))
+                if (lower == 0) then
+                    id = min(id, low)
+                else if (low == lower) then
+                    id = min(id, max(gid(i), gid(j)))
+                end if
+            end do
+        end do
+        if (id == huge(1_i8)) id = 0
+    end function deep_overlap_id
 
     !> Number of overlapping particle pairs among the owned particles' list entries, counted
     !> from both sides: summed over the ranks, twice the number of contacts. A reduction, on

@@ -2,7 +2,8 @@
 program dem_main
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use dem, only: wp, dem_version_string, error_t, case_t, time_scales_t, case_time_scales, &
-                   case_total_mass, case_release_particles, read_case, solver_t, solver_init, solver_restore, &
+                   case_release_particles, read_case, solver_t, solver_init, solver_prepare, &
+                   solver_restore, &
                    solver_run, stop_wall_time, stop_signal, frame_t, checkpoint_read, &
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
                    solver_particles, solver_parallel_stats, i8
@@ -56,12 +57,16 @@ program dem_main
         if (nargs /= 1) call usage_error('one case file at a time')
         path = arg1
     end select
-    call read_case(path, c, err)
+    call read_case(path, c, err, comm)
     if (err%failed()) call fail(err)
     if (comm%rank == 0) call print_check(c)
-    if (check_only) call finish(0)
     call solver_init(s, c, comm)
     call case_release_particles(c)     ! each rank keeps its share, in the solver
+    if (check_only) then               ! the checks of a run's start: ids, overlaps
+        call solver_prepare(s, c, err)
+        if (err%failed()) call fail(err)
+        call finish(0)
+    end if
     if (resume) restart = checkpoint_latest(c%output_dir)
     if (len(restart) > 0) then
         call checkpoint_read(restart, c, comm, fr, err)
@@ -123,7 +128,7 @@ contains
         write(output_unit, '(a)') 'case ' // c%source
         write(output_unit, '(a,i0,a,i0,a)') '  particles            ', c%n_particles, &
             ' (wall triangles ', c%mesh%n_tri, ')'
-        write(output_unit, '(a,es12.5,a)') '  total mass           ', case_total_mass(c), ' kg'
+        write(output_unit, '(a,es12.5,a)') '  total mass           ', c%summary%mass, ' kg'
         write(output_unit, '(a,es12.5,a,es10.3,a)') '  Rayleigh time        ', ts%rayleigh, &
             ' s (smallest particle, radius ', ts%rayleigh_radius, ' m)'
         if (ts%speed > 0.0_wp) then

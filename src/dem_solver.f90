@@ -5,13 +5,14 @@ module dem_solver
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
     use dem_kinds, only: wp, ip, i8
-    use dem_error, only: error_t, set_error, dem_err_runtime
-    use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather, comm_node_rank
+    use dem_error, only: error_t, set_error, dem_err_runtime, dem_err_input
+    use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather, comm_node_rank, &
+                        comm_counts, comm_exchange
     use dem_case, only: case_t, time_scales_t, case_time_scales, case_particle_materials
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
                              particles_reserve, order_by_id, particles_find, particles_park
     use dem_domain, only: domain_t, domain_init, domain_data, domain_balance, domain_imbalance, &
-                          domain_migrate, domain_ghosts, domain_update
+                          domain_migrate, domain_ghosts, domain_update, sorted_by_rank
     use dem_materials, only: pair_constants_t, pair_constants_build
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
                              neighbors_spatial_order, neighbors_history, neighbors_set_history, &
@@ -25,7 +26,7 @@ module dem_solver
     use dem_outlets, only: outlets_mark
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
     use dem_diagnostics, only: energies, count_pp_sides, first_nonfinite, count_unstable, &
-                               contact_trace
+                               contact_trace, deep_overlap_id
     use dem_output, only: output_t, output_open, output_series, output_contact, &
                           output_final, output_close, output_sizes, output_probes, &
                           output_histogram
@@ -43,7 +44,8 @@ module dem_solver
                           wall_seconds, timer_seconds
     implicit none
     private
-    public :: solver_t, solver_init, solver_restore, solver_run, solver_start, solver_advance, &
+    public :: solver_t, solver_init, solver_prepare, solver_restore, solver_run, solver_start, &
+              solver_advance, &
               solver_finish, solver_time, solver_retime, solver_particles, &
               solver_parallel_stats, &
               stop_end, stop_settled, stop_wall_time, stop_signal
@@ -130,9 +132,9 @@ contains
         type(comm_t), intent(in) :: comm
         integer(ip) :: i, n_mine
         s%comm = comm
-        n_mine = max(0, (c%n_particles - comm%rank + comm%size - 1) / comm%size)
+        n_mine = c%n_held
         call particles_init(s%p, n_mine)
-        do i = 1 + comm%rank, c%n_particles, comm%size
+        do i = 1, n_mine
             call particles_add(s%p, c%gid(i), c%mat(i), c%radius(i), &
                                c%mats%density(c%mat(i)), c%x(:, i), c%v(:, i), c%w(:, i))
             if (c%gid(i) == c%trace_id) s%trace = s%p%n_own
@@ -143,7 +145,7 @@ contains
         call wall_contacts_init(s%wc, n_mine)
         s%nb%skin = c%skin
         s%imbalance_limit = c%imbalance_limit
-        s%sort_cell = 2.0_wp * minval(c%radius(1:c%n_particles)) + c%skin
+        s%sort_cell = 2.0_wp * minval(c%summary%rmin) + c%skin
         s%run%probed = case_particle_materials(c)
         call case_time_scales(c, s%scales)
         s%step = 0
@@ -277,7 +279,9 @@ contains
             end do
             if (s%comm%size > 1 .and. s%trace_id /= 0) call set_error(err, dem_err_runtime, &
                 c%source // ': &output trace_id: tracing runs on one MPI rank')
-            if (s%comm%rank == 0 .and. .not. err%failed()) then  ! the CSV files are rank 0's
+            if (.not. failed_anywhere(s, err)) call solver_prepare(s, c, err)
+            if (err%failed()) return
+            if (s%comm%rank == 0) then  ! the CSV files are rank 0's
                 if (s%restarted) then
                     call output_open(r%out, c%output_dir, s%trace > 0, columns, err, &
                         [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes])
@@ -288,11 +292,6 @@ contains
                 end if
             end if
             if (failed_anywhere(s, err)) return
-            if (s%comm%size > 1) call start_domain(s, c)
-            s%device = acc_select_device(comm_node_rank(s%comm))
-            call device_data(s, acc_enter)
-
-            call rebuild(s, outlets=.false.)
             if (.not. s%restarted) then
                 if (c%integrator == integrator_verlet) then
                     call compute_forces(s, c, time_of(s, c, s%step), err)
@@ -308,6 +307,67 @@ contains
             r%last = wall_seconds()
         end associate
     end subroutine solver_start
+
+    !> Decompose space (several ranks), put the state on the device and build the lists. A
+    !> run that does not continue a checkpoint checks its particles first: ids unique, then,
+    !> from the lists, no two overlapping by more than half the smaller radius (an input
+    !> error naming the smallest ids). Collective: on failure, err is set on every rank.
+    subroutine solver_prepare(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        integer(i8) :: ids(2)
+        if (.not. s%restarted) then
+            ids(1) = smallest(repeated_id(s))
+            if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particle id ' // &
+                                           itoa(ids(1)) // ' is given twice')
+            if (failed_anywhere(s, err)) return
+        end if
+        if (s%comm%size > 1) call start_domain(s, c)
+        s%device = acc_select_device(comm_node_rank(s%comm))
+        call device_data(s, acc_enter)
+        call rebuild(s, outlets=.false.)
+        if (s%restarted) return
+        associate (p => s%p, n => s%p%n_own)
+            ids(1) = smallest(deep_overlap_id(n, n + p%n_ghost, size(s%nb%list, kind=ip), &
+                              p%gid, p%x, p%radius, s%nb%start, s%nb%list, 0_i8))
+            if (ids(1) == 0) return
+            ids(2) = smallest(deep_overlap_id(n, n + p%n_ghost, size(s%nb%list, kind=ip), &
+                              p%gid, p%x, p%radius, s%nb%start, s%nb%list, ids(1)))
+        end associate
+        call set_error(err, dem_err_input, c%source // ': particles ' // itoa(ids(1)) // &
+                       ' and ' // itoa(ids(2)) // ' overlap by more than half the smaller radius')
+    contains
+        !> The smallest of the ranks' ids > 0 (0 if none has one).
+        integer(i8) function smallest(id) result(least)
+            integer(i8), intent(in) :: id
+            integer(i8) :: a(1)
+            a = merge(-id, -huge(1_i8), id > 0)
+            call comm_max(s%comm, a)
+            least = merge(-a(1), 0_i8, a(1) > -huge(1_i8))
+        end function smallest
+    end subroutine solver_prepare
+
+    !> The smallest id that two particles share among those of rank mod(id, P): each rank
+    !> sends its particles' ids there (0 if there is none).
+    integer(i8) function repeated_id(s) result(id)
+        type(solver_t), intent(in) :: s
+        integer, allocatable :: counts(:), recv_counts(:)
+        integer(ip), allocatable :: order(:)
+        integer(i8), allocatable :: sent(:, :), ids(:, :)
+        integer(ip) :: k, n
+        n = s%p%n_own
+        order = sorted_by_rank(int(mod(s%p%gid(1:n), int(s%comm%size, i8))), s%comm%size, counts)
+        sent = reshape(s%p%gid(order), [1, n])
+        recv_counts = comm_counts(s%comm, counts)
+        allocate(ids(1, sum(recv_counts)))
+        call comm_exchange(s%comm, sent, counts, ids, recv_counts)
+        order = order_by_id(ids(1, :))
+        id = 0
+        do k = size(order), 2, -1
+            if (ids(1, order(k)) == ids(1, order(k - 1))) id = ids(1, order(k))
+        end do
+    end function repeated_id
 
     !> The run's last step and the steps between outputs, for dt = c%dt from step0.
     subroutine plan_run(s, c)

@@ -12,7 +12,11 @@ checkpoints' particles and contact history, for
 4. a checkpoint written on 3 ranks, restarted on 2: the same final state as the
    uninterrupted run on one rank; and a checkpoint written on 1 rank restarted on 3;
 5. a run that goes unstable: the last good state it writes (kept by each rank for its own
-   particles, gathered when written) is the same checkpoint on 1 and 2 ranks.
+   particles, gathered when written) is the same checkpoint on 1 and 2 ranks;
+6. bad particles in a particle file, which the ranks read in shares (an id given twice, two
+   spheres far deeper into each other than a contact, each pair in rows that different
+   ranks hold): on 1, 2 and 3 ranks, a run and --check stop with the same input error
+   naming the file and the ids (the smallest pair when several), and leave no output.
 
 The runs are independent: each rank count decomposes space differently (METIS on blocks),
 so equality means that the forces do not depend on the decomposition, that particles
@@ -201,4 +205,34 @@ if all(unstable.values()):
     with h5py.File(unstable[2]) as f:
         check(f["particles/id"].shape[0] == 200, "unstable run on 2 ranks: the last good "
               f"state holds {f['particles/id'].shape[0]} particles, not 200")
+
+# 6. bad particles in a particle file: the same error on any number of ranks
+rows = ["id,material,radius,x,y,z"] + [f"{k},M1,0.002,{0.01 * (k % 10)},{0.01 * (k // 10)},0.1"
+                                       for k in range(1, 41)]
+moved = {"twice": {38: "7,M1,0.002,0.08,0.03,0.1"},                # a second id 7
+         "deep": {22: "22,M1,0.002,0.02,0.0,0.1011",                 # onto 2, and 33
+                  33: "33,M1,0.002,0.02,0.01,0.1003"}}               # onto 12
+expected = {"twice": "particle id 7 is given twice",
+            "deep": "particles 2 and 22 overlap by more than half the smaller radius"}
+for name in ("twice", "deep"):
+    d = os.path.join(work, "bad_" + name)
+    os.makedirs(d)
+    bad_rows = [moved[name].get(k, row) for k, row in enumerate(rows)]
+    with open(os.path.join(d, "particles.csv"), "w") as f:
+        f.write("\n".join(bad_rows) + "\n")
+    case = os.path.join(d, "case.nml")
+    with open(case, "w") as f:
+        f.write(f"""&run dt = 1e-7, t_end = 1e-6 /
+&output dir = '{d}/out', interval = 1e-7 /
+&material name = 'M1', density = 2500.0, youngs_modulus = 5e6, poisson_ratio = 0.3 /
+&pair materials = 'M1', 'M1', restitution = 0.5, friction = 0.3 /
+&particle_file file = 'particles.csv' /
+""")
+    for ranks in (1, 2, 3):
+        for args in ((), ("--check",)):
+            r = run(case, ranks, *args, code=2)
+            check(case in r.stderr and expected[name] in r.stderr,
+                  f"bad_{name} on {ranks} ranks {args}: {r.stderr.strip()[-500:]}")
+            check(not os.path.exists(os.path.join(d, "out")),
+                  f"bad_{name} on {ranks} ranks {args}: left output behind")
 finish()
