@@ -67,8 +67,8 @@ contains
         do i = 1, n_own
             do k = start(i), start(i + 1) - 1
                 j = list(k)
-                if (norm2(x(:, j) - x(:, i)) >= radius(i) + radius(j) &
-                    - 0.5_wp * min(radius(i), radius(j))) cycle
+                if ((x(1, j) - x(1, i))**2 + (x(2, j) - x(2, i))**2 + (x(3, j) - x(3, i))**2 &
+                    >= (radius(i) + radius(j) - 0.5_wp * min(radius(i), radius(j)))**2) cycle
                 low = min(gid(i), gid(j))
                 if (lower == 0) then
                     id = min(id, low)
