@@ -21,7 +21,7 @@ module dem_acc
 
     !> acc_data(a, op): one of the operations above on a whole array.
     interface acc_data
-        module procedure data_r1, data_r2, data_r3, data_i1, data_i2, data_l1, data_b1
+        module procedure data_r1, data_r2, data_r3, data_i1, data_i2, data_l1, data_l2, data_b1
     end interface acc_data
 
 contains
@@ -151,6 +151,23 @@ contains
             !$acc enter data create(a)
         end select
     end subroutine data_l1
+
+    subroutine data_l2(a, op)
+        integer(i8), intent(inout) :: a(:, :)
+        integer, intent(in) :: op
+        select case (op)
+        case (acc_enter)
+            !$acc enter data copyin(a)
+        case (acc_exit)
+            !$acc exit data delete(a)
+        case (acc_to_host)
+            !$acc update self(a)
+        case (acc_to_device)
+            !$acc update device(a)
+        case (acc_create)
+            !$acc enter data create(a)
+        end select
+    end subroutine data_l2
 
     subroutine data_b1(a, op)
         logical, intent(inout) :: a(:)

@@ -10,7 +10,8 @@ module dem_domain
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_exchange, comm_counts, comm_sum, &
                         comm_max
-    use dem_acc, only: acc_data, acc_to_host, acc_to_device
+    use dem_acc, only: acc_data, acc_to_host, acc_to_device, acc_enter, acc_exit, acc_create
+    use dem_cells, only: cell_coords, cell_number, prefix_sum, bin_items
     use dem_metis, only: metis_partition
     use dem_neighbors, only: neighbors_unique_pairs, fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
@@ -69,32 +70,6 @@ contains
         d%recv_counts = 0
     end subroutine domain_init
 
-    !> Block coordinates (0-based) of a point, clamped to the grid (before the conversion to
-    !> integers, so that any finite point has some, a parked particle's too).
-    pure function block_coords(d, x) result(c)
-        type(domain_t), intent(in) :: d
-        real(wp), intent(in) :: x(3)
-        integer(ip) :: c(3)
-        c = int(min(real(d%n - 1, wp), max(0.0_wp, (x - d%origin) / d%h)), ip)
-    end function block_coords
-
-    pure integer(ip) function block_index(d, c) result(b)
-        type(domain_t), intent(in) :: d
-        integer(ip), intent(in) :: c(3)
-        b = 1 + c(1) + d%n(1) * (c(2) + d%n(2) * c(3))
-    end function block_index
-
-    !> Squared distance from x to block c (the outer blocks reach to infinity) [m^2].
-    pure real(wp) function block_distance2(d, c, x) result(d2)
-        type(domain_t), intent(in) :: d
-        integer(ip), intent(in) :: c(3)
-        real(wp), intent(in) :: x(3)
-        real(wp) :: lo(3), hi(3)
-        lo = merge(-huge(1.0_wp), d%origin + c * d%h, c == 0)
-        hi = merge(huge(1.0_wp), d%origin + (c + 1) * d%h, c == d%n - 1)
-        d2 = sum(max(0.0_wp, lo - x, x - hi)**2)
-    end function block_distance2
-
     !> Assign the blocks to ranks with METIS: vertex weight = 1 + s (particles + wall
     !> contacts) in a block, with s as large as 32-bit weights allow, up to 1024 (empty
     !> space costs almost nothing; METIS balances badly with weights of zero), edge weight =
@@ -119,8 +94,8 @@ contains
         if (n_own > 0) r = maxval(radius(1:n_own))
         call comm_max(comm, r)
         do i = 1, n_own
-            c = block_coords(d, x(:, i))
-            b = block_index(d, c)
+            c = cell_coords(x(:, i), d%origin, d%h, d%n)
+            b = cell_number(c, d%n)
             weight(b) = weight(b) + 1 + count(wall_tri(:, i) > 0)
             reach = radius(i) + r(1) + d%skin
             do k = 1, 3
@@ -144,9 +119,9 @@ contains
                 e(k) = c(k) + side
                 if (e(k) < 0 .or. e(k) >= d%n(k)) cycle
                 m = m + 1
-                adjncy(m) = block_index(d, e) - 1
+                adjncy(m) = cell_number(e, d%n) - 1
                 adjwgt(m) = int(1 + face(6 * (b - 1) + f) &
-                                + face(6 * (block_index(d, e) - 1) + f - side))   ! its face to b
+                                + face(6 * (cell_number(e, d%n) - 1) + f - side))   ! its face to b
             end do
             xadj(b + 1) = m
         end do
@@ -194,7 +169,7 @@ contains
         integer :: nr, np, i, m, nreal
         allocate(dest(p%n_own + p%n_ghost))
         do i = 1, p%n_own + p%n_ghost
-            dest(i) = d%owner(block_index(d, block_coords(d, p%x(:, i))))
+            dest(i) = d%owner(cell_number(cell_coords(p%x(:, i), d%origin, d%h, d%n), d%n))
         end do
         allocate(removed(p%n_own))
         removed = .true.
@@ -208,7 +183,7 @@ contains
                              counts)
         nreal = particles_pack_reals(p)
         allocate(ibuf(n_pack_int, size(idx)), rbuf(nreal + n_wall_pack_real, size(idx)))
-        call particles_pack(p, idx, ibuf, rbuf(1:nreal, :))
+        call particles_pack(p, size(idx, kind=ip), idx, ibuf, rbuf)
         call wall_contacts_pack(wc, idx, rbuf(nreal + 1:, :))
         recv_counts = comm_counts(comm, counts)
         nr = sum(recv_counts)
@@ -221,7 +196,7 @@ contains
         p%n_ghost = 0
         call particles_reserve(p, p%n_own + nr)
         call wall_contacts_reserve(wc, p%n_own, p%n_own + nr)
-        call particles_unpack(p, p%n_own + 1, irecv, rrecv(1:nreal, :))
+        call particles_unpack(p, p%n_own + 1, nr, irecv, rrecv)
         call wall_contacts_unpack(wc, p%n_own + 1, rrecv(nreal + 1:, :))
         p%n_own = p%n_own + nr
     contains
@@ -284,65 +259,187 @@ contains
     !> store the copies received as ghosts after the owned particles. Particle i goes to rank
     !> q when it is within R_i + R_b + skin of one of q's blocks b, R_b the largest radius in
     !> b: every pair that the lists can hold until their next rebuild is then on both ranks.
-    subroutine domain_ghosts(d, comm, p)
+    !> Kernels over the particles, on the device where they are: the blocks' largest radii
+    !> (atomic maxima, then the maxima over the ranks), the ranks each particle goes to
+    !> (counted, then listed from a prefix sum), that list sorted by rank (bin_items: each
+    !> rank's particles in increasing order, as a sequential pass gives them), the packing,
+    !> and the unpacking of the ghosts received; the host sees the block radii, the counts
+    !> and the packed ghosts, for MPI. `reserve(need)` makes room for `need` particles.
+    subroutine domain_ghosts(d, comm, p, reserve)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         type(particles_t), intent(inout) :: p
-        integer, allocatable :: to(:), marked(:)
-        integer(ip), allocatable :: from(:)
+        interface
+            subroutine reserve(need)
+                import :: ip
+                integer(ip), intent(in) :: need
+            end subroutine reserve
+        end interface
+        integer(ip), allocatable :: per(:), first(:), to(:), from(:), by_rank(:), start(:), &
+                                    cnt(:)
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :)
         real(wp), allocatable :: rbuf(:, :), rrecv(:, :)
-        integer(ip) :: c0(3), c1(3), cx, cy, cz, i, q, b, n_sent, pass
-        real(wp) :: reach, rmax_all
-        d%rmax = 0.0_wp
-        do i = 1, p%n_own
-            b = block_index(d, block_coords(d, p%x(:, i)))
-            d%rmax(b) = max(d%rmax(b), p%radius(i))
-        end do
+        integer(ip) :: n, m, nr, nb, last(1)
+        real(wp) :: rmax_all
+        n = p%n_own
+        nb = product(d%n)
+        allocate(per(max(1, n)), first(n + 1))
+        call acc_data(d%owner, acc_enter)
+        call acc_data(d%rmax, acc_create)
+        call acc_data(per, acc_create)
+        call acc_data(first, acc_create)
+        call block_radii(n, nb, d%origin, d%h, d%n, p%x, p%radius, d%rmax)
+        call acc_data(d%rmax, acc_to_host)
         call comm_max(comm, d%rmax)
+        call acc_data(d%rmax, acc_to_device)
         rmax_all = maxval(d%rmax)
-        allocate(marked(0:comm%size - 1))
-        do pass = 1, 2
-            marked = 0
-            n_sent = 0
-            do i = 1, p%n_own
-                reach = p%radius(i) + rmax_all + d%skin
-                c0 = block_coords(d, p%x(:, i) - reach)
-                c1 = block_coords(d, p%x(:, i) + reach)
-                do cz = c0(3), c1(3)
-                    do cy = c0(2), c1(2)
-                        do cx = c0(1), c1(1)
-                            b = block_index(d, [cx, cy, cz])
-                            q = d%owner(b)
-                            if (q == comm%rank .or. marked(q) == i .or. d%rmax(b) == 0.0_wp) cycle
-                            if (block_distance2(d, [cx, cy, cz], p%x(:, i)) &
-                                >= (p%radius(i) + d%rmax(b) + d%skin)**2) cycle
-                            marked(q) = i
-                            n_sent = n_sent + 1
-                            if (pass == 1) cycle
-                            to(n_sent) = q
-                            from(n_sent) = i
-                        end do
-                    end do
-                end do
-            end do
-            if (pass == 1) allocate(to(n_sent), from(n_sent))
-        end do
-        d%send = from(sorted_by_rank(to, comm%size, d%send_counts))
+        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, comm%rank, d%skin, &
+                         rmax_all, p%x, p%radius, per, first, 0, per, per)
+        call prefix_sum(n, per, first)
+        call acc_data(first(n + 1:n + 1), acc_to_host)
+        last = first(n + 1:n + 1)
+        m = last(1) - 1
+        if (allocated(d%send)) deallocate(d%send)
+        allocate(to(max(1, m)), from(max(1, m)), by_rank(max(1, m)), start(comm%size + 1), &
+                 cnt(comm%size), d%send(m))
+        call acc_data(to, acc_create)
+        call acc_data(from, acc_create)
+        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, comm%rank, d%skin, &
+                         rmax_all, p%x, p%radius, per, first, max(1, m), to, from)
+        call acc_data(by_rank, acc_create)
+        call acc_data(start, acc_create)
+        call acc_data(cnt, acc_create)
+        call bin_items(m, comm%size, to, start, by_rank, cnt)
+        call acc_data(start, acc_to_host)
+        d%send_counts = int(start(2:) - start(:comm%size))
+        call acc_data(d%send, acc_create)
+        call gather_from(m, by_rank, from, d%send)
+        call acc_data(d%send, acc_to_host)
+        allocate(ibuf(n_pack_int, m), rbuf(particles_pack_reals(p), m))
+        call acc_data(ibuf, acc_create)
+        call acc_data(rbuf, acc_create)
+        call particles_pack(p, m, d%send, ibuf, rbuf)
+        call acc_data(ibuf, acc_to_host)
+        call acc_data(rbuf, acc_to_host)
         d%recv_counts = comm_counts(comm, d%send_counts)
-        allocate(ibuf(n_pack_int, n_sent), rbuf(particles_pack_reals(p), n_sent))
-        call particles_pack(p, d%send, ibuf, rbuf)
-        allocate(irecv(n_pack_int, sum(d%recv_counts)), &
-                 rrecv(particles_pack_reals(p), sum(d%recv_counts)))
+        nr = sum(d%recv_counts)
+        allocate(irecv(n_pack_int, nr), rrecv(particles_pack_reals(p), nr))
         call comm_exchange(comm, ibuf, d%send_counts, irecv, d%recv_counts)
         call comm_exchange(comm, rbuf, d%send_counts, rrecv, d%recv_counts)
         d%bytes = d%bytes + 8 * (size(ibuf) + size(rbuf))
-        call particles_reserve(p, p%n_own + size(irecv, 2, kind=ip))
-        call particles_unpack(p, p%n_own + 1, irecv, rrecv)
-        p%n_ghost = size(irecv, 2)
+        call reserve(n + nr)
+        call acc_data(irecv, acc_enter)
+        call acc_data(rrecv, acc_enter)
+        call particles_unpack(p, n + 1, nr, irecv, rrecv)
+        p%n_ghost = nr
+        call acc_data(rrecv, acc_exit)
+        call acc_data(irecv, acc_exit)
+        call acc_data(rbuf, acc_exit)
+        call acc_data(ibuf, acc_exit)
+        call acc_data(d%send, acc_exit)
+        call acc_data(cnt, acc_exit)
+        call acc_data(start, acc_exit)
+        call acc_data(by_rank, acc_exit)
+        call acc_data(from, acc_exit)
+        call acc_data(to, acc_exit)
+        call acc_data(first, acc_exit)
+        call acc_data(per, acc_exit)
+        call acc_data(d%rmax, acc_exit)
+        call acc_data(d%owner, acc_exit)
         if (allocated(d%sbuf)) deallocate(d%sbuf, d%rbuf)
         allocate(d%sbuf(9, size(d%send)), d%rbuf(9, p%n_ghost))
     end subroutine domain_ghosts
+
+    !> rmax(b) = the largest radius of the particles 1..n in block b (0 if none), by atomic
+    !> maxima (the result does not depend on their order).
+    subroutine block_radii(n, nb, origin, h, nblk, x, radius, rmax)
+        integer(ip), intent(in) :: n, nb, nblk(3)
+        real(wp), intent(in) :: origin(3), h, x(:, :), radius(:)
+        real(wp), intent(inout) :: rmax(nb)
+        integer(ip) :: i, b
+        !$acc parallel loop gang vector default(present)
+        do b = 1, nb
+            rmax(b) = 0.0_wp
+        end do
+        !$acc parallel loop gang vector default(present) copyin(origin, nblk) private(b)
+        do i = 1, n
+            b = cell_number(cell_coords(x(:, i), origin, h, nblk), nblk)
+            !$acc atomic update
+            rmax(b) = max(rmax(b), radius(i))
+        end do
+    end subroutine block_radii
+
+    !> The ranks other than `rank` that particle i (1..n) goes to as a ghost: the owners of
+    !> the blocks b within radius(i) + rmax(b) + skin of it, each once (the first block of a
+    !> rank in the scan counts). With list_len = 0, per(i) = how many; otherwise the ranks,
+    !> plus one (for bin_items), and i go to to(k), from(k), k = first(i), first(i) + 1, ...
+    subroutine ghost_ranks(n, nb, origin, h, nblk, owner, rmax, rank, skin, rmax_all, x, &
+                           radius, per, first, list_len, to, from)
+        integer(ip), intent(in) :: n, nb, nblk(3), list_len
+        real(wp), intent(in) :: origin(3), h, skin, rmax_all, x(:, :), radius(:)
+        integer, intent(in) :: owner(nb), rank
+        real(wp), intent(in) :: rmax(nb)
+        integer(ip), intent(inout) :: per(:), first(n + 1), to(list_len), from(list_len)
+        integer(ip) :: i, c0(3), w(3), t, u, k
+        integer :: q
+        logical :: seen
+        !$acc parallel loop gang vector default(present) copyin(origin, nblk) &
+        !$acc private(c0, w, t, u, k, q, seen)
+        do i = 1, n
+            c0 = cell_coords(x(:, i) - (radius(i) + rmax_all + skin), origin, h, nblk)
+            w = cell_coords(x(:, i) + (radius(i) + rmax_all + skin), origin, h, nblk) - c0 + 1
+            k = 0
+            do t = 0, product(w) - 1
+                q = ghost_owner(t, c0, w, x(:, i), radius(i), skin, origin, h, nblk, &
+                                nb, owner, rmax, rank)
+                if (q < 0) cycle
+                seen = .false.
+                do u = 0, t - 1
+                    if (ghost_owner(u, c0, w, x(:, i), radius(i), skin, origin, h, nblk, &
+                                    nb, owner, rmax, rank) == q) seen = .true.
+                end do
+                if (seen) cycle
+                if (list_len > 0) then
+                    to(first(i) + k) = q + 1
+                    from(first(i) + k) = i
+                end if
+                k = k + 1
+            end do
+            if (list_len == 0) per(i) = k
+        end do
+    end subroutine ghost_ranks
+
+    !> The owner of block t (from 0, x fastest) of the box of w blocks from c0 if a sphere at
+    !> x of radius r is within r + R_b + skin of it (R_b its largest radius) and the owner is
+    !> not `rank`, else -1. The outer blocks reach to infinity.
+    pure integer function ghost_owner(t, c0, w, x, r, skin, origin, h, nblk, nb, owner, rmax, &
+                                      rank) result(q)
+        !$acc routine seq
+        integer(ip), intent(in) :: t, c0(3), w(3), nblk(3), nb
+        real(wp), intent(in) :: x(3), r, skin, origin(3), h, rmax(nb)
+        integer, intent(in) :: owner(nb), rank
+        integer(ip) :: c(3), b
+        real(wp) :: lo(3), hi(3)
+        c = c0 + [mod(t, w(1)), mod(t / w(1), w(2)), t / (w(1) * w(2))]
+        b = cell_number(c, nblk)
+        q = -1
+        if (owner(b) == rank .or. rmax(b) == 0.0_wp) return
+        lo = merge(-huge(1.0_wp), origin + c * h, c == 0)
+        hi = merge(huge(1.0_wp), origin + (c + 1) * h, c == nblk - 1)
+        if (sum(max(0.0_wp, lo - x, x - hi)**2) < (r + rmax(b) + skin)**2) q = owner(b)
+    end function ghost_owner
+
+    !> send(k) = from(item(k)), k = 1..m.
+    subroutine gather_from(m, item, from, send)
+        integer(ip), intent(in) :: m
+        integer(ip), intent(in) :: item(:), from(:)
+        integer(ip), intent(inout) :: send(:)
+        integer(ip) :: k
+        !$acc parallel loop gang vector default(present)
+        do k = 1, m
+            send(k) = from(item(k))
+        end do
+    end subroutine gather_from
 
     !> Refresh the ghosts' positions and velocities from their owners (every step): packed,
     !> exchanged and unpacked on the device during a run; MPI is handed the buffers' device

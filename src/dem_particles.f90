@@ -3,7 +3,7 @@
 module dem_particles
     use dem_kinds, only: wp, ip, i8
     use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int, &
-                           permute_i8
+                           permute_i8, gather_real, scatter_real, gather_ids, scatter_ids
     implicit none
     private
     public :: particles_t, particles_init, particles_add, particles_permute, order_by_id, &
@@ -191,45 +191,53 @@ contains
         if (allocated(p%ext)) n = n + n_ext
     end function particles_pack_reals
 
-    !> Every field of the particles idx, appended to the buffers that carry them to another
-    !> rank (n_pack_int and n_pack_real values per particle, in the order of idx).
-    subroutine particles_pack(p, idx, ibuf, rbuf)
+    !> Every field of the particles idx(1:n), packed for another rank: n_pack_int integers
+    !> (ibuf) and particles_pack_reals reals (the first rows of rbuf) per particle, in the
+    !> order of idx (storage's gather kernels: on the device when the arrays are there).
+    subroutine particles_pack(p, n, idx, ibuf, rbuf)
         type(particles_t), intent(in) :: p
-        integer(ip), intent(in) :: idx(:)
-        integer(i8), intent(inout) :: ibuf(:, :)   !! (n_pack_int, size(idx))
-        real(wp), intent(inout) :: rbuf(:, :)      !! (n_pack_real, size(idx))
-        integer(ip) :: a, i
-        do a = 1, size(idx)
-            i = idx(a)
-            ibuf(:, a) = [p%gid(i), int(p%mat(i), i8)]
-            rbuf(1:n_pack_real, a) = [p%radius(i), p%mass(i), p%inv_mass(i), p%inv_inertia(i), &
-                                      p%x(:, i), p%v(:, i), p%w(:, i), p%f(:, i), p%t(:, i)]
-            if (allocated(p%ext)) rbuf(n_pack_real + 1:n_pack_real + n_ext, a) = p%ext(:, i)
-        end do
+        integer(ip), intent(in) :: n
+        integer(ip), intent(in) :: idx(n)
+        integer(i8), intent(inout) :: ibuf(:, :)   !! (n_pack_int, n)
+        real(wp), intent(inout) :: rbuf(:, :)      !! (>= particles_pack_reals(p), n)
+        integer(ip) :: cap, rows
+        cap = size(p%gid)
+        rows = size(rbuf, 1)
+        call gather_ids(cap, n, idx, p%gid, p%mat, ibuf)
+        call gather_real(1, cap, n, idx, p%radius, rows, 0, rbuf)
+        call gather_real(1, cap, n, idx, p%mass, rows, 1, rbuf)
+        call gather_real(1, cap, n, idx, p%inv_mass, rows, 2, rbuf)
+        call gather_real(1, cap, n, idx, p%inv_inertia, rows, 3, rbuf)
+        call gather_real(3, cap, n, idx, p%x, rows, 4, rbuf)
+        call gather_real(3, cap, n, idx, p%v, rows, 7, rbuf)
+        call gather_real(3, cap, n, idx, p%w, rows, 10, rbuf)
+        call gather_real(3, cap, n, idx, p%f, rows, 13, rbuf)
+        call gather_real(3, cap, n, idx, p%t, rows, 16, rbuf)
+        if (allocated(p%ext)) call gather_real(n_ext, cap, n, idx, p%ext, rows, n_pack_real, &
+                                               rbuf)
     end subroutine particles_pack
 
-    !> Store packed particles at first, first+1, ... (particles_pack's inverse).
-    subroutine particles_unpack(p, first, ibuf, rbuf)
+    !> Store n packed particles at first, first+1, ... (particles_pack's inverse).
+    subroutine particles_unpack(p, first, n, ibuf, rbuf)
         type(particles_t), intent(inout) :: p
-        integer(ip), intent(in) :: first
+        integer(ip), intent(in) :: first, n
         integer(i8), intent(in) :: ibuf(:, :)
         real(wp), intent(in) :: rbuf(:, :)
-        integer(ip) :: a, i
-        do a = 1, size(ibuf, 2)
-            i = first + a - 1
-            p%gid(i) = ibuf(1, a)
-            p%mat(i) = int(ibuf(2, a), ip)
-            p%radius(i) = rbuf(1, a)
-            p%mass(i) = rbuf(2, a)
-            p%inv_mass(i) = rbuf(3, a)
-            p%inv_inertia(i) = rbuf(4, a)
-            p%x(:, i) = rbuf(5:7, a)
-            p%v(:, i) = rbuf(8:10, a)
-            p%w(:, i) = rbuf(11:13, a)
-            p%f(:, i) = rbuf(14:16, a)
-            p%t(:, i) = rbuf(17:19, a)
-            if (allocated(p%ext)) p%ext(:, i) = rbuf(n_pack_real + 1:n_pack_real + n_ext, a)
-        end do
+        integer(ip) :: cap, rows
+        cap = size(p%gid)
+        rows = size(rbuf, 1)
+        call scatter_ids(cap, n, first, ibuf, p%gid, p%mat)
+        call scatter_real(1, cap, n, first, rows, 0, rbuf, p%radius)
+        call scatter_real(1, cap, n, first, rows, 1, rbuf, p%mass)
+        call scatter_real(1, cap, n, first, rows, 2, rbuf, p%inv_mass)
+        call scatter_real(1, cap, n, first, rows, 3, rbuf, p%inv_inertia)
+        call scatter_real(3, cap, n, first, rows, 4, rbuf, p%x)
+        call scatter_real(3, cap, n, first, rows, 7, rbuf, p%v)
+        call scatter_real(3, cap, n, first, rows, 10, rbuf, p%w)
+        call scatter_real(3, cap, n, first, rows, 13, rbuf, p%f)
+        call scatter_real(3, cap, n, first, rows, 16, rbuf, p%t)
+        if (allocated(p%ext)) call scatter_real(n_ext, cap, n, first, rows, n_pack_real, rbuf, &
+                                                p%ext)
     end subroutine particles_unpack
 
     !> The index i with gid(i) = id, by binary search through `order` (indices of gid in

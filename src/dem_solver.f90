@@ -18,6 +18,7 @@ module dem_solver
                              neighbors_spatial_order, neighbors_history, neighbors_set_history, &
                              neighbors_data, neighbors_free, neighbors_moved
     use dem_cells, only: fill_range, kept_indices
+    use dem_storage, only: storage_capacity
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, wall_contacts_permute, &
                                wall_contacts_reserve, pw_forces
@@ -784,10 +785,7 @@ contains
         call particles_permute(s%p, order(1:m))
         call wall_contacts_permute(s%wc, order(1:m))
         if (s%comm%size > 1) then
-            call particle_data(s, acc_to_host)
-            call particle_data(s, acc_exit)
-            call domain_ghosts(s%dom, s%comm, s%p)
-            call particle_data(s, acc_enter)
+            call domain_ghosts(s%dom, s%comm, s%p, reserve)
             call domain_data(s%dom, acc_enter)
         end if
         if (s%trace_id /= 0) s%trace = particles_find(s%p%n_own, s%p%gid, s%trace_id)
@@ -798,6 +796,17 @@ contains
         call acc_data(kept, acc_exit)
         if (allocated(s%gone)) call release_gone(s)   ! made anew for the new order
         s%parked = 0
+    contains
+        !> Room for `need` particles in the store: when it must grow or shrink, through the
+        !> host (rarely: it keeps a quarter's margin).
+        subroutine reserve(need)
+            integer(ip), intent(in) :: need
+            if (storage_capacity(size(s%p%gid, kind=ip), need) == size(s%p%gid)) return
+            call particle_data(s, acc_to_host)
+            call particle_data(s, acc_exit)
+            call particles_reserve(s%p, need)
+            call particle_data(s, acc_enter)
+        end subroutine reserve
     end subroutine rebuild
 
     !> Give the particles `kept` (the others are removed) and their contact history to the

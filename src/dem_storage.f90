@@ -1,13 +1,15 @@
 !> Per-particle storage that follows a rank's share of the particles: the capacity policy
 !> (grow to 5/4 of the need when it is short, shrink to that when the store is more than
 !> 3/2 of the need; doc/parallel.md), the reallocation of arrays whose last index is the
-!> particle, keeping the first rows, and their reordering (a kernel, on the device when the
-!> array is there, otherwise on the host's copy).
+!> particle, keeping the first rows, their reordering, and the packing of some particles'
+!> columns into a buffer for another rank and back (kernels, on the device when the arrays
+!> are there, otherwise on the host's copies).
 module dem_storage
     use dem_kinds, only: wp, ip, i8
     implicit none
     private
-    public :: storage_capacity, storage_resize, permute_real, permute_int, permute_i8
+    public :: storage_capacity, storage_resize, permute_real, permute_int, permute_i8, &
+              gather_real, scatter_real, gather_ids, scatter_ids
 
     !> storage_resize(a, n_keep, capacity): a reallocated with `capacity` entries along its
     !> last dimension; entries 1..n_keep keep their values, the others are zero.
@@ -160,4 +162,64 @@ contains
         end do
         !$acc end data
     end subroutine permute_i8
+
+    !> buf(row0 + 1:row0 + rows, k) = a(:, idx(k)), k = 1..n: columns of a(rows, capacity)
+    !> into rows of a buffer (on the device if a, idx and buf are there, as permute_real).
+    subroutine gather_real(rows, capacity, n, idx, a, buf_rows, row0, buf)
+        integer(ip), intent(in) :: rows, capacity, n, buf_rows, row0
+        integer(ip), intent(in) :: idx(n)
+        real(wp), intent(in) :: a(rows, capacity)
+        real(wp), intent(inout) :: buf(buf_rows, n)
+        integer(ip) :: k, j
+        !$acc parallel loop gang vector copyin(idx, a) copy(buf)
+        do k = 1, n
+            do j = 1, rows
+                buf(row0 + j, k) = a(j, idx(k))
+            end do
+        end do
+    end subroutine gather_real
+
+    !> a(:, first + k - 1) = buf(row0 + 1:row0 + rows, k), k = 1..n: gather_real's inverse,
+    !> into consecutive columns.
+    subroutine scatter_real(rows, capacity, n, first, buf_rows, row0, buf, a)
+        integer(ip), intent(in) :: rows, capacity, n, first, buf_rows, row0
+        real(wp), intent(in) :: buf(buf_rows, n)
+        real(wp), intent(inout) :: a(rows, capacity)
+        integer(ip) :: k, j
+        !$acc parallel loop gang vector copyin(buf) copy(a)
+        do k = 1, n
+            do j = 1, rows
+                a(j, first + k - 1) = buf(row0 + j, k)
+            end do
+        end do
+    end subroutine scatter_real
+
+    !> buf(:, k) = global id and material of particle idx(k), k = 1..n.
+    subroutine gather_ids(capacity, n, idx, gid, mat, buf)
+        integer(ip), intent(in) :: capacity, n
+        integer(ip), intent(in) :: idx(n)
+        integer(i8), intent(in) :: gid(capacity)
+        integer(ip), intent(in) :: mat(capacity)
+        integer(i8), intent(inout) :: buf(2, n)
+        integer(ip) :: k
+        !$acc parallel loop gang vector copyin(idx, gid, mat) copy(buf)
+        do k = 1, n
+            buf(1, k) = gid(idx(k))
+            buf(2, k) = mat(idx(k))
+        end do
+    end subroutine gather_ids
+
+    !> gather_ids' inverse, into particles first, first + 1, ...
+    subroutine scatter_ids(capacity, n, first, buf, gid, mat)
+        integer(ip), intent(in) :: capacity, n, first
+        integer(i8), intent(in) :: buf(2, n)
+        integer(i8), intent(inout) :: gid(capacity)
+        integer(ip), intent(inout) :: mat(capacity)
+        integer(ip) :: k
+        !$acc parallel loop gang vector copyin(buf) copy(gid, mat)
+        do k = 1, n
+            gid(first + k - 1) = buf(1, k)
+            mat(first + k - 1) = int(buf(2, k), ip)
+        end do
+    end subroutine scatter_ids
 end module dem_storage
