@@ -582,21 +582,29 @@ contains
     end subroutine read_frame
 
     !> The particles of a snapshot or checkpoint file (a particle file): materials are
-    !> matched by name with `names`, the materials of the case.
-    subroutine snapshot_read_particles(path, names, gid, mat, radius, x, v, w, err)
+    !> matched by name with `names`, the materials of the case; n_rows is the file's count.
+    !> With `comm`, collective: each rank reads its block of the rows (rank r the rows
+    !> r N / P + 1 ... (r + 1) N / P), and a bad row stops every rank with the message of the
+    !> first one in the file.
+    subroutine snapshot_read_particles(path, names, gid, mat, radius, x, v, w, n_rows, err, &
+                                       comm)
         character(len=*), intent(in) :: path
         character(len=*), intent(in) :: names(:)
         integer(i8), allocatable, intent(out) :: gid(:)
         integer(ip), allocatable, intent(out) :: mat(:)
         real(wp), allocatable, intent(out) :: radius(:), x(:, :), v(:, :), w(:, :)
+        integer(ip), intent(out) :: n_rows
         type(error_t), intent(inout) :: err
+        type(comm_t), intent(in), optional :: comm
         type(h5_file_t) :: h
         integer(i8), allocatable :: dims(:)
         character(len=32), allocatable :: file_names(:)
         integer(ip), allocatable :: to_case(:)
-        integer(ip) :: n, k
+        integer(i8) :: first, n, bad(3), mine
+        integer(ip) :: k
         allocate(gid(0), mat(0), radius(0), x(3, 0), v(3, 0), w(3, 0))
-        call h5_open(h, path, err)
+        n_rows = 0
+        call h5_open(h, path, err, comm)
         if (err%failed()) return
         call h5_dims(h, '/materials/name', dims, err)
         if (.not. err%failed()) then
@@ -608,34 +616,59 @@ contains
             call h5_close(h, err)
             return
         end if
-        n = int(dims(1), ip)
+        n_rows = int(dims(1), ip)
+        first = 0
+        n = dims(1)
+        if (present(comm)) then
+            first = comm%rank * dims(1) / comm%size
+            n = (comm%rank + 1) * dims(1) / comm%size - first
+        end if
         deallocate(gid, mat, radius, x, v, w)
         allocate(gid(n), mat(n), radius(n), x(3, n), v(3, n), w(3, n))
-        call h5_read(h, '/particles/id', gid, err)
-        call h5_read(h, '/particles/material', mat, err)
-        call h5_read(h, '/particles/radius', radius, err)
-        call h5_read(h, '/particles/position', x, err)
-        call h5_read(h, '/particles/velocity', v, err)
-        call h5_read(h, '/particles/angular_velocity', w, err)
+        if (present(comm)) then
+            call h5_read(h, '/particles/id', gid, err, first)
+            call h5_read(h, '/particles/material', mat, err, first)
+            call h5_read(h, '/particles/radius', radius, err, first)
+            call h5_read(h, '/particles/position', x, err, first)
+            call h5_read(h, '/particles/velocity', v, err, first)
+            call h5_read(h, '/particles/angular_velocity', w, err, first)
+        else
+            call h5_read(h, '/particles/id', gid, err)
+            call h5_read(h, '/particles/material', mat, err)
+            call h5_read(h, '/particles/radius', radius, err)
+            call h5_read(h, '/particles/position', x, err)
+            call h5_read(h, '/particles/velocity', v, err)
+            call h5_read(h, '/particles/angular_velocity', w, err)
+        end if
         call h5_close(h, err)
         if (err%failed()) return
         do k = 1, size(file_names)
             to_case(k) = findloc(names, file_names(k), dim=1)
         end do
-        do k = 1, n
-            if (mat(k) < 1 .or. mat(k) > size(file_names)) then
-                call set_error(err, dem_err_input, path // ': particle ' // itoa(gid(k)) // &
-                               ' has no valid material index (damaged file?)')
-                return
+        bad = -huge(1_i8)              ! the first bad row: -(row), id, material index
+        do k = 1, int(n, ip)
+            if (mat(k) >= 1 .and. mat(k) <= size(file_names)) then
+                if (to_case(mat(k)) > 0) cycle
             end if
-            if (to_case(mat(k)) == 0) then
-                call set_error(err, dem_err_input, path // ": particle " // itoa(gid(k)) // &
-                               " is of material '" // trim(file_names(mat(k))) // "', which " // &
-                               'the case does not define')
-                return
-            end if
-            mat(k) = to_case(mat(k))
+            bad = [-(first + k), gid(k), int(mat(k), i8)]
+            exit
         end do
+        if (present(comm)) then        ! the first bad row of all: its rank tells the others
+            mine = bad(1)
+            call comm_max(comm, bad(1:1))
+            if (mine /= bad(1)) bad(2:3) = -huge(1_i8)
+            call comm_max(comm, bad(2:3))
+        end if
+        if (bad(1) == -huge(1_i8)) then
+            mat = to_case(mat)
+        else if (bad(3) < 1 .or. bad(3) > size(file_names)) then
+            call set_error(err, dem_err_input, path // ': particle ' // itoa(bad(2)) // &
+                           ' has no valid material index (damaged file?)')
+        else
+            call set_error(err, dem_err_input, path // ": particle " // itoa(bad(2)) // &
+                           " is of material '" // trim(file_names(bad(3))) // "', which " // &
+                           'the case does not define')
+        end if
     end subroutine snapshot_read_particles
 
     function name_list(names) result(s)

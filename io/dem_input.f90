@@ -91,7 +91,7 @@ contains
         if (count_blocks(nf, 'insert') > 0) share = [0, 1]
         call read_particles(nf, share, c, err)
         if (err%failed()) return
-        call read_particle_files(nf, share, c, err)
+        call read_particle_files(nf, share, comm, c, err)
         if (err%failed()) return
         call read_inserts(nf, c, err)
         if (err%failed()) return
@@ -582,9 +582,10 @@ contains
 
     !> &particle_file (repeated): particles read from a CSV or HDF5 file (dem_particle_file),
     !> the share (rank, ranks) of each kept.
-    subroutine read_particle_files(nf, share, c, err)
+    subroutine read_particle_files(nf, share, comm, c, err)
         type(nml_file_t), intent(in) :: nf
         integer, intent(in) :: share(2)
+        type(comm_t), intent(in) :: comm
         type(case_t), intent(inout) :: c
         type(error_t), intent(inout) :: err
         character(len=512) :: file  ! CSV or HDF5 particle file, relative to the case file, required
@@ -613,7 +614,8 @@ contains
                 return
             end if
             call read_particle_file(relative_to(nf%path, trim(file)), c%mats%name, &
-                                    c%mats%rigid, share, gid, mat, radius, x, v, w, n_rows, err)
+                                    c%mats%rigid, comm, share(2) == 1, gid, mat, radius, x, v, &
+                                    w, n_rows, err)
             if (err%failed()) then
                 err%message = at // ": key 'file': " // err%message
                 return

@@ -10,6 +10,7 @@ module dem_particle_file
     use dem_text, only: read_line
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_checkpoint, only: snapshot_read_particles
+    use dem_comm, only: comm_t, comm_any
     implicit none
     private
     public :: read_particle_file
@@ -21,16 +22,18 @@ module dem_particle_file
 
 contains
 
-    !> Check every particle of a file and keep the share (rank, ranks) of them: rows
-    !> rank + 1, rank + 1 + ranks, ... of the n_rows. `names` are the materials a row may name
-    !> (not those `rigid`, which are for walls); mat(k) is the index of row k's material in
-    !> them.
-    subroutine read_particle_file(path, names, rigid, share, gid, mat, radius, x, v, w, &
+    !> Check every particle of a file (collective over comm) and keep, unless `whole`, this
+    !> rank's share of its n_rows: of a CSV file rows r + 1, r + 1 + P, ... (rank r of P,
+    !> every rank reading and checking all rows), of an HDF5 file the r-th of P consecutive
+    !> blocks (each rank reading its own). `names` are the materials a row may name (not
+    !> those `rigid`, which are for walls); mat(k) is the index of row k's material in them.
+    subroutine read_particle_file(path, names, rigid, comm, whole, gid, mat, radius, x, v, w, &
                                   n_rows, err)
         character(len=*), intent(in) :: path
         character(len=*), intent(in) :: names(:)
         logical, intent(in) :: rigid(:)
-        integer, intent(in) :: share(2)
+        type(comm_t), intent(in) :: comm
+        logical, intent(in) :: whole
         integer(i8), allocatable, intent(out) :: gid(:)
         integer(ip), allocatable, intent(out) :: mat(:)
         real(wp), allocatable, intent(out) :: radius(:), x(:, :), v(:, :), w(:, :)
@@ -40,31 +43,29 @@ contains
         character(len=64), allocatable :: fields(:)
         character(len=16) :: num
         integer :: u, ios, lineno, col(12), k, n, j
-        integer(ip), allocatable :: kept(:)
         integer(i8) :: id
         integer(ip) :: m
+        integer :: share(2)
         real(wp) :: val(10)
 
         n_rows = 0
         if (is_hdf5(path)) then
-            call snapshot_read_particles(path, names, gid, mat, radius, x, v, w, err)
+            if (whole) then
+                call snapshot_read_particles(path, names, gid, mat, radius, x, v, w, n_rows, err)
+            else
+                call snapshot_read_particles(path, names, gid, mat, radius, x, v, w, n_rows, &
+                                             err, comm)
+            end if
             if (err%failed()) then
                 err%code = dem_err_input
-            else if (any(rigid(mat))) then
+            else if (comm_any(comm, any(rigid(mat)))) then
                 call set_error(err, dem_err_input, path // ': a particle has a rigid ' // &
                                'material (rigid materials are for walls)')
-            else
-                n_rows = size(gid)
-                kept = [(k, k = share(1) + 1, n_rows, share(2))]
-                gid = gid(kept)
-                mat = mat(kept)
-                radius = radius(kept)
-                x = x(:, kept)
-                v = v(:, kept)
-                w = w(:, kept)
             end if
             return
         end if
+        share = [comm%rank, comm%size]
+        if (whole) share = [0, 1]
         allocate(gid(0), mat(0), radius(0), x(3, 0), v(3, 0), w(3, 0))
         open(newunit=u, file=path, status='old', action='read', iostat=ios)
         if (ios /= 0) then

@@ -16,7 +16,10 @@ checkpoints' particles and contact history, for
 6. bad particles in a particle file, which the ranks read in shares (an id given twice, two
    spheres far deeper into each other than a contact, each pair in rows that different
    ranks hold): on 1, 2 and 3 ranks, a run and --check stop with the same input error
-   naming the file and the ids (the smallest pair when several), and leave no output.
+   naming the file and the ids (the smallest pair when several), and leave no output;
+7. a case started from a CSV particle file and from the HDF5 snapshot of its first step (each
+   rank reading its block of the file) on 1, 2 and 3 ranks: the same final.csv; and a case
+   whose materials lack the snapshot's stops on every rank count with the same message.
 
 The runs are independent: each rank count decomposes space differently (METIS on blocks),
 so equality means that the forces do not depend on the decomposition, that particles
@@ -235,4 +238,33 @@ for name in ("twice", "deep"):
                   f"bad_{name} on {ranks} ranks {args}: {r.stderr.strip()[-500:]}")
             check(not os.path.exists(os.path.join(d, "out")),
                   f"bad_{name} on {ranks} ranks {args}: left output behind")
+
+# 7. the same start from a CSV file and from an HDF5 snapshot, read in shares
+d = os.path.join(work, "shares")
+os.makedirs(d)
+with open(os.path.join(d, "particles.csv"), "w") as f:
+    f.write("\n".join(rows) + "\n")
+CASE7 = """&run dt = 1e-6, t_end = 1e-4 /
+&output dir = '{out}', interval = 5e-5, snapshot_interval = {snap} /
+&material name = '{mat}', density = 2500.0, youngs_modulus = 5e6, poisson_ratio = 0.3 /
+&pair materials = '{mat}', '{mat}', restitution = 0.5, friction = 0.3 /
+&particle_file file = '{file}' /
+"""
+with open(os.path.join(d, "csv.nml"), "w") as f:
+    f.write(CASE7.format(out=f"{d}/csv", snap="1e-4", mat="M1", file="particles.csv"))
+run(os.path.join(d, "csv.nml"), 1)
+snapshot = os.path.join(d, "csv", "snapshots", "snapshot_000000000000.h5")
+for ranks in (1, 2, 3):
+    case = os.path.join(d, f"h5_{ranks}.nml")
+    with open(case, "w") as f:
+        f.write(CASE7.format(out=f"{d}/h5_{ranks}", snap="0", mat="M1", file=snapshot))
+    run(case, ranks)
+    same_file(os.path.join(d, "csv", "final.csv"), os.path.join(d, f"h5_{ranks}", "final.csv"),
+              f"started from the snapshot on {ranks} ranks")
+    case = os.path.join(d, f"h5_bad_{ranks}.nml")
+    with open(case, "w") as f:
+        f.write(CASE7.format(out=f"{d}/h5_bad_{ranks}", snap="0", mat="M3", file=snapshot))
+    r = run(case, ranks, code=2)
+    check("particle 1 is of material 'M1', which the case does not define" in r.stderr,
+          f"snapshot of undefined materials on {ranks} ranks: {r.stderr.strip()[-500:]}")
 finish()
