@@ -116,7 +116,7 @@ contains
     contains
         !> Per-particle columns sent to the ranks of their blocks, received in id order.
         function moved(a) result(b)
-            real(wp), intent(in) :: a(:, :)
+            real(wp), intent(in), contiguous :: a(:, :)
             real(wp), allocatable :: b(:, :)
             allocate(b(size(a, 1), n))
             call comm_exchange(comm, a, send, b, recv)
@@ -124,7 +124,7 @@ contains
         end function moved
 
         function moved_int(a) result(b)
-            integer(ip), intent(in) :: a(:, :)
+            integer(ip), intent(in), contiguous :: a(:, :)
             integer(i8), allocatable :: b(:, :)
             allocate(b(size(a, 1), n))
             call comm_exchange(comm, int(a, i8), send, b, recv)
@@ -149,10 +149,10 @@ contains
         type(comm_t), intent(in) :: comm
         integer(i8), intent(in) :: bound(0:)
         logical, intent(in) :: both
-        integer(i8), allocatable :: pair(:, :)
+        integer(i8), allocatable :: pair(:, :), sent_pair(:, :)
         integer(ip), allocatable :: order(:)
         integer, allocatable :: dest(:)
-        real(wp), allocatable :: pair_xi(:, :)
+        real(wp), allocatable :: pair_xi(:, :), sent_xi(:, :)
         integer :: send(0:comm%size - 1), recv(0:comm%size - 1), k, m
         m = size(fr%pair, 2)
         allocate(dest(2 * m))
@@ -171,8 +171,10 @@ contains
         order = merge(order, order - m, order <= m)          ! back to pair numbers
         recv = comm_counts(comm, send)
         allocate(pair(2, sum(recv)), pair_xi(3, sum(recv)))
-        call comm_exchange(comm, fr%pair(:, order), send, pair, recv)
-        call comm_exchange(comm, fr%pair_xi(:, order), send, pair_xi, recv)
+        sent_pair = fr%pair(:, order)                      ! (contiguous, for the exchange)
+        sent_xi = fr%pair_xi(:, order)
+        call comm_exchange(comm, sent_pair, send, pair, recv)
+        call comm_exchange(comm, sent_xi, send, pair_xi, recv)
         call neighbors_unique_pairs(pair, pair_xi, fr%pair, fr%pair_xi)
     end subroutine route_pairs
 
