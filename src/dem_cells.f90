@@ -9,7 +9,7 @@ module dem_cells
     implicit none
     private
     public :: prefix_sum, bin_items, cell_number, cell_coords, fill_range, kept_indices, &
-              sort_segment
+              sort_segment, gather_items
 
     integer(ip), parameter :: chunk = 256    !< counts summed by one thread in prefix_sum
 
@@ -111,6 +111,18 @@ contains
             a(j + 1) = key
         end do
     end subroutine sort_segment
+
+    !> order(k) = items(item(k)), k = 1..m: items in the order a sort of them gave.
+    subroutine gather_items(m, items, item, order)
+        integer(ip), intent(in) :: m
+        integer(ip), intent(in) :: items(:), item(:)
+        integer(ip), intent(inout) :: order(:)
+        integer(ip) :: k
+        !$acc parallel loop gang vector default(present)
+        do k = 1, m
+            order(k) = items(item(k))
+        end do
+    end subroutine gather_items
 
     !> a(i) = first + step (i - 1), i = 1..n.
     subroutine fill_range(n, a, first, step)

@@ -11,7 +11,7 @@ module dem_domain
     use dem_comm, only: comm_t, comm_exchange, comm_counts, comm_sum, &
                         comm_max
     use dem_acc, only: acc_data, acc_to_host, acc_to_device, acc_enter, acc_exit, acc_create
-    use dem_cells, only: cell_coords, cell_number, prefix_sum, bin_items
+    use dem_cells, only: cell_coords, cell_number, prefix_sum, bin_items, gather_items
     use dem_metis, only: metis_partition
     use dem_neighbors, only: neighbors_unique_pairs, fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
@@ -313,7 +313,7 @@ contains
         call acc_data(start, acc_to_host)
         d%send_counts = int(start(2:) - start(:comm%size))
         call acc_data(d%send, acc_create)
-        call gather_from(m, by_rank, from, d%send)
+        call gather_items(m, from, by_rank, d%send)
         call acc_data(d%send, acc_to_host)
         allocate(ibuf(n_pack_int, m), rbuf(particles_pack_reals(p), m))
         call acc_data(ibuf, acc_create)
@@ -428,18 +428,6 @@ contains
         hi = merge(huge(1.0_wp), origin + (c + 1) * h, c == nblk - 1)
         if (sum(max(0.0_wp, lo - x, x - hi)**2) < (r + rmax(b) + skin)**2) q = owner(b)
     end function ghost_owner
-
-    !> send(k) = from(item(k)), k = 1..m.
-    subroutine gather_from(m, item, from, send)
-        integer(ip), intent(in) :: m
-        integer(ip), intent(in) :: item(:), from(:)
-        integer(ip), intent(inout) :: send(:)
-        integer(ip) :: k
-        !$acc parallel loop gang vector default(present)
-        do k = 1, m
-            send(k) = from(item(k))
-        end do
-    end subroutine gather_from
 
     !> Refresh the ghosts' positions and velocities from their owners (every step): packed,
     !> exchanged and unpacked on the device during a run; MPI is handed the buffers' device

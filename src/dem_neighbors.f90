@@ -10,7 +10,7 @@ module dem_neighbors
     use dem_kinds, only: wp, ip, i8
     use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host
     use dem_cells, only: prefix_sum, bin_items, cell_coords, cell_number, fill_range, &
-                         sort_segment
+                         sort_segment, gather_items
     use dem_particles, only: order_by_id, index_of_id
     use dem_mesh, only: mesh_t, closest_point_triangle
     implicit none
@@ -156,18 +156,6 @@ contains
             level(k) = 0
         end do
     end subroutine gather_columns
-
-    !> order(k) = kept(item(k)), k = 1..m.
-    subroutine gather_items(m, kept, item, order)
-        integer(ip), intent(in) :: m
-        integer(ip), intent(in) :: kept(m), item(m)
-        integer(ip), intent(inout) :: order(m)
-        integer(ip) :: k
-        !$acc parallel loop gang vector default(present)
-        do k = 1, m
-            order(k) = kept(item(k))
-        end do
-    end subroutine gather_items
 
     !> Rebuild both lists, on the device: gid, x, radius, the walls' vertices and old_index
     !> are there, and the lists are left there (neighbors_data brings them to the host). The
