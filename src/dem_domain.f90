@@ -16,7 +16,7 @@ module dem_domain
     use dem_neighbors, only: neighbors_unique_pairs, fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
                              n_pack_int, particles_pack_reals, order_by_id, particles_reserve, &
-                             index_of_id
+                             index_of_id, particles_reserve_on_device
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_pack, wall_contacts_unpack, &
                                wall_contacts_permute, n_wall_pack_real, wall_contacts_reserve
     implicit none
@@ -264,17 +264,11 @@ contains
     !> (counted, then listed from a prefix sum), that list sorted by rank (bin_items: each
     !> rank's particles in increasing order, as a sequential pass gives them), the packing,
     !> and the unpacking of the ghosts received; the host sees the block radii, the counts
-    !> and the packed ghosts, for MPI. `reserve(need)` makes room for `need` particles.
-    subroutine domain_ghosts(d, comm, p, reserve)
+    !> and the packed ghosts, for MPI (and the store, when it must grow or shrink).
+    subroutine domain_ghosts(d, comm, p)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         type(particles_t), intent(inout) :: p
-        interface
-            subroutine reserve(need)
-                import :: ip
-                integer(ip), intent(in) :: need
-            end subroutine reserve
-        end interface
         integer(ip), allocatable :: per(:), first(:), to(:), from(:), by_rank(:), start(:), &
                                     cnt(:)
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :)
@@ -327,7 +321,7 @@ contains
         call comm_exchange(comm, ibuf, d%send_counts, irecv, d%recv_counts)
         call comm_exchange(comm, rbuf, d%send_counts, rrecv, d%recv_counts)
         d%bytes = d%bytes + 8 * (size(ibuf) + size(rbuf))
-        call reserve(n + nr)
+        call particles_reserve_on_device(p, n + nr)
         call acc_data(irecv, acc_enter)
         call acc_data(rrecv, acc_enter)
         call particles_unpack(p, n + 1, nr, irecv, rrecv)

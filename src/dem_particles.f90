@@ -4,10 +4,12 @@ module dem_particles
     use dem_kinds, only: wp, ip, i8
     use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int, &
                            permute_i8, gather_real, scatter_real, gather_ids, scatter_ids
+    use dem_acc, only: acc_data, acc_enter, acc_exit, acc_to_host
     implicit none
     private
     public :: particles_t, particles_init, particles_add, particles_permute, order_by_id, &
-              particles_reserve, index_of_id, particles_find, particles_park, &
+              particles_reserve, particles_reserve_on_device, particles_data, index_of_id, &
+              particles_find, particles_park, &
               particles_pack, particles_unpack, particles_pack_reals, particles_external, &
               n_pack_int, sphere_mass, sphere_inv_inertia, ext_force, ext_torque, ext_beta, &
               ext_fluid_v, ext_impulse, n_ext
@@ -80,6 +82,36 @@ contains
         call storage_resize(p%t, n, capacity)
         if (allocated(p%ext)) call storage_resize(p%ext, n, capacity)
     end subroutine particles_reserve
+
+    !> particles_reserve for a store that is on the device: when it must grow or shrink, its
+    !> arrays go through the host (rarely: storage_capacity keeps a quarter's margin).
+    subroutine particles_reserve_on_device(p, need)
+        type(particles_t), intent(inout) :: p
+        integer(ip), intent(in) :: need
+        if (storage_capacity(size(p%gid, kind=ip), need) == size(p%gid)) return
+        call particles_data(p, acc_to_host)
+        call particles_data(p, acc_exit)
+        call particles_reserve(p, need)
+        call particles_data(p, acc_enter)
+    end subroutine particles_reserve_on_device
+
+    !> One operation of dem_acc on every array of the store.
+    subroutine particles_data(p, op)
+        type(particles_t), intent(inout) :: p
+        integer, intent(in) :: op
+        call acc_data(p%gid, op)
+        call acc_data(p%mat, op)
+        call acc_data(p%radius, op)
+        call acc_data(p%mass, op)
+        call acc_data(p%inv_mass, op)
+        call acc_data(p%inv_inertia, op)
+        call acc_data(p%x, op)
+        call acc_data(p%v, op)
+        call acc_data(p%w, op)
+        if (allocated(p%ext)) call acc_data(p%ext, op)
+        call acc_data(p%f, op)
+        call acc_data(p%t, op)
+    end subroutine particles_data
 
     !> Append an owned sphere (there are no ghosts while particles are added).
     subroutine particles_add(p, gid, mat, radius, density, x, v, w)

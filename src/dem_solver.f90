@@ -10,7 +10,8 @@ module dem_solver
                         comm_counts, comm_exchange
     use dem_case, only: case_t, time_scales_t, case_time_scales, case_particle_materials
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
-                             particles_reserve, order_by_id, particles_find, particles_park
+                             particles_reserve, order_by_id, particles_find, particles_park, &
+                             particles_data
     use dem_domain, only: domain_t, domain_init, domain_data, domain_balance, domain_imbalance, &
                           domain_migrate, domain_ghosts, domain_update, sorted_by_rank
     use dem_materials, only: pair_constants_t, pair_constants_build
@@ -18,7 +19,6 @@ module dem_solver
                              neighbors_spatial_order, neighbors_history, neighbors_set_history, &
                              neighbors_data, neighbors_free, neighbors_moved
     use dem_cells, only: fill_range, kept_indices
-    use dem_storage, only: storage_capacity
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, wall_contacts_permute, &
                                wall_contacts_reserve, pw_forces
@@ -785,7 +785,7 @@ contains
         call particles_permute(s%p, order(1:m))
         call wall_contacts_permute(s%wc, order(1:m))
         if (s%comm%size > 1) then
-            call domain_ghosts(s%dom, s%comm, s%p, reserve)
+            call domain_ghosts(s%dom, s%comm, s%p)
             call domain_data(s%dom, acc_enter)
         end if
         if (s%trace_id /= 0) s%trace = particles_find(s%p%n_own, s%p%gid, s%trace_id)
@@ -796,17 +796,6 @@ contains
         call acc_data(kept, acc_exit)
         if (allocated(s%gone)) call release_gone(s)   ! made anew for the new order
         s%parked = 0
-    contains
-        !> Room for `need` particles in the store: when it must grow or shrink, through the
-        !> host (rarely: it keeps a quarter's margin).
-        subroutine reserve(need)
-            integer(ip), intent(in) :: need
-            if (storage_capacity(size(s%p%gid, kind=ip), need) == size(s%p%gid)) return
-            call particle_data(s, acc_to_host)
-            call particle_data(s, acc_exit)
-            call particles_reserve(s%p, need)
-            call particle_data(s, acc_enter)
-        end subroutine reserve
     end subroutine rebuild
 
     !> Give the particles `kept` (the others are removed) and their contact history to the
@@ -1248,18 +1237,7 @@ contains
     subroutine particle_data(s, op)
         type(solver_t), intent(inout) :: s
         integer, intent(in) :: op
-        call acc_data(s%p%gid, op)
-        call acc_data(s%p%mat, op)
-        call acc_data(s%p%radius, op)
-        call acc_data(s%p%mass, op)
-        call acc_data(s%p%inv_mass, op)
-        call acc_data(s%p%inv_inertia, op)
-        call acc_data(s%p%x, op)
-        call acc_data(s%p%v, op)
-        call acc_data(s%p%w, op)
-        if (allocated(s%p%ext)) call acc_data(s%p%ext, op)
-        call acc_data(s%p%f, op)
-        call acc_data(s%p%t, op)
+        call particles_data(s%p, op)
         call acc_data(s%wc%tri, op)
         call acc_data(s%wc%xi, op)
     end subroutine particle_data
