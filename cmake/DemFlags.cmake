@@ -4,6 +4,9 @@
 #            multiply-adds would make results depend on the number of MPI ranks,
 #            doc/theory.md section 13; nvfortran: -Mnofma for the same reason)
 #   Debug:   -O0 -g and run-time checks (gfortran: -fcheck=all -ffpe-trap=... -Wall)
+#   gfortran, both: -ffpe-summary=invalid,zero,overflow: a run reports on stop only the
+#            floating-point flags that mean trouble, not the underflows of tiny forces
+#            (or of the MPI library), which are harmless
 #   DEM_OPENACC=ON: gfortran -fopenacc, with nvptx offload when gcc-offload-nvptx is
 #                   installed; nvfortran -acc -gpu=${DEM_GPU_ARCH},nofma -Minfo=accel
 set(DEM_GPU_ARCH "cc80" CACHE STRING "nvfortran: the GPUs' compute capability (cc70, cc80, cc90)")
@@ -16,7 +19,8 @@ if(CMAKE_Fortran_COMPILER_ID STREQUAL "NVHPC")
     list(APPEND DEM_OPENACC_FLAGS -acc -gpu=${DEM_GPU_ARCH},nofma -Minfo=accel)
   endif()
 else()
-  set(DEM_FORTRAN_FLAGS_COMMON -ffree-line-length-none -std=f2018 -fimplicit-none)
+  set(DEM_FORTRAN_FLAGS_COMMON -ffree-line-length-none -std=f2018 -fimplicit-none
+      -ffpe-summary=invalid,zero,overflow)
   set(DEM_FORTRAN_FLAGS_RELEASE -O3)
   set(DEM_FORTRAN_FLAGS_DEBUG -O0 -g -fcheck=all -ffpe-trap=invalid,zero,overflow -Wall
       -Wno-maybe-uninitialized -fbacktrace)
