@@ -9,10 +9,11 @@ module dem_contacts_pw
     use dem_mesh, only: closest_point_triangle, feature_face
     use dem_vector, only: cross
     use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int
+    use dem_acc, only: acc_data, acc_to_host, acc_exit, acc_enter
     implicit none
     private
     public :: wall_contacts_t, wall_contacts_init, wall_contacts_permute, pw_forces, &
-              wall_contacts_reserve, &
+              wall_contacts_reserve, wall_contacts_reserve_on_device, &
               max_wall_contacts, wall_contacts_pack, wall_contacts_unpack, n_wall_pack_real
 
     integer(ip), parameter :: max_wall_contacts = 8     !< per particle
@@ -49,6 +50,21 @@ contains
         call storage_resize(wc%xi, n_keep, capacity)
     end subroutine wall_contacts_reserve
 
+    !> wall_contacts_reserve for history that is on the device: when the store must grow or
+    !> shrink, it goes through the host (as particles_reserve_on_device).
+    subroutine wall_contacts_reserve_on_device(wc, n_keep, need)
+        type(wall_contacts_t), intent(inout) :: wc
+        integer(ip), intent(in) :: n_keep, need
+        if (storage_capacity(size(wc%tri, 2, kind=ip), need) == size(wc%tri, 2)) return
+        call acc_data(wc%tri, acc_to_host)
+        call acc_data(wc%xi, acc_to_host)
+        call acc_data(wc%tri, acc_exit)
+        call acc_data(wc%xi, acc_exit)
+        call wall_contacts_reserve(wc, n_keep, need)
+        call acc_data(wc%tri, acc_enter)
+        call acc_data(wc%xi, acc_enter)
+    end subroutine wall_contacts_reserve_on_device
+
     !> Reorder the history with the particles: particle i becomes the one stored at order(i);
     !> the slots of particles left out are emptied.
     subroutine wall_contacts_permute(wc, order)
@@ -60,30 +76,61 @@ contains
                           size(order, kind=ip), order, wc%xi)
     end subroutine wall_contacts_permute
 
-    !> The history of the particles idx, for another rank (n_wall_pack_real values each).
-    subroutine wall_contacts_pack(wc, idx, rbuf)
+    !> The history of the particles idx(1:n) for another rank, into rows row0 + 1 ..
+    !> row0 + n_wall_pack_real of rbuf (on the device if the arrays are there, as dem_storage's
+    !> kernels).
+    subroutine wall_contacts_pack(wc, n, idx, row0, rbuf)
         type(wall_contacts_t), intent(in) :: wc
-        integer(ip), intent(in) :: idx(:)
-        real(wp), intent(inout) :: rbuf(:, :)    !! (n_wall_pack_real, size(idx))
-        integer(ip) :: a
-        do a = 1, size(idx)
-            rbuf(1:max_wall_contacts, a) = real(wc%tri(:, idx(a)), wp)
-            rbuf(max_wall_contacts + 1:, a) = reshape(wc%xi(:, :, idx(a)), [3 * max_wall_contacts])
-        end do
+        integer(ip), intent(in) :: n, row0
+        integer(ip), intent(in) :: idx(n)
+        real(wp), intent(inout) :: rbuf(:, :)
+        call pack_history(size(wc%tri, 2, kind=ip), n, idx, wc%tri, wc%xi, &
+                          size(rbuf, 1, kind=ip), row0, rbuf)
     end subroutine wall_contacts_pack
 
-    !> Store packed history for particles first, first+1, ... (wall_contacts_pack's inverse).
-    subroutine wall_contacts_unpack(wc, first, rbuf)
-        type(wall_contacts_t), intent(inout) :: wc
-        integer(ip), intent(in) :: first
-        real(wp), intent(in) :: rbuf(:, :)
-        integer(ip) :: a
-        do a = 1, size(rbuf, 2)
-            wc%tri(:, first + a - 1) = nint(rbuf(1:max_wall_contacts, a), ip)
-            wc%xi(:, :, first + a - 1) = reshape(rbuf(max_wall_contacts + 1:, a), &
-                                                 [3, max_wall_contacts])
+    subroutine pack_history(capacity, n, idx, tri, xi, rows, row0, rbuf)
+        integer(ip), intent(in) :: capacity, n, rows, row0
+        integer(ip), intent(in) :: idx(n), tri(max_wall_contacts, capacity)
+        real(wp), intent(in) :: xi(3 * max_wall_contacts, capacity)
+        real(wp), intent(inout) :: rbuf(rows, n)
+        integer(ip) :: k, j
+        !$acc parallel loop gang vector copyin(idx, tri, xi) copy(rbuf)
+        do k = 1, n
+            do j = 1, max_wall_contacts
+                rbuf(row0 + j, k) = real(tri(j, idx(k)), wp)
+            end do
+            do j = 1, 3 * max_wall_contacts
+                rbuf(row0 + max_wall_contacts + j, k) = xi(j, idx(k))
+            end do
         end do
+    end subroutine pack_history
+
+    !> Store the packed history of n particles for particles first, first + 1, ...
+    !> (wall_contacts_pack's inverse).
+    subroutine wall_contacts_unpack(wc, first, n, row0, rbuf)
+        type(wall_contacts_t), intent(inout) :: wc
+        integer(ip), intent(in) :: first, n, row0
+        real(wp), intent(in) :: rbuf(:, :)
+        call unpack_history(size(wc%tri, 2, kind=ip), first, n, size(rbuf, 1, kind=ip), row0, &
+                            rbuf, wc%tri, wc%xi)
     end subroutine wall_contacts_unpack
+
+    subroutine unpack_history(capacity, first, n, rows, row0, rbuf, tri, xi)
+        integer(ip), intent(in) :: capacity, first, n, rows, row0
+        real(wp), intent(in) :: rbuf(rows, n)
+        integer(ip), intent(inout) :: tri(max_wall_contacts, capacity)
+        real(wp), intent(inout) :: xi(3 * max_wall_contacts, capacity)
+        integer(ip) :: k, j
+        !$acc parallel loop gang vector copyin(rbuf) copy(tri, xi)
+        do k = 1, n
+            do j = 1, max_wall_contacts
+                tri(j, first + k - 1) = nint(rbuf(row0 + j, k), ip)
+            end do
+            do j = 1, 3 * max_wall_contacts
+                xi(j, first + k - 1) = rbuf(row0 + max_wall_contacts + j, k)
+            end do
+        end do
+    end subroutine unpack_history
 
     !> Of the nc triangles touching a sphere (closest points q, features), keep those whose
     !> closest point is a local minimum of the distance to their union: faces always; an edge

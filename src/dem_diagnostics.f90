@@ -1,17 +1,18 @@
 !> Whole-system quantities written to series.csv, the contact trace of one particle, and the
 !> checks that the state is finite and slower than the instability bound. Host-side and
 !> called at output times only (and every step for the trace, which is a diagnostic for
-!> single-contact tests), except count_unstable, a device kernel run every step.
+!> single-contact tests), except count_unstable, a device kernel run every step, and
+!> momentum_sums, one run at each migration between ranks.
 module dem_diagnostics
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t, closest_point_triangle
-    use dem_comm, only: comm_t, comm_max
+    use dem_comm, only: comm_t, comm_max, comm_sum
     use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total
     implicit none
     private
     public :: energies, count_pp_sides, deep_overlap_id, first_nonfinite, count_unstable, &
-              contact_trace
+              contact_trace, momentum_sums
 
 contains
 
@@ -171,4 +172,30 @@ contains
         fn = -dot_product(fc, nrm)
         ft = norm2(fc + fn * nrm)
     end subroutine contact_trace
+
+    !> The count, the momentum (3) [kg m/s] and the sum of |momentum| [kg m/s] of the
+    !> particles idx(1:m), over the ranks: a device reduction, for the conservation check
+    !> of a migration (a tolerance, so the order of the sums does not matter); collective.
+    function momentum_sums(comm, m, idx, mass, v) result(t)
+        type(comm_t), intent(in) :: comm
+        integer(ip), intent(in) :: m
+        integer(ip), intent(in) :: idx(:)
+        real(wp), intent(in) :: mass(:), v(:, :)
+        real(wp) :: t(5), px, py, pz, pa
+        integer(ip) :: a, i
+        px = 0.0_wp
+        py = 0.0_wp
+        pz = 0.0_wp
+        pa = 0.0_wp
+        !$acc parallel loop gang vector default(present) private(i) reduction(+:px, py, pz, pa)
+        do a = 1, m
+            i = idx(a)
+            px = px + mass(i) * v(1, i)
+            py = py + mass(i) * v(2, i)
+            pz = pz + mass(i) * v(3, i)
+            pa = pa + mass(i) * sqrt(v(1, i)**2 + v(2, i)**2 + v(3, i)**2)
+        end do
+        t = [real(m, wp), px, py, pz, pa]
+        call comm_sum(comm, t)
+    end function momentum_sums
 end module dem_diagnostics

@@ -11,14 +11,15 @@ module dem_domain
     use dem_comm, only: comm_t, comm_exchange, comm_counts, comm_sum, &
                         comm_max
     use dem_acc, only: acc_data, acc_to_host, acc_to_device, acc_enter, acc_exit, acc_create
-    use dem_cells, only: cell_coords, cell_number, prefix_sum, bin_items, gather_items
+    use dem_cells, only: cell_coords, cell_number, prefix_sum, bin_items, gather_items, &
+                         kept_indices
     use dem_metis, only: metis_partition
-    use dem_neighbors, only: neighbors_unique_pairs, fit_grid
+    use dem_neighbors, only: fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
-                             n_pack_int, particles_pack_reals, order_by_id, particles_reserve, &
-                             index_of_id, particles_reserve_on_device
+                             n_pack_int, particles_pack_reals, particles_reserve_on_device
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_pack, wall_contacts_unpack, &
-                               wall_contacts_permute, n_wall_pack_real, wall_contacts_reserve
+                               wall_contacts_permute, n_wall_pack_real, &
+                               wall_contacts_reserve_on_device
     implicit none
     private
     public :: domain_t, domain_init, domain_balance, domain_imbalance, domain_migrate, &
@@ -73,43 +74,43 @@ contains
     !> Assign the blocks to ranks with METIS: vertex weight = 1 + s (particles + wall
     !> contacts) in a block, with s as large as 32-bit weights allow, up to 1024 (empty
     !> space costs almost nothing; METIS balances badly with weights of zero), edge weight =
-    !> 1 + particles within reach of the shared face. Every rank computes the same partition
-    !> from the same sums. `status` is METIS's (1: done).
-    subroutine domain_balance(d, comm, n_own, x, radius, wall_tri, status)
+    !> 1 + particles within reach of the shared face. The particles are kept(1:m); their loads
+    !> are counted by a kernel (integer atomics: the sums do not depend on the order), and
+    !> every rank computes the same partition from the same sums. `status` is METIS's (1:
+    !> done).
+    subroutine domain_balance(d, comm, m, kept, x, radius, wall_tri, status)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
-        integer(ip), intent(in) :: n_own
-        real(wp), intent(in) :: x(:, :), radius(:)   !! owned particles [m]
+        integer(ip), intent(in) :: m
+        integer(ip), intent(in) :: kept(:)           !! the particles in the run (m of them)
+        real(wp), intent(in) :: x(:, :), radius(:)   !! [m]
         integer(ip), intent(in) :: wall_tri(:, :)    !! wall-contact slots (0: free)
         integer, intent(out) :: status
+        integer(ip), allocatable :: load(:), near(:)
         integer(i8), allocatable :: weight(:), face(:)      ! face(6 (b - 1) + f): face f of b
         integer, allocatable :: xadj(:), adjncy(:), adjwgt(:), part(:)
-        real(wp) :: r(1), reach
-        integer(ip) :: i, b, k, c(3), e(3), nb, m, f, side
+        real(wp) :: r(1)
+        integer(ip) :: b, k, c(3), e(3), nb, n_adj, f, side
         nb = product(d%n)
-        allocate(weight(nb), face(6 * nb))
-        weight = 0
-        face = 0
-        r = 0.0_wp
-        if (n_own > 0) r = maxval(radius(1:n_own))
+        allocate(load(nb), near(6 * nb))
+        call acc_data(load, acc_create)
+        call acc_data(near, acc_create)
+        r = largest_radius(m, kept, radius)
         call comm_max(comm, r)
-        do i = 1, n_own
-            c = cell_coords(x(:, i), d%origin, d%h, d%n)
-            b = cell_number(c, d%n)
-            weight(b) = weight(b) + 1 + count(wall_tri(:, i) > 0)
-            reach = radius(i) + r(1) + d%skin
-            do k = 1, 3
-                f = 6 * (b - 1) + 2 * k - 1                  ! the lower face along k
-                if (x(k, i) - (d%origin(k) + c(k) * d%h) < reach) face(f) = face(f) + 1
-                if (d%origin(k) + (c(k) + 1) * d%h - x(k, i) < reach) face(f + 1) = face(f + 1) + 1
-            end do
-        end do
+        call block_loads(m, kept, nb, d%origin, d%h, d%n, r(1), d%skin, x, radius, wall_tri, &
+                         load, near)
+        call acc_data(load, acc_to_host)
+        call acc_data(near, acc_to_host)
+        call acc_data(near, acc_exit)
+        call acc_data(load, acc_exit)
+        weight = load
+        face = near
         call comm_sum(comm, weight)
         weight = 1 + weight * max(1_i8, min(1024_i8, (2_i8**30 - nb) / max(1_i8, sum(weight))))
         call comm_sum(comm, face)
         allocate(xadj(nb + 1), adjncy(6 * nb), adjwgt(6 * nb), part(nb))
         xadj(1) = 0
-        m = 0
+        n_adj = 0
         do b = 1, nb
             c = [mod(b - 1, d%n(1)), mod((b - 1) / d%n(1), d%n(2)), (b - 1) / (d%n(1) * d%n(2))]
             do f = 1, 6
@@ -118,18 +119,74 @@ contains
                 e = c
                 e(k) = c(k) + side
                 if (e(k) < 0 .or. e(k) >= d%n(k)) cycle
-                m = m + 1
-                adjncy(m) = cell_number(e, d%n) - 1
-                adjwgt(m) = int(1 + face(6 * (b - 1) + f) &
-                                + face(6 * (cell_number(e, d%n) - 1) + f - side))   ! its face to b
+                n_adj = n_adj + 1
+                adjncy(n_adj) = cell_number(e, d%n) - 1
+                adjwgt(n_adj) = int(1 + face(6 * (b - 1) + f) &
+                                    + face(6 * (cell_number(e, d%n) - 1) + f - side))  ! to b
             end do
-            xadj(b + 1) = m
+            xadj(b + 1) = n_adj
         end do
-        call metis_partition(xadj, adjncy(1:m), int(weight), adjwgt(1:m), comm%size, part, &
-                             status)
+        call metis_partition(xadj, adjncy(1:n_adj), int(weight), adjwgt(1:n_adj), comm%size, &
+                             part, status)
         d%owner = part
         d%balances = d%balances + 1
     end subroutine domain_balance
+
+    !> The largest radius of the particles kept(1:m) (0 if none): a device reduction.
+    real(wp) function largest_radius(m, kept, radius) result(r)
+        integer(ip), intent(in) :: m
+        integer(ip), intent(in) :: kept(:)
+        real(wp), intent(in) :: radius(:)
+        integer(ip) :: a
+        r = 0.0_wp
+        !$acc parallel loop gang vector default(present) reduction(max:r)
+        do a = 1, m
+            r = max(r, radius(kept(a)))
+        end do
+    end function largest_radius
+
+    !> load(b) = particles and wall contacts of the particles kept(1:m) in block b, near(6 (b
+    !> - 1) + f) = those of them within R_i + r_max + skin of face f of b (faces -x, +x, -y,
+    !> +y, -z, +z), by integer atomics.
+    subroutine block_loads(m, kept, nb, origin, h, nblk, r_max, skin, x, radius, wall_tri, &
+                           load, near)
+        integer(ip), intent(in) :: m, nb, nblk(3)
+        integer(ip), intent(in) :: kept(:), wall_tri(:, :)
+        real(wp), intent(in) :: origin(3), h, r_max, skin, x(:, :), radius(:)
+        integer(ip), intent(inout) :: load(nb), near(6 * nb)
+        integer(ip) :: a, i, b, c(3), k, f, j, w
+        real(wp) :: reach
+        !$acc parallel loop gang vector default(present)
+        do b = 1, nb
+            load(b) = 0
+            near(6 * b - 5:6 * b) = 0
+        end do
+        !$acc parallel loop gang vector default(present) copyin(origin, nblk) &
+        !$acc private(i, b, c, k, f, j, w, reach)
+        do a = 1, m
+            i = kept(a)
+            c = cell_coords(x(:, i), origin, h, nblk)
+            b = cell_number(c, nblk)
+            w = 1
+            do j = 1, size(wall_tri, 1)
+                if (wall_tri(j, i) > 0) w = w + 1
+            end do
+            !$acc atomic update
+            load(b) = load(b) + w
+            reach = radius(i) + r_max + skin
+            do k = 1, 3
+                f = 6 * (b - 1) + 2 * k - 1                  ! the lower face along k
+                if (x(k, i) - (origin(k) + c(k) * h) < reach) then
+                    !$acc atomic update
+                    near(f) = near(f) + 1
+                end if
+                if (origin(k) + (c(k) + 1) * h - x(k, i) < reach) then
+                    !$acc atomic update
+                    near(f + 1) = near(f + 1) + 1
+                end if
+            end do
+        end do
+    end subroutine block_loads
 
     !> Largest particle count of a rank over the mean (1: balanced).
     real(wp) function domain_imbalance(comm, n_own) result(imbalance)
@@ -145,89 +202,248 @@ contains
         if (total(1) > 0) imbalance = most(1) * comm%size / real(total(1), wp)
     end function domain_imbalance
 
-    !> Give the owned particles `kept` (the others are removed) to the ranks of their
-    !> blocks, with their wall-contact history, and send each pair's tangential history
-    !> (lower id, higher id, displacement of the lower; from this rank's rows) to the ranks
-    !> that now own either particle; `pair` and `xi` come back as the pairs of this rank's
-    !> particles, ordered by the two ids. A pair is sent for each of its particles that this
-    !> rank holds (both, but for a restart's pairs, which come with one of them at least).
-    !> Ghosts are dropped; the stores are resized to what the rank now holds
-    !> (particles_reserve).
-    subroutine domain_migrate(d, comm, p, wc, kept, pair, xi)
+    !> Give the particles kept(1:m) (the other owned particles are removed) to the ranks of
+    !> their blocks, with their wall-contact history and their rows of pair history (hstart,
+    !> hpartner, hxi: neighbors_row_history's rows, replaced by those of the particles owned
+    !> after the move). The particles that stay keep their order; those received follow, by
+    !> sending rank, each rank's in the order it held them. Ghosts are dropped; the stores
+    !> follow the rank's share (particles_reserve_on_device). Kernels, on the device where
+    !> the particles are: the host sees the counts and the packed particles, for MPI.
+    subroutine domain_migrate(d, comm, p, wc, m, kept, hstart, hpartner, hxi)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         type(particles_t), intent(inout) :: p
         type(wall_contacts_t), intent(inout) :: wc
+        integer(ip), intent(in) :: m
         integer(ip), intent(in) :: kept(:)
-        integer(i8), allocatable, intent(inout) :: pair(:, :)   !! (2, pairs)
-        real(wp), allocatable, intent(inout) :: xi(:, :)        !! (3, pairs) [m]
-        integer, allocatable :: dest(:), pair_dest(:, :), counts(:), recv_counts(:)
-        integer(ip), allocatable :: idx(:), stay(:), by_id(:)
-        integer(i8), allocatable :: ibuf(:, :), irecv(:, :), pbuf(:, :), precv(:, :)
-        real(wp), allocatable :: rbuf(:, :), rrecv(:, :), xbuf(:, :), xrecv(:, :)
-        logical, allocatable :: removed(:)
-        integer :: nr, np, i, m, nreal
-        allocate(dest(p%n_own + p%n_ghost))
-        do i = 1, p%n_own + p%n_ghost
-            dest(i) = d%owner(cell_number(cell_coords(p%x(:, i), d%origin, d%h, d%n), d%n))
-        end do
-        allocate(removed(p%n_own))
-        removed = .true.
-        removed(kept) = .false.
-        where (removed) dest(1:p%n_own) = -1
-        stay = pack([(i, i = 1, p%n_own)], dest(1:p%n_own) == comm%rank)
-        call send_pairs()
+        integer(ip), allocatable, intent(inout) :: hstart(:)
+        integer(i8), allocatable, intent(inout) :: hpartner(:)
+        real(wp), allocatable, intent(inout) :: hxi(:, :)
+        integer(ip), allocatable :: bin(:), stay(:), item(:), start(:), cnt(:), hlen(:), &
+                                    hpos(:), nlen(:), nstart(:)
+        logical, allocatable :: drop(:)
+        integer(i8), allocatable :: ibuf(:, :), irecv(:, :), pbuf(:, :), precv(:, :), &
+                                    npartner(:)
+        real(wp), allocatable :: rbuf(:, :), rrecv(:, :), xbuf(:, :), xrecv(:, :), nxi(:, :)
+        integer, allocatable :: counts(:), recv_counts(:), hcounts(:), hrecv_counts(:)
+        integer(ip) :: n, n_stay, n_send, nr, n_out, n_in, n_h, rows, last(1)
+        integer :: nreal
+        n = p%n_own
+        allocate(bin(max(1, n)), drop(max(1, n)), stay(max(1, n)), item(max(1, n)), &
+                 start(comm%size + 1), cnt(comm%size))
+        call acc_data(bin, acc_create)
+        call acc_data(drop, acc_create)
+        call acc_data(stay, acc_create)
+        call acc_data(item, acc_create)
+        call acc_data(start, acc_create)
+        call acc_data(cnt, acc_create)
+        call acc_data(d%owner, acc_enter)
+        call destinations(n, m, kept, product(d%n), d%origin, d%h, d%n, d%owner, comm%rank, &
+                          p%x, bin, drop)
+        call acc_data(d%owner, acc_exit)
+        call kept_indices(n, drop, stay, n_stay)
+        call bin_items(n, comm%size, bin, start, item, cnt)
+        call acc_data(start, acc_to_host)
+        counts = int(start(2:) - start(:comm%size))
+        n_send = start(comm%size + 1) - 1
 
-        ! the particles that leave
-        idx = sorted_by_rank(merge(dest(1:p%n_own), -1, dest(1:p%n_own) /= comm%rank), comm%size, &
-                             counts)
+        ! what leaves: the particles, with their wall history and the length of their row of
+        ! pair history (one more real), and those rows
+        allocate(hlen(max(1, n_send)), hpos(n_send + 1))
+        call acc_data(hlen, acc_create)
+        call acc_data(hpos, acc_create)
         nreal = particles_pack_reals(p)
-        allocate(ibuf(n_pack_int, size(idx)), rbuf(nreal + n_wall_pack_real, size(idx)))
-        call particles_pack(p, size(idx, kind=ip), idx, ibuf, rbuf)
-        call wall_contacts_pack(wc, idx, rbuf(nreal + 1:, :))
+        rows = nreal + n_wall_pack_real + 1
+        allocate(ibuf(n_pack_int, n_send), rbuf(rows, n_send))
+        call acc_data(ibuf, acc_create)
+        call acc_data(rbuf, acc_create)
+        call particles_pack(p, n_send, item, ibuf, rbuf)
+        call wall_contacts_pack(wc, n_send, item, nreal, rbuf)
+        call row_lengths(n_send, item, hstart, rows, hlen, rbuf)
+        call prefix_sum(n_send, hlen, hpos)
+        call acc_data(hpos, acc_to_host)
+        hcounts = int(hpos(start(2:)) - hpos(start(:comm%size)))
+        n_out = hpos(n_send + 1) - 1
+        allocate(pbuf(1, n_out), xbuf(3, n_out))
+        call acc_data(pbuf, acc_create)
+        call acc_data(xbuf, acc_create)
+        call gather_rows(n_send, item, hstart, hpartner, hxi, hpos, n_out, pbuf, xbuf)
+        call acc_data(ibuf, acc_to_host)
+        call acc_data(rbuf, acc_to_host)
+        call acc_data(pbuf, acc_to_host)
+        call acc_data(xbuf, acc_to_host)
         recv_counts = comm_counts(comm, counts)
+        hrecv_counts = comm_counts(comm, hcounts)
         nr = sum(recv_counts)
-        allocate(irecv(n_pack_int, nr), rrecv(nreal + n_wall_pack_real, nr))
+        n_in = sum(hrecv_counts)
+        allocate(irecv(n_pack_int, nr), rrecv(rows, nr), precv(1, n_in), xrecv(3, n_in))
         call comm_exchange(comm, ibuf, counts, irecv, recv_counts)
         call comm_exchange(comm, rbuf, counts, rrecv, recv_counts)
-        d%bytes = d%bytes + 8 * (size(ibuf) + size(rbuf))
-        call particles_permute(p, stay)
-        call wall_contacts_permute(wc, stay)
+        call comm_exchange(comm, pbuf, hcounts, precv, hrecv_counts)
+        call comm_exchange(comm, xbuf, hcounts, xrecv, hrecv_counts)
+        d%bytes = d%bytes + 8 * (size(ibuf) + size(rbuf) + size(pbuf) + size(xbuf))
+
+        ! what stays, then what arrived
+        call particles_permute(p, stay(1:n_stay))
+        call wall_contacts_permute(wc, stay(1:n_stay))
         p%n_ghost = 0
-        call particles_reserve(p, p%n_own + nr)
-        call wall_contacts_reserve(wc, p%n_own, p%n_own + nr)
-        call particles_unpack(p, p%n_own + 1, nr, irecv, rrecv)
-        call wall_contacts_unpack(wc, p%n_own + 1, rrecv(nreal + 1:, :))
-        p%n_own = p%n_own + nr
-    contains
-        !> The pairs: to the ranks of both particles (once if the same), for those held here.
-        subroutine send_pairs()
-            integer(ip) :: a, b
-            by_id = order_by_id(p%gid(1:p%n_own + p%n_ghost))
-            allocate(pair_dest(2, size(pair, 2)))
-            do m = 1, size(pair, 2)
-                a = index_of_id(p%gid, by_id, pair(1, m))
-                b = index_of_id(p%gid, by_id, pair(2, m))
-                if (a == 0 .and. b == 0) error stop 'dem_domain: a pair names no particle ' // &
-                                                    'of this rank'
-                pair_dest(:, m) = -1
-                if (a > 0) pair_dest(1, m) = dest(a)
-                if (b > 0) pair_dest(2, m) = dest(b)
-                if (pair_dest(2, m) == pair_dest(1, m)) pair_dest(2, m) = -1   ! once
-            end do
-            idx = sorted_by_rank([pair_dest(1, :), pair_dest(2, :)], comm%size, counts)
-            idx = merge(idx, idx - size(pair, 2), idx <= size(pair, 2))  ! back to pair numbers
-            pbuf = pair(:, idx)
-            xbuf = xi(:, idx)
-            recv_counts = comm_counts(comm, counts)
-            np = sum(recv_counts)
-            allocate(precv(2, np), xrecv(3, np))
-            call comm_exchange(comm, pbuf, counts, precv, recv_counts)
-            call comm_exchange(comm, xbuf, counts, xrecv, recv_counts)
-            d%bytes = d%bytes + 8 * (size(pbuf) + size(xbuf))
-            call neighbors_unique_pairs(precv, xrecv, pair, xi)
-        end subroutine send_pairs
+        call particles_reserve_on_device(p, n_stay + nr)
+        call wall_contacts_reserve_on_device(wc, n_stay, n_stay + nr)
+        call acc_data(irecv, acc_enter)
+        call acc_data(rrecv, acc_enter)
+        call acc_data(precv, acc_enter)
+        call acc_data(xrecv, acc_enter)
+        call particles_unpack(p, n_stay + 1, nr, irecv, rrecv)
+        call wall_contacts_unpack(wc, n_stay + 1, nr, nreal, rrecv)
+        p%n_own = n_stay + nr
+        allocate(nlen(max(1, p%n_own)), nstart(p%n_own + 1))
+        call acc_data(nlen, acc_create)
+        call acc_data(nstart, acc_create)
+        call kept_row_lengths(n_stay, nr, stay, hstart, rows, rrecv, nlen)
+        call prefix_sum(p%n_own, nlen, nstart)
+        call acc_data(nstart(p%n_own + 1:p%n_own + 1), acc_to_host)
+        last = nstart(p%n_own + 1:p%n_own + 1)
+        n_h = last(1) - 1
+        allocate(npartner(max(1, n_h)), nxi(3, max(1, n_h)))
+        call acc_data(npartner, acc_create)
+        call acc_data(nxi, acc_create)
+        call kept_rows(n_stay, nr, stay, hstart, hpartner, hxi, n_in, precv, xrecv, nstart, &
+                       n_h, npartner, nxi)
+        call acc_data(hxi, acc_exit)
+        call acc_data(hpartner, acc_exit)
+        call acc_data(hstart, acc_exit)
+        call move_alloc(nstart, hstart)
+        call move_alloc(npartner, hpartner)
+        call move_alloc(nxi, hxi)
+        call acc_data(nlen, acc_exit)
+        call acc_data(xrecv, acc_exit)
+        call acc_data(precv, acc_exit)
+        call acc_data(rrecv, acc_exit)
+        call acc_data(irecv, acc_exit)
+        call acc_data(xbuf, acc_exit)
+        call acc_data(pbuf, acc_exit)
+        call acc_data(rbuf, acc_exit)
+        call acc_data(ibuf, acc_exit)
+        call acc_data(hpos, acc_exit)
+        call acc_data(hlen, acc_exit)
+        call acc_data(cnt, acc_exit)
+        call acc_data(start, acc_exit)
+        call acc_data(item, acc_exit)
+        call acc_data(stay, acc_exit)
+        call acc_data(drop, acc_exit)
+        call acc_data(bin, acc_exit)
     end subroutine domain_migrate
+
+    !> Where each owned particle i (1..n) goes: drop(i) unless it is one of kept(1:m) and its
+    !> block is this rank's; bin(i) = 1 + the rank of its block if that is another rank's
+    !> and it is kept, else 0.
+    subroutine destinations(n, m, kept, nb, origin, h, nblk, owner, rank, x, bin, drop)
+        integer(ip), intent(in) :: n, m, nb, nblk(3)
+        integer(ip), intent(in) :: kept(:)
+        real(wp), intent(in) :: origin(3), h, x(:, :)
+        integer, intent(in) :: owner(nb), rank
+        integer(ip), intent(inout) :: bin(:)
+        logical, intent(inout) :: drop(:)
+        integer(ip) :: i, a
+        integer :: q
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n
+            bin(i) = 0
+            drop(i) = .true.
+        end do
+        !$acc parallel loop gang vector default(present) copyin(origin, nblk) private(i, q)
+        do a = 1, m
+            i = kept(a)
+            q = owner(cell_number(cell_coords(x(:, i), origin, h, nblk), nblk))
+            if (q == rank) then
+                drop(i) = .false.
+            else
+                bin(i) = q + 1
+            end if
+        end do
+    end subroutine destinations
+
+    !> hlen(k) = length of the history row of particle item(k), k = 1..n, also as a real in
+    !> the last row of rbuf.
+    subroutine row_lengths(n, item, hstart, rows, hlen, rbuf)
+        integer(ip), intent(in) :: n, rows
+        integer(ip), intent(in) :: item(:), hstart(:)
+        integer(ip), intent(inout) :: hlen(:)
+        real(wp), intent(inout) :: rbuf(rows, n)
+        integer(ip) :: k
+        !$acc parallel loop gang vector default(present)
+        do k = 1, n
+            hlen(k) = hstart(item(k) + 1) - hstart(item(k))
+            rbuf(rows, k) = real(hlen(k), wp)
+        end do
+    end subroutine row_lengths
+
+    !> The history rows of the particles item(1:n), one after another from hpos(k), into
+    !> pbuf (partner ids) and xbuf (displacements).
+    subroutine gather_rows(n, item, hstart, hpartner, hxi, hpos, n_out, pbuf, xbuf)
+        integer(ip), intent(in) :: n, n_out
+        integer(ip), intent(in) :: item(:), hstart(:), hpos(:)
+        integer(i8), intent(in) :: hpartner(:)
+        real(wp), intent(in) :: hxi(:, :)
+        integer(i8), intent(inout) :: pbuf(1, n_out)
+        real(wp), intent(inout) :: xbuf(3, n_out)
+        integer(ip) :: k, j, first
+        !$acc parallel loop gang vector default(present) private(j, first)
+        do k = 1, n
+            first = hstart(item(k))
+            do j = 0, hpos(k + 1) - hpos(k) - 1
+                pbuf(1, hpos(k) + j) = hpartner(first + j)
+                xbuf(:, hpos(k) + j) = hxi(:, first + j)
+            end do
+        end do
+    end subroutine gather_rows
+
+    !> nlen(k) = the length of the history row of the k-th particle owned after the move:
+    !> particle stay(k)'s for k <= n_stay, then those received (last row of rrecv).
+    subroutine kept_row_lengths(n_stay, nr, stay, hstart, rows, rrecv, nlen)
+        integer(ip), intent(in) :: n_stay, nr, rows
+        integer(ip), intent(in) :: stay(:), hstart(:)
+        real(wp), intent(in) :: rrecv(rows, nr)
+        integer(ip), intent(inout) :: nlen(:)
+        integer(ip) :: k
+        !$acc parallel loop gang vector default(present)
+        do k = 1, n_stay + nr
+            if (k <= n_stay) then
+                nlen(k) = hstart(stay(k) + 1) - hstart(stay(k))
+            else
+                nlen(k) = nint(rrecv(rows, k - n_stay), ip)
+            end if
+        end do
+    end subroutine kept_row_lengths
+
+    !> The history rows of the particles owned after the move, from nstart(k): those of the
+    !> particles that stayed, then those received (one after another in precv, xrecv).
+    subroutine kept_rows(n_stay, nr, stay, hstart, hpartner, hxi, n_in, precv, xrecv, nstart, &
+                         n_h, npartner, nxi)
+        integer(ip), intent(in) :: n_stay, nr, n_in, n_h
+        integer(ip), intent(in) :: stay(:), hstart(:), nstart(:)
+        integer(i8), intent(in) :: hpartner(:), precv(1, n_in)
+        real(wp), intent(in) :: hxi(:, :), xrecv(3, n_in)
+        integer(i8), intent(inout) :: npartner(n_h)
+        real(wp), intent(inout) :: nxi(3, n_h)
+        integer(ip) :: k, j, first
+        !$acc parallel loop gang vector default(present) private(j, first)
+        do k = 1, n_stay + nr
+            if (k <= n_stay) then
+                first = hstart(stay(k))
+                do j = 0, nstart(k + 1) - nstart(k) - 1
+                    npartner(nstart(k) + j) = hpartner(first + j)
+                    nxi(:, nstart(k) + j) = hxi(:, first + j)
+                end do
+            else
+                first = nstart(k) - nstart(n_stay + 1) + 1
+                do j = 0, nstart(k + 1) - nstart(k) - 1
+                    npartner(nstart(k) + j) = precv(1, first + j)
+                    nxi(:, nstart(k) + j) = xrecv(:, first + j)
+                end do
+            end if
+        end do
+    end subroutine kept_rows
 
     !> The positions of the items with rank >= 0, grouped by rank (in their order within a
     !> rank), and how many go to each of the nranks ranks.

@@ -11,14 +11,14 @@ module dem_neighbors
     use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host
     use dem_cells, only: prefix_sum, bin_items, cell_coords, cell_number, fill_range, &
                          sort_segment, gather_items
-    use dem_particles, only: order_by_id, index_of_id
+    use dem_particles, only: index_of_id, order_by_id
     use dem_mesh, only: mesh_t, closest_point_triangle
     implicit none
     private
     public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order, &
-              neighbors_history, neighbors_set_history, neighbors_unique_pairs, fit_grid, &
-              neighbors_data, neighbors_free, neighbors_moved, grid_t, grid_shape, grid_fill, &
-              cell_of
+              neighbors_history, neighbors_set_history, neighbors_row_history, &
+              neighbors_set_rows, neighbors_unique_pairs, fit_grid, neighbors_data, &
+              neighbors_free, neighbors_moved, grid_t, grid_shape, grid_fill, cell_of
 
     !> The lists, their per-entry tangential history, and the positions they were built at.
     type :: neighbors_t
@@ -31,7 +31,8 @@ module dem_neighbors
         integer(i8), allocatable :: partner(:) !< partner's global id (history key)
         integer(ip), allocatable :: mirror(:) !< the partner's entry for the same pair, negated
                                               !< when the partner (lower id) evaluates the
-                                              !< pair; 0 for a ghost partner
+                                              !< pair; 0 for a ghost partner (and in
+                                              !< rows set by neighbors_set_rows)
         real(wp), allocatable :: xi(:, :)     !< tangential displacement per entry [m]
         logical, allocatable :: touching(:)   !< work space of the contact kernel
         real(wp), allocatable :: fpair(:, :)  !< work space of the contact kernel [N]
@@ -750,10 +751,120 @@ contains
         end do
     end subroutine neighbors_history
 
+    !> The tangential history each owned particle holds, seen from its own side, as rows
+    !> ordered by partner id: row i is hpartner(hstart(i):hstart(i + 1) - 1), with the
+    !> displacements hxi(:, ...) of particle i's side; what a particle takes to another rank.
+    !> Pairs without history (xi = 0) are left out; without rows (no lists yet), all rows are
+    !> empty. Kernels; the rows are left on the device.
+    subroutine neighbors_row_history(nb, n_own, hstart, hpartner, hxi)
+        type(neighbors_t), intent(in) :: nb
+        integer(ip), intent(in) :: n_own
+        integer(ip), allocatable, intent(out) :: hstart(:)
+        integer(i8), allocatable, intent(out) :: hpartner(:)
+        real(wp), allocatable, intent(out) :: hxi(:, :)
+        integer(ip), allocatable :: cnt(:)
+        integer(ip) :: n_h
+        allocate(hstart(n_own + 1), cnt(max(1, n_own)))
+        call acc_data(hstart, acc_create)
+        call acc_data(cnt, acc_create)
+        if (allocated(nb%start)) then
+            if (size(nb%start) /= n_own + 1) error stop 'dem_neighbors: the history rows ' // &
+                                                       'are not those of the particles'
+            call history_counts(n_own, size(nb%partner, kind=ip), nb%start, nb%mirror, &
+                                nb%xi, cnt)
+        else
+            call fill_range(n_own, cnt, 0, 0)
+        end if
+        call prefix_sum(n_own, cnt, hstart)
+        call acc_data(hstart(n_own + 1:n_own + 1), acc_to_host)
+        n_h = hstart(n_own + 1) - 1
+        allocate(hpartner(max(1, n_h)), hxi(3, max(1, n_h)))
+        call acc_data(hpartner, acc_create)
+        call acc_data(hxi, acc_create)
+        if (n_h > 0) call history_fill(n_own, size(nb%partner, kind=ip), nb%start, nb%partner, &
+                                       nb%mirror, nb%xi, hstart, n_h, hpartner, hxi)
+        call acc_data(cnt, acc_exit)
+    end subroutine neighbors_row_history
+
+    !> cnt(i) = the entries of row i with history (side_history nonzero).
+    subroutine history_counts(n_own, n_entries, start, mirror, xi, cnt)
+        integer(ip), intent(in) :: n_own, n_entries
+        integer(ip), intent(in) :: start(n_own + 1), mirror(n_entries)
+        real(wp), intent(in) :: xi(3, n_entries)
+        integer(ip), intent(inout) :: cnt(n_own)
+        integer(ip) :: i, k, m
+        real(wp) :: h(3)
+        !$acc parallel loop gang vector default(present) private(k, m, h)
+        do i = 1, n_own
+            m = 0
+            do k = start(i), start(i + 1) - 1
+                call side_history(n_entries, k, mirror, xi, h)
+                if (any(h /= 0.0_wp)) m = m + 1
+            end do
+            cnt(i) = m
+        end do
+    end subroutine history_counts
+
+    !> The entries with history of each row i into hpartner/hxi from hstart(i), in order.
+    subroutine history_fill(n_own, n_entries, start, partner, mirror, xi, hstart, n_h, &
+                            hpartner, hxi)
+        integer(ip), intent(in) :: n_own, n_entries, n_h
+        integer(ip), intent(in) :: start(n_own + 1), mirror(n_entries), hstart(n_own + 1)
+        integer(i8), intent(in) :: partner(n_entries)
+        real(wp), intent(in) :: xi(3, n_entries)
+        integer(i8), intent(inout) :: hpartner(n_h)
+        real(wp), intent(inout) :: hxi(3, n_h)
+        integer(ip) :: i, k, m
+        real(wp) :: h(3)
+        !$acc parallel loop gang vector default(present) private(k, m, h)
+        do i = 1, n_own
+            m = hstart(i)
+            do k = start(i), start(i + 1) - 1
+                call side_history(n_entries, k, mirror, xi, h)
+                if (all(h == 0.0_wp)) cycle
+                hpartner(m) = partner(k)
+                hxi(:, m) = h
+                m = m + 1
+            end do
+        end do
+    end subroutine history_fill
+
+    !> The displacement of entry k seen from its row's particle: its own, or, when the
+    !> partner evaluates the pair (mirror < 0), the partner's entry negated (the two sides
+    !> are exact negatives, doc/theory.md section 13).
+    pure subroutine side_history(n_entries, k, mirror, xi, h)
+        !$acc routine seq
+        integer(ip), intent(in) :: n_entries, k
+        integer(ip), intent(in) :: mirror(n_entries)
+        real(wp), intent(in) :: xi(3, n_entries)
+        real(wp), intent(out) :: h(3)
+        if (mirror(k) < 0) then
+            h = -xi(:, -mirror(k))
+        else
+            h = xi(:, k)
+        end if
+    end subroutine side_history
+
+    !> Make rows of history (as neighbors_row_history gives them, on the device) the lists'
+    !> history, for the next neighbors_build to carry into its lists; the lists are freed.
+    !> Each row's particle evaluates its own entries until then (mirror 0).
+    subroutine neighbors_set_rows(nb, start, partner, xi)
+        type(neighbors_t), intent(inout) :: nb
+        integer(ip), allocatable, intent(inout) :: start(:)
+        integer(i8), allocatable, intent(inout) :: partner(:)
+        real(wp), allocatable, intent(inout) :: xi(:, :)
+        call neighbors_free(nb)
+        call move_alloc(start, nb%start)         ! (their device copies go with them)
+        call move_alloc(partner, nb%partner)
+        call move_alloc(xi, nb%xi)
+        allocate(nb%mirror(size(nb%partner)))
+        call acc_data(nb%mirror, acc_create)
+        call fill_range(size(nb%mirror, kind=ip), nb%mirror, 0, 0)
+    end subroutine neighbors_set_rows
+
     !> Rows of history for particles 1..n_own from pairs as neighbors_history gives them
-    !> (ordered by ids), so that the next neighbors_build carries them into its lists. A
-    !> pair goes to the row of its lower id if that particle is owned, else, negated, to the
-    !> row of its higher id (the owned side of a pair with a ghost evaluates it too).
+    !> (ordered by ids), on the device (neighbors_set_rows): a pair goes to the row of each
+    !> of its particles held here, negated in the higher id's row.
     subroutine neighbors_set_history(nb, n_own, gid, order, pair, xi)
         type(neighbors_t), intent(inout) :: nb
         integer(ip), intent(in) :: n_own
@@ -761,54 +872,45 @@ contains
         integer(ip), intent(in) :: order(:)      !! the owned particles by increasing id
         integer(i8), intent(in) :: pair(:, :)    !! (2, pairs)
         real(wp), intent(in) :: xi(:, :)         !! (3, pairs) [m]
+        integer(ip), allocatable :: start(:)
+        integer(i8), allocatable :: partner(:)
+        real(wp), allocatable :: hxi(:, :)
         integer(ip) :: row(2, size(pair, 2)), fill(n_own + 1), k, m, i
-        row = 0
         do k = 1, 2
-            row(k, :) = local_index(pair(k, :))
-        end do
-        call neighbors_free(nb)
-        allocate(nb%start(n_own + 1))
-        nb%start = 0
-        do m = 1, size(pair, 2)
-            i = merge(row(1, m), row(2, m), row(1, m) > 0)
-            if (i > 0) nb%start(i + 1) = nb%start(i + 1) + 1
-        end do
-        nb%start(1) = 1
-        do i = 1, n_own
-            nb%start(i + 1) = nb%start(i + 1) + nb%start(i)
-        end do
-        allocate(nb%partner(nb%start(n_own + 1) - 1), nb%xi(3, nb%start(n_own + 1) - 1))
-        fill = nb%start
-        do m = 1, size(pair, 2)          ! pairs by (lower, higher): rows come out ordered
-            if (row(1, m) > 0) then
-                i = row(1, m)
-                nb%partner(fill(i)) = pair(2, m)
-                nb%xi(:, fill(i)) = xi(:, m)
-            else if (row(2, m) > 0) then
-                i = row(2, m)
-                nb%partner(fill(i)) = pair(1, m)
-                nb%xi(:, fill(i)) = -xi(:, m)
-            else
-                cycle
-            end if
-            fill(i) = fill(i) + 1
-        end do
-        do i = 1, n_own
-            call sort_history_row(nb%partner(nb%start(i):nb%start(i + 1) - 1), &
-                                  nb%xi(:, nb%start(i):nb%start(i + 1) - 1))
-        end do
-        call acc_data(nb%start, acc_enter)       ! for the next build, on the device
-        call acc_data(nb%partner, acc_enter)
-        call acc_data(nb%xi, acc_enter)
-    contains
-        !> Local index of each id (0 if not owned).
-        function local_index(ids) result(idx)
-            integer(i8), intent(in) :: ids(:)
-            integer(ip) :: idx(size(ids)), q
-            do q = 1, size(ids)
-                idx(q) = index_of_id(gid, order(1:n_own), ids(q))
+            do m = 1, size(pair, 2)
+                row(k, m) = index_of_id(gid, order(1:n_own), pair(k, m))
             end do
-        end function local_index
+        end do
+        allocate(start(n_own + 1))
+        start = 0
+        do m = 1, size(pair, 2)
+            do k = 1, 2
+                if (row(k, m) > 0) start(row(k, m) + 1) = start(row(k, m) + 1) + 1
+            end do
+        end do
+        start(1) = 1
+        do i = 1, n_own
+            start(i + 1) = start(i + 1) + start(i)
+        end do
+        allocate(partner(max(1, start(n_own + 1) - 1)), hxi(3, max(1, start(n_own + 1) - 1)))
+        fill = start
+        do m = 1, size(pair, 2)
+            do k = 1, 2
+                i = row(k, m)
+                if (i == 0) cycle
+                partner(fill(i)) = pair(3 - k, m)
+                hxi(:, fill(i)) = merge(xi(:, m), -xi(:, m), k == 1)
+                fill(i) = fill(i) + 1
+            end do
+        end do
+        do i = 1, n_own
+            call sort_history_row(partner(start(i):start(i + 1) - 1), &
+                                  hxi(:, start(i):start(i + 1) - 1))
+        end do
+        call acc_data(start, acc_enter)
+        call acc_data(partner, acc_enter)
+        call acc_data(hxi, acc_enter)
+        call neighbors_set_rows(nb, start, partner, hxi)
     end subroutine neighbors_set_history
 
     !> The pairs ordered by (lower id, higher id), each once (copies from two ranks are
@@ -833,8 +935,7 @@ contains
         xi = xi_in(:, order)
     end subroutine neighbors_unique_pairs
 
-    !> Order a row of history by partner id (insertion sort): a row holds the pairs where
-    !> its particle is the lower id, then those where it is the higher.
+    !> Order a row of history by partner id (insertion sort: rows are short).
     pure subroutine sort_history_row(partner, xi)
         integer(i8), intent(inout) :: partner(:)
         real(wp), intent(inout) :: xi(:, :)

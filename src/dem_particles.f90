@@ -174,10 +174,12 @@ contains
 
     !> Take the particles flagged out of the dynamics until they are removed (at the next
     !> rebuild): at rest, massless for the integrator (1/m = 1/I = 0), and placed far away,
-    !> each at its own place, where nothing touches them (doc/theory.md, section 10).
-    subroutine particles_park(n, flag, x, v, w, inv_mass, inv_inertia)
+    !> each at a place of its own, given by its global id, so that no two parked particles
+    !> meet, on one rank or as a ghost of another (doc/theory.md, section 10).
+    subroutine particles_park(n, flag, gid, x, v, w, inv_mass, inv_inertia)
         integer(ip), intent(in) :: n
         logical, intent(in) :: flag(n)
+        integer(i8), intent(in) :: gid(n)
         real(wp), intent(inout) :: x(3, n), v(3, n), w(3, n), inv_mass(n), inv_inertia(n)
         real(wp), parameter :: far = 1.0e9_wp    !< [m]
         integer(ip) :: i
@@ -186,7 +188,7 @@ contains
             if (.not. flag(i)) cycle
             x(1, i) = far
             x(2, i) = far
-            x(3, i) = far + 1.0e3_wp * i
+            x(3, i) = far + 1.0e3_wp * real(gid(i), wp)
             v(:, i) = 0.0_wp
             w(:, i) = 0.0_wp
             inv_mass(i) = 0.0_wp

@@ -17,7 +17,8 @@ module dem_solver
     use dem_materials, only: pair_constants_t, pair_constants_build
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
                              neighbors_spatial_order, neighbors_history, neighbors_set_history, &
-                             neighbors_data, neighbors_free, neighbors_moved
+                             neighbors_data, neighbors_free, neighbors_moved, &
+                             neighbors_row_history, neighbors_set_rows
     use dem_cells, only: fill_range, kept_indices
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, wall_contacts_permute, &
@@ -27,7 +28,7 @@ module dem_solver
     use dem_outlets, only: outlets_mark
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
     use dem_diagnostics, only: energies, count_pp_sides, first_nonfinite, count_unstable, &
-                               contact_trace, deep_overlap_id
+                               contact_trace, deep_overlap_id, momentum_sums
     use dem_output, only: output_t, output_open, output_series, output_contact, &
                           output_final, output_close, output_sizes, output_probes, &
                           output_histogram
@@ -725,7 +726,7 @@ contains
                     s%trace_id = 0
                 end if
             end if
-            call particles_park(n, s%fresh, p%x, p%v, p%w, p%inv_mass, p%inv_inertia)
+            call particles_park(n, s%fresh, p%gid, p%x, p%v, p%w, p%inv_mass, p%inv_inertia)
             call neighbors_moved(s%nb, n, s%fresh, p%x)
         end associate
     end subroutine remove_outlet_particles
@@ -747,38 +748,20 @@ contains
 
     !> Re-sort the particles in space and rebuild the neighbour lists; the history follows
     !> the particles. With `outlets`, the particles the outlet flags mark (parked) are
-    !> removed. On one
-    !> rank all of it runs on the device. On several ranks the particles first go to the
-    !> ranks of their blocks (repartitioned when the load is out of balance), on the host,
-    !> and the ghosts are exchanged after the re-sort, on the host too; the stores then
-    !> follow the rank's share (they may be reallocated, so their device copies are made
-    !> anew).
+    !> removed. On several ranks the particles first go to the ranks of their blocks
+    !> (repartitioned when the load is out of balance), and the ghosts are exchanged after
+    !> the re-sort. All of it runs on the device; the host sees counts and the buffers MPI
+    !> sends (and the stores when they must grow or shrink for a rank's share).
     subroutine rebuild(s, outlets)
         type(solver_t), intent(inout) :: s
         logical, intent(in) :: outlets           !! remove the parked particles
         integer(ip), allocatable :: order(:), kept(:)
         integer(ip) :: m
-        if (s%comm%size > 1) then               ! the migration, on the host, drops them
-            call particle_data(s, acc_to_host)
-            call neighbors_data(s%nb, acc_to_host)
-            if (outlets) call acc_data(s%gone, acc_to_host)
-            call particle_data(s, acc_exit)
+        if (s%comm%size > 1) then
             if (s%lists_on_device) call domain_data(s%dom, acc_exit)
-            if (outlets) then
-                call distribute(s, pack([(m, m = 1, s%p%n_own)], .not. s%gone))
-            else
-                call distribute(s, [(m, m = 1, s%p%n_own)])
-            end if
-            call particle_data(s, acc_enter)
+            call distribute(s, outlets)
         end if
-        allocate(kept(max(1, s%p%n_own)))
-        call acc_data(kept, acc_create)
-        if (outlets .and. s%comm%size == 1) then
-            call kept_indices(s%p%n_own, s%gone, kept, m)
-        else
-            m = s%p%n_own
-            call fill_range(m, kept, 1, 1)
-        end if
+        call kept_particles(s, outlets .and. s%comm%size == 1, kept, m)
         allocate(order(max(1, m)))
         call acc_data(order, acc_create)
         call neighbors_spatial_order(m, kept, s%p%x, s%sort_cell, order)
@@ -798,62 +781,61 @@ contains
         s%parked = 0
     end subroutine rebuild
 
-    !> Give the particles `kept` (the others are removed) and their contact history to the
-    !> ranks of their blocks, rebalancing first when the load ratio exceeds the limit times
-    !> the ratio the last partition achieved (blocks may not allow better, and a draining
-    !> silo's last particles would be repartitioned at every rebuild); the first time after a
-    !> restart, the pairs are those of the checkpoint that involve the rank's particles. The history
-    !> of the particles now owned is left for the next neighbors_build. The particle count
-    !> and the momentum are checked to be the same after the move (to round-off).
-    subroutine distribute(s, kept)
+    !> kept(1:m): the owned particles that stay in the run, in order; with `outlets`, those
+    !> the outlet flags do not mark. On the device (kept is created there).
+    subroutine kept_particles(s, outlets, kept, m)
+        type(solver_t), intent(in) :: s
+        logical, intent(in) :: outlets
+        integer(ip), allocatable, intent(out) :: kept(:)
+        integer(ip), intent(out) :: m
+        allocate(kept(max(1, s%p%n_own)))
+        call acc_data(kept, acc_create)
+        if (outlets) then
+            call kept_indices(s%p%n_own, s%gone, kept, m)
+        else
+            m = s%p%n_own
+            call fill_range(m, kept, 1, 1)
+        end if
+    end subroutine kept_particles
+
+    !> Give the particles that stay in the run (with `outlets`, the parked ones are removed)
+    !> and their contact history to the ranks of their blocks, rebalancing first when the
+    !> load ratio exceeds the limit times the ratio the last partition achieved (blocks may
+    !> not allow better, and a draining silo's last particles would be repartitioned at every
+    !> rebuild). The pair history travels in rows, each particle's from its own side
+    !> (neighbors_row_history: from the lists, or after a restart from the checkpoint's
+    !> pairs), and is left for the next neighbors_build. The particle count and the momentum
+    !> are checked to be the same after the move (to round-off).
+    subroutine distribute(s, outlets)
         type(solver_t), intent(inout) :: s
-        integer(ip), intent(in) :: kept(:)
-        integer(i8), allocatable :: pair(:, :)
-        real(wp), allocatable :: xi(:, :)
+        logical, intent(in) :: outlets
+        integer(ip), allocatable :: kept(:), owned(:), hstart(:)
+        integer(i8), allocatable :: hpartner(:)
+        real(wp), allocatable :: hxi(:, :)
         real(wp) :: imbalance, before(5), after(5)
-        integer(ip) :: i
+        integer(ip) :: m, n
         integer :: status
         logical :: balance
-        if (s%distributed) then
-            call neighbors_history(s%nb, s%p%n_own, s%p%gid, order_by_id(s%p%gid(1:s%p%n_own)), &
-                                   pair, xi)
-        else if (allocated(s%good%pair)) then      ! restored from a checkpoint
-            pair = s%good%pair
-            xi = s%good%pair_xi
-        else
-            allocate(pair(2, 0), xi(3, 0))
-        end if
-        imbalance = domain_imbalance(s%comm, size(kept, kind=ip))
+        call kept_particles(s, outlets, kept, m)
+        call neighbors_row_history(s%nb, s%p%n_own, hstart, hpartner, hxi)
+        imbalance = domain_imbalance(s%comm, m)
         balance = .not. s%distributed .or. imbalance > s%imbalance_limit * s%balanced
         if (balance) then
-            call domain_balance(s%dom, s%comm, size(kept, kind=ip), s%p%x(:, kept), &
-                                s%p%radius(kept), s%wc%tri(:, kept), status)
+            call domain_balance(s%dom, s%comm, m, kept, s%p%x, s%p%radius, s%wc%tri, status)
             if (status /= 1) error stop 'dem: METIS could not partition the blocks'
         end if
-        before = totals(kept)
-        call domain_migrate(s%dom, s%comm, s%p, s%wc, kept, pair, xi)
+        before = momentum_sums(s%comm, m, kept, s%p%mass, s%p%v)
+        call domain_migrate(s%dom, s%comm, s%p, s%wc, m, kept, hstart, hpartner, hxi)
+        call acc_data(kept, acc_exit)
         s%distributed = .true.
         if (balance) s%balanced = domain_imbalance(s%comm, s%p%n_own)
-        after = totals([(i, i = 1, s%p%n_own)])
+        call kept_particles(s, .false., owned, n)
+        after = momentum_sums(s%comm, n, owned, s%p%mass, s%p%v)
+        call acc_data(owned, acc_exit)
         if (nint(after(1)) /= nint(before(1)) .or. any(abs(after(2:4) - before(2:4)) > &
             1.0e-9_wp * (before(5) + tiny(1.0_wp)))) &
             error stop 'dem: a migration did not conserve the particles or their momentum'
-        call neighbors_set_history(s%nb, s%p%n_own, s%p%gid, order_by_id(s%p%gid(1:s%p%n_own)), &
-                                   pair, xi)
-    contains
-        !> Particles, momentum and sum of |momentum| of the particles idx over the ranks.
-        function totals(idx) result(t)
-            integer(ip), intent(in) :: idx(:)
-            real(wp) :: t(5)
-            integer(ip) :: k
-            t = 0.0_wp
-            t(1) = size(idx)
-            do k = 1, size(idx)
-                t(2:4) = t(2:4) + s%p%mass(idx(k)) * s%p%v(:, idx(k))
-                t(5) = t(5) + s%p%mass(idx(k)) * norm2(s%p%v(:, idx(k)))
-            end do
-            call comm_sum(s%comm, t)
-        end function totals
+        call neighbors_set_rows(s%nb, hstart, hpartner, hxi)
     end subroutine distribute
 
     !> One row of series.csv and of probes.csv, every rank giving its own particles, the sums
