@@ -2,11 +2,14 @@
 !> (Hertz), through one contact, wherever it is: over faces, shared edges and vertices shared
 !> by six triangles. Two walls meeting at 90 degrees give two contacts. A sphere sliding
 !> across 108 shared edges feels, at every step, the normal and tangential force of one big
-!> plane: the history follows the contact from triangle to triangle.
+!> plane: the history follows the contact from triangle to triangle. The history packed for
+!> another rank and unpacked comes back the same, in the order asked for.
 program test_contacts_pw
     use dem_kinds, only: wp, ip
     use dem_mesh, only: mesh_t, mesh_add_plane
-    use dem_contacts_pw, only: pw_forces, max_wall_contacts
+    use dem_contacts_pw, only: pw_forces, max_wall_contacts, wall_contacts_t, &
+                               wall_contacts_init, wall_contacts_pack, wall_contacts_unpack, &
+                               n_wall_pack_real
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp), r = 0.01_wp, d = 1.0e-5_wp, estar = 1.0e10_wp
@@ -18,6 +21,8 @@ program test_contacts_pw
     integer(ip) :: wtri1(max_wall_contacts, 1)
     real(wp) :: wxi1(3, max_wall_contacts, 1), f1(3, 1), t1(3, 1), worst
     integer(ip), allocatable :: wlist(:)
+    type(wall_contacts_t) :: wa, wb
+    real(wp) :: buf(2 + n_wall_pack_real, 3)
 
     call mesh_add_plane(m, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.05_wp, 10_ip, &
                         2_ip)
@@ -79,6 +84,21 @@ program test_contacts_pw
     call assert_true(count(wtri(:, 1) > 0) == 2, 'two contacts in a corner')
     call assert_close(f(1, 1), fhertz, 1e-12_wp, 'corner: force from the side wall')
     call assert_close(f(3, 1), fhertz, 1e-12_wp, 'corner: force from the floor')
+    ! the history of particles 4, 1, 3 of a store, packed after two other rows, unpacked
+    ! into particles 2-4 of another
+    call wall_contacts_init(wa, 5_ip)
+    call wall_contacts_init(wb, 6_ip)
+    do i = 1, 5
+        wa%tri(:, i) = [(100 * i + k, k = 1, max_wall_contacts)]
+        call random_number(wa%xi(:, :, i))
+    end do
+    buf = -1.0_wp
+    call wall_contacts_pack(wa, 3_ip, [4_ip, 1_ip, 3_ip], 2_ip, buf)
+    call assert_true(all(buf(1:2, :) == -1.0_wp), 'packing leaves the rows before it alone')
+    call wall_contacts_unpack(wb, 2_ip, 3_ip, 2_ip, buf)
+    call assert_true(all(wb%tri(:, 2:4) == wa%tri(:, [4, 1, 3])) .and. &
+                     all(wb%xi(:, :, 2:4) == wa%xi(:, :, [4, 1, 3])) .and. &
+                     all(wb%tri(:, [1, 5, 6]) == 0), 'wall history packed and unpacked')
     call assert_finish()
 
 contains

@@ -3,12 +3,15 @@
 !> rows and no other, rows ordered by partner id; the wall list holds exactly the triangles
 !> within R_i + skin, found with far fewer tests than particles x triangles; the tangential
 !> history of pairs still listed survives a rebuild and a spatial re-sort of the particles;
-!> the rebuild criterion is skin/2.
+!> the rebuild criterion is skin/2. The rows of history a migrating particle takes along
+!> hold each of its pairs with history once, seen from its side (the lower id's value, negated
+!> in the higher id's row, never the stale entry of the side that does not evaluate), ordered
+!> by partner id, and a build from them gives both sides of each pair their values back.
 program test_neighbors
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t, mesh_add_plane
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
-                             neighbors_spatial_order
+                             neighbors_spatial_order, neighbors_row_history, neighbors_set_rows
     use dem_mesh, only: closest_point_triangle
     use dem_assert, only: assert_true, assert_finish
     implicit none
@@ -21,7 +24,10 @@ program test_neighbors
     integer(ip), allocatable :: expected(:), kept(:)
     real(wp) :: xk(3, n), rk(n)
     integer(i8) :: gk(n)
-    integer(ip) :: nk
+    integer(ip) :: nk, a
+    integer(ip), allocatable :: hstart(:)
+    integer(i8), allocatable :: hpartner(:), want(:)
+    real(wp), allocatable :: hxi(:, :)
     real(wp), parameter :: ratios(4) = [1.0_wp, 2.0_wp, 10.0_wp, 20.0_wp]
     logical :: ok
 
@@ -132,9 +138,68 @@ program test_neighbors
         end do
         call assert_true(ok, 'lists and history after removing particles')
     end do
+
+    ! rows of history: the evaluating side (mirror >= 0) holds the pair's value, the other
+    ! side a stale value that must not travel; a third of the pairs out of contact (zero)
+    nb = neighbors_t(skin=0.004_wp)
+    call neighbors_build(nb, n, n, gid, x, r, m)
+    do i = 1, n
+        do k = nb%start(i), nb%start(i + 1) - 1
+            j = nb%list(k)
+            if (nb%mirror(k) < 0) then
+                nb%xi(:, k) = 99.0_wp
+            else if (.not. touching(gid(i), gid(j))) then
+                nb%xi(:, k) = 0.0_wp
+            else
+                nb%xi(:, k) = side_xi(gid(i), gid(j))
+            end if
+        end do
+    end do
+    call neighbors_row_history(nb, n, hstart, hpartner, hxi)
+    ok = .true.
+    do i = 1, n
+        want = nb%partner(nb%start(i):nb%start(i + 1) - 1)
+        want = pack(want, [(touching(gid(i), want(k)), k = 1, size(want))])
+        ok = ok .and. hstart(i + 1) - hstart(i) == size(want)
+        if (.not. ok) exit
+        do k = 1, size(want)
+            a = hstart(i) + k - 1
+            ok = ok .and. hpartner(a) == want(k) .and. all(hxi(:, a) == side_xi(gid(i), want(k)))
+        end do
+    end do
+    call assert_true(ok, 'rows of history: each pair with history, from its own side, by id')
+    call neighbors_set_rows(nb, hstart, hpartner, hxi)
+    call neighbors_build(nb, n, n, gid, x, r, m)
+    ok = .true.
+    do i = 1, n
+        do k = nb%start(i), nb%start(i + 1) - 1
+            j = nb%list(k)
+            if (touching(gid(i), gid(j))) then
+                ok = ok .and. all(nb%xi(:, k) == side_xi(gid(i), gid(j)))
+            else
+                ok = ok .and. all(nb%xi(:, k) == 0.0_wp)
+            end if
+        end do
+    end do
+    call assert_true(ok, 'a build from rows of history gives both sides their values')
     call assert_finish()
 
 contains
+
+    !> Whether the pair of ids a, b is taken to be in contact (two in three pairs).
+    logical function touching(a_, b_)
+        integer(i8), intent(in) :: a_, b_
+        touching = mod(a_ + b_, 3_i8) /= 0
+    end function touching
+
+    !> The history of the pair (a, b) seen from a: a value of the pair, negated on the higher
+    !> id's side.
+    function side_xi(a_, b_) result(v)
+        integer(i8), intent(in) :: a_, b_
+        real(wp) :: v(3)
+        v = 1.0e-6_wp * real([min(a_, b_), max(a_, b_), max(a_, b_) - 2 * min(a_, b_)], wp)
+        if (a_ > b_) v = -v
+    end function side_xi
 
     logical function near(t_, i_)
         integer(ip), intent(in) :: t_, i_
