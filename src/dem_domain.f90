@@ -307,8 +307,9 @@ contains
         allocate(npartner(max(1, n_h)), nxi(3, max(1, n_h)))
         call acc_data(npartner, acc_create)
         call acc_data(nxi, acc_create)
-        call kept_rows(n_stay, nr, stay, hstart, hpartner, hxi, n_in, precv, xrecv, nstart, &
-                       n_h, npartner, nxi)
+        ! the rows of the particles that stayed, then those received, in their order
+        call gather_rows(n_stay, stay, hstart, hpartner, hxi, nstart, n_h, npartner, nxi)
+        call place_received(n_in, precv, xrecv, n_h - n_in + 1, npartner, nxi)
         call acc_data(hxi, acc_exit)
         call acc_data(hpartner, acc_exit)
         call acc_data(hstart, acc_exit)
@@ -379,20 +380,21 @@ contains
     end subroutine row_lengths
 
     !> The history rows of the particles item(1:n), one after another from hpos(k), into
-    !> pbuf (partner ids) and xbuf (displacements).
+    !> pbuf (partner ids) and xbuf (displacements); pbuf(1:n_out) may be the elements of an
+    !> array of shape (1, n_out) (sequence association), as comm_exchange sends.
     subroutine gather_rows(n, item, hstart, hpartner, hxi, hpos, n_out, pbuf, xbuf)
         integer(ip), intent(in) :: n, n_out
         integer(ip), intent(in) :: item(:), hstart(:), hpos(:)
         integer(i8), intent(in) :: hpartner(:)
         real(wp), intent(in) :: hxi(:, :)
-        integer(i8), intent(inout) :: pbuf(1, n_out)
+        integer(i8), intent(inout) :: pbuf(n_out)
         real(wp), intent(inout) :: xbuf(3, n_out)
         integer(ip) :: k, j, first
         !$acc parallel loop gang vector default(present) private(j, first)
         do k = 1, n
             first = hstart(item(k))
             do j = 0, hpos(k + 1) - hpos(k) - 1
-                pbuf(1, hpos(k) + j) = hpartner(first + j)
+                pbuf(hpos(k) + j) = hpartner(first + j)
                 xbuf(:, hpos(k) + j) = hxi(:, first + j)
             end do
         end do
@@ -416,34 +418,21 @@ contains
         end do
     end subroutine kept_row_lengths
 
-    !> The history rows of the particles owned after the move, from nstart(k): those of the
-    !> particles that stayed, then those received (one after another in precv, xrecv).
-    subroutine kept_rows(n_stay, nr, stay, hstart, hpartner, hxi, n_in, precv, xrecv, nstart, &
-                         n_h, npartner, nxi)
-        integer(ip), intent(in) :: n_stay, nr, n_in, n_h
-        integer(ip), intent(in) :: stay(:), hstart(:), nstart(:)
-        integer(i8), intent(in) :: hpartner(:), precv(1, n_in)
-        real(wp), intent(in) :: hxi(:, :), xrecv(3, n_in)
-        integer(i8), intent(inout) :: npartner(n_h)
-        real(wp), intent(inout) :: nxi(3, n_h)
-        integer(ip) :: k, j, first
-        !$acc parallel loop gang vector default(present) private(j, first)
-        do k = 1, n_stay + nr
-            if (k <= n_stay) then
-                first = hstart(stay(k))
-                do j = 0, nstart(k + 1) - nstart(k) - 1
-                    npartner(nstart(k) + j) = hpartner(first + j)
-                    nxi(:, nstart(k) + j) = hxi(:, first + j)
-                end do
-            else
-                first = nstart(k) - nstart(n_stay + 1) + 1
-                do j = 0, nstart(k + 1) - nstart(k) - 1
-                    npartner(nstart(k) + j) = precv(1, first + j)
-                    nxi(:, nstart(k) + j) = xrecv(:, first + j)
-                end do
-            end if
+    !> The n_in received history entries (precv: partner ids, as an array of shape (1, n_in);
+    !> xrecv: displacements) into npartner, nxi from first on.
+    subroutine place_received(n_in, precv, xrecv, first, npartner, nxi)
+        integer(ip), intent(in) :: n_in, first
+        integer(i8), intent(in) :: precv(n_in)
+        real(wp), intent(in) :: xrecv(3, n_in)
+        integer(i8), intent(inout) :: npartner(:)
+        real(wp), intent(inout) :: nxi(:, :)
+        integer(ip) :: j
+        !$acc parallel loop gang vector default(present)
+        do j = 1, n_in
+            npartner(first + j - 1) = precv(j)
+            nxi(:, first + j - 1) = xrecv(:, j)
         end do
-    end subroutine kept_rows
+    end subroutine place_received
 
     !> The positions of the items with rank >= 0, grouped by rank (in their order within a
     !> rank), and how many go to each of the nranks ranks.

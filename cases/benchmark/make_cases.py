@@ -9,6 +9,8 @@ paths of the particle files are the outputs of the preparations there:
                                           100 000 spheres of 4 mm and let them settle
   silo_<M1|M2>_<small|large>.nml          discharge for 5 s; probes: particles above the
                                           orifice plane, velocity histograms at 2 s
+  [prepare_]silo_<M>_<orifice>_20000[_seed<k>].nml  the same with 20 000 spheres, run here
+                                          (small M1: six fillings of different seeds)
   prepare_drum_1.nml, prepare_drum_2.nml  8 000 M2 of 4 mm settled in the drum, then
                                           30 000 M1 of 2 mm settled on top
   drum.nml                                5 s at 2 rad/s about y, omega = (0, -2, 0) as in
@@ -38,6 +40,7 @@ SILO = {"small": dict(r_o=0.02, z_o=-0.0593008, top=0.320699),
 SILO_DT = {"M1": 1.5e-6, "M2": 2.0e-6}
 SILO_PREPARE_DT = {"M1": 4.0e-6, "M2": 5.0e-6}     # about 0.24 Rayleigh times of the 4 mm spheres
 SILO_REDUCED = 20000                               # particles in the reduced silos run here
+SILO_FILLINGS = 6                                  # reduced small M1 silo: fillings of seeds 1-6
 FLOOR = -0.0902431                        # impact box floor [m]
 IMPACTOR_ID = 1000000000
 BIG = "1e30"
@@ -64,36 +67,37 @@ def silo_walls(orifice):
     return (f"&wall_mesh file = 'geometry/silo_{orifice}.stl', material = 'steel' /\n")
 
 
-def silo_name(material, orifice, n=100000):
-    return f"silo_{material}_{orifice}" + (f"_{n}" if n != 100000 else "")
+def silo_name(material, orifice, n=100000, seed=1):
+    return (f"silo_{material}_{orifice}" + (f"_{n}" if n != 100000 else "")
+            + (f"_seed{seed}" if seed > 1 else ""))
 
 
-def prepare_silo(material, orifice, n=100000, scale=1.0, t_end=2.0):
+def prepare_silo(material, orifice, n=100000, scale=1.0, t_end=2.0, seed=1):
     """Spheres of 4 mm dropped into the silo from a cylinder above the cone (0.9 m high, so
     that random insertion has room), onto a plane that closes the orifice; settled, at a
     larger dt than the discharge (the packing's settling is not measured)."""
     s = SILO[orifice]
     z_j = 0.1 - (s["r_o"] - s["z_o"])                # where cone and cylinder meet
     height = min(0.9, 0.9 * n / 100000.0 + 0.05)
-    name = "prepare_" + silo_name(material, orifice, n)
+    name = "prepare_" + silo_name(material, orifice, n, seed)
     return (run(SILO_PREPARE_DT[material] / scale ** 0.5, t_end,
                 f", stop_kinetic_energy = {n * 1e-10:g}")
             + output(name, 0.01, 0.0) + materials(scale)
             + f"&insert n = {n}, material = '{material}', radius_min = 0.002, "
               f"radius_max = 0.002, region = 'cylinder', cylinder_base = 0, 0, {z_j:.7g}, "
-              f"cylinder_radius = 0.096, cylinder_height = {height:g}, seed = 1 /\n"
+              f"cylinder_radius = 0.096, cylinder_height = {height:g}, seed = {seed} /\n"
             + silo_walls(orifice)
             + f"&wall_plane material = 'steel', point = 0, 0, {s['z_o']}, normal = 0, 0, 1, "
               f"half_width = 0.035 /\n")
 
 
 def silo(material, orifice, n=100000, scale=1.0, t_end=5.0, interval=0.1, histogram_time=2.0,
-         snapshots=0.5, dt=None, integrator="symplectic_euler", name=None):
+         snapshots=0.5, dt=None, integrator="symplectic_euler", name=None, seed=1):
     """Discharge: the settled packing without the plane; particles removed 0.02 m below the
     orifice plane (MercuryDPM's deletion boundary); remaining particles counted above it
     (dt, integrator and output name other than the case's for the speed-against-error study)."""
     s = SILO[orifice]
-    bed = silo_name(material, orifice, n)
+    bed = silo_name(material, orifice, n, seed)
     name = name or bed
     above = (f"region = 'box', box_min = -{BIG}, -{BIG}, {s['z_o']}, "
              f"box_max = {BIG}, {BIG}, {BIG}")
@@ -205,6 +209,13 @@ def cases():
             out[f"prepare_{silo_name(m, o, n)}.nml"] = prepare_silo(m, o, n, t_end=1.0)
             out[f"{silo_name(m, o, n)}.nml"] = silo(m, o, n, t_end=0.5, interval=0.01,
                                                      histogram_time=0.3, snapshots=0.1)
+    for seed in range(2, SILO_FILLINGS + 1):
+        n = SILO_REDUCED
+        out[f"prepare_{silo_name('M1', 'small', n, seed)}.nml"] = prepare_silo(
+            "M1", "small", n, t_end=1.0, seed=seed)
+        out[f"{silo_name('M1', 'small', n, seed)}.nml"] = silo(
+            "M1", "small", n, t_end=0.5, interval=0.01, histogram_time=0.3, snapshots=0.1,
+            seed=seed)
     out["prepare_drum_1.nml"] = prepare_drum(1)
     out["prepare_drum_2.nml"] = prepare_drum(2)
     out["drum.nml"] = drum()
