@@ -233,10 +233,16 @@ def cases():
     return out
 
 
+def files():
+    """{file name: its text, with the line that says where it comes from}."""
+    return {name: f"! {name}: written by make_cases.py (Dosta et al. 2024 benchmark)\n" + text
+            for name, text in cases().items()}
+
+
 def main():
-    for name, text in cases().items():
+    for name, text in files().items():
         with open(os.path.join(HERE, name), "w") as f:
-            f.write(f"! {name}: written by make_cases.py (Dosta et al. 2024 benchmark)\n" + text)
+            f.write(text)
 
 
 if __name__ == "__main__":

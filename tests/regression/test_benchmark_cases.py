@@ -25,6 +25,8 @@ hold whatever the size:
 4. the analysis of doc/benchmarks.md: scripts/plot-benchmarks draws the figures of these
    outputs; its flow-rate fit recovers the slope of an exact line, and its Beverloo k for the
    paper's flow-rate ratio of 3.10 is the paper's 1.26.
+5. the namelists in cases/benchmark are make_cases.py's: each it writes is there, with the
+   same text, and there is no other (one edited by hand, or one it no longer writes, fails).
 usage: test_benchmark_cases.py DEM WORKDIR [MPIEXEC]"""
 import os
 import shutil
@@ -49,6 +51,16 @@ os.makedirs(os.path.join(cases, "geometry"))
 shutil.copytree(os.path.join(ROOT, "cases", "benchmark", "geometry"),
                 os.path.join(cases, "geometry"), dirs_exist_ok=True)
 SCALE = 1e-3
+
+# 5. (first: it needs no run) the committed namelists against their generator
+written = mc.files()
+here = {n for n in os.listdir(os.path.join(ROOT, "cases", "benchmark")) if n.endswith(".nml")}
+check(here == set(written), "cases/benchmark: namelists not written by make_cases.py: "
+      f"{sorted(here - set(written))}; missing: {sorted(set(written) - here)}")
+for name in sorted(here & set(written)):
+    with open(os.path.join(ROOT, "cases", "benchmark", name)) as f:
+        check(f.read() == written[name], f"cases/benchmark/{name} differs from what "
+              "make_cases.py writes (run it)")
 
 
 def run(name, text, ranks=1):
