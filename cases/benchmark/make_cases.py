@@ -10,7 +10,7 @@ paths of the particle files are the outputs of the preparations there:
   silo_<M1|M2>_<small|large>.nml          discharge for 5 s; probes: particles above the
                                           orifice plane, velocity histograms at 2 s
   [prepare_]silo_<M>_<orifice>_20000[_seed<k>].nml  the same with 20 000 spheres, run here
-                                          (small M1: six fillings of different seeds)
+                                          (M1: six fillings of different seeds)
   prepare_drum_1.nml, prepare_drum_2.nml  8 000 M2 of 4 mm settled in the drum, then
                                           30 000 M1 of 2 mm settled on top
   drum.nml                                5 s at 2 rad/s about y, omega = (0, -2, 0) as in
@@ -40,7 +40,7 @@ SILO = {"small": dict(r_o=0.02, z_o=-0.0593008, top=0.320699),
 SILO_DT = {"M1": 1.5e-6, "M2": 2.0e-6}
 SILO_PREPARE_DT = {"M1": 4.0e-6, "M2": 5.0e-6}     # about 0.24 Rayleigh times of the 4 mm spheres
 SILO_REDUCED = 20000                               # particles in the reduced silos run here
-SILO_FILLINGS = 6                                  # reduced small M1 silo: fillings of seeds 1-6
+SILO_FILLINGS = 6                                  # reduced M1 silos: fillings of seeds 1-6
 FLOOR = -0.0902431                        # impact box floor [m]
 IMPACTOR_ID = 1000000000
 BIG = "1e30"
@@ -209,12 +209,12 @@ def cases():
             out[f"prepare_{silo_name(m, o, n)}.nml"] = prepare_silo(m, o, n, t_end=1.0)
             out[f"{silo_name(m, o, n)}.nml"] = silo(m, o, n, t_end=0.5, interval=0.01,
                                                      histogram_time=0.3, snapshots=0.1)
-    for seed in range(2, SILO_FILLINGS + 1):
+    for o, seed in ((o, seed) for o in SILO for seed in range(2, SILO_FILLINGS + 1)):
         n = SILO_REDUCED
-        out[f"prepare_{silo_name('M1', 'small', n, seed)}.nml"] = prepare_silo(
-            "M1", "small", n, t_end=1.0, seed=seed)
-        out[f"{silo_name('M1', 'small', n, seed)}.nml"] = silo(
-            "M1", "small", n, t_end=0.5, interval=0.01, histogram_time=0.3, snapshots=0.1,
+        out[f"prepare_{silo_name('M1', o, n, seed)}.nml"] = prepare_silo(
+            "M1", o, n, t_end=1.0, seed=seed)
+        out[f"{silo_name('M1', o, n, seed)}.nml"] = silo(
+            "M1", o, n, t_end=0.5, interval=0.01, histogram_time=0.3, snapshots=0.1,
             seed=seed)
     out["prepare_drum_1.nml"] = prepare_drum(1)
     out["prepare_drum_2.nml"] = prepare_drum(2)
