@@ -205,17 +205,12 @@ def cases():
         for o in ("small", "large"):
             out[f"prepare_silo_{m}_{o}.nml"] = prepare_silo(m, o)
             out[f"silo_{m}_{o}.nml"] = silo(m, o)
-            n = SILO_REDUCED
-            out[f"prepare_{silo_name(m, o, n)}.nml"] = prepare_silo(m, o, n, t_end=1.0)
-            out[f"{silo_name(m, o, n)}.nml"] = silo(m, o, n, t_end=0.5, interval=0.01,
-                                                     histogram_time=0.3, snapshots=0.1)
-    for o, seed in ((o, seed) for o in SILO for seed in range(2, SILO_FILLINGS + 1)):
-        n = SILO_REDUCED
-        out[f"prepare_{silo_name('M1', o, n, seed)}.nml"] = prepare_silo(
-            "M1", o, n, t_end=1.0, seed=seed)
-        out[f"{silo_name('M1', o, n, seed)}.nml"] = silo(
-            "M1", o, n, t_end=0.5, interval=0.01, histogram_time=0.3, snapshots=0.1,
-            seed=seed)
+            n = SILO_REDUCED                   # run here; M1 from fillings of several seeds
+            for seed in range(1, SILO_FILLINGS + 1) if m == "M1" else (1,):
+                name = silo_name(m, o, n, seed)
+                out[f"prepare_{name}.nml"] = prepare_silo(m, o, n, t_end=1.0, seed=seed)
+                out[f"{name}.nml"] = silo(m, o, n, t_end=0.5, interval=0.01, histogram_time=0.3,
+                                          snapshots=0.1, seed=seed)
     out["prepare_drum_1.nml"] = prepare_drum(1)
     out["prepare_drum_2.nml"] = prepare_drum(2)
     out["drum.nml"] = drum()
