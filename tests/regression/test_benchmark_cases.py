@@ -24,7 +24,8 @@ hold whatever the size:
    lowest point stays within 2 mm of it: the soft floor contact overlaps that much).
 4. the analysis of doc/benchmarks.md: scripts/plot-benchmarks draws the figures of these
    outputs; its flow-rate fit recovers the slope of an exact line, and its Beverloo k for the
-   paper's flow-rate ratio of 3.10 is the paper's 1.26.
+   paper's flow-rate ratio of 3.10 is the paper's 1.26; it finds the reduced silos' fillings
+   by their names and takes the rates of those that ran to the case's end.
 5. the namelists in cases/benchmark are make_cases.py's: each it writes is there, with the
    same text, and there is no other (one edited by hand, or one it no longer writes, fails).
 usage: test_benchmark_cases.py DEM WORKDIR [MPIEXEC]"""
@@ -177,4 +178,22 @@ line["time"], line["silo_M1"] = t, 20000.0 - 7000.0 * t
 w, dev, keep = pb.flow_rate(line, "M1")
 check(abs(w - 7000.0) < 1e-6 and dev < 1e-6 and keep.sum() == 91, f"flow rate of a line {w}")
 check(abs(pb.beverloo_k(3.10) - 1.26) < 0.005, f"Beverloo k for 3.10: {pb.beverloo_k(3.10)}")
+# the fillings' rates: exact lines, in folders named as make_cases.py names the reduced silos;
+# a discharge stopped before the case's end, and a folder of another name, left out
+fake = os.path.join(work, "fillings")
+exact = {1: 7000.0, 2: 7100.0, 3: 6900.0, 4: 7300.0}
+for seed, w in exact.items():
+    d = os.path.join(fake, mc.silo_name("M1", "small", mc.SILO_REDUCED, seed))
+    os.makedirs(d)
+    t = np.linspace(0.0, mc.SILO_REDUCED_T_END if seed < 4 else 0.3, 51)
+    np.savetxt(os.path.join(d, "probes.csv"), np.c_[t, 20000.0 - w * t], delimiter=",",
+               header="time,silo_M1", comments="")
+shutil.copytree(d, os.path.join(fake, mc.silo_name("M1", "small", mc.SILO_REDUCED) + "_copy"))
+found = pb.silo_outputs(fake)
+check(list(found) == [("M1", "small", mc.SILO_REDUCED)] and sorted(found[list(found)[0]])
+      == [1, 2, 3, 4], f"the fillings' folders: {found}")
+rates = pb.filling_rates(found, "M1")
+check(list(rates) == ["small"] and sorted(rates["small"]) == [1, 2, 3]
+      and all(abs(rates["small"][k] - exact[k]) < 1e-6 for k in (1, 2, 3)),
+      f"the fillings' flow rates: {rates}")
 finish()
