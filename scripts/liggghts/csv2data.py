@@ -16,9 +16,10 @@ The data file (LIGGGHTS atom_style granular):
     Atoms:      atom-ID atom-type diameter density x y z
     Velocities: atom-ID vx vy vz omegax omegay omegaz
 with 2 atom types and box bounds x in [-0.06, 0.06], y in [-0.04, 0.04], z in [-0.095, 0.2],
-a little larger than the Case 3 container (98 x 60 mm, floor at z = -0.0902431 m).
+a little larger than the Case 3 container (98 x 60 mm, floor at z = -0.0902431 m), or those
+given with --box.
 
-Usage: csv2data.py BED.csv OUT.data [--map KEY=TYPE ...]
+Usage: csv2data.py BED.csv OUT.data [--map KEY=TYPE ...] [--box XLO XHI YLO YHI ZLO ZHI]
 Standard library and numpy only.
 """
 import argparse
@@ -75,6 +76,9 @@ def main():
     ap.add_argument("data")
     ap.add_argument("--map", action="append", default=[], metavar="KEY=TYPE",
                     help="extra material name/index -> atom type (1 or 2)")
+    ap.add_argument("--box", nargs=6, type=float, default=[x for r in BOX for x in r],
+                    metavar=("XLO", "XHI", "YLO", "YHI", "ZLO", "ZHI"),
+                    help="the simulation box (default: the impact case's)")
     a = ap.parse_args()
     extra = {}
     for m in a.map:
@@ -84,23 +88,30 @@ def main():
         extra[k.strip()] = int(t)
 
     ids, types, v = read_csv(a.csv, extra)
+    write_data(a.data, ids, types, v, a.csv, tuple(zip(a.box[::2], a.box[1::2])))
+
+
+def write_data(path, ids, types, v, source, box=BOX):
+    """The data file of the particles read by read_csv, in the box ((xlo, xhi), ...); stops
+    with an error naming `source` for duplicate ids, radii <= 0 or particles outside the box."""
     if len(np.unique(ids)) != len(ids) or ids.min() <= 0:
-        sys.exit(f"{a.csv}: ids must be unique and > 0")
+        sys.exit(f"{source}: ids must be unique and > 0")
     radius, pos, vel, omega = v[:, 0], v[:, 1:4], v[:, 4:7], v[:, 7:10]
     if np.any(radius <= 0):
-        sys.exit(f"{a.csv}: radius must be > 0")
-    for k, (lo, hi) in enumerate(BOX):
+        sys.exit(f"{source}: radius must be > 0")
+    for k, (lo, hi) in enumerate(box):
         out = (pos[:, k] - radius < lo) | (pos[:, k] + radius > hi)
         if out.any():
-            sys.exit(f"{a.csv}: {out.sum()} particle(s) outside the box {'xyz'[k]} in [{lo}, {hi}]")
+            sys.exit(f"{source}: {out.sum()} particle(s) outside the box: {'xyz'[k]} in "
+                     f"[{lo}, {hi}]")
     dens = np.array([DENSITY[t] for t in types])
 
-    with open(a.data, "w") as f:
-        f.write(f"LIGGGHTS data file (atom_style granular) from {a.csv} by csv2data.py\n\n")
+    with open(path, "w") as f:
+        f.write(f"LIGGGHTS data file (atom_style granular) from {source} by csv2data.py\n\n")
         f.write(f"{len(ids)} atoms\n2 atom types\n\n")
-        for k, (lo, hi) in enumerate(BOX):
+        for k, (lo, hi) in enumerate(box):
             d = "xyz"[k]
-            f.write(f"{lo:.6g} {hi:.6g} {d}lo {d}hi\n")
+            f.write(f"{lo:.9g} {hi:.9g} {d}lo {d}hi\n")
         f.write("\nAtoms\n\n")
         for i in range(len(ids)):
             f.write(f"{ids[i]} {types[i]} {2 * radius[i]:.17g} {dens[i]:.17g} "
@@ -110,7 +121,7 @@ def main():
             f.write(f"{ids[i]} {vel[i, 0]:.17g} {vel[i, 1]:.17g} {vel[i, 2]:.17g} "
                     f"{omega[i, 0]:.17g} {omega[i, 1]:.17g} {omega[i, 2]:.17g}\n")
     n1, n2 = int((types == 1).sum()), int((types == 2).sum())
-    print(f"csv2data: {len(ids)} particles ({n1} of type 1, {n2} of type 2) -> {a.data}")
+    print(f"csv2data: {len(ids)} particles ({n1} of type 1, {n2} of type 2) -> {path}")
 
 
 if __name__ == "__main__":
