@@ -42,6 +42,7 @@ SILO_PREPARE_DT = {"M1": 4.0e-6, "M2": 5.0e-6}     # about 0.24 Rayleigh times o
 SILO_REDUCED = 20000                               # particles in the reduced silos run here
 SILO_FILLINGS = 6                                  # reduced M1 silos: fillings of seeds 1-6
 SILO_REDUCED_T_END = 0.5                           # reduced silos' discharge [s]
+SILO_REDUCED_INTERVAL = 0.01                       # ... and the time between their counts [s]
 FLOOR = -0.0902431                        # impact box floor [m]
 IMPACTOR_ID = 1000000000
 BIG = "1e30"
@@ -210,7 +211,8 @@ def cases():
             for seed in range(1, SILO_FILLINGS + 1) if m == "M1" else (1,):
                 name = silo_name(m, o, n, seed)
                 out[f"prepare_{name}.nml"] = prepare_silo(m, o, n, t_end=1.0, seed=seed)
-                out[f"{name}.nml"] = silo(m, o, n, t_end=SILO_REDUCED_T_END, interval=0.01,
+                out[f"{name}.nml"] = silo(m, o, n, t_end=SILO_REDUCED_T_END,
+                                          interval=SILO_REDUCED_INTERVAL,
                                           histogram_time=0.3, snapshots=0.1, seed=seed)
     out["prepare_drum_1.nml"] = prepare_drum(1)
     out["prepare_drum_2.nml"] = prepare_drum(2)
