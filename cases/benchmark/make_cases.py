@@ -18,6 +18,10 @@ paths of the particle files are the outputs of the preparations there:
   prepare_drum_slice_<1|2>.nml, drum_slice.nml  the same in a quarter of the drum's depth
                                           (0.015 m, 2 000 M2 and 7 500 M1), run here
   drum_slice_smooth.nml                   that slice with frictionless end discs
+  [prepare_]drum[_slice]_soft[_<1|2>].nml MercuryDPM's -soft drum (E of M1 and M2 2e-3
+                                          times as large, dt 1e-4 s, output every 0.01 s),
+                                          full and in the slice; drum_soft_dt25us.nml
+                                          the full one at dt 25 us (its dt's error)
   prepare_impact_<N>[_seed<k>].nml        N = 25 000, 50 000, 100 000 M1 of 2 mm settled in
                                           the box (ten 25 000 beds of different seeds)
   impact_<N>[_seed<k>].nml                the steel impactor (R = 10 mm) from z = 0.06 m at
@@ -43,15 +47,21 @@ SILO_REDUCED = 20000                               # particles in the reduced si
 SILO_FILLINGS = 6                                  # reduced M1 silos: fillings of seeds 1-6
 SILO_REDUCED_T_END = 0.5                           # reduced silos' discharge [s]
 SILO_REDUCED_INTERVAL = 0.01                       # ... and the time between their counts [s]
+DRUM_SOFT = 2.0e-3                       # MercuryDPM's -soft drum: E of M1, M2 times this
+DRUM_SOFT_DT = 1.0e-4                    # ... its dt [s]
+DRUM_SOFT_INTERVAL = 0.01                # ... and its output interval [s]
 FLOOR = -0.0902431                        # impact box floor [m]
 IMPACTOR_ID = 1000000000
 BIG = "1e30"
 
 
-def materials(scale=1.0):
-    """&material and &pair groups; Young's moduli times `scale` (reduced test versions)."""
-    text = "".join(f"&material name = '{m}', density = {rho}, youngs_modulus = {e * scale:g}, "
-                   f"poisson_ratio = 0.2 /\n" for m, (rho, e) in MATERIALS.items())
+def materials(scale=1.0, steel_scale=None):
+    """&material and &pair groups; Young's moduli of M1 and M2 times `scale`, steel's times
+    `steel_scale` (default `scale`: the reduced test versions; 1 for the soft drums)."""
+    factor = {"M1": scale, "M2": scale, "steel": scale if steel_scale is None else steel_scale}
+    text = "".join(f"&material name = '{m}', density = {rho}, "
+                   f"youngs_modulus = {e * factor[m]:g}, poisson_ratio = 0.2 /\n"
+                   for m, (rho, e) in MATERIALS.items())
     return text + "".join(f"&pair materials = '{a}', '{b}', restitution = {e}, "
                           f"friction = {mu} /\n" for a, b, e, mu in PAIRS)
 
@@ -121,10 +131,25 @@ def drum_walls(rotating, drum="drum"):
     return f"&wall_mesh file = 'geometry/{drum}.stl', material = 'steel'{spin} /\n"
 
 
+def drum_materials(scale, soft):
+    """The drum's &material and &pair groups: `soft` is MercuryDPM's -soft variant (M1 and M2
+    2e-3 times as stiff, steel as it is)."""
+    return materials(DRUM_SOFT, 1.0) if soft else materials(scale)
+
+
+def drum_name(drum, soft):
+    return drum + ("_soft" if soft else "")
+
+
 def prepare_drum(stage, n_m2=8000, n_m1=30000, scale=1.0, t_end=1.0, drum="drum",
-                 half_depth=0.03):
+                 half_depth=0.03, soft=False):
     """Stage 1: M2 (4 mm) inserted in the whole drum, settled; stage 2: M1 (2 mm) inserted
-    in a box above that bed, settled on it (`drum`: the wall file and the cases' name)."""
+    in a box above that bed, settled on it (`drum`: the wall file and, with `soft`, the cases'
+    name). dt is the case's 0.8 us scaled with the Rayleigh time (the square root of the
+    stiffness), for the soft drums too: the falling spheres' impacts need it."""
+    name = drum_name(drum, soft)
+    if soft:
+        scale = DRUM_SOFT
     dt = 8e-7 / scale ** 0.5
     if stage == 1:
         body = (f"&insert n = {n_m2}, material = 'M2', radius_min = 0.002, radius_max = 0.002, "
@@ -132,22 +157,29 @@ def prepare_drum(stage, n_m2=8000, n_m1=30000, scale=1.0, t_end=1.0, drum="drum"
         n = n_m2
     else:
         y = half_depth - 0.002
-        body = (f"&particle_file file = '{FROM_HERE}/prepare_{drum}_1/final.csv' /\n"
+        body = (f"&particle_file file = '{FROM_HERE}/prepare_{name}_1/final.csv' /\n"
                 f"&insert n = {n_m1}, material = 'M1', radius_min = 0.001, radius_max = 0.001, "
                 f"region = 'box', box_min = -0.07, -{y:g}, -0.03, "
                 f"box_max = 0.07, {y:g}, 0.068, seed = 2 /\n")
         n = n_m2 + n_m1
     return (run(dt, t_end, f", stop_kinetic_energy = {n * 1e-11:g}")
-            + output(f"prepare_{drum}_{stage}", 0.01, 0.0) + materials(scale) + body
+            + output(f"prepare_{name}_{stage}", 0.01, 0.0) + drum_materials(scale, soft) + body
             + drum_walls(False, drum))
 
 
-def drum(scale=1.0, t_end=5.0, interval=0.1, drum="drum", smooth_ends=False):
+def drum(scale=1.0, t_end=5.0, interval=0.1, drum="drum", smooth_ends=False, soft=False,
+         dt=None, name=None):
     """Zone 1: x > 0 and z > 0 (the upper quadrant on the rising side for omega = (0,-2,0));
     Zone 2: x < 0 and z < 0 (MercuryDPM's definitions). `smooth_ends`: the end discs, apart
     from the turning cylinder, of a steel without friction (a stand-in for a periodic depth:
-    they hold the bed in y without dragging it round)."""
-    walls, name = drum_walls(True, drum), drum
+    they hold the bed in y without dragging it round). `soft`: MercuryDPM's -soft variant,
+    from the soft preparation, at its dt and output interval unless given (`dt`, `name`: a
+    run of another dt, for the check of its error)."""
+    bed = drum_name(drum, soft)
+    walls, name = drum_walls(True, drum), name or bed
+    if soft:
+        dt, interval = dt or DRUM_SOFT_DT, DRUM_SOFT_INTERVAL
+    dt = dt or 8e-7 / scale ** 0.5
     if smooth_ends:
         name += "_smooth"
         walls = (drum_walls(True, drum + "_shell")
@@ -156,8 +188,8 @@ def drum(scale=1.0, t_end=5.0, interval=0.1, drum="drum", smooth_ends=False):
                    f"youngs_modulus = {210e9 * scale:g}, poisson_ratio = 0.2 /\n"
                  + "".join(f"&pair materials = '{m}', 'smooth', restitution = 0.4, "
                            "friction = 0 /\n" for m in ("M1", "M2")))
-    return (run(8e-7 / scale ** 0.5, t_end) + output(name, interval, 1.0) + materials(scale)
-            + f"&particle_file file = '{FROM_HERE}/prepare_{drum}_2/final.csv' /\n"
+    return (run(dt, t_end) + output(name, interval, 1.0) + drum_materials(scale, soft)
+            + f"&particle_file file = '{FROM_HERE}/prepare_{bed}_2/final.csv' /\n"
             + walls
             + f"&probe name = 'zone1', kind = 'count', region = 'box', box_min = 0, -{BIG}, 0, "
               f"box_max = {BIG}, {BIG}, {BIG} /\n"
@@ -222,6 +254,12 @@ def cases():
     out["prepare_drum_slice_2.nml"] = prepare_drum(2, **slice_)
     out["drum_slice.nml"] = drum(drum="drum_slice")
     out["drum_slice_smooth.nml"] = drum(drum="drum_slice", smooth_ends=True)
+    for size in (dict(drum="drum"), slice_):
+        soft = drum_name(size["drum"], True)
+        out[f"prepare_{soft}_1.nml"] = prepare_drum(1, soft=True, **size)
+        out[f"prepare_{soft}_2.nml"] = prepare_drum(2, soft=True, **size)
+        out[f"{soft}.nml"] = drum(drum=size["drum"], soft=True)
+    out["drum_soft_dt25us.nml"] = drum(soft=True, dt=2.5e-5, name="drum_soft_dt25us")
     for n in (25000, 50000, 100000):
         out[f"prepare_{impact_name(n, 1)}.nml"] = prepare_impact(n)
         out[f"{impact_name(n, 1)}.nml"] = impact(n)

@@ -25,7 +25,9 @@ hold whatever the size:
 4. the analysis of doc/benchmarks.md: scripts/plot-benchmarks draws the figures of these
    outputs; its flow-rate fit recovers the slope of an exact line, and its Beverloo k for the
    paper's flow-rate ratio of 3.10 is the paper's 1.26; it finds the reduced silos' fillings
-   by their names and takes the rates of those that ran to the case's end.
+   by their names and takes the rates of those that ran to the case's end; the drum's
+   oscillation amplitude, of a cosine whose amplitude halves every second, is twice that
+   amplitude in each whole second.
 5. the namelists in cases/benchmark are make_cases.py's: each it writes is there, with the
    same text, and there is no other (one edited by hand, or one it no longer writes, fails).
 usage: test_benchmark_cases.py DEM WORKDIR [MPIEXEC]"""
@@ -178,6 +180,16 @@ line["time"], line["silo_M1"] = t, 20000.0 - 7000.0 * t
 w, dev, keep = pb.flow_rate(line, "M1")
 check(abs(w - 7000.0) < 1e-6 and dev < 1e-6 and keep.sum() == 91, f"flow rate of a line {w}")
 check(abs(pb.beverloo_k(3.10) - 1.26) < 0.005, f"Beverloo k for 3.10: {pb.beverloo_k(3.10)}")
+# the drum's oscillation amplitude, second by second: a cosine of period 0.5 s (its extremes
+# on the samples, every 0.01 s) of amplitude 1000, 500, 250 in the first three seconds, and
+# the start of a fourth (not whole, so not counted): ranges 2000, 1000, 500
+t = np.arange(351) * 0.01
+wave = np.zeros(351, dtype=[("time", float), ("zone2_M1", float)])
+wave["time"] = t
+wave["zone2_M1"] = 3000.0 + 1000.0 * 0.5 ** np.floor(t + 1e-9) * np.cos(4 * np.pi * t)
+expected = [2000, 1000, 500]
+got = pb.oscillation(wave)
+check(got == expected, f"oscillation ranges {got} (expected {expected})")
 # the fillings' rates: exact lines, in folders named as make_cases.py names the reduced silos;
 # a discharge stopped before the case's end, and a folder of another name, left out
 fake = os.path.join(work, "fillings")
