@@ -11,6 +11,9 @@ paths of the particle files are the outputs of the preparations there:
                                           orifice plane, velocity histograms at 2 s
   [prepare_]silo_<M>_<orifice>_20000[_seed<k>].nml  the same with 20 000 spheres, run here
                                           (M1: six fillings of different seeds)
+  [prepare_]silo_<M>_<orifice>[_20000]_soft[_seed<k>].nml  the same with the soft drum's
+                                          materials (below), at about 0.2 Rayleigh times
+                                          (reduced M1: three fillings)
   prepare_drum_1.nml, prepare_drum_2.nml  8 000 M2 of 4 mm settled in the drum, then
                                           30 000 M1 of 2 mm settled on top
   drum.nml                                5 s at 2 rad/s about y, omega = (0, -2, 0) as in
@@ -19,9 +22,10 @@ paths of the particle files are the outputs of the preparations there:
                                           (0.015 m, 2 000 M2 and 7 500 M1), run here
   drum_slice_smooth.nml                   that slice with frictionless end discs
   [prepare_]drum[_slice]_soft[_<1|2>].nml MercuryDPM's -soft drum (E of M1 and M2 2e-3
-                                          times as large, dt 1e-4 s, output every 0.01 s),
-                                          full and in the slice; drum_soft_dt25us.nml
-                                          the full one at dt 25 us (its dt's error)
+                                          times as large, output every 0.01 s; dt 5e-5 s,
+                                          half its 1e-4 s, within our stability bound),
+                                          full and in the slice; drum_slice_soft_dt25us.nml
+                                          the slice at dt 25 us (the error of dt 50 us)
   prepare_impact_<N>[_seed<k>].nml        N = 25 000, 50 000, 100 000 M1 of 2 mm settled in
                                           the box (ten 25 000 beds of different seeds)
   impact_<N>[_seed<k>].nml                the steel impactor (R = 10 mm) from z = 0.06 m at
@@ -47,8 +51,11 @@ SILO_REDUCED = 20000                               # particles in the reduced si
 SILO_FILLINGS = 6                                  # reduced M1 silos: fillings of seeds 1-6
 SILO_REDUCED_T_END = 0.5                           # reduced silos' discharge [s]
 SILO_REDUCED_INTERVAL = 0.01                       # ... and the time between their counts [s]
-DRUM_SOFT = 2.0e-3                       # MercuryDPM's -soft drum: E of M1, M2 times this
-DRUM_SOFT_DT = 1.0e-4                    # ... its dt [s]
+SILO_SOFT_DT = {"M1": 7.5e-5, "M2": 1.0e-4}        # soft silos: about 0.2 Rayleigh times
+SILO_SOFT_FILLINGS = 3                             # reduced soft M1 silos: seeds 1-3
+SOFT = 2.0e-3                            # MercuryDPM's -soft drum: E of M1, M2 times this
+DRUM_SOFT_DT = 5.0e-5                    # ... its dt [s] (MercuryDPM's 1e-4 is above the
+                                         # bound, 5.34e-5, of our default contact law)
 DRUM_SOFT_INTERVAL = 0.01                # ... and its output interval [s]
 FLOOR = -0.0902431                        # impact box floor [m]
 IMPACTOR_ID = 1000000000
@@ -66,6 +73,12 @@ def materials(scale=1.0, steel_scale=None):
                           f"friction = {mu} /\n" for a, b, e, mu in PAIRS)
 
 
+def case_materials(scale, soft):
+    """A case's &material and &pair groups: `soft` is MercuryDPM's -soft variant (M1 and M2
+    2e-3 times as stiff, steel as it is), else `materials(scale)`."""
+    return materials(SOFT, 1.0) if soft else materials(scale)
+
+
 def run(dt, t_end, extra=""):
     return f"&run dt = {dt:g}, t_end = {t_end:g}, gravity = 0, 0, -9.81{extra} /\n"
 
@@ -79,22 +92,24 @@ def silo_walls(orifice):
     return (f"&wall_mesh file = 'geometry/silo_{orifice}.stl', material = 'steel' /\n")
 
 
-def silo_name(material, orifice, n=100000, seed=1):
+def silo_name(material, orifice, n=100000, seed=1, soft=False):
     return (f"silo_{material}_{orifice}" + (f"_{n}" if n != 100000 else "")
-            + (f"_seed{seed}" if seed > 1 else ""))
+            + ("_soft" if soft else "") + (f"_seed{seed}" if seed > 1 else ""))
 
 
-def prepare_silo(material, orifice, n=100000, scale=1.0, t_end=2.0, seed=1):
+def prepare_silo(material, orifice, n=100000, scale=1.0, t_end=2.0, seed=1, soft=False):
     """Spheres of 4 mm dropped into the silo from a cylinder above the cone (0.9 m high, so
     that random insertion has room), onto a plane that closes the orifice; settled, at a
-    larger dt than the discharge (the packing's settling is not measured)."""
+    larger dt than the discharge (the packing's settling is not measured); `soft`: with the
+    soft drum's materials, at the soft discharge's dt."""
     s = SILO[orifice]
     z_j = 0.1 - (s["r_o"] - s["z_o"])                # where cone and cylinder meet
     height = min(0.9, 0.9 * n / 100000.0 + 0.05)
-    name = "prepare_" + silo_name(material, orifice, n, seed)
-    return (run(SILO_PREPARE_DT[material] / scale ** 0.5, t_end,
+    name = "prepare_" + silo_name(material, orifice, n, seed, soft)
+    dt = SILO_SOFT_DT[material] if soft else SILO_PREPARE_DT[material] / scale ** 0.5
+    return (run(dt, t_end,
                 f", stop_kinetic_energy = {n * 1e-10:g}")
-            + output(name, 0.01, 0.0) + materials(scale)
+            + output(name, 0.01, 0.0) + case_materials(scale, soft)
             + f"&insert n = {n}, material = '{material}', radius_min = 0.002, "
               f"radius_max = 0.002, region = 'cylinder', cylinder_base = 0, 0, {z_j:.7g}, "
               f"cylinder_radius = 0.096, cylinder_height = {height:g}, seed = {seed} /\n"
@@ -104,18 +119,21 @@ def prepare_silo(material, orifice, n=100000, scale=1.0, t_end=2.0, seed=1):
 
 
 def silo(material, orifice, n=100000, scale=1.0, t_end=5.0, interval=0.1, histogram_time=2.0,
-         snapshots=0.5, dt=None, integrator="symplectic_euler", name=None, seed=1):
+         snapshots=0.5, dt=None, integrator="symplectic_euler", name=None, seed=1, soft=False):
     """Discharge: the settled packing without the plane; particles removed 0.02 m below the
     orifice plane (MercuryDPM's deletion boundary); remaining particles counted above it
-    (dt, integrator and output name other than the case's for the speed-against-error study)."""
+    (dt, integrator and output name other than the case's for the speed-against-error study;
+    `soft`: the soft drum's materials, from the soft filling, at SILO_SOFT_DT)."""
     s = SILO[orifice]
-    bed = silo_name(material, orifice, n, seed)
+    bed = silo_name(material, orifice, n, seed, soft)
+    if soft:
+        scale, dt = 1.0, dt or SILO_SOFT_DT[material]
     name = name or bed
     above = (f"region = 'box', box_min = -{BIG}, -{BIG}, {s['z_o']}, "
              f"box_max = {BIG}, {BIG}, {BIG}")
     extra = "" if integrator == "symplectic_euler" else f", integrator = '{integrator}'"
     return (run((dt or SILO_DT[material]) / scale ** 0.5, t_end, extra)
-            + output(name, interval, snapshots) + materials(scale)
+            + output(name, interval, snapshots) + case_materials(scale, soft)
             + f"&particle_file file = '{FROM_HERE}/prepare_{bed}/final.csv' /\n"
             + silo_walls(orifice)
             + f"&outlet region = 'plane', point = 0, 0, {s['z_o'] - 0.02:.7g}, "
@@ -131,12 +149,6 @@ def drum_walls(rotating, drum="drum"):
     return f"&wall_mesh file = 'geometry/{drum}.stl', material = 'steel'{spin} /\n"
 
 
-def drum_materials(scale, soft):
-    """The drum's &material and &pair groups: `soft` is MercuryDPM's -soft variant (M1 and M2
-    2e-3 times as stiff, steel as it is)."""
-    return materials(DRUM_SOFT, 1.0) if soft else materials(scale)
-
-
 def drum_name(drum, soft):
     return drum + ("_soft" if soft else "")
 
@@ -149,7 +161,7 @@ def prepare_drum(stage, n_m2=8000, n_m1=30000, scale=1.0, t_end=1.0, drum="drum"
     stiffness), for the soft drums too: the falling spheres' impacts need it."""
     name = drum_name(drum, soft)
     if soft:
-        scale = DRUM_SOFT
+        scale = SOFT
     dt = 8e-7 / scale ** 0.5
     if stage == 1:
         body = (f"&insert n = {n_m2}, material = 'M2', radius_min = 0.002, radius_max = 0.002, "
@@ -163,7 +175,7 @@ def prepare_drum(stage, n_m2=8000, n_m1=30000, scale=1.0, t_end=1.0, drum="drum"
                 f"box_max = 0.07, {y:g}, 0.068, seed = 2 /\n")
         n = n_m2 + n_m1
     return (run(dt, t_end, f", stop_kinetic_energy = {n * 1e-11:g}")
-            + output(f"prepare_{name}_{stage}", 0.01, 0.0) + drum_materials(scale, soft) + body
+            + output(f"prepare_{name}_{stage}", 0.01, 0.0) + case_materials(scale, soft) + body
             + drum_walls(False, drum))
 
 
@@ -188,7 +200,7 @@ def drum(scale=1.0, t_end=5.0, interval=0.1, drum="drum", smooth_ends=False, sof
                    f"youngs_modulus = {210e9 * scale:g}, poisson_ratio = 0.2 /\n"
                  + "".join(f"&pair materials = '{m}', 'smooth', restitution = 0.4, "
                            "friction = 0 /\n" for m in ("M1", "M2")))
-    return (run(dt, t_end) + output(name, interval, 1.0) + drum_materials(scale, soft)
+    return (run(dt, t_end) + output(name, interval, 1.0) + case_materials(scale, soft)
             + f"&particle_file file = '{FROM_HERE}/prepare_{bed}_2/final.csv' /\n"
             + walls
             + f"&probe name = 'zone1', kind = 'count', region = 'box', box_min = 0, -{BIG}, 0, "
@@ -246,6 +258,15 @@ def cases():
                 out[f"{name}.nml"] = silo(m, o, n, t_end=SILO_REDUCED_T_END,
                                           interval=SILO_REDUCED_INTERVAL,
                                           histogram_time=0.3, snapshots=0.1, seed=seed)
+            name = silo_name(m, o, soft=True)            # the full silos, soft
+            out[f"prepare_{name}.nml"] = prepare_silo(m, o, soft=True)
+            out[f"{name}.nml"] = silo(m, o, soft=True)
+            for seed in range(1, SILO_SOFT_FILLINGS + 1) if m == "M1" else ():
+                name = silo_name(m, o, n, seed, soft=True)
+                out[f"prepare_{name}.nml"] = prepare_silo(m, o, n, t_end=1.0, seed=seed, soft=True)
+                out[f"{name}.nml"] = silo(m, o, n, t_end=SILO_REDUCED_T_END,
+                                          interval=SILO_REDUCED_INTERVAL, histogram_time=0.3,
+                                          snapshots=0.1, seed=seed, soft=True)
     out["prepare_drum_1.nml"] = prepare_drum(1)
     out["prepare_drum_2.nml"] = prepare_drum(2)
     out["drum.nml"] = drum()
@@ -259,7 +280,8 @@ def cases():
         out[f"prepare_{soft}_1.nml"] = prepare_drum(1, soft=True, **size)
         out[f"prepare_{soft}_2.nml"] = prepare_drum(2, soft=True, **size)
         out[f"{soft}.nml"] = drum(drum=size["drum"], soft=True)
-    out["drum_soft_dt25us.nml"] = drum(soft=True, dt=2.5e-5, name="drum_soft_dt25us")
+    out["drum_slice_soft_dt25us.nml"] = drum(drum="drum_slice", soft=True, dt=2.5e-5,
+                                             name="drum_slice_soft_dt25us")
     for n in (25000, 50000, 100000):
         out[f"prepare_{impact_name(n, 1)}.nml"] = prepare_impact(n)
         out[f"{impact_name(n, 1)}.nml"] = impact(n)
