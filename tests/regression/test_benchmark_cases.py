@@ -25,9 +25,9 @@ hold whatever the size:
 4. the analysis of doc/benchmarks.md: scripts/plot-benchmarks draws the figures of these
    outputs; its flow-rate fit recovers the slope of an exact line, and its Beverloo k for the
    paper's flow-rate ratio of 3.10 is the paper's 1.26; it finds the reduced silos' fillings
-   by their names and takes the rates of those that ran to the case's end; the drum's
-   oscillation amplitude, of a cosine whose amplitude halves every second, is twice that
-   amplitude in each whole second.
+   by their names (the soft ones apart) and takes the rates of those that ran to the case's
+   end; the drum's oscillation amplitude, of a cosine whose amplitude halves every second,
+   is twice that amplitude in each whole second.
 5. the namelists in cases/benchmark are make_cases.py's: each it writes is there, with the
    same text, and there is no other (one edited by hand, or one it no longer writes, fails).
 usage: test_benchmark_cases.py DEM WORKDIR [MPIEXEC]"""
@@ -201,9 +201,14 @@ for seed, w in exact.items():
     np.savetxt(os.path.join(d, "probes.csv"), np.c_[t, 20000.0 - w * t], delimiter=",",
                header="time,silo_M1", comments="")
 shutil.copytree(d, os.path.join(fake, mc.silo_name("M1", "small", mc.SILO_REDUCED) + "_copy"))
+soft = os.path.join(fake, mc.silo_name("M1", "large", mc.SILO_REDUCED, 2, soft=True))
+shutil.copytree(d, soft)
 found = pb.silo_outputs(fake)
 check(list(found) == [("M1", "small", mc.SILO_REDUCED)] and sorted(found[list(found)[0]])
       == [1, 2, 3, 4], f"the fillings' folders: {found}")
+found_soft = pb.silo_outputs(fake, soft=True)
+check(found_soft == {("M1", "large", mc.SILO_REDUCED): {2: soft}},
+      f"the soft fillings' folders: {found_soft}")
 rates = pb.filling_rates(found, "M1")
 check(list(rates) == ["small"] and sorted(rates["small"]) == [1, 2, 3]
       and all(abs(rates["small"][k] - exact[k]) < 1e-6 for k in (1, 2, 3)),
