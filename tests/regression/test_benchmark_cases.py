@@ -27,7 +27,8 @@ hold whatever the size:
    paper's flow-rate ratio of 3.10 is the paper's 1.26; it finds the reduced silos' fillings
    by their names (the soft ones apart) and takes the rates of those that ran to the case's
    end; the drum's oscillation amplitude, of a cosine whose amplitude halves every second,
-   is twice that amplitude in each whole second.
+   is twice that amplitude in each whole second; two drum runs set apart by known amounts
+   from a known time are found that far apart after it and not before.
 5. the namelists in cases/benchmark are make_cases.py's: each it writes is there, with the
    same text, and there is no other (one edited by hand, or one it no longer writes, fails).
 usage: test_benchmark_cases.py DEM WORKDIR [MPIEXEC]"""
@@ -190,6 +191,25 @@ wave["zone2_M1"] = 3000.0 + 1000.0 * 0.5 ** np.floor(t + 1e-9) * np.cos(4 * np.p
 expected = [2000, 1000, 500]
 got = pb.oscillation(wave)
 check(got == expected, f"oscillation ranges {got} (expected {expected})")
+# two drum runs apart by 7 M1 in Zone 2 and 3 mm of M1's centre of mass from t = 2 s on, the
+# second sampled twice as often: apart by that much over the whole run, by nothing to 1 s
+fields = [f"{z}_{m}" for z in ("zone1", "zone2") for m in ("M1", "M2")] + [
+    f"com_{m}_{c}" for m in ("M1", "M2") for c in "xyz"]
+runs = []
+for every in (0.1, 0.05):
+    r = np.zeros(int(round(3.0 / every)) + 1,
+                 dtype=[("time", float)] + [(f, float) for f in fields])
+    r["time"] = np.arange(len(r)) * every
+    r["zone2_M1"], r["com_M2_z"] = 1000.0, -0.05
+    runs.append(r)
+late = runs[1]["time"] >= 2.0 - 1e-9
+runs[1]["zone2_M1"][late] += 7
+runs[1]["com_M1_x"][late] += 0.003
+apart = pb.drum_difference(*runs)
+whole, first = apart.split("; ")[0], apart.split("; ")[1]
+check("'zone2_M1': 7," in whole and "3.0 mm (M1), 0.0 mm (M2)" in whole
+      and first.startswith("to 1.00 s") and "'zone2_M1': 0," in first
+      and "0.0 mm (M1)" in first, f"drum runs apart: {apart}")
 # the fillings' rates: exact lines, in folders named as make_cases.py names the reduced silos;
 # a discharge stopped before the case's end, and a folder of another name, left out
 fake = os.path.join(work, "fillings")
