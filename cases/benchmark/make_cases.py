@@ -25,7 +25,8 @@ paths of the particle files are the outputs of the preparations there:
                                           times as large, output every 0.01 s; dt 5e-5 s,
                                           half its 1e-4 s, within our stability bound),
                                           full and in the slice; drum_slice_soft_dt25us.nml
-                                          the slice at dt 25 us (the error of dt 50 us)
+                                          the slice at dt 25 us (the error of dt 50 us);
+                                          drum_slice_soft_seed2: a slice of other seeds
   prepare_impact_<N>[_seed<k>].nml        N = 25 000, 50 000, 100 000 M1 of 2 mm settled in
                                           the box (ten 25 000 beds of different seeds)
   impact_<N>[_seed<k>].nml                the steel impactor (R = 10 mm) from z = 0.06 m at
@@ -149,30 +150,31 @@ def drum_walls(rotating, drum="drum"):
     return f"&wall_mesh file = 'geometry/{drum}.stl', material = 'steel'{spin} /\n"
 
 
-def drum_name(drum, soft):
-    return drum + ("_soft" if soft else "")
+def drum_name(drum, soft, seed=1):
+    return drum + ("_soft" if soft else "") + (f"_seed{seed}" if seed > 1 else "")
 
 
 def prepare_drum(stage, n_m2=8000, n_m1=30000, scale=1.0, t_end=1.0, drum="drum",
-                 half_depth=0.03, soft=False):
+                 half_depth=0.03, soft=False, seed=1):
     """Stage 1: M2 (4 mm) inserted in the whole drum, settled; stage 2: M1 (2 mm) inserted
-    in a box above that bed, settled on it (`drum`: the wall file and, with `soft`, the cases'
-    name). dt is the case's 0.8 us scaled with the Rayleigh time (the square root of the
-    stiffness), for the soft drums too: the falling spheres' impacts need it."""
-    name = drum_name(drum, soft)
+    in a box above that bed, settled on it (`drum`: the wall file and, with `soft` and
+    `seed`, the cases' name; the insertions' seeds are 2 seed - 1 and 2 seed). dt is the
+    case's 0.8 us scaled with the Rayleigh time (the square root of the stiffness), for the
+    soft drums too: the falling spheres' impacts need it."""
+    name = drum_name(drum, soft, seed)
     if soft:
         scale = SOFT
     dt = 8e-7 / scale ** 0.5
     if stage == 1:
         body = (f"&insert n = {n_m2}, material = 'M2', radius_min = 0.002, radius_max = 0.002, "
-                f"region = 'mesh', mesh_file = 'geometry/{drum}.stl', seed = 1 /\n")
+                f"region = 'mesh', mesh_file = 'geometry/{drum}.stl', seed = {2 * seed - 1} /\n")
         n = n_m2
     else:
         y = half_depth - 0.002
         body = (f"&particle_file file = '{FROM_HERE}/prepare_{name}_1/final.csv' /\n"
                 f"&insert n = {n_m1}, material = 'M1', radius_min = 0.001, radius_max = 0.001, "
                 f"region = 'box', box_min = -0.07, -{y:g}, -0.03, "
-                f"box_max = 0.07, {y:g}, 0.068, seed = 2 /\n")
+                f"box_max = 0.07, {y:g}, 0.068, seed = {2 * seed} /\n")
         n = n_m2 + n_m1
     return (run(dt, t_end, f", stop_kinetic_energy = {n * 1e-11:g}")
             + output(f"prepare_{name}_{stage}", 0.01, 0.0) + case_materials(scale, soft) + body
@@ -180,14 +182,14 @@ def prepare_drum(stage, n_m2=8000, n_m1=30000, scale=1.0, t_end=1.0, drum="drum"
 
 
 def drum(scale=1.0, t_end=5.0, interval=0.1, drum="drum", smooth_ends=False, soft=False,
-         dt=None, name=None):
+         dt=None, name=None, seed=1):
     """Zone 1: x > 0 and z > 0 (the upper quadrant on the rising side for omega = (0,-2,0));
     Zone 2: x < 0 and z < 0 (MercuryDPM's definitions). `smooth_ends`: the end discs, apart
     from the turning cylinder, of a steel without friction (a stand-in for a periodic depth:
     they hold the bed in y without dragging it round). `soft`: MercuryDPM's -soft variant,
     from the soft preparation, at its dt and output interval unless given (`dt`, `name`: a
-    run of another dt, for the check of its error)."""
-    bed = drum_name(drum, soft)
+    run of another dt, for the check of its error); `seed`: from that preparation."""
+    bed = drum_name(drum, soft, seed)
     walls, name = drum_walls(True, drum), name or bed
     if soft:
         dt, interval = dt or DRUM_SOFT_DT, DRUM_SOFT_INTERVAL
@@ -282,6 +284,10 @@ def cases():
         out[f"{soft}.nml"] = drum(drum=size["drum"], soft=True)
     out["drum_slice_soft_dt25us.nml"] = drum(drum="drum_slice", soft=True, dt=2.5e-5,
                                              name="drum_slice_soft_dt25us")
+    for stage in (1, 2):
+        out[f"prepare_drum_slice_soft_seed2_{stage}.nml"] = prepare_drum(stage, soft=True,
+                                                                         seed=2, **slice_)
+    out["drum_slice_soft_seed2.nml"] = drum(drum="drum_slice", soft=True, seed=2)
     for n in (25000, 50000, 100000):
         out[f"prepare_{impact_name(n, 1)}.nml"] = prepare_impact(n)
         out[f"{impact_name(n, 1)}.nml"] = impact(n)
