@@ -17,7 +17,9 @@ module dem_contacts_pw
               max_wall_contacts, wall_contacts_pack, wall_contacts_unpack, n_wall_pack_real
 
     integer(ip), parameter :: max_wall_contacts = 8     !< per particle
-    integer(ip), parameter :: max_wall_candidates = 16  !< touching triangles per particle
+    !> touching triangles stored per particle; a particle touching more (many triangles
+    !> meeting at a vertex) has its contacts found from its list, without storing them
+    integer(ip), parameter :: max_wall_candidates = 16
     !> reals per packed particle (the triangles travel as reals: exact below 2^53)
     integer, parameter :: n_wall_pack_real = 4 * max_wall_contacts
 
@@ -145,25 +147,88 @@ contains
         real(wp), intent(in) :: tri_vert(3, 3, nc)   !! the candidates' corners [m]
         real(wp), intent(in) :: tol                  !! points closer than this coincide [m]
         logical, intent(out) :: keep(nc)
-        integer(ip) :: k, m, fm
-        real(wp) :: qm(3)
+        integer(ip) :: k, m
 
         keep = .true.
         do k = 1, nc
             if (feature(k) == feature_face) cycle
             do m = 1, nc
                 if (m == k) cycle
-                call closest_point_triangle(q(:, k), tri_vert(:, 1, m), tri_vert(:, 2, m), &
-                                            tri_vert(:, 3, m), qm, fm)
-                if (sum((qm - q(:, k))**2) > tol**2) cycle   ! triangle m does not hold q_k
-                if (sum((q(:, m) - q(:, k))**2) > tol**2 .or. feature(m) == feature_face &
-                    .or. m < k) then
+                if (shadows(q(:, k), q(:, m), feature(m), tri_vert(:, :, m), m < k, tol)) then
                     keep(k) = .false.
                     exit
                 end if
             end do
         end do
     end subroutine wall_contact_select
+
+    !> Whether triangle m (corners vm, closest point qm to the sphere, feature fm) makes the
+    !> edge or vertex point qk of another touching triangle no contact: m holds qk, and its
+    !> closest point is elsewhere, or is qk too and m is a face or comes first.
+    pure logical function shadows(qk, qm, fm, vm, m_first, tol)
+        !$acc routine seq
+        real(wp), intent(in) :: qk(3), qm(3), vm(3, 3), tol   !! [m]
+        integer(ip), intent(in) :: fm
+        logical, intent(in) :: m_first
+        real(wp) :: qq(3)
+        integer(ip) :: fq
+        call closest_point_triangle(qk, vm(:, 1), vm(:, 2), vm(:, 3), qq, fq)
+        shadows = .false.
+        if (sum((qq - qk)**2) > tol**2) return                 ! triangle m does not hold qk
+        shadows = sum((qm - qk)**2) > tol**2 .or. fm == feature_face .or. m_first
+    end function shadows
+
+    !> The contacts of a sphere that touches more triangles than can be stored: the same
+    !> selection as wall_contact_select over its candidate triangles wlist(first:last), each
+    !> closest point found again as needed, only the kept contacts stored (at most `most`;
+    !> `over` if there are more).
+    pure subroutine wall_contacts_streamed(xi, r, first, last, n_cand, wlist, n_tri, vert, tol, &
+                                           most, nc, q, feature, ctri, tri_vert, over)
+        !$acc routine seq
+        real(wp), intent(in) :: xi(3), r                   !! the sphere's centre, radius [m]
+        integer(ip), intent(in) :: first, last, n_cand, wlist(n_cand), n_tri, most
+        real(wp), intent(in) :: vert(3, 3, n_tri)          !! [m]
+        real(wp), intent(in) :: tol                        !! [m]
+        integer(ip), intent(out) :: nc
+        real(wp), intent(inout) :: q(3, most), tri_vert(3, 3, most)
+        integer(ip), intent(inout) :: feature(most), ctri(most)
+        logical, intent(out) :: over
+        integer(ip) :: k, m, fk, fm, tk, tm
+        real(wp) :: qk(3), qm(3)
+        logical :: kept
+
+        nc = 0
+        over = .false.
+        do k = first, last
+            tk = wlist(k)
+            call closest_point_triangle(xi, vert(:, 1, tk), vert(:, 2, tk), vert(:, 3, tk), qk, fk)
+            if (sum((qk - xi)**2) >= r**2) cycle
+            kept = .true.
+            if (fk /= feature_face) then
+                do m = first, last
+                    if (m == k) cycle
+                    tm = wlist(m)
+                    call closest_point_triangle(xi, vert(:, 1, tm), vert(:, 2, tm), &
+                                                vert(:, 3, tm), qm, fm)
+                    if (sum((qm - xi)**2) >= r**2) cycle        ! m does not touch the sphere
+                    if (shadows(qk, qm, fm, vert(:, :, tm), m < k, tol)) then
+                        kept = .false.
+                        exit
+                    end if
+                end do
+            end if
+            if (.not. kept) cycle
+            if (nc == most) then
+                over = .true.
+                return
+            end if
+            nc = nc + 1
+            q(:, nc) = qk
+            feature(nc) = fk
+            ctri(nc) = tk
+            tri_vert(:, :, nc) = vert(:, :, tk)
+        end do
+    end subroutine wall_contacts_streamed
 
     !> The history slot each kept contact continues: the slot of its own triangle, or else,
     !> for a contact that has moved onto a neighbouring triangle, the unclaimed slot of the
@@ -212,7 +277,7 @@ contains
     end subroutine history_slots
 
     !> Add the wall contact forces and torques to every owned particle. `overflow` counts
-    !> particles with more touching triangles or contacts than the fixed limits.
+    !> particles with more separate contacts than the history store holds.
     subroutine pw_forces(n_own, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, mat, wstart, &
                          wlist, vert, tmat, twall, wall_v, wall_w, wall_c, kn, sn, st, cn, ct, &
                          mu, clamp_normal, dt, wtri, wxi, f, t, overflow)
@@ -240,17 +305,20 @@ contains
         integer(ip) :: slot(max_wall_candidates)
         real(wp) :: q(3, max_wall_candidates), d2(max_wall_candidates), qk(3), d2k
         real(wp) :: cv(3, 3, max_wall_candidates), new_xi(3, max_wall_contacts)
-        real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r
-        logical :: keep(max_wall_candidates)
+        real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r, tol
+        logical :: keep(max_wall_candidates), many, over
 
         overflow = 0
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
         !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, d2, qk, d2k) &
-        !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, keep, slot)
+        !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, tol, keep, slot) &
+        !$acc private(many, over)
         do i = 1, n_own
             if (wstart(i + 1) == wstart(i) .and. wtri(1, i) == 0) cycle   ! no wall near
             r = radius(i)
+            tol = 1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
             nc = 0
+            many = .false.
             do k = wstart(i), wstart(i + 1) - 1
                 tri = wlist(k)
                 call closest_point_triangle(x(:, i), vert(:, 1, tri), vert(:, 2, tri), &
@@ -258,7 +326,7 @@ contains
                 d2k = sum((qk - x(:, i))**2)
                 if (d2k >= r**2) cycle
                 if (nc == max_wall_candidates) then
-                    overflow = overflow + 1
+                    many = .true.
                     exit
                 end if
                 nc = nc + 1
@@ -268,9 +336,19 @@ contains
                 ctri(nc) = tri
                 cv(:, :, nc) = vert(:, :, tri)
             end do
-            call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), cv(:, :, 1:nc), &
-                                     1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), &
-                                                      abs(x(3, i))), keep(1:nc))
+            if (many) then                 ! many triangles meet here: the kept ones only
+                call wall_contacts_streamed(x(:, i), r, wstart(i), wstart(i + 1) - 1, n_cand, &
+                                            wlist, n_tri, vert, tol, max_wall_candidates, nc, &
+                                            q, feat, ctri, cv, over)
+                if (over) overflow = overflow + 1
+                keep(1:nc) = .true.
+                do c = 1, nc
+                    d2(c) = sum((q(:, c) - x(:, i))**2)
+                end do
+            else
+                call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), cv(:, :, 1:nc), tol, &
+                                         keep(1:nc))
+            end if
             call history_slots(nc, keep(1:nc), ctri(1:nc), q(:, 1:nc), wtri(:, i), n_tri, &
                                vert, twall, slot(1:nc))
             fi = 0.0_wp

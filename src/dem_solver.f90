@@ -689,8 +689,8 @@ contains
                            pc%mu, pc%clamp_normal, c%dt, s%wc%tri, s%wc%xi, p%f, p%t, overflow)
             call timer_stop(s%timers, phase_contacts_pw)
         end associate
-        if (overflow > 0) call set_error(err, dem_err_runtime, 'a particle touches more ' // &
-            'wall triangles than the contact store holds; the walls overlap or are too fine')
+        if (overflow > 0) call set_error(err, dem_err_runtime, 'a particle has more separate ' // &
+            'wall contacts than the contact store holds; walls overlap or cross there')
     end subroutine compute_forces
 
     !> Take the particles that entered an outlet out of the run: they are counted removed and

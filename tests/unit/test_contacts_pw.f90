@@ -2,11 +2,14 @@
 !> (Hertz), through one contact, wherever it is: over faces, shared edges and vertices shared
 !> by six triangles. Two walls meeting at 90 degrees give two contacts. A sphere sliding
 !> across 108 shared edges feels, at every step, the normal and tangential force of one big
-!> plane: the history follows the contact from triangle to triangle. The history packed for
-!> another rank and unpacked comes back the same, in the order asked for.
+!> plane: the history follows the contact from triangle to triangle. In the corner of a fan
+!> of 98 or 392 triangles meeting at a vertex and a wall at right angles, more triangles
+!> touch the sphere than are stored, and it still has two contacts, each with the force of
+!> one plane. The history packed for another rank and unpacked comes back the same, in the
+!> order asked for.
 program test_contacts_pw
     use dem_kinds, only: wp, ip
-    use dem_mesh, only: mesh_t, mesh_add_plane
+    use dem_mesh, only: mesh_t, mesh_add_plane, mesh_append
     use dem_contacts_pw, only: pw_forces, max_wall_contacts, wall_contacts_t, &
                                wall_contacts_init, wall_contacts_pack, wall_contacts_unpack, &
                                n_wall_pack_real
@@ -84,6 +87,12 @@ program test_contacts_pw
     call assert_true(count(wtri(:, 1) > 0) == 2, 'two contacts in a corner')
     call assert_close(f(1, 1), fhertz, 1e-12_wp, 'corner: force from the side wall')
     call assert_close(f(3, 1), fhertz, 1e-12_wp, 'corner: force from the floor')
+    ! the corner of a drum's end disc, a fan of 98 (and of 392) triangles from a vertex on
+    ! its rim, and its cylinder, a wall through that vertex at right angles: a sphere pressed
+    ! 10 % of its radius into the disc near the vertex touches about 30 (120) triangles, more
+    ! than are stored, and still has two contacts, each with the force of one plane
+    call corner_of_fan(98_ip)
+    call corner_of_fan(392_ip)
     ! the history of particles 4, 1, 3 of a store, packed after two other rows, unpacked
     ! into particles 2-4 of another
     call wall_contacts_init(wa, 5_ip)
@@ -113,6 +122,41 @@ contains
         call assert_close(f(1, 1), 0.0_wp, 0.0_wp, what // ': no sideways force', 1e-12_wp * fhertz)
         call assert_close(f(2, 1), 0.0_wp, 0.0_wp, what // ': no sideways force', 1e-12_wp * fhertz)
     end subroutine press
+
+    !> A fan of n triangles in the plane z = 0 from the origin over the angles between
+    !> -88.2 and 88.2 degrees from +x (a 100-gon's corner), and a wall x = 0 facing +x; the
+    !> sphere 1e-5 m into the wall and 0.1 r into the fan.
+    subroutine corner_of_fan(n)
+        integer(ip), intent(in) :: n
+        type(mesh_t) :: fan
+        real(wp) :: vert(3, 3, n), a0, a1, dw, df, fdisc
+        integer(ip) :: j
+        do j = 1, n
+            a0 = (-88.2_wp + 176.4_wp * (j - 1) / n) * pi / 180.0_wp
+            a1 = (-88.2_wp + 176.4_wp * j / n) * pi / 180.0_wp
+            vert(:, 1, j) = 0.0_wp
+            vert(:, 2, j) = 0.05_wp * [cos(a0), sin(a0), 0.0_wp]
+            vert(:, 3, j) = 0.05_wp * [cos(a1), sin(a1), 0.0_wp]
+        end do
+        call mesh_append(fan, vert, 2_ip)
+        call mesh_add_plane(fan, [0.0_wp, 0.0_wp, 0.05_wp], [1.0_wp, 0.0_wp, 0.0_wp], 0.05_wp, &
+                            4_ip, 2_ip)
+        dw = 1.0e-5_wp
+        df = 0.1_wp * r
+        x(:, 1) = [r - dw, 1.0e-4_wp, r - df]
+        wtri = 0
+        wxi = 0.0_wp
+        call step(fan, wtri, wxi, f, t)
+        fdisc = 4.0_wp / 3.0_wp * estar * sqrt(r) * df**1.5_wp   ! 1000 times the wall's
+        call assert_true(count(wtri(:, 1) > 0) == 2, 'corner of a fan: two contacts')
+        call assert_close(f(3, 1), fdisc, 1e-12_wp, 'corner of a fan: force of the disc')
+        ! the disc's normal is (0, 0, 1) to round-off (the thin triangles' barycentric
+        ! coordinates): 1e-11 of its force sideways
+        call assert_close(f(1, 1), fhertz * (dw / d)**1.5_wp, 0.0_wp, &
+                          'corner of a fan: force of the wall', 1e-11_wp * fdisc)
+        call assert_close(f(2, 1), 0.0_wp, 0.0_wp, 'corner of a fan: no sideways force', &
+                          1e-11_wp * fdisc)
+    end subroutine corner_of_fan
 
     !> Forces with every triangle as a candidate and fresh history.
     subroutine evaluate()
