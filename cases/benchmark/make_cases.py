@@ -13,7 +13,7 @@ paths of the particle files are the outputs of the preparations there:
                                           (M1: six fillings of different seeds)
   [prepare_]silo_<M>_<orifice>[_20000]_soft[_seed<k>].nml  the same with the soft drum's
                                           materials (below), at about 0.2 Rayleigh times
-                                          (reduced M1: three fillings)
+                                          (reduced: M1 three fillings, M2 one)
   prepare_drum_1.nml, prepare_drum_2.nml  8 000 M2 of 4 mm settled in the drum, then
                                           30 000 M1 of 2 mm settled on top
   drum.nml                                5 s at 2 rad/s about y, omega = (0, -2, 0) as in
@@ -263,7 +263,7 @@ def cases():
             name = silo_name(m, o, soft=True)            # the full silos, soft
             out[f"prepare_{name}.nml"] = prepare_silo(m, o, soft=True)
             out[f"{name}.nml"] = silo(m, o, soft=True)
-            for seed in range(1, SILO_SOFT_FILLINGS + 1) if m == "M1" else ():
+            for seed in range(1, SILO_SOFT_FILLINGS + 1) if m == "M1" else (1,):
                 name = silo_name(m, o, n, seed, soft=True)
                 out[f"prepare_{name}.nml"] = prepare_silo(m, o, n, t_end=1.0, seed=seed, soft=True)
                 out[f"{name}.nml"] = silo(m, o, n, t_end=SILO_REDUCED_T_END,
