@@ -55,9 +55,9 @@ SILO_REDUCED_INTERVAL = 0.01                       # ... and the time between th
 SILO_SOFT_DT = {"M1": 7.5e-5, "M2": 1.0e-4}        # soft silos: about 0.2 Rayleigh times
 SILO_SOFT_FILLINGS = 3                             # reduced soft M1 silos: seeds 1-3
 SOFT = 2.0e-3                            # MercuryDPM's -soft drum: E of M1, M2 times this
-DRUM_SOFT_DT = 5.0e-5                    # ... its dt [s] (MercuryDPM's 1e-4 is above the
-                                         # bound, 5.34e-5, of our default contact law)
-DRUM_SOFT_INTERVAL = 0.01                # ... and its output interval [s]
+DRUM_SOFT_DT = 5.0e-5                    # the soft drums' dt [s] (MercuryDPM's 1e-4 is above
+                                         # the bound, 5.34e-5, of our default contact law)
+DRUM_SOFT_INTERVAL = 0.01                # ... and their output interval, MercuryDPM's [s]
 FLOOR = -0.0902431                        # impact box floor [m]
 IMPACTOR_ID = 1000000000
 BIG = "1e30"
@@ -65,7 +65,7 @@ BIG = "1e30"
 
 def materials(scale=1.0, steel_scale=None):
     """&material and &pair groups; Young's moduli of M1 and M2 times `scale`, steel's times
-    `steel_scale` (default `scale`: the reduced test versions; 1 for the soft drums)."""
+    `steel_scale` (default `scale`: the reduced test versions; 1 for the soft cases)."""
     factor = {"M1": scale, "M2": scale, "steel": scale if steel_scale is None else steel_scale}
     text = "".join(f"&material name = '{m}', density = {rho}, "
                    f"youngs_modulus = {e * factor[m]:g}, poisson_ratio = 0.2 /\n"
