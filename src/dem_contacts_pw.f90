@@ -222,13 +222,24 @@ contains
                 over = .true.
                 return
             end if
-            nc = nc + 1
-            q(:, nc) = qk
-            feature(nc) = fk
-            ctri(nc) = tk
-            tri_vert(:, :, nc) = vert(:, :, tk)
+            call add_candidate(qk, fk, tk, vert(:, :, tk), most, nc, q, feature, ctri, tri_vert)
         end do
     end subroutine wall_contacts_streamed
+
+    !> Append a touching triangle (closest point qk, feature fk, index tk, corners vk) to the
+    !> nc stored ones.
+    pure subroutine add_candidate(qk, fk, tk, vk, most, nc, q, feature, ctri, tri_vert)
+        !$acc routine seq
+        real(wp), intent(in) :: qk(3), vk(3, 3)            !! [m]
+        integer(ip), intent(in) :: fk, tk, most
+        integer(ip), intent(inout) :: nc, feature(most), ctri(most)
+        real(wp), intent(inout) :: q(3, most), tri_vert(3, 3, most)  !! [m]
+        nc = nc + 1
+        q(:, nc) = qk
+        feature(nc) = fk
+        ctri(nc) = tk
+        tri_vert(:, :, nc) = vk
+    end subroutine add_candidate
 
     !> The history slot each kept contact continues: the slot of its own triangle, or else,
     !> for a contact that has moved onto a neighbouring triangle, the unclaimed slot of the
@@ -303,14 +314,14 @@ contains
         integer(ip) :: i, k, c, nc, ns, a, b, tri, feat(max_wall_candidates)
         integer(ip) :: new_tri(max_wall_contacts), ctri(max_wall_candidates), fk
         integer(ip) :: slot(max_wall_candidates)
-        real(wp) :: q(3, max_wall_candidates), d2(max_wall_candidates), qk(3), d2k
+        real(wp) :: q(3, max_wall_candidates), qk(3)
         real(wp) :: cv(3, 3, max_wall_candidates), new_xi(3, max_wall_contacts)
         real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r, tol
         logical :: keep(max_wall_candidates), many, over
 
         overflow = 0
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
-        !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, d2, qk, d2k) &
+        !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk) &
         !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, tol, keep, slot) &
         !$acc private(many, over)
         do i = 1, n_own
@@ -323,18 +334,13 @@ contains
                 tri = wlist(k)
                 call closest_point_triangle(x(:, i), vert(:, 1, tri), vert(:, 2, tri), &
                                             vert(:, 3, tri), qk, fk)
-                d2k = sum((qk - x(:, i))**2)
-                if (d2k >= r**2) cycle
+                if (sum((qk - x(:, i))**2) >= r**2) cycle
                 if (nc == max_wall_candidates) then
                     many = .true.
                     exit
                 end if
-                nc = nc + 1
-                q(:, nc) = qk
-                d2(nc) = d2k
-                feat(nc) = fk
-                ctri(nc) = tri
-                cv(:, :, nc) = vert(:, :, tri)
+                call add_candidate(qk, fk, tri, vert(:, :, tri), max_wall_candidates, nc, q, &
+                                   feat, ctri, cv)
             end do
             if (many) then                 ! many triangles meet here: the kept ones only
                 call wall_contacts_streamed(x(:, i), r, wstart(i), wstart(i + 1) - 1, n_cand, &
@@ -342,9 +348,6 @@ contains
                                             q, feat, ctri, cv, over)
                 if (over) overflow = overflow + 1
                 keep(1:nc) = .true.
-                do c = 1, nc
-                    d2(c) = sum((q(:, c) - x(:, i))**2)
-                end do
             else
                 call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), cv(:, :, 1:nc), tol, &
                                          keep(1:nc))
@@ -364,7 +367,7 @@ contains
                 tri = ctri(c)
                 xik = 0.0_wp
                 if (slot(c) > 0) xik = wxi(:, slot(c), i)
-                dist = sqrt(d2(c))
+                dist = sqrt(sum((q(:, c) - x(:, i))**2))
                 nrm = (q(:, c) - x(:, i)) / dist
                 ! minus the wall's velocity at the contact point
                 vrel = v(:, i) + cross(r * w(:, i), nrm) - wall_v(:, twall(tri)) &
