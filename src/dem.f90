@@ -7,7 +7,7 @@ module dem
     use dem_case, only: case_t, time_scales_t, case_time_scales, case_release_particles
     use dem_input, only: read_case
     use dem_solver, only: solver_t, solver_init, solver_prepare, solver_restore, solver_run, solver_particles, &
-                          solver_parallel_stats, &
+                          solver_particle_steps, solver_parallel_stats, &
                           stop_end, stop_settled, stop_wall_time, stop_signal
     use dem_checkpoint, only: frame_t, checkpoint_read, checkpoint_file, checkpoint_latest
     use dem_timers, only: n_phases, phase_names, timer_seconds, wall_seconds
@@ -16,7 +16,8 @@ module dem
     public :: wp, ip, i8, dem_version_string, error_t, case_t, time_scales_t, &
               case_time_scales, case_release_particles, read_case, &
               solver_t, solver_init, solver_prepare, &
-              solver_restore, solver_run, solver_particles, solver_parallel_stats, &
+              solver_restore, solver_run, solver_particles, solver_particle_steps, &
+              solver_parallel_stats, &
               checkpoint_file, stop_end, stop_settled, &
               stop_wall_time, stop_signal, frame_t, checkpoint_read, checkpoint_latest, &
               n_phases, phase_names, timer_seconds, wall_seconds

@@ -6,7 +6,7 @@ program dem_main
                    solver_restore, &
                    solver_run, stop_wall_time, stop_signal, frame_t, checkpoint_read, &
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
-                   solver_particles, solver_parallel_stats, i8
+                   solver_particles, solver_particle_steps, solver_parallel_stats, i8
     use dem_comm, only: comm_t, comm_init, comm_free, comm_max
     use dem_signals, only: signals_install
     implicit none
@@ -78,7 +78,7 @@ program dem_main
     end if
     call solver_run(s, c, started, err)
     if (err%failed()) call fail(err)
-    call print_timing(s, solver_particles(s))
+    call print_timing(s, solver_particles(s), solver_particle_steps(s))
     if (comm%size > 1) call print_parallel(solver_parallel_stats(s))
     if (s%stopped == stop_wall_time .or. s%stopped == stop_signal) then
         if (comm%rank == 0) write(output_unit, '(a)') 'dem: ' // s%stop_message
@@ -153,12 +153,14 @@ contains
             'stability bound (allow_unstable = .true.)'
     end subroutine print_check
 
-    !> Steps, time per particle-step and time per phase of the run (rank 0's clocks;
-    !> n particles at the end, over all ranks).
-    subroutine print_timing(s, n)
+    !> Steps, time per particle-step and time per phase of the run (rank 0's clocks). The
+    !> particles are those of a step on the mean over the run (particle_steps over the steps:
+    !> outlets remove some), and n those at the end, over all ranks.
+    subroutine print_timing(s, n, particle_steps)
         type(solver_t), intent(in) :: s
-        integer(i8), intent(in) :: n
+        integer(i8), intent(in) :: n, particle_steps
         real(wp) :: total, ns, most(n_phases), least(n_phases)
+        integer(i8) :: mean
         integer :: k
         most = [(timer_seconds(s%timers, k), k = 1, n_phases)]
         least = -most
@@ -166,10 +168,13 @@ contains
         call comm_max(comm, least)
         if (comm%rank /= 0) return
         total = sum([(timer_seconds(s%timers, k), k = 1, n_phases)])
-        ns = 1.0e9_wp * total / max(1.0_wp, real(s%steps_run, wp) * n)
+        ns = 1.0e9_wp * total / max(1.0_wp, real(particle_steps, wp))
+        mean = nint(real(particle_steps, wp) / max(1.0_wp, real(s%steps_run, wp)), i8)
         write(output_unit, '(a,i0,a,i0,a,es11.4,a,f10.1,a)', advance='no') 'timing: ', &
-            s%steps_run, ' steps of ', n, ' particles in ', total, ' s, ', ns, &
+            s%steps_run, ' steps of ', mean, ' particles in ', total, ' s, ', ns, &
             ' ns per particle-step'
+        if (mean /= n .and. s%steps_run > 0) write(output_unit, '(a,i0,a)', advance='no') &
+            ' (particles on the mean over the steps; ', n, ' at the end)'
         if (comm%size > 1) write(output_unit, '(a,i0,a)', advance='no') ' on ', comm%size, &
             ' ranks'
         write(output_unit, '(a)') ''

@@ -48,7 +48,7 @@ module dem_solver
     private
     public :: solver_t, solver_init, solver_prepare, solver_restore, solver_run, solver_start, &
               solver_advance, &
-              solver_finish, solver_time, solver_retime, solver_particles, &
+              solver_finish, solver_time, solver_retime, solver_particles, solver_particle_steps, &
               solver_parallel_stats, &
               stop_end, stop_settled, stop_wall_time, stop_signal
 
@@ -92,6 +92,7 @@ module dem_solver
         integer(i8), allocatable :: removed_ids(:)  !< their ids on this rank, when allocated
         logical :: settled = .false.   !< the kinetic energy fell below stop_kinetic_energy
         integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
+        integer(i8) :: particle_steps = 0  !< this rank's particles in each of them, summed
         type(timers_t) :: timers       !< time per phase of those steps
         type(comm_t) :: comm           !< the ranks of the run
         type(domain_t) :: dom          !< their blocks and ghosts (more than one rank)
@@ -220,6 +221,16 @@ contains
         n = a(1)
     end function solver_particles
 
+    !> The particles of every step of the last run, summed over its steps and the ranks:
+    !> steps times particles, where outlets remove some (collective).
+    integer(i8) function solver_particle_steps(s) result(n)
+        type(solver_t), intent(in) :: s
+        integer(i8) :: a(1)
+        a = s%particle_steps
+        call comm_sum(s%comm, a)
+        n = a(1)
+    end function solver_particle_steps
+
     !> On several ranks: the load imbalance (largest particle count of a rank over the mean),
     !> ghosts per owned particle, bytes sent between ranks per step of the last run (all
     !> ranks together), the partitions computed, and the largest particle store of a rank
@@ -303,6 +314,7 @@ contains
                 if (r%every_snap > 0 .and. .not. err%failed()) call write_snapshot(s, c, err)
             end if
             s%steps_run = 0
+            s%particle_steps = 0
             s%dom%bytes = 0
             s%timers = timers_t()
             r%next_progress = wall_seconds() + c%progress_interval
@@ -461,6 +473,7 @@ contains
             call timer_stop(s%timers, phase_integrate)
             s%step = s%step + 1
             s%steps_run = s%steps_run + 1
+            s%particle_steps = s%particle_steps + s%p%n_own
             if (size(c%outlets) > 0) call remove_outlet_particles(s, c)
             call timer_stop(s%timers, phase_neighbors)
             ! outputs fall due on the same steps on every rank; an error in one (a rank's
@@ -633,17 +646,18 @@ contains
         type(case_t), intent(in) :: c
         integer(i8), intent(in) :: n_end
         real(wp) :: run_seconds, rate, left
-        integer(i8) :: counts(3)
+        integer(i8) :: counts(3), particle_steps
         integer :: k
         call settle_outlets(s)
         call particle_data(s, acc_to_host)
         counts = contact_counts(s)
+        particle_steps = solver_particle_steps(s)
         if (s%comm%rank /= 0) return
         run_seconds = 0.0_wp
         do k = 1, size(s%timers%ticks)
             run_seconds = run_seconds + timer_seconds(s%timers, k)
         end do
-        rate = real(s%steps_run, wp) * counts(3) / max(run_seconds, tiny(1.0_wp))
+        rate = real(particle_steps, wp) / max(run_seconds, tiny(1.0_wp))
         left = real(n_end - s%step, wp) * run_seconds / max(1.0_wp, real(s%steps_run, wp))
         write(output_unit, '(a,i0,a,es11.4,a,f5.1,a,i0,a,i0,a,es9.2,a,a)') 'progress: step ', &
             s%step, '  t = ', time_of(s, c, s%step), ' s  ', &

@@ -10,13 +10,17 @@ and draining it through an outlet.
    exactly (the gravitational energy of series.csv's first row equals the file's, computed
    here).
 3. Without its floor, the bed drains through an outlet plane: every sphere is removed, and
-   particles + removed = 100 in every row of series.csv.
+   particles + removed = 100 in every row of series.csv. The timing line's particles per step
+   (their mean over the steps) lies between the means of series.csv's counts taken at the
+   start and at the end of each output interval (the count never rises), the end count (0)
+   is beside it, and its ns per particle-step is its time over steps x that mean.
 4. Bad particle files are reported with the file, the line and the column.
 5. &insert into the inside of a closed mesh (a cube turned 45 degrees about z, so that its
    bounding box is twice its volume): every sphere lies inside the cube, at least its radius
    from every face.
 usage: test_fill_drain.py DEM WORKDIR"""
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -94,11 +98,25 @@ path = case("drain", f"""&run dt = 5.0e-5, t_end = 0.4 /
 {MATERIALS}{SIDES}&particle_file file = '{settled}' /
 &outlet region = 'plane', point = 0, 0, -0.05, normal = 0, 0, -1 /
 """)
-run_dem(dem, path, work)
+_, stdout, _ = run_dem(dem, path, work)
 dr = co.read_csv(os.path.join(out, "drain", "series.csv"))
 check(np.all(dr["particles"] + dr["removed"] == 100), "particles + removed = 100 in every row")
 check(dr["removed"][-1] == 100 and dr["particles"][-1] == 0, "all drained")
 check(np.all(np.diff(dr["removed"]) >= 0), "removed never decreases")
+m = re.search(r"^timing: (\d+) steps of (\d+) particles in +(\S+) s, +(\S+) ns per "
+              r"particle-step \(particles on the mean over the steps; 0 at the end\)", stdout, re.M)
+check(m is not None, f"drain: timing line with the mean and the end count: {stdout[-400:]}")
+if m:
+    steps, mean, seconds, ns = int(m[1]), int(m[2]), float(m[3]), float(m[4])
+    counts = np.asarray(dr["particles"], float)
+    check(steps == round(0.4 / 5.0e-5), f"drain: {steps} steps")
+    lo, hi = counts[1:].mean(), counts[:-1].mean()
+    check(lo - 0.5 <= mean <= hi + 0.5, f"drain: mean {mean} particles per step within the "
+          f"series' bounds {lo:.1f}-{hi:.1f}")
+    # the mean is printed rounded to a particle, the time to 5 digits
+    check(1e9 * seconds / (steps * (mean + 0.5)) * (1 - 1e-4) <= ns
+          <= 1e9 * seconds / (steps * (mean - 0.5)) * (1 + 1e-4) + 0.05,
+          f"drain: {ns} ns per particle-step is {seconds} s over {steps} x {mean}")
 
 # 4. bad particle files
 for name, text, words in (
