@@ -180,6 +180,14 @@ line = np.zeros(101, dtype=[("time", float), ("silo_M1", float)])
 line["time"], line["silo_M1"] = t, 20000.0 - 7000.0 * t
 w, dev, keep = pb.flow_rate(line, "M1")
 check(abs(w - 7000.0) < 1e-6 and dev < 1e-6 and keep.sum() == 91, f"flow rate of a line {w}")
+# rows every 0.1 s at dt = 75 us: every 1333 steps, 0.099975 s apart; the row a fraction of
+# a step before 0.1 s starts the fit
+line = np.zeros(51, dtype=[("time", float), ("silo_M1", float)])
+line["time"] = np.arange(51) * 1333 * 7.5e-5
+line["silo_M1"] = 100000.0 - 8000.0 * line["time"]
+w, dev, keep = pb.flow_rate(line, "M1")
+check(keep.sum() == 50 and keep[1] and abs(w - 8000.0) < 1e-6,
+      f"flow rate of a line on 75 us steps {w}, from row {np.argmax(keep)}")
 check(abs(pb.beverloo_k(3.10) - 1.26) < 0.005, f"Beverloo k for 3.10: {pb.beverloo_k(3.10)}")
 # the drum's oscillation amplitude, second by second: a cosine of period 0.5 s (its extremes
 # on the samples, every 0.01 s) of amplitude 1000, 500, 250 in the first three seconds, and
