@@ -190,8 +190,8 @@ contains
             'timing: the kernels ran on OpenACC device ', s%device, ' (rank 0)'
         if (peak_memory_kib() > 0) write(output_unit, '(a,f10.1,a,f10.1,a)') &
             'memory: peak resident ', peak_memory_kib() / 1024.0_wp, ' MiB, ', &
-            1024.0_wp * peak_memory_kib() / max(1, s%p%n_own), ' bytes per particle' // &
-            trim(merge(' (rank 0)', '         ', comm%size > 1))
+            1024.0_wp * peak_memory_kib() / max(1, s%particles_most), ' bytes per particle' // &
+            ' (of the most held' // trim(merge(', rank 0)', ')        ', comm%size > 1))
     end subroutine print_timing
 
     !> The decomposition's statistics (solver_parallel_stats).

@@ -93,6 +93,7 @@ module dem_solver
         logical :: settled = .false.   !< the kinetic energy fell below stop_kinetic_energy
         integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
         integer(i8) :: particle_steps = 0  !< this rank's particles in each of them, summed
+        integer(ip) :: particles_most = 0  !< the most particles this rank held in them
         type(timers_t) :: timers       !< time per phase of those steps
         type(comm_t) :: comm           !< the ranks of the run
         type(domain_t) :: dom          !< their blocks and ghosts (more than one rank)
@@ -215,21 +216,25 @@ contains
     !> The particles of the run, over all ranks.
     integer(i8) function solver_particles(s) result(n)
         type(solver_t), intent(in) :: s
-        integer(i8) :: a(1)
-        a = s%p%n_own
-        call comm_sum(s%comm, a)
-        n = a(1)
+        n = summed(s%comm, int(s%p%n_own, i8))
     end function solver_particles
 
     !> The particles of every step of the last run, summed over its steps and the ranks:
     !> steps times particles, where outlets remove some (collective).
     integer(i8) function solver_particle_steps(s) result(n)
         type(solver_t), intent(in) :: s
-        integer(i8) :: a(1)
-        a = s%particle_steps
-        call comm_sum(s%comm, a)
-        n = a(1)
+        n = summed(s%comm, s%particle_steps)
     end function solver_particle_steps
+
+    !> A count summed over the ranks (collective).
+    integer(i8) function summed(comm, count) result(n)
+        type(comm_t), intent(in) :: comm
+        integer(i8), intent(in) :: count
+        integer(i8) :: a(1)
+        a = count
+        call comm_sum(comm, a)
+        n = a(1)
+    end function summed
 
     !> On several ranks: the load imbalance (largest particle count of a rank over the mean),
     !> ghosts per owned particle, bytes sent between ranks per step of the last run (all
@@ -315,6 +320,7 @@ contains
             end if
             s%steps_run = 0
             s%particle_steps = 0
+            s%particles_most = s%p%n_own
             s%dom%bytes = 0
             s%timers = timers_t()
             r%next_progress = wall_seconds() + c%progress_interval
@@ -474,6 +480,7 @@ contains
             s%step = s%step + 1
             s%steps_run = s%steps_run + 1
             s%particle_steps = s%particle_steps + s%p%n_own
+            s%particles_most = max(s%particles_most, s%p%n_own)
             if (size(c%outlets) > 0) call remove_outlet_particles(s, c)
             call timer_stop(s%timers, phase_neighbors)
             ! outputs fall due on the same steps on every rank; an error in one (a rank's

@@ -13,7 +13,8 @@ and draining it through an outlet.
    particles + removed = 100 in every row of series.csv. The timing line's particles per step
    (their mean over the steps) lies between the means of series.csv's counts taken at the
    start and at the end of each output interval (the count never rises), the end count (0)
-   is beside it, and its ns per particle-step is its time over steps x that mean.
+   is beside it, and its ns per particle-step is its time over steps x that mean. The memory
+   line's bytes per particle are the peak over the most particles held (the 100 at the start).
 4. Bad particle files are reported with the file, the line and the column.
 5. &insert into the inside of a closed mesh (a cube turned 45 degrees about z, so that its
    bounding box is twice its volume): every sphere lies inside the cube, at least its radius
@@ -117,6 +118,13 @@ if m:
     check(1e9 * seconds / (steps * (mean + 0.5)) * (1 - 1e-4) <= ns
           <= 1e9 * seconds / (steps * (mean - 0.5)) * (1 + 1e-4) + 0.05,
           f"drain: {ns} ns per particle-step is {seconds} s over {steps} x {mean}")
+# the memory line divides the peak by the most particles held (100 at the start), not by the 0 left
+m = re.search(r"^memory: peak resident +(\S+) MiB, +(\S+) bytes per particle \(of the most "
+              r"held\)", stdout, re.M)
+check(m is not None, f"drain: memory line per the most particles held: {stdout[-300:]}")
+if m:
+    check(abs(float(m[2]) - float(m[1]) * 2**20 / 100) <= 0.05 * 2**20 / 100 + 0.1,
+          f"drain: {m[2]} bytes per particle is {m[1]} MiB over 100 particles")
 
 # 4. bad particle files
 for name, text, words in (
