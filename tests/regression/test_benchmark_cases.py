@@ -28,7 +28,8 @@ hold whatever the size:
    by their names (the soft ones apart) and takes the rates of those that ran to the case's
    end; the drum's oscillation amplitude, of a cosine whose amplitude halves every second,
    is twice that amplitude in each whole second; two drum runs set apart by known amounts
-   from a known time are found that far apart after it and not before.
+   from a known time are found that far apart after it and not before; the mean distance
+   of each material from the bed's centre, of spheres set at known distances, is those.
 5. the namelists in cases/benchmark are make_cases.py's: each it writes is there, with the
    same text, and there is no other (one edited by hand, or one it no longer writes, fails).
 usage: test_benchmark_cases.py DEM WORKDIR [MPIEXEC]"""
@@ -218,6 +219,21 @@ whole, first = apart.split("; ")[0], apart.split("; ")[1]
 check("'zone2_M1': 7," in whole and "3.0 mm (M1), 0.0 mm (M2)" in whole
       and first.startswith("to 1.00 s") and "'zone2_M1': 0," in first
       and "0.0 mm (M1)" in first, f"drum runs apart: {apart}")
+# radial sorting: M1 and M2 spheres set symmetrically about a point, 20 and 50 mm from it,
+# in a snapshot of the case's layout: the bed's centre is that point
+import h5py  # noqa: E402
+d = os.path.join(work, "sorting", "snapshots")
+os.makedirs(d)
+square = np.array([[1, 0], [-1, 0], [0, 1], [0, -1]], float)
+xz = np.r_[0.02 * square, 0.05 * square] + [0.01, -0.04]
+with h5py.File(os.path.join(d, "snapshot_000000000000.h5"), "w") as f:
+    f["materials/name"] = np.array([b"M1", b"M2", b"steel"])
+    f["particles/material"] = np.r_[np.full(4, 1), np.full(4, 2)]
+    f["particles/position"] = np.c_[xz[:, 0], np.linspace(-0.01, 0.01, 8), xz[:, 1]]
+    f["particles/radius"] = np.r_[np.full(4, 0.001), np.full(4, 0.002)]
+    f["time"] = 1.0
+sorting = pb.radial_sorting(os.path.dirname(d))
+check(sorting.endswith("1.0 s 20.0/50.0"), f"radial sorting: {sorting}")
 # the fillings' rates: exact lines, in folders named as make_cases.py names the reduced silos;
 # a discharge stopped before the case's end, and a folder of another name, left out
 fake = os.path.join(work, "fillings")
