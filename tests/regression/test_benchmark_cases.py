@@ -27,7 +27,8 @@ hold whatever the size:
    paper's flow-rate ratio of 3.10 is the paper's 1.26; it finds the reduced silos' fillings
    by their names (the soft ones apart) and takes the rates of those that ran to the case's
    end; the drum's oscillation amplitude, of a cosine whose amplitude halves every second,
-   is twice that amplitude in each whole second; two drum runs set apart by known amounts
+   is twice that amplitude in each whole second; the flow rate by second, of a count whose
+   rate steps, is each second's; two drum runs set apart by known amounts
    from a known time are found that far apart after it and not before; the mean distance
    of each material from the bed's centre, of spheres set at known distances, is those.
 5. the namelists in cases/benchmark are make_cases.py's: each it writes is there, with the
@@ -189,6 +190,14 @@ line["silo_M1"] = 100000.0 - 8000.0 * line["time"]
 w, dev, keep = pb.flow_rate(line, "M1")
 check(keep.sum() == 50 and keep[1] and abs(w - 8000.0) < 1e-6,
       f"flow rate of a line on 75 us steps {w}, from row {np.argmax(keep)}")
+# by second: a count whose rate steps from 8000 to 6000 particles/s at 1.5 s, rows every 0.1 s
+line = np.zeros(31, dtype=[("time", float), ("silo_M1", float)])
+line["time"] = np.arange(31) * 0.1
+line["silo_M1"] = 100000.0 - 8000.0 * np.minimum(line["time"], 1.5) - 6000.0 * np.maximum(
+    line["time"] - 1.5, 0.0)
+by = pb.rates_by_second(line, "M1", line["time"] >= 0.1 - 1e-4)
+check(len(by) == 3 and abs(by[0] - 8000.0) < 1e-6 and abs(by[2] - 6000.0) < 1e-6
+      and abs(by[1] - 7000.0) < 1e-6, f"rates by second {by}")   # the step mid-second
 check(abs(pb.beverloo_k(3.10) - 1.26) < 0.005, f"Beverloo k for 3.10: {pb.beverloo_k(3.10)}")
 # the drum's oscillation amplitude, second by second: a cosine of period 0.5 s (its extremes
 # on the samples, every 0.01 s) of amplitude 1000, 500, 250 in the first three seconds, and
