@@ -12,7 +12,7 @@ paths of the particle files are the outputs of the preparations there:
   [prepare_]silo_<M>_<orifice>_20000[_seed<k>].nml  the same with 20 000 spheres, run here
                                           (M1: six fillings of different seeds)
   [prepare_]silo_<M>_<orifice>[_20000]_soft[_seed<k>].nml  the same with the soft drum's
-                                          materials (below), at about 0.2 Rayleigh times
+                                          materials (below), at dt = 50 us
                                           (reduced: M1 three fillings, M2 one)
   prepare_drum_1.nml, prepare_drum_2.nml  8 000 M2 of 4 mm settled in the drum, then
                                           30 000 M1 of 2 mm settled on top
@@ -21,6 +21,9 @@ paths of the particle files are the outputs of the preparations there:
   prepare_drum_slice_<1|2>.nml, drum_slice.nml  the same in a quarter of the drum's depth
                                           (0.015 m, 2 000 M2 and 7 500 M1), run here
   drum_slice_smooth.nml                   that slice with frictionless end discs
+  resettle_silo_<M>_small_soft_dt<us>.nml the full soft small silo's filling run on for
+                                          0.06 s, orifice closed, at 50, 75 (and M2: 100)
+                                          us: does the resting bed stay at rest?
   [prepare_]drum[_slice]_soft[_<1|2>].nml MercuryDPM's -soft drum (E of M1 and M2 2e-3
                                           times as large, output every 0.01 s; dt 5e-5 s,
                                           half its 1e-4 s, within our stability bound),
@@ -52,7 +55,11 @@ SILO_REDUCED = 20000                               # particles in the reduced si
 SILO_FILLINGS = 6                                  # reduced M1 silos: fillings of seeds 1-6
 SILO_REDUCED_T_END = 0.5                           # reduced silos' discharge [s]
 SILO_REDUCED_INTERVAL = 0.01                       # ... and the time between their counts [s]
-SILO_SOFT_DT = {"M1": 7.5e-5, "M2": 1.0e-4}        # soft silos: about 0.2 Rayleigh times
+SILO_SOFT_DT = 5.0e-5                              # soft silos [s]: 0.10 and 0.13 Rayleigh times
+                                                   # of the 4 mm M2 and M1 spheres; 75 and 100
+                                                   # us (0.2 of M1's, M2's) let full beds rattle
+                                                   # (doc/benchmarks.md)
+SILO_SOFT_CHECKPOINT = 0.1                         # full soft silos: checkpoint interval [s]
 SILO_SOFT_FILLINGS = 3                             # reduced soft M1 silos: seeds 1-3
 SOFT = 2.0e-3                            # MercuryDPM's -soft drum: E of M1, M2 times this
 DRUM_SOFT_DT = 5.0e-5                    # the soft drums' dt [s] (MercuryDPM's 1e-4 is above
@@ -89,6 +96,13 @@ def output(name, interval, snapshots, extra=""):
             f"snapshot_interval = {snapshots:g}{extra} /\n")
 
 
+def soft_checkpoints(n, soft):
+    """The full soft silos' checkpoints (&output keys), so that a run stopped by the end of a
+    session loses little (dem --resume continues it); none for the others."""
+    return (f", checkpoint_interval = {SILO_SOFT_CHECKPOINT:g}, checkpoint_keep = 2"
+            if soft and n == 100000 else "")
+
+
 def silo_walls(orifice):
     return (f"&wall_mesh file = 'geometry/silo_{orifice}.stl', material = 'steel' /\n")
 
@@ -107,10 +121,10 @@ def prepare_silo(material, orifice, n=100000, scale=1.0, t_end=2.0, seed=1, soft
     z_j = 0.1 - (s["r_o"] - s["z_o"])                # where cone and cylinder meet
     height = min(0.9, 0.9 * n / 100000.0 + 0.05)
     name = "prepare_" + silo_name(material, orifice, n, seed, soft)
-    dt = SILO_SOFT_DT[material] if soft else SILO_PREPARE_DT[material] / scale ** 0.5
+    dt = SILO_SOFT_DT if soft else SILO_PREPARE_DT[material] / scale ** 0.5
     return (run(dt, t_end,
                 f", stop_kinetic_energy = {n * 1e-10:g}")
-            + output(name, 0.01, 0.0) + case_materials(scale, soft)
+            + output(name, 0.01, 0.0, soft_checkpoints(n, soft)) + case_materials(scale, soft)
             + f"&insert n = {n}, material = '{material}', radius_min = 0.002, "
               f"radius_max = 0.002, region = 'cylinder', cylinder_base = 0, 0, {z_j:.7g}, "
               f"cylinder_radius = 0.096, cylinder_height = {height:g}, seed = {seed} /\n"
@@ -128,13 +142,14 @@ def silo(material, orifice, n=100000, scale=1.0, t_end=5.0, interval=0.1, histog
     s = SILO[orifice]
     bed = silo_name(material, orifice, n, seed, soft)
     if soft:
-        scale, dt = 1.0, dt or SILO_SOFT_DT[material]
+        scale, dt = 1.0, dt or SILO_SOFT_DT
     name = name or bed
     above = (f"region = 'box', box_min = -{BIG}, -{BIG}, {s['z_o']}, "
              f"box_max = {BIG}, {BIG}, {BIG}")
     extra = "" if integrator == "symplectic_euler" else f", integrator = '{integrator}'"
     return (run((dt or SILO_DT[material]) / scale ** 0.5, t_end, extra)
-            + output(name, interval, snapshots) + case_materials(scale, soft)
+            + output(name, interval, snapshots, soft_checkpoints(n, soft))
+            + case_materials(scale, soft)
             + f"&particle_file file = '{FROM_HERE}/prepare_{bed}/final.csv' /\n"
             + silo_walls(orifice)
             + f"&outlet region = 'plane', point = 0, 0, {s['z_o'] - 0.02:.7g}, "
@@ -142,6 +157,20 @@ def silo(material, orifice, n=100000, scale=1.0, t_end=5.0, interval=0.1, histog
             + f"&probe name = 'silo', kind = 'count', {above} /\n"
             + f"&probe name = 'velocity', kind = 'histogram', time = {histogram_time:g}, "
               f"bins = 40, v_min = -1.5, v_max = 0.5, {above} /\n")
+
+
+def resettle_silo(material, dt, orifice="small", t_end=0.06):
+    """The full soft silo's settled filling, the orifice still closed, run on at another dt:
+    at too large a step the resting bed's contacts go unstable (its spheres spin up, from the
+    bottom, to a level friction caps) instead of staying at rest."""
+    s = SILO[orifice]
+    bed = silo_name(material, orifice, soft=True)
+    return (run(dt, t_end) + output(f"resettle_{bed}_dt{dt * 1e6:.0f}us", 0.005, 0.0)
+            + case_materials(1.0, True)
+            + f"&particle_file file = '{FROM_HERE}/prepare_{bed}/final.csv' /\n"
+            + silo_walls(orifice)
+            + f"&wall_plane material = 'steel', point = 0, 0, {s['z_o']}, normal = 0, 0, 1, "
+              f"half_width = 0.035 /\n")
 
 
 def drum_walls(rotating, drum="drum"):
@@ -269,6 +298,9 @@ def cases():
                 out[f"{name}.nml"] = silo(m, o, n, t_end=SILO_REDUCED_T_END,
                                           interval=SILO_REDUCED_INTERVAL, histogram_time=0.3,
                                           snapshots=0.1, seed=seed, soft=True)
+    for m, steps in (("M1", (5.0e-5, 7.5e-5)), ("M2", (5.0e-5, 7.5e-5, 1.0e-4))):
+        for dt in steps:
+            out[f"resettle_silo_{m}_small_soft_dt{dt * 1e6:.0f}us.nml"] = resettle_silo(m, dt)
     out["prepare_drum_1.nml"] = prepare_drum(1)
     out["prepare_drum_2.nml"] = prepare_drum(2)
     out["drum.nml"] = drum()
