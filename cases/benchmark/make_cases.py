@@ -107,6 +107,12 @@ def silo_walls(orifice):
     return (f"&wall_mesh file = 'geometry/silo_{orifice}.stl', material = 'steel' /\n")
 
 
+def orifice_closed(orifice):
+    """The plane that closes the orifice while a filling settles."""
+    return (f"&wall_plane material = 'steel', point = 0, 0, {SILO[orifice]['z_o']}, "
+            f"normal = 0, 0, 1, half_width = 0.035 /\n")
+
+
 def silo_name(material, orifice, n=100000, seed=1, soft=False):
     return (f"silo_{material}_{orifice}" + (f"_{n}" if n != 100000 else "")
             + ("_soft" if soft else "") + (f"_seed{seed}" if seed > 1 else ""))
@@ -128,9 +134,7 @@ def prepare_silo(material, orifice, n=100000, scale=1.0, t_end=2.0, seed=1, soft
             + f"&insert n = {n}, material = '{material}', radius_min = 0.002, "
               f"radius_max = 0.002, region = 'cylinder', cylinder_base = 0, 0, {z_j:.7g}, "
               f"cylinder_radius = 0.096, cylinder_height = {height:g}, seed = {seed} /\n"
-            + silo_walls(orifice)
-            + f"&wall_plane material = 'steel', point = 0, 0, {s['z_o']}, normal = 0, 0, 1, "
-              f"half_width = 0.035 /\n")
+            + silo_walls(orifice) + orifice_closed(orifice))
 
 
 def silo(material, orifice, n=100000, scale=1.0, t_end=5.0, interval=0.1, histogram_time=2.0,
@@ -163,14 +167,11 @@ def resettle_silo(material, dt, orifice="small", t_end=0.06):
     """The full soft silo's settled filling, the orifice still closed, run on at another dt:
     at too large a step the resting bed's contacts go unstable (its spheres spin up, from the
     bottom, to a level friction caps) instead of staying at rest."""
-    s = SILO[orifice]
     bed = silo_name(material, orifice, soft=True)
     return (run(dt, t_end) + output(f"resettle_{bed}_dt{dt * 1e6:.0f}us", 0.005, 0.0)
             + case_materials(1.0, True)
             + f"&particle_file file = '{FROM_HERE}/prepare_{bed}/final.csv' /\n"
-            + silo_walls(orifice)
-            + f"&wall_plane material = 'steel', point = 0, 0, {s['z_o']}, normal = 0, 0, 1, "
-              f"half_width = 0.035 /\n")
+            + silo_walls(orifice) + orifice_closed(orifice))
 
 
 def drum_walls(rotating, drum="drum"):
