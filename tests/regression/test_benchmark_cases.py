@@ -30,7 +30,9 @@ hold whatever the size:
    is twice that amplitude in each whole second; the flow rate by second, of a count whose
    rate steps, is each second's; two drum runs set apart by known amounts
    from a known time are found that far apart after it and not before; the mean distance
-   of each material from the bed's centre, of spheres set at known distances, is those.
+   of each material from the bed's centre, of spheres set at known distances, is those; a
+   preparation's end state (energies, centre of mass, spin by eighths of height) is read
+   from files made for it.
 5. the namelists in cases/benchmark are make_cases.py's: each it writes is there, with the
    same text, and there is no other (one edited by hand, or one it no longer writes, fails).
 usage: test_benchmark_cases.py DEM WORKDIR [MPIEXEC]"""
@@ -243,6 +245,22 @@ with h5py.File(os.path.join(d, "snapshot_000000000000.h5"), "w") as f:
     f["time"] = 1.0
 sorting = pb.radial_sorting(os.path.dirname(d))
 check(sorting.endswith("1.0 s 20.0/50.0"), f"radial sorting: {sorting}")
+# a preparation's state at its end: spheres at heights 0-7 mm, one to an eighth of the bed's
+# height, spinning at 0-7 rad/s about x, y or z in turn
+d = os.path.join(work, "rest", "prepare_bed")
+os.makedirs(d)
+with open(os.path.join(d, "series.csv"), "w") as f:
+    f.write("time,kinetic_translational,kinetic_rotational\n0,1,1\n0.5,2e-06,3e-07\n")
+with open(os.path.join(d, "final.csv"), "w") as f:
+    f.write("id,material,radius,x,y,z,vx,vy,vz,wx,wy,wz\n")
+    for k in range(8):
+        w = [0.0, 0.0, 0.0]
+        w[k % 3] = float(k)
+        f.write(f"{k + 1},M1,0.001,0,0,{k * 1e-3},0,0,0,{w[0]},{w[1]},{w[2]}\n")
+rest = pb.preparations(os.path.dirname(d), work)
+check("prepare_bed: t = 0.50 s, kinetic 2e-06 J (translation), 3e-07 J (rotation); centre of "
+      "mass z = 3.5 mm; mean spin by eighths of height 0 1 2 3 4 5 6 7 rad/s" in rest,
+      f"a preparation at its end: {rest}")
 # the fillings' rates: exact lines, in folders named as make_cases.py names the reduced silos;
 # a discharge stopped before the case's end, and a folder of another name, left out
 fake = os.path.join(work, "fillings")
