@@ -250,6 +250,7 @@ with h5py.File(os.path.join(d, "snapshot_000000000000.h5"), "w") as f:
     f["materials/name"] = np.array([b"M1", b"M2", b"steel"])
     f["particles/material"] = np.r_[np.full(4, 1), np.full(4, 2)]
     f["particles/position"] = np.c_[xz[:, 0], np.linspace(-0.01, 0.01, 8), xz[:, 1]]
+    f["particles/velocity"] = np.zeros((8, 3))
     f["particles/radius"] = np.r_[np.full(4, 0.001), np.full(4, 0.002)]
     f["time"] = 1.0
 sorting = pb.radial_sorting(os.path.dirname(d))
