@@ -4,7 +4,7 @@ module dem_contact_hm
     use dem_kinds, only: wp
     implicit none
     private
-    public :: hm_force
+    public :: hm_force, hm_force_damped
 
 contains
 
@@ -33,14 +33,30 @@ contains
         real(wp), intent(inout) :: xi(3)  !! tangential spring displacement [m]
         real(wp), intent(out) :: fn       !! normal force, repulsive > 0 [N]
         real(wp), intent(out) :: ft(3)    !! tangential force on i [N]
+        call hm_force_damped(overlap, nrm, vrel, rstar, kn, st, cn * sqrt(sn * mstar), &
+                             ct * sqrt(st * mstar), mu, clamp_normal, dt, xi, fn, ft)
+    end subroutine hm_force
+
+    !> hm_force with the damping factors of the pair given, dn = cn sqrt(sn m*) and
+    !> dtan = ct sqrt(st m*): the form the particle-pair kernel uses, whose pairs keep them
+    !> from the list build (the same operations in the same order, so the same bits).
+    pure subroutine hm_force_damped(overlap, nrm, vrel, rstar, kn, st, dn, dtan, mu, &
+                                    clamp_normal, dt, xi, fn, ft)
+        !$acc routine seq
+        real(wp), intent(in) :: overlap, nrm(3), vrel(3), rstar, kn, st, mu, dt
+        real(wp), intent(in) :: dn        !! cn sqrt(sn m*) [kg^(1/2) Pa^(1/2)]
+        real(wp), intent(in) :: dtan      !! ct sqrt(st m*) [kg^(1/2) Pa^(1/2)]
+        logical, intent(in) :: clamp_normal
+        real(wp), intent(inout) :: xi(3)
+        real(wp), intent(out) :: fn, ft(3)
         real(wp) :: root, q, vn, vt(3), kt, len_old, len_new, ft2, ft_max
 
         ! sqrt(S m*) = sqrt(s m*) (R* d)^(1/4) for S = s sqrt(R* d): the square roots of the
-        ! masses and constants do not wait for the overlap's
+        ! masses and constants (dn, dtan) do not wait for the overlap's
         root = sqrt(rstar * overlap)
         q = sqrt(root)
         vn = dot_product(vrel, nrm)
-        fn = kn * overlap * root + cn * sqrt(sn * mstar) * q * vn
+        fn = kn * overlap * root + dn * q * vn
         if (clamp_normal) fn = max(fn, 0.0_wp)
 
         vt = vrel - vn * nrm
@@ -64,7 +80,7 @@ contains
             ft = ft * (ft_max / sqrt(ft2))
             xi = -ft / kt
         else
-            ft = ft - ct * sqrt(st * mstar) * q * vt
+            ft = ft - dtan * q * vt
         end if
-    end subroutine hm_force
+    end subroutine hm_force_damped
 end module dem_contact_hm

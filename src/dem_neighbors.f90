@@ -18,7 +18,8 @@ module dem_neighbors
     public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order, &
               neighbors_history, neighbors_set_history, neighbors_row_history, &
               neighbors_set_rows, neighbors_unique_pairs, fit_grid, neighbors_data, &
-              neighbors_free, neighbors_moved, grid_t, grid_shape, grid_fill, cell_of
+              neighbors_free, neighbors_moved, grid_t, grid_shape, grid_fill, cell_of, &
+              neighbors_entry_history
 
     !> The lists, their per-entry tangential history, and the positions they were built at.
     type :: neighbors_t
@@ -33,8 +34,15 @@ module dem_neighbors
                                               !< when the partner (lower id) evaluates the
                                               !< pair; 0 for a ghost partner (and in
                                               !< rows set by neighbors_set_rows)
-        real(wp), allocatable :: xi(:, :)     !< tangential displacement per entry [m]
-        logical, allocatable :: touching(:)   !< work space of the contact kernel
+        integer(ip), allocatable :: pref(:)   !< the entry's pair p, or -p when the partner
+                                              !< evaluates it (the pair's first particle)
+        integer(ip) :: n_pairs = 0            !< pairs evaluated here, each once
+        integer(ip), allocatable :: pair(:, :) !< (first, second) particle of each pair; the
+                                              !< first is the row's particle that evaluates it
+        real(wp), allocatable :: pconst(:, :) !< constants of each pair (dem_contacts_pp)
+        real(wp), allocatable :: xi(:, :)     !< tangential displacement of each pair's
+                                              !< first particle [m]
+        logical, allocatable :: touching(:)   !< the pair is in contact (xi /= 0 only then)
         real(wp), allocatable :: fpair(:, :)  !< work space of the contact kernel [N]
         real(wp), allocatable :: cpair(:, :)  !< work space of the contact kernel [N]
         integer(ip), allocatable :: wstart(:) !< wall row i is wstart(i):wstart(i+1)-1
@@ -172,7 +180,8 @@ contains
         type(mesh_t), intent(in) :: mesh
         integer(ip), intent(in), optional :: old_index(:)
         integer(ip), allocatable :: old_start(:), same(:), level(:), cell(:), gstart(:), &
-                                    gitem(:), cnt(:), n_of(:, :), off(:)
+                                    gitem(:), cnt(:), n_of(:, :), off(:), pstart(:)
+        integer(ip), allocatable :: old_pref(:)
         integer(i8), allocatable :: old_partner(:)
         real(wp), allocatable :: old_xi(:, :), rmax(:), origin(:, :), h(:)
         real(wp) :: lo(3), hi(3), margin
@@ -185,6 +194,7 @@ contains
         if (keep_history) then                   ! (their device copies go with them)
             call move_alloc(nb%start, old_start)
             call move_alloc(nb%partner, old_partner)
+            call move_alloc(nb%pref, old_pref)
             call move_alloc(nb%xi, old_xi)
         end if
         call neighbors_free(nb)
@@ -240,38 +250,57 @@ contains
         call prefix_sum(n_own, cnt, nb%start)
         call acc_data(nb%start(n_own + 1:n_own + 1), acc_to_host)
         n_entries = nb%start(n_own + 1) - 1
-        allocate(nb%list(n_entries), nb%partner(n_entries), nb%xi(3, n_entries), &
-                 nb%mirror(n_entries), nb%touching(n_entries), nb%fpair(3, n_entries), &
-                 nb%cpair(3, n_entries))
+        allocate(nb%list(n_entries), nb%partner(n_entries), nb%mirror(n_entries), &
+                 nb%pref(n_entries))
         call acc_data(nb%list, acc_create)
         call acc_data(nb%partner, acc_create)
-        call acc_data(nb%xi, acc_create)
         call acc_data(nb%mirror, acc_create)
-        call acc_data(nb%touching, acc_create)
-        call acc_data(nb%fpair, acc_create)
-        call acc_data(nb%cpair, acc_create)
+        call acc_data(nb%pref, acc_create)
         call pair_rows(.true., n_own, n_all, n_levels, x, radius, nb%skin, rmax, origin, h, &
                        n_of, off, n_cells, gstart, gitem, nb%start, n_entries, nb%list)
         call pair_partners(n_own, n_all, n_entries, gid, nb%start, nb%list, nb%partner, &
-                           nb%mirror, nb%xi, nb%touching)
-        if (keep_history .and. present(old_index)) then
-            call carry_history(n_own, size(old_start, kind=ip), n_entries, &
-                               size(old_partner, kind=ip), old_index, nb%start, nb%partner, &
-                               nb%xi, old_start, old_partner, old_xi)
-        else if (keep_history) then              ! the particles kept their places
-            allocate(same(n_own))
-            call acc_data(same, acc_create)
-            call fill_range(n_own, same, 1, 1)
-            call carry_history(n_own, size(old_start, kind=ip), n_entries, &
-                               size(old_partner, kind=ip), same, nb%start, nb%partner, &
-                               nb%xi, old_start, old_partner, old_xi)
-            call acc_data(same, acc_exit)
-        end if
+                           nb%mirror)
+
+        ! the pairs this rank evaluates, each once, numbered row by row
+        call evaluated_counts(n_own, n_entries, nb%start, nb%mirror, cnt)
+        allocate(pstart(n_own + 1))
+        call acc_data(pstart, acc_create)
+        call prefix_sum(n_own, cnt, pstart)
+        call acc_data(pstart(n_own + 1:n_own + 1), acc_to_host)
+        nb%n_pairs = pstart(n_own + 1) - 1
+        allocate(nb%pair(2, max(1, nb%n_pairs)), nb%xi(3, max(1, nb%n_pairs)), &
+                 nb%touching(max(1, nb%n_pairs)), nb%fpair(3, max(1, nb%n_pairs)), &
+                 nb%cpair(3, max(1, nb%n_pairs)))
+        call acc_data(nb%pair, acc_create)
+        call acc_data(nb%xi, acc_create)
+        call acc_data(nb%touching, acc_create)
+        call acc_data(nb%fpair, acc_create)
+        call acc_data(nb%cpair, acc_create)
+        call number_pairs(n_own, n_entries, nb%n_pairs, nb%start, nb%list, nb%mirror, pstart, &
+                          nb%pref, nb%pair, nb%xi)
+        call acc_data(pstart, acc_exit)
         if (keep_history) then
+            if (present(old_index)) then
+                call carry_history(n_own, size(old_start, kind=ip), n_entries, nb%n_pairs, &
+                                   size(old_partner, kind=ip), size(old_xi, 2, kind=ip), &
+                                   old_index, nb%start, nb%partner, nb%pref, nb%xi, &
+                                   old_start, old_partner, old_pref, old_xi)
+            else                                 ! the particles kept their places
+                allocate(same(n_own))
+                call acc_data(same, acc_create)
+                call fill_range(n_own, same, 1, 1)
+                call carry_history(n_own, size(old_start, kind=ip), n_entries, nb%n_pairs, &
+                                   size(old_partner, kind=ip), size(old_xi, 2, kind=ip), &
+                                   same, nb%start, nb%partner, nb%pref, nb%xi, &
+                                   old_start, old_partner, old_pref, old_xi)
+                call acc_data(same, acc_exit)
+            end if
             call acc_data(old_start, acc_exit)
             call acc_data(old_partner, acc_exit)
+            call acc_data(old_pref, acc_exit)
             call acc_data(old_xi, acc_exit)
         end if
+        call touching_from_history(nb%n_pairs, nb%xi, nb%touching)
         call acc_data(cnt, acc_exit)
         call acc_data(gstart, acc_exit)
         call acc_data(gitem, acc_exit)
@@ -428,19 +457,15 @@ contains
     end subroutine pair_rows
 
     !> Each row ordered by the partners' global ids (insertion sort: rows are short), the
-    !> partners' ids, no history yet, and the mirror entries: the partner's entry for the
-    !> same pair (a binary search of its row), negated when the partner has the lower id,
-    !> 0 for a ghost partner.
-    subroutine pair_partners(n_own, n_all, n_entries, gid, start, list, partner, mirror, xi, &
-                             touching)
+    !> partners' ids, and the mirror entries: the partner's entry for the same pair (a binary
+    !> search of its row), negated when the partner has the lower id, 0 for a ghost partner.
+    subroutine pair_partners(n_own, n_all, n_entries, gid, start, list, partner, mirror)
         integer(ip), intent(in) :: n_own, n_all, n_entries
         integer(i8), intent(in) :: gid(n_all)
         integer(ip), intent(in) :: start(n_own + 1)
         integer(ip), intent(inout) :: list(n_entries)
         integer(i8), intent(inout) :: partner(n_entries)
         integer(ip), intent(inout) :: mirror(n_entries)
-        real(wp), intent(inout) :: xi(3, n_entries)
-        logical, intent(inout) :: touching(n_entries)
         integer(ip) :: i, j, a, b, key, lo, hi, e
         !$acc parallel loop gang vector default(present) private(a, b, key)
         do i = 1, n_own
@@ -458,8 +483,6 @@ contains
         !$acc parallel loop gang vector default(present)
         do a = 1, n_entries
             partner(a) = gid(list(a))
-            xi(:, a) = 0.0_wp
-            touching(a) = .false.
         end do
         !$acc parallel loop gang vector default(present) private(j, a, lo, hi, e)
         do i = 1, n_own
@@ -486,15 +509,61 @@ contains
         end do
     end subroutine pair_partners
 
+    !> cnt(i) = the entries of row i whose pair row i evaluates (mirror >= 0).
+    subroutine evaluated_counts(n_own, n_entries, start, mirror, cnt)
+        integer(ip), intent(in) :: n_own, n_entries
+        integer(ip), intent(in) :: start(n_own + 1), mirror(n_entries)
+        integer(ip), intent(inout) :: cnt(n_own)
+        integer(ip) :: i, k, m
+        !$acc parallel loop gang vector default(present) private(k, m)
+        do i = 1, n_own
+            m = 0
+            do k = start(i), start(i + 1) - 1
+                if (mirror(k) >= 0) m = m + 1
+            end do
+            cnt(i) = m
+        end do
+    end subroutine evaluated_counts
+
+    !> The pairs of the rows, numbered from pstart(i) in row i, each once: pair(:, p) = (i, j)
+    !> for the entries row i evaluates, pref = p there and -p in the partner's entry of the
+    !> same pair (each entry has one writer); no history yet.
+    subroutine number_pairs(n_own, n_entries, n_pairs, start, list, mirror, pstart, pref, &
+                            pair, xi)
+        integer(ip), intent(in) :: n_own, n_entries, n_pairs
+        integer(ip), intent(in) :: start(n_own + 1), list(n_entries), mirror(n_entries), &
+                                   pstart(n_own + 1)
+        integer(ip), intent(inout) :: pref(n_entries), pair(2, max(1, n_pairs))
+        real(wp), intent(inout) :: xi(3, max(1, n_pairs))
+        integer(ip) :: i, k, p
+        !$acc parallel loop gang vector default(present) private(k, p)
+        do i = 1, n_own
+            p = pstart(i)
+            do k = start(i), start(i + 1) - 1
+                if (mirror(k) < 0) cycle
+                pref(k) = p
+                if (mirror(k) > 0) pref(mirror(k)) = -p
+                pair(1, p) = i
+                pair(2, p) = list(k)
+                xi(:, p) = 0.0_wp
+                p = p + 1
+            end do
+        end do
+    end subroutine number_pairs
+
     !> Copy the history of the partners a new row shares with the particle's old row
-    !> (old_row(i)); both rows are ordered by partner id, so one merge pass finds them.
-    subroutine carry_history(n_own, n_old_rows, n_entries, n_old, old_row, start, partner, xi, &
-                             old_start, old_partner, old_xi)
-        integer(ip), intent(in) :: n_own, n_old_rows, n_entries, n_old
+    !> (old_row(i)) into the pairs the new row evaluates; both rows are ordered by partner
+    !> id, so one merge pass finds them. The old entries' history is seen from the old row's
+    !> side (side_history).
+    subroutine carry_history(n_own, n_old_rows, n_entries, n_pairs, n_old, n_old_pairs, &
+                             old_row, start, partner, pref, xi, old_start, old_partner, &
+                             old_pref, old_xi)
+        integer(ip), intent(in) :: n_own, n_old_rows, n_entries, n_pairs, n_old, n_old_pairs
         integer(ip), intent(in) :: old_row(n_own), start(n_own + 1), old_start(n_old_rows)
         integer(i8), intent(in) :: partner(n_entries), old_partner(n_old)
-        real(wp), intent(inout) :: xi(3, n_entries)
-        real(wp), intent(in) :: old_xi(3, n_old)
+        integer(ip), intent(in) :: pref(n_entries), old_pref(n_old)
+        real(wp), intent(inout) :: xi(3, max(1, n_pairs))
+        real(wp), intent(in) :: old_xi(3, n_old_pairs)
         integer(ip) :: i, a, b, b_end
         !$acc parallel loop gang vector default(present) private(a, b, b_end)
         do i = 1, n_own
@@ -506,10 +575,23 @@ contains
                     b = b + 1
                 end do
                 if (b > b_end) exit
-                if (old_partner(b) == partner(a)) xi(:, a) = old_xi(:, b)
+                if (old_partner(b) == partner(a) .and. pref(a) > 0) &
+                    call side_history(n_old, n_old_pairs, b, old_pref, old_xi, xi(:, pref(a)))
             end do
         end do
     end subroutine carry_history
+
+    !> touching(p) = the pair has history (the contact kernel resets both when it ends).
+    subroutine touching_from_history(n_pairs, xi, touching)
+        integer(ip), intent(in) :: n_pairs
+        real(wp), intent(in) :: xi(3, max(1, n_pairs))
+        logical, intent(inout) :: touching(max(1, n_pairs))
+        integer(ip) :: p
+        !$acc parallel loop gang vector default(present)
+        do p = 1, n_pairs
+            touching(p) = any(xi(:, p) /= 0.0_wp)
+        end do
+    end subroutine touching_from_history
 
     !> Wall triangles within R_i + skin of each owned particle. Each triangle is entered in
     !> the cells of a grid (sized for the smallest particles) that its bounding box covers; a
@@ -699,10 +781,13 @@ contains
         if (allocated(nb%xi)) call acc_data(nb%xi, op)
         if (allocated(nb%list)) call acc_data(nb%list, op)
         if (allocated(nb%mirror)) call acc_data(nb%mirror, op)
+        if (allocated(nb%pref)) call acc_data(nb%pref, op)
         if (allocated(nb%touching)) call acc_data(nb%touching, op)
         if (allocated(nb%wstart)) call acc_data(nb%wstart, op)
         if (allocated(nb%wlist)) call acc_data(nb%wlist, op)
         if (op == acc_to_host) return
+        if (allocated(nb%pair)) call acc_data(nb%pair, op)
+        if (allocated(nb%pconst)) call acc_data(nb%pconst, op)
         if (allocated(nb%fpair)) call acc_data(nb%fpair, op)
         if (allocated(nb%cpair)) call acc_data(nb%cpair, op)
         if (allocated(nb%x_ref)) call acc_data(nb%x_ref, op)
@@ -729,21 +814,24 @@ contains
         integer(i8), allocatable, intent(out) :: pair(:, :)  !! (2, pairs)
         real(wp), allocatable, intent(out) :: xi(:, :)       !! (3, pairs) [m]
         integer(ip) :: a, i, k, m, pass
+        real(wp) :: h(3)
         do pass = 1, 2
             m = 0
             do a = 1, n_own
                 i = order(a)
                 do k = nb%start(i), nb%start(i + 1) - 1
-                    if (all(nb%xi(:, k) == 0.0_wp)) cycle
+                    call side_history(size(nb%pref, kind=ip), size(nb%xi, 2, kind=ip), k, &
+                                      nb%pref, nb%xi, h)
+                    if (all(h == 0.0_wp)) cycle
                     if (nb%partner(k) < gid(i) .and. nb%mirror(k) /= 0) cycle
                     m = m + 1
                     if (pass == 1) cycle
                     if (nb%partner(k) > gid(i)) then
                         pair(:, m) = [gid(i), nb%partner(k)]
-                        xi(:, m) = nb%xi(:, k)
+                        xi(:, m) = h
                     else
                         pair(:, m) = [nb%partner(k), gid(i)]
-                        xi(:, m) = -nb%xi(:, k)
+                        xi(:, m) = -h
                     end if
                 end do
             end do
@@ -770,8 +858,8 @@ contains
         if (allocated(nb%start)) then
             if (size(nb%start) /= n_own + 1) error stop 'dem_neighbors: the history rows ' // &
                                                        'are not those of the particles'
-            call history_counts(n_own, size(nb%partner, kind=ip), nb%start, nb%mirror, &
-                                nb%xi, cnt)
+            call history_counts(n_own, size(nb%partner, kind=ip), size(nb%xi, 2, kind=ip), &
+                                nb%start, nb%pref, nb%xi, cnt)
         else
             call fill_range(n_own, cnt, 0, 0)
         end if
@@ -781,16 +869,17 @@ contains
         allocate(hpartner(max(1, n_h)), hxi(3, max(1, n_h)))
         call acc_data(hpartner, acc_create)
         call acc_data(hxi, acc_create)
-        if (n_h > 0) call history_fill(n_own, size(nb%partner, kind=ip), nb%start, nb%partner, &
-                                       nb%mirror, nb%xi, hstart, n_h, hpartner, hxi)
+        if (n_h > 0) call history_fill(n_own, size(nb%partner, kind=ip), &
+                                       size(nb%xi, 2, kind=ip), nb%start, nb%partner, &
+                                       nb%pref, nb%xi, hstart, n_h, hpartner, hxi)
         call acc_data(cnt, acc_exit)
     end subroutine neighbors_row_history
 
     !> cnt(i) = the entries of row i with history (side_history nonzero).
-    subroutine history_counts(n_own, n_entries, start, mirror, xi, cnt)
-        integer(ip), intent(in) :: n_own, n_entries
-        integer(ip), intent(in) :: start(n_own + 1), mirror(n_entries)
-        real(wp), intent(in) :: xi(3, n_entries)
+    subroutine history_counts(n_own, n_entries, n_pairs, start, pref, xi, cnt)
+        integer(ip), intent(in) :: n_own, n_entries, n_pairs
+        integer(ip), intent(in) :: start(n_own + 1), pref(n_entries)
+        real(wp), intent(in) :: xi(3, n_pairs)
         integer(ip), intent(inout) :: cnt(n_own)
         integer(ip) :: i, k, m
         real(wp) :: h(3)
@@ -798,7 +887,7 @@ contains
         do i = 1, n_own
             m = 0
             do k = start(i), start(i + 1) - 1
-                call side_history(n_entries, k, mirror, xi, h)
+                call side_history(n_entries, n_pairs, k, pref, xi, h)
                 if (any(h /= 0.0_wp)) m = m + 1
             end do
             cnt(i) = m
@@ -806,12 +895,12 @@ contains
     end subroutine history_counts
 
     !> The entries with history of each row i into hpartner/hxi from hstart(i), in order.
-    subroutine history_fill(n_own, n_entries, start, partner, mirror, xi, hstart, n_h, &
+    subroutine history_fill(n_own, n_entries, n_pairs, start, partner, pref, xi, hstart, n_h, &
                             hpartner, hxi)
-        integer(ip), intent(in) :: n_own, n_entries, n_h
-        integer(ip), intent(in) :: start(n_own + 1), mirror(n_entries), hstart(n_own + 1)
+        integer(ip), intent(in) :: n_own, n_entries, n_pairs, n_h
+        integer(ip), intent(in) :: start(n_own + 1), pref(n_entries), hstart(n_own + 1)
         integer(i8), intent(in) :: partner(n_entries)
-        real(wp), intent(in) :: xi(3, n_entries)
+        real(wp), intent(in) :: xi(3, n_pairs)
         integer(i8), intent(inout) :: hpartner(n_h)
         real(wp), intent(inout) :: hxi(3, n_h)
         integer(ip) :: i, k, m
@@ -820,7 +909,7 @@ contains
         do i = 1, n_own
             m = hstart(i)
             do k = start(i), start(i + 1) - 1
-                call side_history(n_entries, k, mirror, xi, h)
+                call side_history(n_entries, n_pairs, k, pref, xi, h)
                 if (all(h == 0.0_wp)) cycle
                 hpartner(m) = partner(k)
                 hxi(:, m) = h
@@ -829,25 +918,33 @@ contains
         end do
     end subroutine history_fill
 
-    !> The displacement of entry k seen from its row's particle: its own, or, when the
-    !> partner evaluates the pair (mirror < 0), the partner's entry negated (the two sides
-    !> are exact negatives, doc/theory.md section 13).
-    pure subroutine side_history(n_entries, k, mirror, xi, h)
+    !> The tangential displacement of entry k of the lists seen from its row's particle.
+    pure function neighbors_entry_history(nb, k) result(h)
+        type(neighbors_t), intent(in) :: nb
+        integer(ip), intent(in) :: k
+        real(wp) :: h(3)
+        call side_history(size(nb%pref, kind=ip), size(nb%xi, 2, kind=ip), k, nb%pref, nb%xi, h)
+    end function neighbors_entry_history
+
+    !> The displacement of entry k seen from its row's particle: its pair's, or, when the
+    !> partner evaluates the pair (pref < 0), its pair's negated (the two sides are exact
+    !> negatives, doc/theory.md section 13).
+    pure subroutine side_history(n_entries, n_pairs, k, pref, xi, h)
         !$acc routine seq
-        integer(ip), intent(in) :: n_entries, k
-        integer(ip), intent(in) :: mirror(n_entries)
-        real(wp), intent(in) :: xi(3, n_entries)
+        integer(ip), intent(in) :: n_entries, n_pairs, k
+        integer(ip), intent(in) :: pref(n_entries)
+        real(wp), intent(in) :: xi(3, n_pairs)
         real(wp), intent(out) :: h(3)
-        if (mirror(k) < 0) then
-            h = -xi(:, -mirror(k))
+        if (pref(k) < 0) then
+            h = -xi(:, -pref(k))
         else
-            h = xi(:, k)
+            h = xi(:, pref(k))
         end if
     end subroutine side_history
 
     !> Make rows of history (as neighbors_row_history gives them, on the device) the lists'
     !> history, for the next neighbors_build to carry into its lists; the lists are freed.
-    !> Each row's particle evaluates its own entries until then (mirror 0).
+    !> Each entry is a pair of its own until then (mirror 0, pref(k) = k).
     subroutine neighbors_set_rows(nb, start, partner, xi)
         type(neighbors_t), intent(inout) :: nb
         integer(ip), allocatable, intent(inout) :: start(:)
@@ -857,9 +954,11 @@ contains
         call move_alloc(start, nb%start)         ! (their device copies go with them)
         call move_alloc(partner, nb%partner)
         call move_alloc(xi, nb%xi)
-        allocate(nb%mirror(size(nb%partner)))
+        allocate(nb%mirror(size(nb%partner)), nb%pref(size(nb%partner)))
         call acc_data(nb%mirror, acc_create)
+        call acc_data(nb%pref, acc_create)
         call fill_range(size(nb%mirror, kind=ip), nb%mirror, 0, 0)
+        call fill_range(size(nb%pref, kind=ip), nb%pref, 1, 1)
     end subroutine neighbors_set_rows
 
     !> Rows of history for particles 1..n_own from pairs as neighbors_history gives them

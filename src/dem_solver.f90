@@ -20,7 +20,7 @@ module dem_solver
                              neighbors_data, neighbors_free, neighbors_moved, &
                              neighbors_row_history, neighbors_set_rows
     use dem_cells, only: fill_range, kept_indices
-    use dem_contacts_pp, only: pp_forces
+    use dem_contacts_pp, only: pp_forces, pp_pair_constants, n_pair_constants
     use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, wall_contacts_permute, &
                                wall_contacts_reserve, pw_forces
     use dem_forces, only: body_forces, external_forces
@@ -698,10 +698,9 @@ contains
         associate (p => s%p, nb => s%nb, pc => s%pc, m => s%mesh, n => s%p%n_own)
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
             if (allocated(p%ext)) call external_forces(n, c%dt, p%v, p%ext, p%f, p%t)
-            call pp_forces(n, n + p%n_ghost, size(nb%list), c%mats%n, p%x, p%v, p%w, &
-                           p%radius, p%mass, p%mat, nb%start, nb%list, nb%mirror, pc%kn, pc%sn, &
-                           pc%st, pc%cn, pc%ct, pc%mu, pc%clamp_normal, c%dt, nb%xi, &
-                           nb%touching, nb%fpair, nb%cpair, p%f, p%t)
+            call pp_forces(n, n + p%n_ghost, size(nb%list), nb%n_pairs, p%x, p%v, p%w, &
+                           p%radius, nb%start, nb%pref, nb%pair, nb%pconst, pc%clamp_normal, &
+                           c%dt, nb%xi, nb%touching, nb%fpair, nb%cpair, p%f, p%t)
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
             call pw_forces(n, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, p%x, p%v, p%w, &
@@ -795,6 +794,13 @@ contains
         if (s%trace_id /= 0) s%trace = particles_find(s%p%n_own, s%p%gid, s%trace_id)
         call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
                              s%p%radius, s%mesh, old_index=order)
+        associate (nb => s%nb, pc => s%pc)
+            allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)))
+            call acc_data(nb%pconst, acc_create)
+            call pp_pair_constants(s%p%n_own + s%p%n_ghost, nb%n_pairs, size(pc%kn, 1, kind=ip), &
+                                   s%p%radius, s%p%mass, s%p%mat, nb%pair, pc%kn, pc%sn, pc%st, &
+                                   pc%cn, pc%ct, pc%mu, nb%pconst)
+        end associate
         s%lists_on_device = .true.
         call acc_data(order, acc_exit)
         call acc_data(kept, acc_exit)
@@ -1104,8 +1110,8 @@ contains
                 allocate(fr%contacts(n))
                 do a = 1, n
                     i = order(a)
-                    fr%contacts(a) = count(s%nb%touching(s%nb%start(i):s%nb%start(i + 1) - 1)) &
-                                     + count(s%wc%tri(:, i) > 0)
+                    fr%contacts(a) = count(s%nb%touching(abs(s%nb%pref(s%nb%start(i): &
+                                     s%nb%start(i + 1) - 1)))) + count(s%wc%tri(:, i) > 0)
                 end do
             end if
         end associate

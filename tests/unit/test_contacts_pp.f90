@@ -6,7 +6,7 @@ program test_contacts_pp
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t
     use dem_neighbors, only: neighbors_t, neighbors_build
-    use dem_contacts_pp, only: pp_forces
+    use dem_contacts_pp, only: pp_forces, pp_pair_constants, n_pair_constants
     use dem_contact_hm, only: hm_force
     use dem_vector, only: cross
     use dem_assert, only: assert_true, assert_close, assert_finish
@@ -46,16 +46,20 @@ program test_contacts_pp
         if (trial == 3) order = [(mod(37 * i, n) + 1, i = 1, n)]
         nb = neighbors_t(skin=0.001_wp)
         call neighbors_build(nb, n, n, gid(order), x(:, order), r(order), no_walls)
+        allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)))
+        call pp_pair_constants(n, nb%n_pairs, 1_ip, r(order), m(order), mat, nb%pair, kn, sn, &
+                               st, cn, cn, mu, nb%pconst)
         f = 0.0_wp
         t = 0.0_wp
-        call pp_forces(n, n, size(nb%list), 1_ip, x(:, order), v(:, order), &
-                       w(:, order), r(order), m(order), mat, nb%start, nb%list, nb%mirror, kn, &
-                       sn, st, cn, cn, mu, .false., dt, nb%xi, nb%touching, nb%fpair, &
-                       nb%cpair, f, t)
+        call pp_forces(n, n, size(nb%list), nb%n_pairs, x(:, order), v(:, order), &
+                       w(:, order), r(order), nb%start, nb%pref, nb%pair, nb%pconst, .false., &
+                       dt, nb%xi, nb%touching, nb%fpair, nb%cpair, f, t)
         call assert_true(all(f == fb(:, order)) .and. all(t == tb(:, order)), &
                          'two passes equal both-sides brute force, bit for bit')
         call assert_true(2 * count(nb%mirror < 0) == size(nb%list), &
                          'half the entries are evaluated by the partner')
+        call assert_true(2 * nb%n_pairs == size(nb%list) .and. &
+                         count(nb%pref < 0) == nb%n_pairs, 'each pair is stored once')
         do i = 1, 3
             call assert_close(sum(f(i, :)), 0.0_wp, 0.0_wp, 'contact forces sum to zero', &
                               1e-12_wp * maxval(abs(f)))

@@ -11,14 +11,15 @@ program test_neighbors
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t, mesh_add_plane
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
-                             neighbors_spatial_order, neighbors_row_history, neighbors_set_rows
+                             neighbors_spatial_order, neighbors_row_history, neighbors_set_rows, &
+                             neighbors_entry_history
     use dem_mesh, only: closest_point_triangle
     use dem_assert, only: assert_true, assert_finish
     implicit none
     integer(ip), parameter :: n = 300
     type(neighbors_t) :: nb
     type(mesh_t) :: m
-    real(wp) :: x(3, n), r(n), u, ratio, q(3)
+    real(wp) :: x(3, n), r(n), u, ratio, q(3), hk(3)
     integer(i8) :: gid(n)
     integer(ip) :: i, j, k, found, case_no, t, feature, order(n)
     integer(ip), allocatable :: expected(:), kept(:)
@@ -68,12 +69,11 @@ program test_neighbors
         call assert_true(nb%tri_tests < n * m%n_tri / 100, 'wall search tests few triangles')
         call assert_true(all(nb%partner == gid(nb%list)), 'partners carry global ids')
 
-        ! history: give each entry a value made of its pair's ids, move a little, rebuild
-        do i = 1, n
-            do k = nb%start(i), nb%start(i + 1) - 1
-                nb%xi(:, k) = real(gid(i) * 100000 + nb%partner(k), wp)
-            end do
+        ! history: give each pair a value made of its ids, move a little, rebuild
+        do k = 1, nb%n_pairs
+            nb%xi(:, k) = side_xi(gid(nb%pair(1, k)), gid(nb%pair(2, k)))
         end do
+        call assert_true(nb%n_pairs == size(nb%list) / 2, 'each pair is stored once')
         call assert_true(.not. neighbors_stale(nb, n, x, m), 'fresh lists are not stale')
         x(1, 7) = x(1, 7) + 0.45_wp * nb%skin
         call assert_true(.not. neighbors_stale(nb, n, x, m), 'moved less than skin/2')
@@ -85,12 +85,13 @@ program test_neighbors
             do k = nb%start(i), nb%start(i + 1) - 1
                 j = nb%list(k)
                 ! pairs within the old reach kept their history; new pairs start at zero
-                if (all(nb%xi(:, k) == 0.0_wp)) cycle
-                ok = ok .and. all(nb%xi(:, k) == real(gid(i) * 100000 + gid(j), wp))
+                hk = neighbors_entry_history(nb, k)
+                if (all(hk == 0.0_wp)) cycle
+                ok = ok .and. all(hk == side_xi(gid(i), gid(j)))
             end do
         end do
         call assert_true(ok, 'history follows its pair through a rebuild')
-        call assert_true(count(nb%xi(1, :) /= 0.0_wp) >= size(nb%list) - 4 * n / 10, &
+        call assert_true(count(nb%xi(1, 1:nb%n_pairs) /= 0.0_wp) >= nb%n_pairs - 2 * n / 10, &
                          'most pairs kept their history')
 
         ! re-sort the particles in space and rebuild: the history follows the pairs
@@ -105,12 +106,13 @@ program test_neighbors
         do i = 1, n
             do k = nb%start(i), nb%start(i + 1) - 1
                 j = nb%list(k)
-                if (all(nb%xi(:, k) == 0.0_wp)) cycle
-                ok = ok .and. all(nb%xi(:, k) == real(gid(i) * 100000 + gid(j), wp))
+                hk = neighbors_entry_history(nb, k)
+                if (all(hk == 0.0_wp)) cycle
+                ok = ok .and. all(hk == side_xi(gid(i), gid(j)))
             end do
         end do
         call assert_true(ok, 'history follows its pair through a re-sort')
-        call assert_true(count(nb%xi(1, :) /= 0.0_wp) >= size(nb%list) - 4 * n / 10, &
+        call assert_true(count(nb%xi(1, 1:nb%n_pairs) /= 0.0_wp) >= nb%n_pairs - 2 * n / 10, &
                          'the pairs kept their history through the re-sort')
 
         ! remove every third particle (as an outlet does) and rebuild: still brute force
@@ -132,28 +134,23 @@ program test_neighbors
                 end if
             end do
             do k = nb%start(i), nb%start(i + 1) - 1
-                if (all(nb%xi(:, k) == 0.0_wp)) cycle
-                ok = ok .and. all(nb%xi(:, k) == real(gk(i) * 100000 + gk(nb%list(k)), wp))
+                hk = neighbors_entry_history(nb, k)
+                if (all(hk == 0.0_wp)) cycle
+                ok = ok .and. all(hk == side_xi(gk(i), gk(nb%list(k))))
             end do
         end do
         call assert_true(ok, 'lists and history after removing particles')
     end do
 
-    ! rows of history: the evaluating side (mirror >= 0) holds the pair's value, the other
-    ! side a stale value that must not travel; a third of the pairs out of contact (zero)
+    ! rows of history: each pair holds its value from its first particle's side; a third of
+    ! the pairs out of contact (zero)
     nb = neighbors_t(skin=0.004_wp)
     call neighbors_build(nb, n, n, gid, x, r, m)
-    do i = 1, n
-        do k = nb%start(i), nb%start(i + 1) - 1
-            j = nb%list(k)
-            if (nb%mirror(k) < 0) then
-                nb%xi(:, k) = 99.0_wp
-            else if (.not. touching(gid(i), gid(j))) then
-                nb%xi(:, k) = 0.0_wp
-            else
-                nb%xi(:, k) = side_xi(gid(i), gid(j))
-            end if
-        end do
+    do k = 1, nb%n_pairs
+        i = nb%pair(1, k)
+        j = nb%pair(2, k)
+        nb%xi(:, k) = 0.0_wp
+        if (touching(gid(i), gid(j))) nb%xi(:, k) = side_xi(gid(i), gid(j))
     end do
     call neighbors_row_history(nb, n, hstart, hpartner, hxi)
     ok = .true.
@@ -174,10 +171,11 @@ program test_neighbors
     do i = 1, n
         do k = nb%start(i), nb%start(i + 1) - 1
             j = nb%list(k)
+            hk = neighbors_entry_history(nb, k)
             if (touching(gid(i), gid(j))) then
-                ok = ok .and. all(nb%xi(:, k) == side_xi(gid(i), gid(j)))
+                ok = ok .and. all(hk == side_xi(gid(i), gid(j)))
             else
-                ok = ok .and. all(nb%xi(:, k) == 0.0_wp)
+                ok = ok .and. all(hk == 0.0_wp)
             end if
         end do
     end do
