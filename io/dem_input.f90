@@ -6,7 +6,7 @@ module dem_input
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_namelist_scan, only: nml_file_t, nml_block_t, nml_scan, nml_items, nml_location
-    use dem_case, only: case_t, time_scales_t, case_time_scales, case_summarize
+    use dem_case, only: case_t, time_scales_t, case_time_scales, case_summarize, case_speed_bound
     use dem_comm, only: comm_t, comm_any
     use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion
     use dem_stl, only: stl_read
@@ -237,8 +237,7 @@ contains
         c%gpu_aware_mpi = gpu_aware_mpi
 
         call case_time_scales(c, ts)
-        if (max_speed == unset) max_speed = &
-            max(0.1_wp * minval(c%summary%rmin) / dt, 10.0_wp * ts%speed)
+        if (max_speed == unset) max_speed = case_speed_bound(c, ts)
         c%max_speed = max_speed
         if (dt > ts%bound .and. .not. allow_unstable) then
             write(s1, '(es10.3)') dt

@@ -12,7 +12,7 @@ module dem_case
     implicit none
     private
     public :: case_t, time_scales_t, case_time_scales, case_summarize, case_particle_materials, &
-              case_release_particles
+              case_speed_bound, case_release_particles
 
     !> What the time scales and the checks need of the particles of all ranks
     !> (case_summarize).
@@ -152,6 +152,14 @@ contains
     !> Rayleigh time of the smallest particle, shortest Hertz contact time over the material
     !> pairs present (smallest radius of each material; particle pairs meet at twice the
     !> expected speed, particles hit walls at it), and the stability bound on dt. The expected
+    !> A speed that no particle reaches in a stable run (the instability guard's default):
+    !> a tenth of the smallest radius per step, or ten times the largest expected speed [m/s].
+    pure real(wp) function case_speed_bound(c, ts) result(speed)
+        type(case_t), intent(in) :: c
+        type(time_scales_t), intent(in) :: ts
+        speed = max(0.1_wp * minval(c%summary%rmin) / c%dt, 10.0_wp * ts%speed)
+    end function case_speed_bound
+
     !> speed is the largest of expected_speed, the initial speeds and the free-fall speed.
     !> From the case's summary (case_summarize): the Rayleigh time grows with the radius, so
     !> the smallest sphere of each material has the shortest of its material.

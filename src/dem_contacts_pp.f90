@@ -1,34 +1,39 @@
-!> Particle-particle contact forces (doc/theory.md, section 2), in two passes without
-!> atomics. The neighbour lists hold every pair once in a compact store (dem_neighbors), with
-!> the constants of the pair taken at the list build (pp_pair_constants). First every pair
-!> is evaluated, which stores its force on its first particle and n x F_t (the opposite force
-!> acts on the second) and marks it touching. Then each owned particle sums the touching
-!> pairs of its row of the full list in order (partner ids), each with its sign. As the two
-!> sides of a contact are exact negatives, the sums equal those of evaluating every contact
-!> from both sides, bit for bit, at half the cost, and do not depend on where particles are
-!> stored or on the number of ranks.
+!> Particle-particle contact forces (doc/theory.md, section 2) in one pass over the pairs.
+!> The neighbour lists hold every pair once in a compact store (dem_neighbors), with the
+!> constants of the pair taken at the list build (pp_pair_constants). Each pair's force and
+!> n x F_t are added to both particles in 64-bit fixed point (doc/theory.md, section 13):
+!> integer sums do not depend on the order of their terms, so the forces are the same bit
+!> for bit whatever order pairs are evaluated in, where particles are stored and on any
+!> number of ranks, and on a GPU the sums are integer atomics.
 module dem_contacts_pp
-    use dem_kinds, only: wp, ip
+    use dem_kinds, only: wp, ip, i8
     use dem_contact_hm, only: hm_force_damped
     implicit none
     private
-    public :: pp_forces, pp_pair_constants, n_pair_constants
+    public :: pp_forces, pp_pair_constants, n_pair_constants, fixed_scale
 
-    !> the constants of a pair: R_i + R_j, R*, kn, st, cn sqrt(sn m*), ct sqrt(st m*), mu
+    !> the constants of a pair: R_i + R_j, R*, kn, st, cn sqrt(sn m*), ct sqrt(st m*), mu, and
+    !> the fixed-point scales of its two particles
     integer, parameter :: c_rsum = 1, c_rstar = 2, c_kn = 3, c_st = 4, c_dn = 5, c_dt = 6, &
-                          c_mu = 7, n_pair_constants = 7
+                          c_mu = 7, c_si = 8, c_sj = 9, n_pair_constants = 9
+
+    !> one-word fixed point (fixed_scale): terms within the bound take at most 57 bits; terms
+    !> are clipped at 16 times the bound, so that sums of up to 4 clipped terms still fit
+    integer, parameter :: fixed_bits = 57
+    real(wp), parameter :: fixed_limit = 2.0_wp**61
 
 contains
 
     !> The constants of each pair (i, j) = pair(:, p) from the particles' radii, masses and
     !> materials, computed as the contact law would compute them at every step.
     subroutine pp_pair_constants(n_all, n_pairs, nm, radius, mass, mat, pair, kn, sn, st, cn, &
-                                 ct, mu, pconst)
+                                 ct, mu, accel_bound, pconst)
         integer(ip), intent(in) :: n_all, n_pairs, nm
         real(wp), intent(in) :: radius(n_all), mass(n_all)  !! [m], [kg]
         integer(ip), intent(in) :: mat(n_all), pair(2, n_pairs)
         real(wp), intent(in) :: kn(nm, nm), sn(nm, nm), st(nm, nm)  !! [Pa]
         real(wp), intent(in) :: cn(nm, nm), ct(nm, nm), mu(nm, nm)  !! [-]
+        real(wp), intent(in) :: accel_bound  !! m accel_bound bounds a particle's force [m/s^2]
         real(wp), intent(inout) :: pconst(n_pair_constants, n_pairs)
         integer(ip) :: p, i, j, a, b
         real(wp) :: rsum, mstar
@@ -47,37 +52,38 @@ contains
             pconst(c_dn, p) = cn(a, b) * sqrt(sn(a, b) * mstar)
             pconst(c_dt, p) = ct(a, b) * sqrt(st(a, b) * mstar)
             pconst(c_mu, p) = mu(a, b)
+            pconst(c_si, p) = fixed_scale(mass(i) * accel_bound)
+            pconst(c_sj, p) = fixed_scale(mass(j) * accel_bound)
         end do
     end subroutine pp_pair_constants
 
     !> Add the contact force and torque of every overlapping pair to the owned particles.
     !> Pairs not in contact have their tangential history reset.
-    subroutine pp_forces(n_own, n_all, n_entries, n_pairs, x, v, w, radius, start, pref, &
-                         pair, pconst, clamp_normal, dt, xi, touching, fpair, cpair, f, t)
+    subroutine pp_forces(n_own, n_all, n_pairs, x, v, w, radius, mass, pair, pconst, &
+                         clamp_normal, dt, accel_bound, xi, touching, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
-        integer(ip), intent(in) :: n_entries      !! length of the full neighbour list
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
         real(wp), intent(in) :: x(3, n_all), v(3, n_all), w(3, n_all)  !! [m], [m/s], [rad/s]
-        real(wp), intent(in) :: radius(n_all)     !! [m]
-        integer(ip), intent(in) :: start(n_own + 1)  !! row i of the full list
-        integer(ip), intent(in) :: pref(n_entries)   !! its pair, negated when the row's
-                                                     !! particle is the pair's second
+        real(wp), intent(in) :: radius(n_all), mass(n_all)  !! [m], [kg]
         integer(ip), intent(in) :: pair(2, n_pairs)  !! the two particles of a pair
         real(wp), intent(in) :: pconst(n_pair_constants, n_pairs)
         logical, intent(in) :: clamp_normal
         real(wp), intent(in) :: dt                   !! [s]
+        real(wp), intent(in) :: accel_bound          !! of the fixed-point scales [m/s^2]
         real(wp), intent(inout) :: xi(3, n_pairs)    !! tangential history of the first [m]
         logical, intent(inout) :: touching(n_pairs)  !! in contact (xi /= 0 only if so)
-        real(wp), intent(inout) :: fpair(3, n_pairs) !! force on the first [N]
-        real(wp), intent(inout) :: cpair(3, n_pairs) !! n x F_t [N]
+        integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
+                                                     !! (zero between calls)
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m]
-        integer(ip) :: i, j, k, p
-        real(wp) :: d(3), dist2, dist, rsum, overlap, nrm(3), vrel(3), fn, ft(3), fi(3), &
-                    ti(3), xik(3), wsum(3)
+        integer(ip) :: i, j, p, c
+        integer(i8) :: kf(3), kc(3)
+        real(wp) :: d(3), dist2, dist, rsum, overlap, nrm(3), vrel(3), fn, ft(3), fp(3), &
+                    cp(3), xik(3), wsum(3), si, sj, inv
 
-        ! pass 1: every pair once
-        !$acc parallel loop gang vector default(present) &
-        !$acc private(i, j, dist2, dist, rsum, overlap, fn, d, nrm, vrel, ft, xik, wsum)
+        ! every pair once; its force and n x F_t go to both particles' sums, those of a
+        ! ghost partner to its own rank, which evaluates the pair too
+        !$acc parallel loop gang vector default(present) private(i, j, c, kf, kc, dist2, dist) &
+        !$acc private(rsum, overlap, fn, si, sj, d, nrm, vrel, ft, fp, cp, xik, wsum)
         do p = 1, n_pairs
             i = pair(1, p)
             j = pair(2, p)
@@ -105,30 +111,63 @@ contains
                                  pconst(c_st, p), pconst(c_dn, p), pconst(c_dt, p), &
                                  pconst(c_mu, p), clamp_normal, dt, xik, fn, ft)
             xi(:, p) = xik
-            fpair(:, p) = -fn * nrm + ft
-            cpair(1, p) = nrm(2) * ft(3) - nrm(3) * ft(2)
-            cpair(2, p) = nrm(3) * ft(1) - nrm(1) * ft(3)
-            cpair(3, p) = nrm(1) * ft(2) - nrm(2) * ft(1)
             touching(p) = .true.
+            fp = -fn * nrm + ft
+            cp(1) = nrm(2) * ft(3) - nrm(3) * ft(2)
+            cp(2) = nrm(3) * ft(1) - nrm(1) * ft(3)
+            cp(3) = nrm(1) * ft(2) - nrm(2) * ft(1)
+            si = pconst(c_si, p)
+            do c = 1, 3
+                kf(c) = to_fixed(fp(c) * si)
+                kc(c) = to_fixed(cp(c) * si)
+                !$acc atomic update
+                acc(c, i) = acc(c, i) + kf(c)
+                !$acc atomic update
+                acc(c + 3, i) = acc(c + 3, i) + kc(c)
+            end do
+            if (j > n_own) cycle
+            sj = pconst(c_sj, p)
+            do c = 1, 3                           ! (the same words where the scales are)
+                if (sj /= si) then
+                    kf(c) = to_fixed(fp(c) * sj)
+                    kc(c) = to_fixed(cp(c) * sj)
+                end if
+                !$acc atomic update
+                acc(c, j) = acc(c, j) - kf(c)
+                !$acc atomic update
+                acc(c + 3, j) = acc(c + 3, j) + kc(c)
+            end do
         end do
 
-        ! pass 2: each particle gathers its contacts in the order of its row
-        !$acc parallel loop gang vector default(present) private(k, p, fi, ti)
+        ! the sums into the forces and torques, and cleared for the next call
+        !$acc parallel loop gang vector default(present) private(c, inv)
         do i = 1, n_own
-            fi = 0.0_wp
-            ti = 0.0_wp
-            do k = start(i), start(i + 1) - 1
-                p = abs(pref(k))
-                if (.not. touching(p)) cycle
-                if (pref(k) > 0) then
-                    fi = fi + fpair(:, p)
-                else
-                    fi = fi - fpair(:, p)
-                end if
-                ti = ti + radius(i) * cpair(:, p)
+            inv = 1.0_wp / fixed_scale(mass(i) * accel_bound)
+            do c = 1, 3
+                f(c, i) = f(c, i) + real(acc(c, i), wp) * inv
+                t(c, i) = t(c, i) + radius(i) * (real(acc(c + 3, i), wp) * inv)
             end do
-            f(:, i) = f(:, i) + fi
-            t(:, i) = t(:, i) + ti
+            acc(:, i) = 0
         end do
     end subroutine pp_forces
+
+    !> The scale 2^(57 - e) of one-word fixed point for terms and sums within bound < 2^e:
+    !> to_fixed(t scale) is t to 2^-57 of the bound, and the sum of such words, converted back
+    !> (times 1 / scale, exact), does not depend on the order of the terms.
+    pure real(wp) function fixed_scale(bound) result(scale)
+        !$acc routine seq
+        real(wp), intent(in) :: bound
+        scale = 1.0_wp
+        if (bound > 0.0_wp) scale = set_exponent(1.0_wp, fixed_bits + 1 - exponent(bound))
+    end function fixed_scale
+
+    !> y rounded to the nearest integer (halves away from zero), clipped to +-2^61 (16 times
+    !> the bound of fixed_scale; a term beyond it is an unstable run's).
+    pure integer(i8) function to_fixed(y) result(k)
+        !$acc routine seq
+        real(wp), intent(in) :: y
+        real(wp) :: yc
+        yc = min(max(y, -fixed_limit), fixed_limit)
+        k = int(yc + sign(0.5_wp, yc), i8)
+    end function to_fixed
 end module dem_contacts_pp

@@ -43,8 +43,8 @@ module dem_neighbors
         real(wp), allocatable :: xi(:, :)     !< tangential displacement of each pair's
                                               !< first particle [m]
         logical, allocatable :: touching(:)   !< the pair is in contact (xi /= 0 only then)
-        real(wp), allocatable :: fpair(:, :)  !< work space of the contact kernel [N]
-        real(wp), allocatable :: cpair(:, :)  !< work space of the contact kernel [N]
+        integer(i8), allocatable :: acc(:, :) !< work space of the contact kernel: the owned
+                                              !< particles' sums, zero between steps
         integer(ip), allocatable :: wstart(:) !< wall row i is wstart(i):wstart(i+1)-1
         integer(ip), allocatable :: wlist(:)  !< candidate triangle
         real(wp), allocatable :: x_ref(:, :)  !< positions at the last build [m]
@@ -269,13 +269,12 @@ contains
         call acc_data(pstart(n_own + 1:n_own + 1), acc_to_host)
         nb%n_pairs = pstart(n_own + 1) - 1
         allocate(nb%pair(2, max(1, nb%n_pairs)), nb%xi(3, max(1, nb%n_pairs)), &
-                 nb%touching(max(1, nb%n_pairs)), nb%fpair(3, max(1, nb%n_pairs)), &
-                 nb%cpair(3, max(1, nb%n_pairs)))
+                 nb%touching(max(1, nb%n_pairs)), nb%acc(6, max(1, n_own)))
+        nb%acc = 0
         call acc_data(nb%pair, acc_create)
         call acc_data(nb%xi, acc_create)
         call acc_data(nb%touching, acc_create)
-        call acc_data(nb%fpair, acc_create)
-        call acc_data(nb%cpair, acc_create)
+        call acc_data(nb%acc, acc_enter)
         call number_pairs(n_own, n_entries, nb%n_pairs, nb%start, nb%list, nb%mirror, pstart, &
                           nb%pref, nb%pair, nb%xi)
         call acc_data(pstart, acc_exit)
@@ -788,8 +787,7 @@ contains
         if (op == acc_to_host) return
         if (allocated(nb%pair)) call acc_data(nb%pair, op)
         if (allocated(nb%pconst)) call acc_data(nb%pconst, op)
-        if (allocated(nb%fpair)) call acc_data(nb%fpair, op)
-        if (allocated(nb%cpair)) call acc_data(nb%cpair, op)
+        if (allocated(nb%acc)) call acc_data(nb%acc, op)
         if (allocated(nb%x_ref)) call acc_data(nb%x_ref, op)
         if (allocated(nb%vert_ref)) call acc_data(nb%vert_ref, op)
     end subroutine neighbors_data

@@ -8,7 +8,8 @@ module dem_solver
     use dem_error, only: error_t, set_error, dem_err_runtime, dem_err_input
     use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather, comm_node_rank, &
                         comm_counts, comm_exchange
-    use dem_case, only: case_t, time_scales_t, case_time_scales, case_particle_materials
+    use dem_case, only: case_t, time_scales_t, case_time_scales, case_particle_materials, &
+                        case_speed_bound
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
                              particles_reserve, order_by_id, particles_find, particles_park, &
                              particles_data
@@ -110,6 +111,8 @@ module dem_solver
         integer(i8) :: parked = 0         !< particles taken out by outlets, not yet removed
                                           !< (over the ranks)
         type(time_scales_t) :: scales     !< of the case's particles (an unstable run's message)
+        real(wp) :: accel_bound = 1.0_wp  !< m accel_bound bounds a particle's force, for the
+                                          !< contact sums' fixed point [m/s^2]
         logical, allocatable :: gone(:)  !< outlet flags of the owned particles, on the device
         logical, allocatable :: fresh(:) !< those flagged at the last step
         type(frame_t) :: good          !< the last state that passed the instability guard
@@ -152,6 +155,7 @@ contains
         s%sort_cell = 2.0_wp * minval(c%summary%rmin) + c%skin
         s%run%probed = case_particle_materials(c)
         call case_time_scales(c, s%scales)
+        s%accel_bound = case_speed_bound(c, s%scales) / c%dt
         s%step = 0
         s%rng_state = c%rng_state
         allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0), s%stale(0))
@@ -698,9 +702,9 @@ contains
         associate (p => s%p, nb => s%nb, pc => s%pc, m => s%mesh, n => s%p%n_own)
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
             if (allocated(p%ext)) call external_forces(n, c%dt, p%v, p%ext, p%f, p%t)
-            call pp_forces(n, n + p%n_ghost, size(nb%list), nb%n_pairs, p%x, p%v, p%w, &
-                           p%radius, nb%start, nb%pref, nb%pair, nb%pconst, pc%clamp_normal, &
-                           c%dt, nb%xi, nb%touching, nb%fpair, nb%cpair, p%f, p%t)
+            call pp_forces(n, n + p%n_ghost, nb%n_pairs, p%x, p%v, p%w, p%radius, p%mass, &
+                           nb%pair, nb%pconst, pc%clamp_normal, c%dt, s%accel_bound, nb%xi, &
+                           nb%touching, nb%acc, p%f, p%t)
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
             call pw_forces(n, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, p%x, p%v, p%w, &
@@ -799,7 +803,7 @@ contains
             call acc_data(nb%pconst, acc_create)
             call pp_pair_constants(s%p%n_own + s%p%n_ghost, nb%n_pairs, size(pc%kn, 1, kind=ip), &
                                    s%p%radius, s%p%mass, s%p%mat, nb%pair, pc%kn, pc%sn, pc%st, &
-                                   pc%cn, pc%ct, pc%mu, nb%pconst)
+                                   pc%cn, pc%ct, pc%mu, s%accel_bound, nb%pconst)
         end associate
         s%lists_on_device = .true.
         call acc_data(order, acc_exit)

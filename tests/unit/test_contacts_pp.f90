@@ -1,19 +1,23 @@
-!> The two-pass particle contact kernel (each pair evaluated once, gathered by both) against
-!> brute force evaluating every contact from both sides: the same forces and torques bit for
-!> bit, whatever order the particles are stored in; and Newton's third law (the contact
-!> forces sum to zero).
+!> The one-pass particle contact kernel (each pair evaluated once, its force added to both
+!> particles in fixed point) against brute force evaluating every contact from both sides in
+!> floating point: the same forces and torques to the rounding of the fixed point (half a
+!> unit of its last place per contact) and of the floating-point sums; bit for bit the same
+!> forces whatever order the particles are stored in; and Newton's third law (the contact
+!> forces sum to zero, to the fixed point's rounding).
 program test_contacts_pp
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t
     use dem_neighbors, only: neighbors_t, neighbors_build
-    use dem_contacts_pp, only: pp_forces, pp_pair_constants, n_pair_constants
+    use dem_contacts_pp, only: pp_forces, pp_pair_constants, n_pair_constants, fixed_scale
     use dem_contact_hm, only: hm_force
     use dem_vector, only: cross
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     integer(ip), parameter :: n = 80
-    real(wp), parameter :: e_star = 1.0e7_wp, dt = 1.0e-6_wp
+    real(wp), parameter :: e_star = 1.0e7_wp, dt = 1.0e-6_wp, accel_bound = 1.0e5_wp
     real(wp) :: x(3, n), v(3, n), w(3, n), r(n), m(n), f(3, n), t(3, n), fb(3, n), tb(3, n)
+    real(wp) :: f1(3, n), t1(3, n), tol_f(n), tol_t(n), big(n), quantum(n)
+    integer(ip) :: contacts(n), back(n)
     real(wp) :: kn(1, 1), sn(1, 1), st(1, 1), cn(1, 1), mu(1, 1)
     integer(i8) :: gid(n)
     integer(ip) :: mat(n), i, order(n), trial
@@ -38,6 +42,11 @@ program test_contacts_pp
     w = 100.0_wp * (w - 0.5_wp)
     gid = [(int(7 * i + 3, i8), i = 1, n)]
     call brute_force(fb, tb)
+    ! each term of a fixed-point sum is off by at most half a unit, 1 / (2 scale); the
+    ! floating-point sums by a few roundings of the largest term
+    quantum = [(1.0_wp / fixed_scale(m(i) * accel_bound), i = 1, n)]
+    tol_f = contacts * (0.5_wp * quantum + 4.0_wp * epsilon(1.0_wp) * big)
+    tol_t = r * tol_f
 
     do trial = 1, 3
         ! store the particles in another order each time
@@ -48,29 +57,42 @@ program test_contacts_pp
         call neighbors_build(nb, n, n, gid(order), x(:, order), r(order), no_walls)
         allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)))
         call pp_pair_constants(n, nb%n_pairs, 1_ip, r(order), m(order), mat, nb%pair, kn, sn, &
-                               st, cn, cn, mu, nb%pconst)
+                               st, cn, cn, mu, accel_bound, nb%pconst)
         f = 0.0_wp
         t = 0.0_wp
-        call pp_forces(n, n, size(nb%list), nb%n_pairs, x(:, order), v(:, order), &
-                       w(:, order), r(order), nb%start, nb%pref, nb%pair, nb%pconst, .false., &
-                       dt, nb%xi, nb%touching, nb%fpair, nb%cpair, f, t)
-        call assert_true(all(f == fb(:, order)) .and. all(t == tb(:, order)), &
-                         'two passes equal both-sides brute force, bit for bit')
+        call pp_forces(n, n, nb%n_pairs, x(:, order), v(:, order), w(:, order), r(order), &
+                       m(order), nb%pair, nb%pconst, .false., dt, accel_bound, nb%xi, &
+                       nb%touching, nb%acc, f, t)
+        back(order) = [(i, i = 1, n)]
+        f = f(:, back)                     ! back in the order of the brute force
+        t = t(:, back)
+        call assert_true(all(abs(f - fb) <= spread(tol_f, 1, 3)) .and. &
+                         all(abs(t - tb) <= spread(tol_t, 1, 3)), &
+                         'one pass equals both-sides brute force to the roundings')
+        if (trial == 1) then
+            f1 = f
+            t1 = t
+        end if
+        call assert_true(all(f == f1) .and. all(t == t1), &
+                         'the same forces bit for bit in any storage order')
+        call assert_true(all(nb%acc == 0), 'the sums are cleared for the next step')
         call assert_true(2 * count(nb%mirror < 0) == size(nb%list), &
                          'half the entries are evaluated by the partner')
         call assert_true(2 * nb%n_pairs == size(nb%list) .and. &
                          count(nb%pref < 0) == nb%n_pairs, 'each pair is stored once')
         do i = 1, 3
             call assert_close(sum(f(i, :)), 0.0_wp, 0.0_wp, 'contact forces sum to zero', &
-                              1e-12_wp * maxval(abs(f)))
+                              sum(contacts * quantum))
         end do
+        deallocate(nb%pconst)
     end do
     call assert_true(maxval(abs(fb)) > 0.0_wp, 'there are contacts')
     call assert_finish()
 
 contains
 
-    !> Every contact evaluated from both sides, summed in the order of the partners' ids.
+    !> Every contact evaluated from both sides, summed in the order of the partners' ids;
+    !> the contacts of each particle and its largest contact force.
     subroutine brute_force(fo, to)
         real(wp), intent(out) :: fo(3, n), to(3, n)
         integer(ip) :: a, b, byid(n)
@@ -78,6 +100,8 @@ contains
         byid = [(i, i = 1, n)]           ! gid grows with the index here
         fo = 0.0_wp
         to = 0.0_wp
+        contacts = 0
+        big = 0.0_wp
         do a = 1, n
             do i = 1, n
                 b = byid(i)
@@ -92,6 +116,8 @@ contains
                               m(a) * m(b) / (m(a) + m(b)), kn(1, 1), sn(1, 1), st(1, 1), &
                               cn(1, 1), cn(1, 1), mu(1, 1), .false., dt, xi, fn, ft)
                 fo(:, a) = fo(:, a) + (-fn * nrm + ft)
+                contacts(a) = contacts(a) + 1
+                big(a) = max(big(a), maxval(abs(-fn * nrm + ft)))
                 to(:, a) = to(:, a) + r(a) * cross(nrm, ft)
             end do
         end do
