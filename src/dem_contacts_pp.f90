@@ -157,8 +157,13 @@ contains
     pure real(wp) function fixed_scale(bound) result(scale)
         !$acc routine seq
         real(wp), intent(in) :: bound
+        integer(i8) :: e
         scale = 1.0_wp
-        if (bound > 0.0_wp) scale = set_exponent(1.0_wp, fixed_bits + 1 - exponent(bound))
+        if (.not. (bound >= tiny(1.0_wp) .and. bound <= huge(1.0_wp))) return
+        ! bound = f 2^e, f in [0.5, 1): e = the biased exponent field - 1022 (what exponent()
+        ! gives, without a library call); the scale's field is fixed_bits - e + 1023
+        e = ibits(transfer(bound, 1_i8), 52, 11) - 1022_i8
+        scale = transfer(ishft(int(fixed_bits, i8) - e + 1023_i8, 52), 1.0_wp)
     end function fixed_scale
 
     !> y rounded to the nearest integer (halves away from zero), clipped to +-2^61 (16 times

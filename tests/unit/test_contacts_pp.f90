@@ -18,6 +18,8 @@ program test_contacts_pp
     real(wp) :: x(3, n), v(3, n), w(3, n), r(n), m(n), f(3, n), t(3, n), fb(3, n), tb(3, n)
     real(wp) :: f1(3, n), t1(3, n), tol_f(n), tol_t(n), big(n), quantum(n)
     integer(ip) :: contacts(n), back(n)
+    real(wp) :: bound
+    logical :: ok
     real(wp) :: kn(1, 1), sn(1, 1), st(1, 1), cn(1, 1), mu(1, 1)
     integer(i8) :: gid(n)
     integer(ip) :: mat(n), i, order(n), trial
@@ -82,11 +84,18 @@ program test_contacts_pp
                          count(nb%pref < 0) == nb%n_pairs, 'each pair is stored once')
         do i = 1, 3
             call assert_close(sum(f(i, :)), 0.0_wp, 0.0_wp, 'contact forces sum to zero', &
-                              sum(contacts * quantum))
+                              sum(contacts * quantum) + n * epsilon(1.0_wp) * maxval(abs(f)))
         end do
         deallocate(nb%pconst)
     end do
     call assert_true(maxval(abs(fb)) > 0.0_wp, 'there are contacts')
+    ok = .true.                            ! the scale puts the bound in [2^56, 2^57)
+    do i = -300, 300
+        bound = 1.7_wp**i
+        ok = ok .and. fixed_scale(bound) == 2.0_wp**(57 - exponent(bound)) .and. &
+             bound * fixed_scale(bound) < 2.0_wp**57 .and. bound * fixed_scale(bound) >= 2.0_wp**56
+    end do
+    call assert_true(ok, 'fixed-point scales from the bound')
     call assert_finish()
 
 contains
