@@ -21,7 +21,8 @@ module dem_neighbors
               neighbors_free, neighbors_moved, grid_t, grid_shape, grid_fill, cell_of, &
               neighbors_entry_history
 
-    !> The lists, their per-entry tangential history, and the positions they were built at.
+    !> The lists, their pairs (each once) with their tangential history, and the positions
+    !> they were built at.
     type :: neighbors_t
         real(wp) :: skin = 0.0_wp             !< [m]
         integer(ip) :: n_builds = 0
