@@ -149,9 +149,6 @@ contains
         v = sqrt(2.0_wp * g * (hi - lo))
     end function fall_speed
 
-    !> Rayleigh time of the smallest particle, shortest Hertz contact time over the material
-    !> pairs present (smallest radius of each material; particle pairs meet at twice the
-    !> expected speed, particles hit walls at it), and the stability bound on dt. The expected
     !> A speed that no particle reaches in a stable run (the instability guard's default):
     !> a tenth of the smallest radius per step, or ten times the largest expected speed [m/s].
     pure real(wp) function case_speed_bound(c, ts) result(speed)
@@ -160,6 +157,9 @@ contains
         speed = max(0.1_wp * minval(c%summary%rmin) / c%dt, 10.0_wp * ts%speed)
     end function case_speed_bound
 
+    !> Rayleigh time of the smallest particle, shortest Hertz contact time over the material
+    !> pairs present (smallest radius of each material; particle pairs meet at twice the
+    !> expected speed, particles hit walls at it), and the stability bound on dt. The expected
     !> speed is the largest of expected_speed, the initial speeds and the free-fall speed.
     !> From the case's summary (case_summarize): the Rayleigh time grows with the radius, so
     !> the smallest sphere of each material has the shortest of its material.

@@ -12,10 +12,9 @@ module dem_contacts_pp
     private
     public :: pp_forces, pp_pair_constants, n_pair_constants, fixed_scale
 
-    !> the constants of a pair: R_i + R_j, R*, kn, st, cn sqrt(sn m*), ct sqrt(st m*), mu, and
-    !> the fixed-point scales of its two particles
+    !> the constants of a pair: R_i + R_j, R*, kn, st, cn sqrt(sn m*), ct sqrt(st m*), mu
     integer, parameter :: c_rsum = 1, c_rstar = 2, c_kn = 3, c_st = 4, c_dn = 5, c_dt = 6, &
-                          c_mu = 7, c_si = 8, c_sj = 9, n_pair_constants = 9
+                          c_mu = 7, n_pair_constants = 7
 
     !> one-word fixed point (fixed_scale): terms within the bound take at most 57 bits; terms
     !> are clipped at 16 times the bound, so that sums of up to 4 clipped terms still fit
@@ -25,9 +24,10 @@ module dem_contacts_pp
 contains
 
     !> The constants of each pair (i, j) = pair(:, p) from the particles' radii, masses and
-    !> materials, computed as the contact law would compute them at every step.
+    !> materials, computed as the contact law would compute them at every step, and each
+    !> particle's fixed-point scale.
     subroutine pp_pair_constants(n_all, n_pairs, nm, radius, mass, mat, pair, kn, sn, st, cn, &
-                                 ct, mu, accel_bound, pconst)
+                                 ct, mu, accel_bound, pconst, scale)
         integer(ip), intent(in) :: n_all, n_pairs, nm
         real(wp), intent(in) :: radius(n_all), mass(n_all)  !! [m], [kg]
         integer(ip), intent(in) :: mat(n_all), pair(2, n_pairs)
@@ -35,8 +35,13 @@ contains
         real(wp), intent(in) :: cn(nm, nm), ct(nm, nm), mu(nm, nm)  !! [-]
         real(wp), intent(in) :: accel_bound  !! m accel_bound bounds a particle's force [m/s^2]
         real(wp), intent(inout) :: pconst(n_pair_constants, n_pairs)
+        real(wp), intent(inout) :: scale(n_all)  !! fixed_scale of m accel_bound
         integer(ip) :: p, i, j, a, b
         real(wp) :: rsum, mstar
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n_all
+            scale(i) = fixed_scale(mass(i) * accel_bound)
+        end do
         !$acc parallel loop gang vector default(present) private(i, j, a, b, rsum, mstar)
         do p = 1, n_pairs
             i = pair(1, p)
@@ -52,24 +57,22 @@ contains
             pconst(c_dn, p) = cn(a, b) * sqrt(sn(a, b) * mstar)
             pconst(c_dt, p) = ct(a, b) * sqrt(st(a, b) * mstar)
             pconst(c_mu, p) = mu(a, b)
-            pconst(c_si, p) = fixed_scale(mass(i) * accel_bound)
-            pconst(c_sj, p) = fixed_scale(mass(j) * accel_bound)
         end do
     end subroutine pp_pair_constants
 
     !> Add the contact force and torque of every overlapping pair to the owned particles.
     !> Pairs not in contact have their tangential history reset.
-    subroutine pp_forces(n_own, n_all, n_pairs, x, v, w, radius, mass, pair, pconst, &
-                         clamp_normal, dt, accel_bound, xi, touching, acc, f, t)
+    subroutine pp_forces(n_own, n_all, n_pairs, x, v, w, radius, scale, pair, pconst, &
+                         clamp_normal, dt, xi, touching, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
         real(wp), intent(in) :: x(3, n_all), v(3, n_all), w(3, n_all)  !! [m], [m/s], [rad/s]
-        real(wp), intent(in) :: radius(n_all), mass(n_all)  !! [m], [kg]
+        real(wp), intent(in) :: radius(n_all)     !! [m]
+        real(wp), intent(in) :: scale(n_all)      !! fixed-point scales (pp_pair_constants)
         integer(ip), intent(in) :: pair(2, n_pairs)  !! the two particles of a pair
         real(wp), intent(in) :: pconst(n_pair_constants, n_pairs)
         logical, intent(in) :: clamp_normal
         real(wp), intent(in) :: dt                   !! [s]
-        real(wp), intent(in) :: accel_bound          !! of the fixed-point scales [m/s^2]
         real(wp), intent(inout) :: xi(3, n_pairs)    !! tangential history of the first [m]
         logical, intent(inout) :: touching(n_pairs)  !! in contact (xi /= 0 only if so)
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
@@ -116,7 +119,7 @@ contains
             cp(1) = nrm(2) * ft(3) - nrm(3) * ft(2)
             cp(2) = nrm(3) * ft(1) - nrm(1) * ft(3)
             cp(3) = nrm(1) * ft(2) - nrm(2) * ft(1)
-            si = pconst(c_si, p)
+            si = scale(i)
             do c = 1, 3
                 kf(c) = to_fixed(fp(c) * si)
                 kc(c) = to_fixed(cp(c) * si)
@@ -126,7 +129,7 @@ contains
                 acc(c + 3, i) = acc(c + 3, i) + kc(c)
             end do
             if (j > n_own) cycle
-            sj = pconst(c_sj, p)
+            sj = scale(j)
             do c = 1, 3                           ! (the same words where the scales are)
                 if (sj /= si) then
                     kf(c) = to_fixed(fp(c) * sj)
@@ -142,7 +145,7 @@ contains
         ! the sums into the forces and torques, and cleared for the next call
         !$acc parallel loop gang vector default(present) private(c, inv)
         do i = 1, n_own
-            inv = 1.0_wp / fixed_scale(mass(i) * accel_bound)
+            inv = 1.0_wp / scale(i)
             do c = 1, 3
                 f(c, i) = f(c, i) + real(acc(c, i), wp) * inv
                 t(c, i) = t(c, i) + radius(i) * (real(acc(c + 3, i), wp) * inv)

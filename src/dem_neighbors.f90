@@ -41,6 +41,7 @@ module dem_neighbors
         integer(ip), allocatable :: pair(:, :) !< (first, second) particle of each pair; the
                                               !< first is the row's particle that evaluates it
         real(wp), allocatable :: pconst(:, :) !< constants of each pair (dem_contacts_pp)
+        real(wp), allocatable :: scale(:)     !< fixed-point scale of each particle (same)
         real(wp), allocatable :: xi(:, :)     !< tangential displacement of each pair's
                                               !< first particle [m]
         logical, allocatable :: touching(:)   !< the pair is in contact (xi /= 0 only then)
@@ -788,6 +789,7 @@ contains
         if (op == acc_to_host) return
         if (allocated(nb%pair)) call acc_data(nb%pair, op)
         if (allocated(nb%pconst)) call acc_data(nb%pconst, op)
+        if (allocated(nb%scale)) call acc_data(nb%scale, op)
         if (allocated(nb%acc)) call acc_data(nb%acc, op)
         if (allocated(nb%x_ref)) call acc_data(nb%x_ref, op)
         if (allocated(nb%vert_ref)) call acc_data(nb%vert_ref, op)

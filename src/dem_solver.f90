@@ -702,9 +702,9 @@ contains
         associate (p => s%p, nb => s%nb, pc => s%pc, m => s%mesh, n => s%p%n_own)
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
             if (allocated(p%ext)) call external_forces(n, c%dt, p%v, p%ext, p%f, p%t)
-            call pp_forces(n, n + p%n_ghost, nb%n_pairs, p%x, p%v, p%w, p%radius, p%mass, &
-                           nb%pair, nb%pconst, pc%clamp_normal, c%dt, s%accel_bound, nb%xi, &
-                           nb%touching, nb%acc, p%f, p%t)
+            call pp_forces(n, n + p%n_ghost, nb%n_pairs, p%x, p%v, p%w, p%radius, nb%scale, &
+                           nb%pair, nb%pconst, pc%clamp_normal, c%dt, nb%xi, nb%touching, &
+                           nb%acc, p%f, p%t)
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
             call pw_forces(n, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, p%x, p%v, p%w, &
@@ -799,11 +799,13 @@ contains
         call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
                              s%p%radius, s%mesh, old_index=order)
         associate (nb => s%nb, pc => s%pc)
-            allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)))
+            allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)), &
+                     nb%scale(max(1, s%p%n_own + s%p%n_ghost)))
             call acc_data(nb%pconst, acc_create)
+            call acc_data(nb%scale, acc_create)
             call pp_pair_constants(s%p%n_own + s%p%n_ghost, nb%n_pairs, size(pc%kn, 1, kind=ip), &
                                    s%p%radius, s%p%mass, s%p%mat, nb%pair, pc%kn, pc%sn, pc%st, &
-                                   pc%cn, pc%ct, pc%mu, s%accel_bound, nb%pconst)
+                                   pc%cn, pc%ct, pc%mu, s%accel_bound, nb%pconst, nb%scale)
         end associate
         s%lists_on_device = .true.
         call acc_data(order, acc_exit)

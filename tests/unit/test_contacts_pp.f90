@@ -57,13 +57,13 @@ program test_contacts_pp
         if (trial == 3) order = [(mod(37 * i, n) + 1, i = 1, n)]
         nb = neighbors_t(skin=0.001_wp)
         call neighbors_build(nb, n, n, gid(order), x(:, order), r(order), no_walls)
-        allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)))
+        allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)), nb%scale(n))
         call pp_pair_constants(n, nb%n_pairs, 1_ip, r(order), m(order), mat, nb%pair, kn, sn, &
-                               st, cn, cn, mu, accel_bound, nb%pconst)
+                               st, cn, cn, mu, accel_bound, nb%pconst, nb%scale)
         f = 0.0_wp
         t = 0.0_wp
         call pp_forces(n, n, nb%n_pairs, x(:, order), v(:, order), w(:, order), r(order), &
-                       m(order), nb%pair, nb%pconst, .false., dt, accel_bound, nb%xi, &
+                       nb%scale, nb%pair, nb%pconst, .false., dt, nb%xi, &
                        nb%touching, nb%acc, f, t)
         back(order) = [(i, i = 1, n)]
         f = f(:, back)                     ! back in the order of the brute force
@@ -86,7 +86,7 @@ program test_contacts_pp
             call assert_close(sum(f(i, :)), 0.0_wp, 0.0_wp, 'contact forces sum to zero', &
                               sum(contacts * quantum) + n * epsilon(1.0_wp) * maxval(abs(f)))
         end do
-        deallocate(nb%pconst)
+        deallocate(nb%pconst, nb%scale)
     end do
     call assert_true(maxval(abs(fb)) > 0.0_wp, 'there are contacts')
     ok = .true.                            ! the scale puts the bound in [2^56, 2^57)
