@@ -1,10 +1,15 @@
-!> The no-slip Hertz-Mindlin contact law for one contact (doc/theory.md, section 2).
-!> Pure and free of I/O, so that host loops and OpenACC device loops share it.
+!> The no-slip Hertz-Mindlin contact law (doc/theory.md, section 2), evaluated for a batch of
+!> independent contacts ("lanes") at once: each stage of the law is a short loop over the
+!> lanes, so that the square roots and divisions of one contact overlap with those of the
+!> next (their chain, not the arithmetic, bounds one contact's time). Pure and free of I/O,
+!> so that host loops and OpenACC device loops share it.
 module dem_contact_hm
-    use dem_kinds, only: wp
+    use dem_kinds, only: wp, ip
     implicit none
     private
-    public :: hm_force, hm_force_damped
+    public :: hm_force, hm_lanes, max_lanes
+
+    integer(ip), parameter :: max_lanes = 64     !< contacts per call of hm_lanes, at most
 
 contains
 
@@ -33,54 +38,115 @@ contains
         real(wp), intent(inout) :: xi(3)  !! tangential spring displacement [m]
         real(wp), intent(out) :: fn       !! normal force, repulsive > 0 [N]
         real(wp), intent(out) :: ft(3)    !! tangential force on i [N]
-        call hm_force_damped(overlap, nrm, vrel, rstar, kn, st, cn * sqrt(sn * mstar), &
-                             ct * sqrt(st * mstar), mu, clamp_normal, dt, xi, fn, ft)
+        real(wp) :: a(1), n1(1), n2(1), n3(1), v1(1), v2(1), v3(1), r(1), k(1), s(1), &
+                    dn(1), dtan(1), m(1), x1(1), x2(1), x3(1), f(1), f1(1), f2(1), f3(1)
+        a = overlap
+        n1 = nrm(1)
+        n2 = nrm(2)
+        n3 = nrm(3)
+        v1 = vrel(1)
+        v2 = vrel(2)
+        v3 = vrel(3)
+        r = rstar
+        k = kn
+        s = st
+        dn = cn * sqrt(sn * mstar)
+        dtan = ct * sqrt(st * mstar)
+        m = mu
+        x1 = xi(1)
+        x2 = xi(2)
+        x3 = xi(3)
+        call hm_lanes(1_ip, a, n1, n2, n3, v1, v2, v3, r, k, s, dn, dtan, m, clamp_normal, dt, &
+                      x1, x2, x3, f, f1, f2, f3)
+        xi = [x1(1), x2(1), x3(1)]
+        fn = f(1)
+        ft = [f1(1), f2(1), f3(1)]
     end subroutine hm_force
 
-    !> hm_force with the damping factors of the pair given, dn = cn sqrt(sn m*) and
-    !> dtan = ct sqrt(st m*): the form the particle-pair kernel uses, whose pairs keep them
-    !> from the list build (the same operations in the same order, so the same bits).
-    pure subroutine hm_force_damped(overlap, nrm, vrel, rstar, kn, st, dn, dtan, mu, &
-                                    clamp_normal, dt, xi, fn, ft)
+    !> hm_force for m <= max_lanes contacts, each given by components (lanes l = 1..m), and
+    !> with the damping factors of each contact given: dn = cn sqrt(sn m*) and
+    !> dtan = ct sqrt(st m*) (the particle-pair kernel keeps them from the list build). The
+    !> operations of each lane are those of one contact, in the same order.
+    pure subroutine hm_lanes(m, overlap, n1, n2, n3, v1, v2, v3, rstar, kn, st, dn, dtan, mu, &
+                             clamp_normal, dt, x1, x2, x3, fn, f1, f2, f3)
         !$acc routine seq
-        real(wp), intent(in) :: overlap, nrm(3), vrel(3), rstar, kn, st, mu, dt
-        real(wp), intent(in) :: dn        !! cn sqrt(sn m*) [kg^(1/2) Pa^(1/2)]
-        real(wp), intent(in) :: dtan      !! ct sqrt(st m*) [kg^(1/2) Pa^(1/2)]
+        integer(ip), intent(in) :: m
+        real(wp), intent(in) :: overlap(m)                 !! [m]
+        real(wp), intent(in) :: n1(m), n2(m), n3(m)        !! unit normals
+        real(wp), intent(in) :: v1(m), v2(m), v3(m)        !! relative velocities [m/s]
+        real(wp), intent(in) :: rstar(m), kn(m), st(m), mu(m)
+        real(wp), intent(in) :: dn(m)        !! cn sqrt(sn m*) [kg^(1/2) Pa^(1/2)]
+        real(wp), intent(in) :: dtan(m)      !! ct sqrt(st m*) [kg^(1/2) Pa^(1/2)]
         logical, intent(in) :: clamp_normal
-        real(wp), intent(inout) :: xi(3)
-        real(wp), intent(out) :: fn, ft(3)
-        real(wp) :: root, q, vn, vt(3), kt, len_old, len_new, ft2, ft_max
+        real(wp), intent(in) :: dt                         !! [s]
+        real(wp), intent(inout) :: x1(m), x2(m), x3(m)     !! tangential displacements [m]
+        real(wp), intent(out) :: fn(m)                     !! normal forces [N]
+        real(wp), intent(out) :: f1(m), f2(m), f3(m)       !! tangential forces [N]
+        real(wp) :: root(max_lanes), q(max_lanes), t1(max_lanes), t2(max_lanes), &
+                    t3(max_lanes)
+        real(wp) :: vn, len_old, len_new, s, kt, ft2, ft_max, g
+        integer(ip) :: l
 
-        ! sqrt(S m*) = sqrt(s m*) (R* d)^(1/4) for S = s sqrt(R* d): the square roots of the
-        ! masses and constants (dn, dtan) do not wait for the overlap's
-        root = sqrt(rstar * overlap)
-        q = sqrt(root)
-        vn = dot_product(vrel, nrm)
-        fn = kn * overlap * root + dn * q * vn
-        if (clamp_normal) fn = max(fn, 0.0_wp)
+        ! normal force; sqrt(S m*) = sqrt(s m*) (R* d)^(1/4) for S = s sqrt(R* d): the square
+        ! roots of the masses and constants (dn, dtan) do not wait for the overlap's
+        do l = 1, m
+            root(l) = sqrt(rstar(l) * overlap(l))
+            q(l) = sqrt(root(l))
+            vn = v1(l) * n1(l) + v2(l) * n2(l) + v3(l) * n3(l)
+            fn(l) = kn(l) * overlap(l) * root(l) + dn(l) * q(l) * vn
+            if (clamp_normal) fn(l) = max(fn(l), 0.0_wp)
+            t1(l) = v1(l) - vn * n1(l)
+            t2(l) = v2(l) - vn * n2(l)
+            t3(l) = v3(l) - vn * n3(l)
+        end do
 
-        vt = vrel - vn * nrm
-        len_old = dot_product(xi, xi)
-        if (len_old > 0.0_wp) then
-            xi = xi - dot_product(xi, nrm) * nrm
-            len_new = dot_product(xi, xi)
-            if (len_new > 0.0_wp) then
-                xi = xi * sqrt(len_old / len_new)
-            else
-                xi = 0.0_wp
+        ! the spring into the tangent plane, keeping its length, then advanced by vt dt
+        do l = 1, m
+            len_old = x1(l) * x1(l) + x2(l) * x2(l) + x3(l) * x3(l)
+            if (len_old > 0.0_wp) then
+                s = x1(l) * n1(l) + x2(l) * n2(l) + x3(l) * n3(l)
+                x1(l) = x1(l) - s * n1(l)
+                x2(l) = x2(l) - s * n2(l)
+                x3(l) = x3(l) - s * n3(l)
+                len_new = x1(l) * x1(l) + x2(l) * x2(l) + x3(l) * x3(l)
+                if (len_new > 0.0_wp) then
+                    g = sqrt(len_old / len_new)
+                    x1(l) = x1(l) * g
+                    x2(l) = x2(l) * g
+                    x3(l) = x3(l) * g
+                else
+                    x1(l) = 0.0_wp
+                    x2(l) = 0.0_wp
+                    x3(l) = 0.0_wp
+                end if
             end if
-        end if
-        xi = xi + vt * dt
+            x1(l) = x1(l) + t1(l) * dt
+            x2(l) = x2(l) + t2(l) * dt
+            x3(l) = x3(l) + t3(l) * dt
+        end do
 
-        kt = st * root
-        ft = -kt * xi
-        ft2 = dot_product(ft, ft)
-        ft_max = mu * abs(fn)
-        if (ft2 > ft_max**2) then          ! sliding: spring rescaled to the limit, no damping
-            ft = ft * (ft_max / sqrt(ft2))
-            xi = -ft / kt
-        else
-            ft = ft - dtan * q * vt
-        end if
-    end subroutine hm_force_damped
+        ! spring force, Coulomb limit: sliding rescales the spring to the limit, no damping
+        do l = 1, m
+            kt = st(l) * root(l)
+            f1(l) = -kt * x1(l)
+            f2(l) = -kt * x2(l)
+            f3(l) = -kt * x3(l)
+            ft2 = f1(l) * f1(l) + f2(l) * f2(l) + f3(l) * f3(l)
+            ft_max = mu(l) * abs(fn(l))
+            if (ft2 > ft_max**2) then
+                g = ft_max / sqrt(ft2)
+                f1(l) = f1(l) * g
+                f2(l) = f2(l) * g
+                f3(l) = f3(l) * g
+                x1(l) = -f1(l) / kt
+                x2(l) = -f2(l) / kt
+                x3(l) = -f3(l) / kt
+            else
+                g = dtan(l) * q(l)
+                f1(l) = f1(l) - g * t1(l)
+                f2(l) = f2(l) - g * t2(l)
+                f3(l) = f3(l) - g * t3(l)
+            end if
+        end do
+    end subroutine hm_lanes
 end module dem_contact_hm

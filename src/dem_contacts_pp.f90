@@ -7,19 +7,24 @@
 !> number of ranks, and on a GPU the sums are integer atomics.
 module dem_contacts_pp
     use dem_kinds, only: wp, ip, i8
-    use dem_contact_hm, only: hm_force_damped
+    use dem_contact_hm, only: hm_lanes, max_lanes
     implicit none
     private
     public :: pp_forces, pp_pair_constants, n_pair_constants, fixed_scale
 
-    !> the constants of a pair: R_i + R_j, R*, kn, st, cn sqrt(sn m*), ct sqrt(st m*), mu
-    integer, parameter :: c_rsum = 1, c_rstar = 2, c_kn = 3, c_st = 4, c_dn = 5, c_dt = 6, &
-                          c_mu = 7, n_pair_constants = 7
+    !> the constants of a pair: R*, kn, st, cn sqrt(sn m*), ct sqrt(st m*), mu (R_i + R_j is
+    !> taken from the radii, which the kernel reads anyway: the pass over every pair then
+    !> reads 12 bytes of a pair that does not touch, not its constants)
+    integer, parameter :: c_rstar = 1, c_kn = 2, c_st = 3, c_dn = 4, c_dt = 5, c_mu = 6, &
+                          n_pair_constants = 6
 
     !> one-word fixed point (fixed_scale): terms within the bound take at most 57 bits; terms
     !> are clipped at 16 times the bound, so that sums of up to 4 clipped terms still fit
     integer, parameter :: fixed_bits = 57
     real(wp), parameter :: fixed_limit = 2.0_wp**61
+
+    !> pairs per tile of the contact kernel (its overlapping pairs go to hm_lanes together)
+    integer(ip), parameter :: tile = max_lanes
 
 contains
 
@@ -50,7 +55,6 @@ contains
             b = mat(j)
             rsum = radius(i) + radius(j)
             mstar = mass(i) * mass(j) / (mass(i) + mass(j))
-            pconst(c_rsum, p) = rsum
             pconst(c_rstar, p) = radius(i) * radius(j) / rsum
             pconst(c_kn, p) = kn(a, b)
             pconst(c_st, p) = st(a, b)
@@ -61,7 +65,9 @@ contains
     end subroutine pp_pair_constants
 
     !> Add the contact force and torque of every overlapping pair to the owned particles.
-    !> Pairs not in contact have their tangential history reset.
+    !> Pairs not in contact have their tangential history reset. The pairs are taken in tiles
+    !> of `tile`: the overlapping pairs of a tile are gathered into lanes and the contact law
+    !> runs over those lanes at once (hm_lanes).
     subroutine pp_forces(n_own, n_all, n_pairs, x, v, w, radius, scale, pair, pconst, &
                          clamp_normal, dt, xi, touching, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
@@ -78,67 +84,115 @@ contains
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
                                                      !! (zero between calls)
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m]
-        integer(ip) :: i, j, p, c
+        integer(ip) :: i, j, p, p0, c, l, m
+        integer(ip) :: lp(tile + 1)
+        logical :: over
         integer(i8) :: kf(3), kc(3)
-        real(wp) :: d(3), dist2, dist, rsum, overlap, nrm(3), vrel(3), fn, ft(3), fp(3), &
-                    cp(3), xik(3), wsum(3), si, sj, inv
+        real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj
+        real(wp), dimension(tile + 1) :: e1, e2, e3, e4
+        real(wp), dimension(tile) :: ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, &
+                                     dtan, mu, x1, x2, x3, fn, f1, f2, f3
 
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
-        !$acc parallel loop gang vector default(present) private(i, j, c, kf, kc, dist2, dist) &
-        !$acc private(rsum, overlap, fn, si, sj, d, nrm, vrel, ft, fp, cp, xik, wsum)
-        do p = 1, n_pairs
-            i = pair(1, p)
-            j = pair(2, p)
-            d(1) = x(1, j) - x(1, i)
-            d(2) = x(2, j) - x(2, i)
-            d(3) = x(3, j) - x(3, i)
-            dist2 = d(1)**2 + d(2)**2 + d(3)**2
-            rsum = pconst(c_rsum, p)
-            if (dist2 >= rsum**2) then
-                if (touching(p)) then                          ! the contact has ended
-                    touching(p) = .false.
-                    xi(:, p) = 0.0_wp
+        !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, over) &
+        !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, e1, e2, e3) &
+        !$acc private(e4) &
+        !$acc private(ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu, x1, x2, x3, fn) &
+        !$acc private(f1, f2, f3)
+        do p0 = 0, n_pairs - 1, tile
+            ! the pairs of the tile that overlap, as lanes 1..m (every pair is written to lane
+            ! m + 1, and kept by counting it: no branch on the overlap, which is as likely as
+            ! not; a contact that begins or ends, rarely, branches)
+            m = 0
+            do p = p0 + 1, min(p0 + tile, n_pairs)
+                i = pair(1, p)
+                j = pair(2, p)
+                d1 = x(1, j) - x(1, i)
+                d2 = x(2, j) - x(2, i)
+                d3 = x(3, j) - x(3, i)
+                dist2 = d1**2 + d2**2 + d3**2
+                lp(m + 1) = p
+                e1(m + 1) = d1
+                e2(m + 1) = d2
+                e3(m + 1) = d3
+                e4(m + 1) = dist2
+                over = .not. (dist2 >= (radius(i) + radius(j))**2)
+                m = m + merge(1, 0, over)
+                if (over .neqv. touching(p)) then
+                    if (.not. over) then                      ! the contact has ended
+                        touching(p) = .false.
+                        xi(:, p) = 0.0_wp
+                    end if
                 end if
-                cycle
-            end if
-            dist = sqrt(dist2)
-            nrm = d * (1.0_wp / dist)
-            overlap = rsum - dist
-            wsum = radius(i) * w(:, i) + radius(j) * w(:, j)
-            vrel(1) = v(1, i) - v(1, j) + (wsum(2) * nrm(3) - wsum(3) * nrm(2))
-            vrel(2) = v(2, i) - v(2, j) + (wsum(3) * nrm(1) - wsum(1) * nrm(3))
-            vrel(3) = v(3, i) - v(3, j) + (wsum(1) * nrm(2) - wsum(2) * nrm(1))
-            xik = xi(:, p)
-            call hm_force_damped(overlap, nrm, vrel, pconst(c_rstar, p), pconst(c_kn, p), &
-                                 pconst(c_st, p), pconst(c_dn, p), pconst(c_dt, p), &
-                                 pconst(c_mu, p), clamp_normal, dt, xik, fn, ft)
-            xi(:, p) = xik
-            touching(p) = .true.
-            fp = -fn * nrm + ft
-            cp(1) = nrm(2) * ft(3) - nrm(3) * ft(2)
-            cp(2) = nrm(3) * ft(1) - nrm(1) * ft(3)
-            cp(3) = nrm(1) * ft(2) - nrm(2) * ft(1)
-            si = scale(i)
-            do c = 1, 3
-                kf(c) = to_fixed(fp(c) * si)
-                kc(c) = to_fixed(cp(c) * si)
-                !$acc atomic update
-                acc(c, i) = acc(c, i) + kf(c)
-                !$acc atomic update
-                acc(c + 3, i) = acc(c + 3, i) + kc(c)
             end do
-            if (j > n_own) cycle
-            sj = scale(j)
-            do c = 1, 3                           ! (the same words where the scales are)
-                if (sj /= si) then
-                    kf(c) = to_fixed(fp(c) * sj)
-                    kc(c) = to_fixed(cp(c) * sj)
+            ! their normals, overlaps, relative velocities, constants and history
+            do l = 1, m
+                p = lp(l)
+                i = pair(1, p)
+                j = pair(2, p)
+                dist = sqrt(e4(l))
+                inv = 1.0_wp / dist
+                n1(l) = e1(l) * inv
+                n2(l) = e2(l) * inv
+                n3(l) = e3(l) * inv
+                ov(l) = (radius(i) + radius(j)) - dist
+                ws1 = radius(i) * w(1, i) + radius(j) * w(1, j)
+                ws2 = radius(i) * w(2, i) + radius(j) * w(2, j)
+                ws3 = radius(i) * w(3, i) + radius(j) * w(3, j)
+                v1(l) = v(1, i) - v(1, j) + (ws2 * n3(l) - ws3 * n2(l))
+                v2(l) = v(2, i) - v(2, j) + (ws3 * n1(l) - ws1 * n3(l))
+                v3(l) = v(3, i) - v(3, j) + (ws1 * n2(l) - ws2 * n1(l))
+                rs(l) = pconst(c_rstar, p)
+                kn(l) = pconst(c_kn, p)
+                st(l) = pconst(c_st, p)
+                dn(l) = pconst(c_dn, p)
+                dtan(l) = pconst(c_dt, p)
+                mu(l) = pconst(c_mu, p)
+                x1(l) = xi(1, p)
+                x2(l) = xi(2, p)
+                x3(l) = xi(3, p)
+            end do
+            call hm_lanes(m, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu, &
+                          clamp_normal, dt, x1, x2, x3, fn, f1, f2, f3)
+            ! the history back, and F and n x F_t into both particles' sums
+            do l = 1, m
+                p = lp(l)
+                i = pair(1, p)
+                j = pair(2, p)
+                xi(1, p) = x1(l)
+                xi(2, p) = x2(l)
+                xi(3, p) = x3(l)
+                touching(p) = .true.
+                fp(1) = -fn(l) * n1(l) + f1(l)
+                fp(2) = -fn(l) * n2(l) + f2(l)
+                fp(3) = -fn(l) * n3(l) + f3(l)
+                cp(1) = n2(l) * f3(l) - n3(l) * f2(l)
+                cp(2) = n3(l) * f1(l) - n1(l) * f3(l)
+                cp(3) = n1(l) * f2(l) - n2(l) * f1(l)
+                si = scale(i)
+                do c = 1, 3
+                    kf(c) = to_fixed(fp(c) * si)
+                    kc(c) = to_fixed(cp(c) * si)
+                    !$acc atomic update
+                    acc(c, i) = acc(c, i) + kf(c)
+                    !$acc atomic update
+                    acc(c + 3, i) = acc(c + 3, i) + kc(c)
+                end do
+                if (j > n_own) cycle
+                sj = scale(j)
+                if (sj /= si) then                 ! (the same words where the scales are)
+                    do c = 1, 3
+                        kf(c) = to_fixed(fp(c) * sj)
+                        kc(c) = to_fixed(cp(c) * sj)
+                    end do
                 end if
-                !$acc atomic update
-                acc(c, j) = acc(c, j) - kf(c)
-                !$acc atomic update
-                acc(c + 3, j) = acc(c + 3, j) + kc(c)
+                do c = 1, 3
+                    !$acc atomic update
+                    acc(c, j) = acc(c, j) - kf(c)
+                    !$acc atomic update
+                    acc(c + 3, j) = acc(c + 3, j) + kc(c)
+                end do
             end do
         end do
 

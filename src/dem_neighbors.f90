@@ -10,7 +10,7 @@ module dem_neighbors
     use dem_kinds, only: wp, ip, i8
     use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host
     use dem_cells, only: prefix_sum, bin_items, cell_coords, cell_number, fill_range, &
-                         sort_segment, gather_items
+                         sort_segment, gather_items, morton_bits, morton_number
     use dem_particles, only: index_of_id, order_by_id
     use dem_mesh, only: mesh_t, closest_point_triangle
     implicit none
@@ -115,9 +115,9 @@ contains
         end do
     end function max_displacement2
 
-    !> The particles kept(1:m) in the order of the cells of a grid of size h (x fastest), for
-    !> cache locality: neighbours in space become neighbours in memory. On the device: kept,
-    !> x and order are there.
+    !> The particles kept(1:m) in the order of the cells of a grid of size about h along a
+    !> Morton curve, for cache locality: neighbours in space become neighbours in memory, in
+    !> every direction (not only along x). On the device: kept, x and order are there.
     subroutine neighbors_spatial_order(m, kept, x, h, order)
         integer(ip), intent(in) :: m
         integer(ip), intent(in) :: kept(m)
@@ -125,46 +125,55 @@ contains
         real(wp), intent(in) :: h           !! cell size [m]
         integer(ip), intent(inout) :: order(m)
         real(wp), allocatable :: xk(:, :)
-        integer(ip), allocatable :: level(:), cell(:), start(:), item(:), cnt(:)
-        real(wp) :: lo(3, 1), hi(3), hh(1)
-        integer(ip) :: n(3, 1), off(1)
+        integer(ip), allocatable :: cell(:), start(:), item(:), cnt(:)
+        real(wp) :: lo(3), hi(3), hh
+        integer(ip) :: n(3), b(3), n_cells
         if (m == 0) return
-        allocate(xk(3, m), level(m), cell(m), item(m))
+        allocate(xk(3, m), cell(m), item(m))
         call acc_data(xk, acc_create)
-        call acc_data(level, acc_create)
         call acc_data(cell, acc_create)
         call acc_data(item, acc_create)
-        call gather_columns(m, size(x, 2, kind=ip), kept, x, xk, level)
-        call bounds(m, xk, lo(:, 1), hi)
-        hh = h
-        off = 0
-        call fit_grid(lo(:, 1), hi, max(27.0_wp, 4.0_wp * m), hh(1), n(:, 1))
-        allocate(start(product(n) + 1), cnt(product(n)))
+        call gather_columns(m, size(x, 2, kind=ip), kept, x, xk)
+        call bounds(m, xk, lo, hi)
+        hh = h                              ! at most m cells: below 8 m curve numbers
+        call fit_grid(lo, hi, max(27.0_wp, real(m, wp)), hh, n)
+        b = morton_bits(n)
+        n_cells = ishft(1_ip, sum(b))
+        allocate(start(n_cells + 1), cnt(n_cells))
         call acc_data(start, acc_create)
         call acc_data(cnt, acc_create)
-        call grid_cells(m, 1, xk, level, lo, hh, n, off, cell)
-        call bin_items(m, product(n), cell, start, item, cnt)
+        call curve_cells(m, xk, lo, hh, n, b, cell)
+        call bin_items(m, n_cells, cell, start, item, cnt)
         call gather_items(m, kept, item, order)
         call acc_data(cnt, acc_exit)
         call acc_data(start, acc_exit)
         call acc_data(item, acc_exit)
         call acc_data(cell, acc_exit)
-        call acc_data(level, acc_exit)
         call acc_data(xk, acc_exit)
     end subroutine neighbors_spatial_order
 
-    !> xk(:, k) = x(:, kept(k)), and level(k) = 0 (one grid), for k = 1..m.
-    subroutine gather_columns(m, n_x, kept, x, xk, level)
+    !> The number of each point's cell along the Morton curve of a grid (morton_number).
+    subroutine curve_cells(m, x, origin, h, n, b, cell)
+        integer(ip), intent(in) :: m, n(3), b(3)
+        real(wp), intent(in) :: x(3, m), origin(3), h
+        integer(ip), intent(inout) :: cell(m)
+        integer(ip) :: k
+        !$acc parallel loop gang vector default(present) copyin(origin, n, b)
+        do k = 1, m
+            cell(k) = morton_number(cell_coords(x(:, k), origin, h, n), b)
+        end do
+    end subroutine curve_cells
+
+    !> xk(:, k) = x(:, kept(k)), for k = 1..m.
+    subroutine gather_columns(m, n_x, kept, x, xk)
         integer(ip), intent(in) :: m, n_x
         integer(ip), intent(in) :: kept(m)
         real(wp), intent(in) :: x(3, n_x)
         real(wp), intent(inout) :: xk(3, m)
-        integer(ip), intent(inout) :: level(m)
         integer(ip) :: k
         !$acc parallel loop gang vector default(present)
         do k = 1, m
             xk(:, k) = x(:, kept(k))
-            level(k) = 0
         end do
     end subroutine gather_columns
 
