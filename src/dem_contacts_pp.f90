@@ -102,8 +102,8 @@ contains
         !$acc private(f1, f2, f3)
         do p0 = 0, n_pairs - 1, tile
             ! the pairs of the tile that overlap, as lanes 1..m (every pair is written to lane
-            ! m + 1, and kept by counting it: no branch on the overlap, which is as likely as
-            ! not; a contact that begins or ends, rarely, branches)
+            ! m + 1, and kept by counting it: no branch on the overlap, which a branch predictor
+            ! cannot foresee; only a contact that begins or ends, rarely, branches)
             m = 0
             do p = p0 + 1, min(p0 + tile, n_pairs)
                 i = pair(1, p)
