@@ -183,13 +183,8 @@ contains
     !> Bits of each cell coordinate of a grid of n cells: the least b with 2^b >= n.
     pure function morton_bits(n) result(b)
         integer(ip), intent(in) :: n(3)
-        integer(ip) :: b(3), d
-        do d = 1, 3
-            b(d) = 0
-            do while (ishft(1_ip, b(d)) < n(d))
-                b(d) = b(d) + 1
-            end do
-        end do
+        integer(ip) :: b(3)
+        b = bit_size(n) - leadz(n - 1)
     end function morton_bits
 
     !> Number (from 1) of the cell of coordinates c along a Morton (Z-order) curve through a

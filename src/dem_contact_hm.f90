@@ -38,29 +38,12 @@ contains
         real(wp), intent(inout) :: xi(3)  !! tangential spring displacement [m]
         real(wp), intent(out) :: fn       !! normal force, repulsive > 0 [N]
         real(wp), intent(out) :: ft(3)    !! tangential force on i [N]
-        real(wp) :: a(1), n1(1), n2(1), n3(1), v1(1), v2(1), v3(1), r(1), k(1), s(1), &
-                    dn(1), dtan(1), m(1), x1(1), x2(1), x3(1), f(1), f1(1), f2(1), f3(1)
-        a = overlap
-        n1 = nrm(1)
-        n2 = nrm(2)
-        n3 = nrm(3)
-        v1 = vrel(1)
-        v2 = vrel(2)
-        v3 = vrel(3)
-        r = rstar
-        k = kn
-        s = st
-        dn = cn * sqrt(sn * mstar)
-        dtan = ct * sqrt(st * mstar)
-        m = mu
-        x1 = xi(1)
-        x2 = xi(2)
-        x3 = xi(3)
-        call hm_lanes(1_ip, a, n1, n2, n3, v1, v2, v3, r, k, s, dn, dtan, m, clamp_normal, dt, &
-                      x1, x2, x3, f, f1, f2, f3)
-        xi = [x1(1), x2(1), x3(1)]
+        real(wp) :: f(1)
+        call hm_lanes(1_ip, [overlap], nrm(1:1), nrm(2:2), nrm(3:3), vrel(1:1), vrel(2:2), &
+                      vrel(3:3), [rstar], [kn], [st], [cn * sqrt(sn * mstar)], &
+                      [ct * sqrt(st * mstar)], [mu], clamp_normal, dt, xi(1:1), xi(2:2), &
+                      xi(3:3), f, ft(1:1), ft(2:2), ft(3:3))
         fn = f(1)
-        ft = [f1(1), f2(1), f3(1)]
     end subroutine hm_force
 
     !> hm_force for m <= max_lanes contacts, each given by components (lanes l = 1..m), and

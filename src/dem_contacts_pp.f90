@@ -96,10 +96,9 @@ contains
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, over) &
-        !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, e1, e2, e3) &
-        !$acc private(e4) &
-        !$acc private(ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu, x1, x2, x3, fn) &
-        !$acc private(f1, f2, f3)
+        !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj) &
+        !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu) &
+        !$acc private(x1, x2, x3, fn, f1, f2, f3)
         do p0 = 0, n_pairs - 1, tile
             ! the pairs of the tile that overlap, as lanes 1..m (every pair is written to lane
             ! m + 1, and kept by counting it: no branch on the overlap, which a branch predictor

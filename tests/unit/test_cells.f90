@@ -3,9 +3,9 @@
 !> binned item in its cell once, cells in increasing order, items left out absent), on random
 !> cells with many items per cell and with empty cells; kept_indices against pack; the
 !> storage's permute kernels against a gather (and zeros after the kept ones); the Morton
-!> numbers of grids of unequal sides: one per cell, all below 2^(bx + by + bz), each 2x2x2
-!> block of cells (2^k blocks too) a run of consecutive numbers, and the number of a cell
-!> from the bits of its coordinates by hand.
+!> numbers of grids of unequal sides: one per cell, all below 2^(bx + by + bz); each 2x2x2
+!> block of cells a run of 8 consecutive numbers; the numbers of two cells from the bits of
+!> their coordinates by hand.
 program test_cells
     use dem_kinds, only: wp, ip, i8
     use dem_cells, only: prefix_sum, bin_items, kept_indices, morton_bits, morton_number
