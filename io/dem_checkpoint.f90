@@ -12,10 +12,10 @@ module dem_checkpoint
     use dem_comm, only: comm_t, comm_barrier, comm_counts, comm_exchange, comm_max, comm_sum, &
                         comm_any
     use dem_particles, only: order_by_id
-    use dem_neighbors, only: neighbors_unique_pairs
     use dem_case, only: case_t
     use dem_mesh, only: mesh_t, mesh_move
-    use dem_contacts_pw, only: max_wall_contacts
+    use dem_contact_store, only: max_wall_contacts, n_pair_history, n_wall_history, &
+                                 store_unique_pairs
     use dem_text, only: itoa, step_file
     use dem_files, only: file_rename
     use dem_h5, only: h5_file_t, h5_create, h5_open, h5_close, h5_group, h5_write, h5_read, &
@@ -40,9 +40,9 @@ module dem_checkpoint
         integer(ip), allocatable :: contacts(:)   !< contacts of each particle (snapshots)
         ! contact history
         integer(ip), allocatable :: wall_tri(:, :)    !< (slot, particle)
-        real(wp), allocatable :: wall_xi(:, :, :)     !< (xyz, slot, particle) [m]
+        real(wp), allocatable :: wall_xi(:, :, :)     !< (n_wall_history, slot, particle)
         integer(i8), allocatable :: pair(:, :)        !< (lower id, higher id) per pair
-        real(wp), allocatable :: pair_xi(:, :)        !< (xyz, pair) [m]
+        real(wp), allocatable :: pair_xi(:, :)        !< (n_pair_history, pair)
         ! run bookkeeping
         real(wp) :: time0 = 0.0_wp                !< the time of step0 [s]
         integer(i8) :: step0 = 0                  !< steps count in dt from here
@@ -108,9 +108,9 @@ contains
         fr%f = moved(fr%f)
         fr%t = moved(fr%t)
         fr%wall_tri = int(moved_int(fr%wall_tri), ip)
-        fr%wall_xi = reshape(moved(reshape(fr%wall_xi, [3 * max_wall_contacts, &
+        fr%wall_xi = reshape(moved(reshape(fr%wall_xi, [n_wall_history * max_wall_contacts, &
                                                         size(fr%wall_xi, 3)])), &
-                             [3, max_wall_contacts, n])
+                             [n_wall_history, max_wall_contacts, n])
 
         call route_pairs(fr, comm, bound, both=.false.)   ! to the rank of the lower id
     contains
@@ -170,12 +170,12 @@ contains
         end do
         order = merge(order, order - m, order <= m)          ! back to pair numbers
         recv = comm_counts(comm, send)
-        allocate(pair(2, sum(recv)), pair_xi(3, sum(recv)))
+        allocate(pair(2, sum(recv)), pair_xi(n_pair_history, sum(recv)))
         sent_pair = fr%pair(:, order)                      ! (contiguous, for the exchange)
         sent_xi = fr%pair_xi(:, order)
         call comm_exchange(comm, sent_pair, send, pair, recv)
         call comm_exchange(comm, sent_xi, send, pair_xi, recv)
-        call neighbors_unique_pairs(pair, pair_xi, fr%pair, fr%pair_xi)
+        call store_unique_pairs(pair, pair_xi, fr%pair, fr%pair_xi)
     end subroutine route_pairs
 
     !> Bounds of the id blocks of frame_spread: rank q gets the ids in (bound(q), bound(q+1)],
@@ -507,7 +507,7 @@ contains
         fr%n = int(n, ip)
         allocate(fr%gid(n), fr%mat(n), fr%radius(n), fr%x(3, n), fr%v(3, n), fr%w(3, n), &
                  fr%f(3, n), fr%t(3, n), fr%wall_tri(max_wall_contacts, n), &
-                 fr%wall_xi(3, max_wall_contacts, n))
+                 fr%wall_xi(n_wall_history, max_wall_contacts, n))
         call h5_read(h, '/particles/id', fr%gid, err, first)
         call h5_read(h, '/particles/material', fr%mat, err, first)
         call h5_read(h, '/particles/radius', fr%radius, err, first)
@@ -521,7 +521,7 @@ contains
         call h5_dims(h, '/state/pair', dims, err)
         if (.not. err%failed()) then
             call share(dims(2), first, n)           ! this rank's part of the pairs
-            allocate(fr%pair(2, n), fr%pair_xi(3, n))
+            allocate(fr%pair(2, n), fr%pair_xi(n_pair_history, n))
             call h5_read(h, '/state/pair', fr%pair, err, first)
             call h5_read(h, '/state/pair_history', fr%pair_xi, err, first)
         end if

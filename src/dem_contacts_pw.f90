@@ -8,131 +8,16 @@ module dem_contacts_pw
     use dem_contact_hm, only: hm_force
     use dem_mesh, only: closest_point_triangle, feature_face
     use dem_vector, only: cross
-    use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int
-    use dem_acc, only: acc_data, acc_to_host, acc_exit, acc_enter
+    use dem_contact_store, only: max_wall_contacts, n_wall_history
     implicit none
     private
-    public :: wall_contacts_t, wall_contacts_init, wall_contacts_permute, pw_forces, &
-              wall_contacts_reserve, wall_contacts_reserve_on_device, &
-              max_wall_contacts, wall_contacts_pack, wall_contacts_unpack, n_wall_pack_real
+    public :: pw_forces
 
-    integer(ip), parameter :: max_wall_contacts = 8     !< per particle
     !> touching triangles stored per particle; a particle touching more (many triangles
     !> meeting at a vertex) has its contacts found from its list, without storing them
     integer(ip), parameter :: max_wall_candidates = 16
-    !> reals per packed particle (the triangles travel as reals: exact below 2^53)
-    integer, parameter :: n_wall_pack_real = 4 * max_wall_contacts
-
-    !> Per-particle wall contact history: triangle (0: free slot) and tangential displacement.
-    type :: wall_contacts_t
-        integer(ip), allocatable :: tri(:, :)    !< (slot, particle)
-        real(wp), allocatable :: xi(:, :, :)     !< (xyz, slot, particle) [m]
-    end type wall_contacts_t
 
 contains
-
-    !> Empty history for `capacity` particles.
-    subroutine wall_contacts_init(wc, capacity)
-        type(wall_contacts_t), intent(out) :: wc
-        integer(ip), intent(in) :: capacity
-        allocate(wc%tri(max_wall_contacts, capacity), wc%xi(3, max_wall_contacts, capacity))
-        wc%tri = 0
-        wc%xi = 0.0_wp
-    end subroutine wall_contacts_init
-
-    !> Room for the history of `need` particles; the first n_keep keep theirs (the rule of
-    !> storage_capacity, as for the particles).
-    subroutine wall_contacts_reserve(wc, n_keep, need)
-        type(wall_contacts_t), intent(inout) :: wc
-        integer(ip), intent(in) :: n_keep, need
-        integer(ip) :: capacity
-        capacity = storage_capacity(size(wc%tri, 2, kind=ip), need)
-        if (capacity == size(wc%tri, 2)) return
-        call storage_resize(wc%tri, n_keep, capacity)
-        call storage_resize(wc%xi, n_keep, capacity)
-    end subroutine wall_contacts_reserve
-
-    !> wall_contacts_reserve for history that is on the device: when the store must grow or
-    !> shrink, it goes through the host (as particles_reserve_on_device).
-    subroutine wall_contacts_reserve_on_device(wc, n_keep, need)
-        type(wall_contacts_t), intent(inout) :: wc
-        integer(ip), intent(in) :: n_keep, need
-        if (storage_capacity(size(wc%tri, 2, kind=ip), need) == size(wc%tri, 2)) return
-        call acc_data(wc%tri, acc_to_host)
-        call acc_data(wc%xi, acc_to_host)
-        call acc_data(wc%tri, acc_exit)
-        call acc_data(wc%xi, acc_exit)
-        call wall_contacts_reserve(wc, n_keep, need)
-        call acc_data(wc%tri, acc_enter)
-        call acc_data(wc%xi, acc_enter)
-    end subroutine wall_contacts_reserve_on_device
-
-    !> Reorder the history with the particles: particle i becomes the one stored at order(i);
-    !> the slots of particles left out are emptied.
-    subroutine wall_contacts_permute(wc, order)
-        type(wall_contacts_t), intent(inout) :: wc
-        integer(ip), intent(in) :: order(:)
-        call permute_int(max_wall_contacts, size(wc%tri, 2, kind=ip), size(order, kind=ip), &
-                         order, wc%tri)
-        call permute_real(3 * max_wall_contacts, size(wc%tri, 2, kind=ip), &
-                          size(order, kind=ip), order, wc%xi)
-    end subroutine wall_contacts_permute
-
-    !> The history of the particles idx(1:n) for another rank, into rows row0 + 1 ..
-    !> row0 + n_wall_pack_real of rbuf (on the device if the arrays are there, as dem_storage's
-    !> kernels).
-    subroutine wall_contacts_pack(wc, n, idx, row0, rbuf)
-        type(wall_contacts_t), intent(in) :: wc
-        integer(ip), intent(in) :: n, row0
-        integer(ip), intent(in) :: idx(n)
-        real(wp), intent(inout) :: rbuf(:, :)
-        call pack_history(size(wc%tri, 2, kind=ip), n, idx, wc%tri, wc%xi, &
-                          size(rbuf, 1, kind=ip), row0, rbuf)
-    end subroutine wall_contacts_pack
-
-    subroutine pack_history(capacity, n, idx, tri, xi, rows, row0, rbuf)
-        integer(ip), intent(in) :: capacity, n, rows, row0
-        integer(ip), intent(in) :: idx(n), tri(max_wall_contacts, capacity)
-        real(wp), intent(in) :: xi(3 * max_wall_contacts, capacity)
-        real(wp), intent(inout) :: rbuf(rows, n)
-        integer(ip) :: k, j
-        !$acc parallel loop gang vector copyin(idx, tri, xi) copy(rbuf)
-        do k = 1, n
-            do j = 1, max_wall_contacts
-                rbuf(row0 + j, k) = real(tri(j, idx(k)), wp)
-            end do
-            do j = 1, 3 * max_wall_contacts
-                rbuf(row0 + max_wall_contacts + j, k) = xi(j, idx(k))
-            end do
-        end do
-    end subroutine pack_history
-
-    !> Store the packed history of n particles for particles first, first + 1, ...
-    !> (wall_contacts_pack's inverse).
-    subroutine wall_contacts_unpack(wc, first, n, row0, rbuf)
-        type(wall_contacts_t), intent(inout) :: wc
-        integer(ip), intent(in) :: first, n, row0
-        real(wp), intent(in) :: rbuf(:, :)
-        call unpack_history(size(wc%tri, 2, kind=ip), first, n, size(rbuf, 1, kind=ip), row0, &
-                            rbuf, wc%tri, wc%xi)
-    end subroutine wall_contacts_unpack
-
-    subroutine unpack_history(capacity, first, n, rows, row0, rbuf, tri, xi)
-        integer(ip), intent(in) :: capacity, first, n, rows, row0
-        real(wp), intent(in) :: rbuf(rows, n)
-        integer(ip), intent(inout) :: tri(max_wall_contacts, capacity)
-        real(wp), intent(inout) :: xi(3 * max_wall_contacts, capacity)
-        integer(ip) :: k, j
-        !$acc parallel loop gang vector copyin(rbuf) copy(tri, xi)
-        do k = 1, n
-            do j = 1, max_wall_contacts
-                tri(j, first + k - 1) = nint(rbuf(row0 + j, k), ip)
-            end do
-            do j = 1, 3 * max_wall_contacts
-                xi(j, first + k - 1) = rbuf(row0 + max_wall_contacts + j, k)
-            end do
-        end do
-    end subroutine unpack_history
 
     !> Of the nc triangles touching a sphere (closest points q, features), keep those whose
     !> closest point is a local minimum of the distance to their union: faces always; an edge
@@ -308,15 +193,15 @@ contains
         logical, intent(in) :: clamp_normal
         real(wp), intent(in) :: dt                                    !! [s]
         integer(ip), intent(inout) :: wtri(max_wall_contacts, n_own)
-        real(wp), intent(inout) :: wxi(3, max_wall_contacts, n_own)   !! [m]
+        real(wp), intent(inout) :: wxi(n_wall_history, max_wall_contacts, n_own)  !! [m]
         real(wp), intent(inout) :: f(3, n_own), t(3, n_own)           !! [N], [N m]
         integer(ip), intent(out) :: overflow
         integer(ip) :: i, k, c, nc, ns, a, b, tri, feat(max_wall_candidates)
         integer(ip) :: new_tri(max_wall_contacts), ctri(max_wall_candidates), fk
         integer(ip) :: slot(max_wall_candidates)
         real(wp) :: q(3, max_wall_candidates), qk(3)
-        real(wp) :: cv(3, 3, max_wall_candidates), new_xi(3, max_wall_contacts)
-        real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r, tol
+        real(wp) :: cv(3, 3, max_wall_candidates), new_xi(n_wall_history, max_wall_contacts)
+        real(wp) :: nrm(3), vrel(3), xik(n_wall_history), fn, ft(3), fi(3), ti(3), dist, r, tol
         logical :: keep(max_wall_candidates), many, over
 
         overflow = 0
@@ -374,7 +259,7 @@ contains
                        - cross(wall_w(:, twall(tri)), q(:, c) - wall_c(:, twall(tri)))
                 b = tmat(tri)
                 call hm_force(r - dist, nrm, vrel, r, mass(i), kn(a, b), sn(a, b), st(a, b), &
-                              cn(a, b), ct(a, b), mu(a, b), clamp_normal, dt, xik, fn, ft)
+                              cn(a, b), ct(a, b), mu(a, b), clamp_normal, dt, xik(1:3), fn, ft)
                 ns = ns + 1
                 new_tri(ns) = tri
                 new_xi(:, ns) = xik

@@ -17,9 +17,9 @@ module dem_domain
     use dem_neighbors, only: fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
                              n_pack_int, particles_pack_reals, particles_reserve_on_device
-    use dem_contacts_pw, only: wall_contacts_t, wall_contacts_pack, wall_contacts_unpack, &
-                               wall_contacts_permute, n_wall_pack_real, &
-                               wall_contacts_reserve_on_device
+    use dem_contact_store, only: contact_store_t, store_walls_pack, store_walls_unpack, &
+                                 store_walls_permute, n_wall_pack_real, n_pair_history, &
+                                 store_walls_reserve_on_device
     implicit none
     private
     public :: domain_t, domain_init, domain_balance, domain_imbalance, domain_migrate, &
@@ -209,11 +209,11 @@ contains
     !> sending rank, each rank's in the order it held them. Ghosts are dropped; the stores
     !> follow the rank's share (particles_reserve_on_device). Kernels, on the device where
     !> the particles are: the host sees the counts and the packed particles, for MPI.
-    subroutine domain_migrate(d, comm, p, wc, m, kept, hstart, hpartner, hxi)
+    subroutine domain_migrate(d, comm, p, cs, m, kept, hstart, hpartner, hxi)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         type(particles_t), intent(inout) :: p
-        type(wall_contacts_t), intent(inout) :: wc
+        type(contact_store_t), intent(inout) :: cs   !! its wall-contact history moves
         integer(ip), intent(in) :: m
         integer(ip), intent(in) :: kept(:)
         integer(ip), allocatable, intent(inout) :: hstart(:)
@@ -258,13 +258,13 @@ contains
         call acc_data(ibuf, acc_create)
         call acc_data(rbuf, acc_create)
         call particles_pack(p, n_send, item, ibuf, rbuf)
-        call wall_contacts_pack(wc, n_send, item, nreal, rbuf)
+        call store_walls_pack(cs, n_send, item, nreal, rbuf)
         call row_lengths(n_send, item, hstart, rows, hlen, rbuf)
         call prefix_sum(n_send, hlen, hpos)
         call acc_data(hpos, acc_to_host)
         hcounts = int(hpos(start(2:)) - hpos(start(:comm%size)))
         n_out = hpos(n_send + 1) - 1
-        allocate(pbuf(1, n_out), xbuf(3, n_out))
+        allocate(pbuf(1, n_out), xbuf(n_pair_history, n_out))
         call acc_data(pbuf, acc_create)
         call acc_data(xbuf, acc_create)
         call gather_rows(n_send, item, hstart, hpartner, hxi, hpos, n_out, pbuf, xbuf)
@@ -276,7 +276,8 @@ contains
         hrecv_counts = comm_counts(comm, hcounts)
         nr = sum(recv_counts)
         n_in = sum(hrecv_counts)
-        allocate(irecv(n_pack_int, nr), rrecv(rows, nr), precv(1, n_in), xrecv(3, n_in))
+        allocate(irecv(n_pack_int, nr), rrecv(rows, nr), precv(1, n_in), &
+                 xrecv(n_pair_history, n_in))
         call comm_exchange(comm, ibuf, counts, irecv, recv_counts)
         call comm_exchange(comm, rbuf, counts, rrecv, recv_counts)
         call comm_exchange(comm, pbuf, hcounts, precv, hrecv_counts)
@@ -285,16 +286,16 @@ contains
 
         ! what stays, then what arrived
         call particles_permute(p, stay(1:n_stay))
-        call wall_contacts_permute(wc, stay(1:n_stay))
+        call store_walls_permute(cs, stay(1:n_stay))
         p%n_ghost = 0
         call particles_reserve_on_device(p, n_stay + nr)
-        call wall_contacts_reserve_on_device(wc, n_stay, n_stay + nr)
+        call store_walls_reserve_on_device(cs, n_stay, n_stay + nr)
         call acc_data(irecv, acc_enter)
         call acc_data(rrecv, acc_enter)
         call acc_data(precv, acc_enter)
         call acc_data(xrecv, acc_enter)
         call particles_unpack(p, n_stay + 1, nr, irecv, rrecv)
-        call wall_contacts_unpack(wc, n_stay + 1, nr, nreal, rrecv)
+        call store_walls_unpack(cs, n_stay + 1, nr, nreal, rrecv)
         p%n_own = n_stay + nr
         allocate(nlen(max(1, p%n_own)), nstart(p%n_own + 1))
         call acc_data(nlen, acc_create)
@@ -304,7 +305,7 @@ contains
         call acc_data(nstart(p%n_own + 1:p%n_own + 1), acc_to_host)
         last = nstart(p%n_own + 1:p%n_own + 1)
         n_h = last(1) - 1
-        allocate(npartner(max(1, n_h)), nxi(3, max(1, n_h)))
+        allocate(npartner(max(1, n_h)), nxi(n_pair_history, max(1, n_h)))
         call acc_data(npartner, acc_create)
         call acc_data(nxi, acc_create)
         ! the rows of the particles that stayed, then those received, in their order
@@ -388,7 +389,7 @@ contains
         integer(i8), intent(in) :: hpartner(:)
         real(wp), intent(in) :: hxi(:, :)
         integer(i8), intent(inout) :: pbuf(n_out)
-        real(wp), intent(inout) :: xbuf(3, n_out)
+        real(wp), intent(inout) :: xbuf(n_pair_history, n_out)
         integer(ip) :: k, j, first
         !$acc parallel loop gang vector default(present) private(j, first)
         do k = 1, n
@@ -423,7 +424,7 @@ contains
     subroutine place_received(n_in, precv, xrecv, first, npartner, nxi)
         integer(ip), intent(in) :: n_in, first
         integer(i8), intent(in) :: precv(n_in)
-        real(wp), intent(in) :: xrecv(3, n_in)
+        real(wp), intent(in) :: xrecv(n_pair_history, n_in)
         integer(i8), intent(inout) :: npartner(:)
         real(wp), intent(inout) :: nxi(:, :)
         integer(ip) :: j

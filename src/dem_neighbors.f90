@@ -11,18 +11,21 @@ module dem_neighbors
     use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host
     use dem_cells, only: prefix_sum, bin_items, cell_coords, cell_number, fill_range, &
                          sort_segment, gather_items, morton_bits, morton_number
-    use dem_particles, only: index_of_id, order_by_id
+    use dem_particles, only: index_of_id
     use dem_mesh, only: mesh_t, closest_point_triangle
+    use dem_contact_store, only: contact_store_t, n_pair_history, store_pairs_new, &
+                                 store_pairs_take, carry_history, touching_from_history, &
+                                 history_counts, history_fill, side_history, sort_history_row
     implicit none
     private
     public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order, &
               neighbors_history, neighbors_set_history, neighbors_row_history, &
-              neighbors_set_rows, neighbors_unique_pairs, fit_grid, neighbors_data, &
+              neighbors_set_rows, fit_grid, neighbors_data, &
               neighbors_free, neighbors_moved, grid_t, grid_shape, grid_fill, cell_of, &
               neighbors_entry_history
 
-    !> The lists, their pairs (each once) with their tangential history, and the positions
-    !> they were built at.
+    !> The lists, their pairs (each once; their history is in dem_contact_store, numbered
+    !> as they are) and the positions they were built at.
     type :: neighbors_t
         real(wp) :: skin = 0.0_wp             !< [m]
         integer(ip) :: n_builds = 0
@@ -42,9 +45,6 @@ module dem_neighbors
                                               !< first is the row's particle that evaluates it
         real(wp), allocatable :: pconst(:, :) !< constants of each pair (dem_contacts_pp)
         real(wp), allocatable :: scale(:)     !< fixed-point scale of each particle (same)
-        real(wp), allocatable :: xi(:, :)     !< tangential displacement of each pair's
-                                              !< first particle [m]
-        logical, allocatable :: touching(:)   !< the pair is in contact (xi /= 0 only then)
         integer(i8), allocatable :: acc(:, :) !< work space of the contact kernel: the owned
                                               !< particles' sums, zero between steps
         integer(ip), allocatable :: wstart(:) !< wall row i is wstart(i):wstart(i+1)-1
@@ -179,10 +179,11 @@ contains
 
     !> Rebuild both lists, on the device: gid, x, radius, the walls' vertices and old_index
     !> are there, and the lists are left there (neighbors_data brings them to the host). The
-    !> history of pairs still listed is kept, matched by global id; old_index(i) is where
-    !> particle i was stored at the last build (identity if absent).
-    subroutine neighbors_build(nb, n_own, n_all, gid, x, radius, mesh, old_index)
+    !> history of pairs still listed is kept in the store cs, matched by global id;
+    !> old_index(i) is where particle i was stored at the last build (identity if absent).
+    subroutine neighbors_build(nb, cs, n_own, n_all, gid, x, radius, mesh, old_index)
         type(neighbors_t), intent(inout) :: nb
+        type(contact_store_t), intent(inout) :: cs
         integer(ip), intent(in) :: n_own       !! owned particles (rows)
         integer(ip), intent(in) :: n_all       !! owned plus ghosts (partners)
         integer(i8), intent(in) :: gid(:)
@@ -206,7 +207,7 @@ contains
             call move_alloc(nb%start, old_start)
             call move_alloc(nb%partner, old_partner)
             call move_alloc(nb%pref, old_pref)
-            call move_alloc(nb%xi, old_xi)
+            call move_alloc(cs%xi, old_xi)
         end if
         call neighbors_free(nb)
         allocate(nb%start(n_own + 1), nb%wstart(n_own + 1), nb%x_ref(3, n_own))
@@ -279,21 +280,19 @@ contains
         call prefix_sum(n_own, cnt, pstart)
         call acc_data(pstart(n_own + 1:n_own + 1), acc_to_host)
         nb%n_pairs = pstart(n_own + 1) - 1
-        allocate(nb%pair(2, max(1, nb%n_pairs)), nb%xi(3, max(1, nb%n_pairs)), &
-                 nb%touching(max(1, nb%n_pairs)), nb%acc(6, max(1, n_own)))
+        allocate(nb%pair(2, max(1, nb%n_pairs)), nb%acc(6, max(1, n_own)))
         nb%acc = 0
         call acc_data(nb%pair, acc_create)
-        call acc_data(nb%xi, acc_create)
-        call acc_data(nb%touching, acc_create)
         call acc_data(nb%acc, acc_enter)
+        call store_pairs_new(cs, nb%n_pairs)
         call number_pairs(n_own, n_entries, nb%n_pairs, nb%start, nb%list, nb%mirror, pstart, &
-                          nb%pref, nb%pair, nb%xi)
+                          nb%pref, nb%pair, cs%xi)
         call acc_data(pstart, acc_exit)
         if (keep_history) then
             if (present(old_index)) then
                 call carry_history(n_own, size(old_start, kind=ip), n_entries, nb%n_pairs, &
                                    size(old_partner, kind=ip), size(old_xi, 2, kind=ip), &
-                                   old_index, nb%start, nb%partner, nb%pref, nb%xi, &
+                                   old_index, nb%start, nb%partner, nb%pref, cs%xi, &
                                    old_start, old_partner, old_pref, old_xi)
             else                                 ! the particles kept their places
                 allocate(same(n_own))
@@ -301,7 +300,7 @@ contains
                 call fill_range(n_own, same, 1, 1)
                 call carry_history(n_own, size(old_start, kind=ip), n_entries, nb%n_pairs, &
                                    size(old_partner, kind=ip), size(old_xi, 2, kind=ip), &
-                                   same, nb%start, nb%partner, nb%pref, nb%xi, &
+                                   same, nb%start, nb%partner, nb%pref, cs%xi, &
                                    old_start, old_partner, old_pref, old_xi)
                 call acc_data(same, acc_exit)
             end if
@@ -310,7 +309,7 @@ contains
             call acc_data(old_pref, acc_exit)
             call acc_data(old_xi, acc_exit)
         end if
-        call touching_from_history(nb%n_pairs, nb%xi, nb%touching)
+        call touching_from_history(nb%n_pairs, cs%xi, cs%touching)
         call acc_data(cnt, acc_exit)
         call acc_data(gstart, acc_exit)
         call acc_data(gitem, acc_exit)
@@ -544,7 +543,7 @@ contains
         integer(ip), intent(in) :: start(n_own + 1), list(n_entries), mirror(n_entries), &
                                    pstart(n_own + 1)
         integer(ip), intent(inout) :: pref(n_entries), pair(2, max(1, n_pairs))
-        real(wp), intent(inout) :: xi(3, max(1, n_pairs))
+        real(wp), intent(inout) :: xi(n_pair_history, max(1, n_pairs))
         integer(ip) :: i, k, p
         !$acc parallel loop gang vector default(present) private(k, p)
         do i = 1, n_own
@@ -560,48 +559,6 @@ contains
             end do
         end do
     end subroutine number_pairs
-
-    !> Copy the history of the partners a new row shares with the particle's old row
-    !> (old_row(i)) into the pairs the new row evaluates; both rows are ordered by partner
-    !> id, so one merge pass finds them. The old entries' history is seen from the old row's
-    !> side (side_history).
-    subroutine carry_history(n_own, n_old_rows, n_entries, n_pairs, n_old, n_old_pairs, &
-                             old_row, start, partner, pref, xi, old_start, old_partner, &
-                             old_pref, old_xi)
-        integer(ip), intent(in) :: n_own, n_old_rows, n_entries, n_pairs, n_old, n_old_pairs
-        integer(ip), intent(in) :: old_row(n_own), start(n_own + 1), old_start(n_old_rows)
-        integer(i8), intent(in) :: partner(n_entries), old_partner(n_old)
-        integer(ip), intent(in) :: pref(n_entries), old_pref(n_old)
-        real(wp), intent(inout) :: xi(3, max(1, n_pairs))
-        real(wp), intent(in) :: old_xi(3, n_old_pairs)
-        integer(ip) :: i, a, b, b_end
-        !$acc parallel loop gang vector default(present) private(a, b, b_end)
-        do i = 1, n_own
-            b = old_start(old_row(i))
-            b_end = old_start(old_row(i) + 1) - 1
-            do a = start(i), start(i + 1) - 1
-                do while (b <= b_end)
-                    if (old_partner(b) >= partner(a)) exit
-                    b = b + 1
-                end do
-                if (b > b_end) exit
-                if (old_partner(b) == partner(a) .and. pref(a) > 0) &
-                    call side_history(n_old, n_old_pairs, b, old_pref, old_xi, xi(:, pref(a)))
-            end do
-        end do
-    end subroutine carry_history
-
-    !> touching(p) = the pair has history (the contact kernel resets both when it ends).
-    subroutine touching_from_history(n_pairs, xi, touching)
-        integer(ip), intent(in) :: n_pairs
-        real(wp), intent(in) :: xi(3, max(1, n_pairs))
-        logical, intent(inout) :: touching(max(1, n_pairs))
-        integer(ip) :: p
-        !$acc parallel loop gang vector default(present)
-        do p = 1, n_pairs
-            touching(p) = any(xi(:, p) /= 0.0_wp)
-        end do
-    end subroutine touching_from_history
 
     !> Wall triangles within R_i + skin of each owned particle. Each triangle is entered in
     !> the cells of a grid (sized for the smallest particles) that its bounding box covers; a
@@ -788,11 +745,9 @@ contains
         integer, intent(in) :: op
         if (allocated(nb%start)) call acc_data(nb%start, op)
         if (allocated(nb%partner)) call acc_data(nb%partner, op)
-        if (allocated(nb%xi)) call acc_data(nb%xi, op)
         if (allocated(nb%list)) call acc_data(nb%list, op)
         if (allocated(nb%mirror)) call acc_data(nb%mirror, op)
         if (allocated(nb%pref)) call acc_data(nb%pref, op)
-        if (allocated(nb%touching)) call acc_data(nb%touching, op)
         if (allocated(nb%wstart)) call acc_data(nb%wstart, op)
         if (allocated(nb%wlist)) call acc_data(nb%wlist, op)
         if (op == acc_to_host) return
@@ -816,22 +771,23 @@ contains
     !> owned particles by id. A pair is taken from the row of its lower id, or, when that is
     !> a ghost, from the higher id's row, negated (the two sides are exact negatives). Without
     !> ghosts the pairs come out ordered by the two ids.
-    subroutine neighbors_history(nb, n_own, gid, order, pair, xi)
+    subroutine neighbors_history(nb, cs, n_own, gid, order, pair, xi)
         type(neighbors_t), intent(in) :: nb
+        type(contact_store_t), intent(in) :: cs
         integer(ip), intent(in) :: n_own
         integer(i8), intent(in) :: gid(:)
         integer(ip), intent(in) :: order(:)      !! the owned particles by increasing id
         integer(i8), allocatable, intent(out) :: pair(:, :)  !! (2, pairs)
-        real(wp), allocatable, intent(out) :: xi(:, :)       !! (3, pairs) [m]
+        real(wp), allocatable, intent(out) :: xi(:, :)       !! (n_pair_history, pairs) [m]
         integer(ip) :: a, i, k, m, pass
-        real(wp) :: h(3)
+        real(wp) :: h(n_pair_history)
         do pass = 1, 2
             m = 0
             do a = 1, n_own
                 i = order(a)
                 do k = nb%start(i), nb%start(i + 1) - 1
-                    call side_history(size(nb%pref, kind=ip), size(nb%xi, 2, kind=ip), k, &
-                                      nb%pref, nb%xi, h)
+                    call side_history(size(nb%pref, kind=ip), size(cs%xi, 2, kind=ip), k, &
+                                      nb%pref, cs%xi, h)
                     if (all(h == 0.0_wp)) cycle
                     if (nb%partner(k) < gid(i) .and. nb%mirror(k) /= 0) cycle
                     m = m + 1
@@ -845,7 +801,7 @@ contains
                     end if
                 end do
             end do
-            if (pass == 1) allocate(pair(2, m), xi(3, m))
+            if (pass == 1) allocate(pair(2, m), xi(n_pair_history, m))
         end do
     end subroutine neighbors_history
 
@@ -854,8 +810,9 @@ contains
     !> displacements hxi(:, ...) of particle i's side; what a particle takes to another rank.
     !> Pairs without history (xi = 0) are left out; without rows (no lists yet), all rows are
     !> empty. Kernels; the rows are left on the device.
-    subroutine neighbors_row_history(nb, n_own, hstart, hpartner, hxi)
+    subroutine neighbors_row_history(nb, cs, n_own, hstart, hpartner, hxi)
         type(neighbors_t), intent(in) :: nb
+        type(contact_store_t), intent(in) :: cs
         integer(ip), intent(in) :: n_own
         integer(ip), allocatable, intent(out) :: hstart(:)
         integer(i8), allocatable, intent(out) :: hpartner(:)
@@ -868,102 +825,45 @@ contains
         if (allocated(nb%start)) then
             if (size(nb%start) /= n_own + 1) error stop 'dem_neighbors: the history rows ' // &
                                                        'are not those of the particles'
-            call history_counts(n_own, size(nb%partner, kind=ip), size(nb%xi, 2, kind=ip), &
-                                nb%start, nb%pref, nb%xi, cnt)
+            call history_counts(n_own, size(nb%partner, kind=ip), size(cs%xi, 2, kind=ip), &
+                                nb%start, nb%pref, cs%xi, cnt)
         else
             call fill_range(n_own, cnt, 0, 0)
         end if
         call prefix_sum(n_own, cnt, hstart)
         call acc_data(hstart(n_own + 1:n_own + 1), acc_to_host)
         n_h = hstart(n_own + 1) - 1
-        allocate(hpartner(max(1, n_h)), hxi(3, max(1, n_h)))
+        allocate(hpartner(max(1, n_h)), hxi(n_pair_history, max(1, n_h)))
         call acc_data(hpartner, acc_create)
         call acc_data(hxi, acc_create)
         if (n_h > 0) call history_fill(n_own, size(nb%partner, kind=ip), &
-                                       size(nb%xi, 2, kind=ip), nb%start, nb%partner, &
-                                       nb%pref, nb%xi, hstart, n_h, hpartner, hxi)
+                                       size(cs%xi, 2, kind=ip), nb%start, nb%partner, &
+                                       nb%pref, cs%xi, hstart, n_h, hpartner, hxi)
         call acc_data(cnt, acc_exit)
     end subroutine neighbors_row_history
 
-    !> cnt(i) = the entries of row i with history (side_history nonzero).
-    subroutine history_counts(n_own, n_entries, n_pairs, start, pref, xi, cnt)
-        integer(ip), intent(in) :: n_own, n_entries, n_pairs
-        integer(ip), intent(in) :: start(n_own + 1), pref(n_entries)
-        real(wp), intent(in) :: xi(3, n_pairs)
-        integer(ip), intent(inout) :: cnt(n_own)
-        integer(ip) :: i, k, m
-        real(wp) :: h(3)
-        !$acc parallel loop gang vector default(present) private(k, m, h)
-        do i = 1, n_own
-            m = 0
-            do k = start(i), start(i + 1) - 1
-                call side_history(n_entries, n_pairs, k, pref, xi, h)
-                if (any(h /= 0.0_wp)) m = m + 1
-            end do
-            cnt(i) = m
-        end do
-    end subroutine history_counts
-
-    !> The entries with history of each row i into hpartner/hxi from hstart(i), in order.
-    subroutine history_fill(n_own, n_entries, n_pairs, start, partner, pref, xi, hstart, n_h, &
-                            hpartner, hxi)
-        integer(ip), intent(in) :: n_own, n_entries, n_pairs, n_h
-        integer(ip), intent(in) :: start(n_own + 1), pref(n_entries), hstart(n_own + 1)
-        integer(i8), intent(in) :: partner(n_entries)
-        real(wp), intent(in) :: xi(3, n_pairs)
-        integer(i8), intent(inout) :: hpartner(n_h)
-        real(wp), intent(inout) :: hxi(3, n_h)
-        integer(ip) :: i, k, m
-        real(wp) :: h(3)
-        !$acc parallel loop gang vector default(present) private(k, m, h)
-        do i = 1, n_own
-            m = hstart(i)
-            do k = start(i), start(i + 1) - 1
-                call side_history(n_entries, n_pairs, k, pref, xi, h)
-                if (all(h == 0.0_wp)) cycle
-                hpartner(m) = partner(k)
-                hxi(:, m) = h
-                m = m + 1
-            end do
-        end do
-    end subroutine history_fill
-
     !> The tangential displacement of entry k of the lists seen from its row's particle.
-    pure function neighbors_entry_history(nb, k) result(h)
+    pure function neighbors_entry_history(nb, cs, k) result(h)
         type(neighbors_t), intent(in) :: nb
+        type(contact_store_t), intent(in) :: cs
         integer(ip), intent(in) :: k
-        real(wp) :: h(3)
-        call side_history(size(nb%pref, kind=ip), size(nb%xi, 2, kind=ip), k, nb%pref, nb%xi, h)
+        real(wp) :: h(n_pair_history)
+        call side_history(size(nb%pref, kind=ip), size(cs%xi, 2, kind=ip), k, nb%pref, cs%xi, h)
     end function neighbors_entry_history
-
-    !> The displacement of entry k seen from its row's particle: its pair's, or, when the
-    !> partner evaluates the pair (pref < 0), its pair's negated (the two sides are exact
-    !> negatives, doc/theory.md section 13).
-    pure subroutine side_history(n_entries, n_pairs, k, pref, xi, h)
-        !$acc routine seq
-        integer(ip), intent(in) :: n_entries, n_pairs, k
-        integer(ip), intent(in) :: pref(n_entries)
-        real(wp), intent(in) :: xi(3, n_pairs)
-        real(wp), intent(out) :: h(3)
-        if (pref(k) < 0) then
-            h = -xi(:, -pref(k))
-        else
-            h = xi(:, pref(k))
-        end if
-    end subroutine side_history
 
     !> Make rows of history (as neighbors_row_history gives them, on the device) the lists'
     !> history, for the next neighbors_build to carry into its lists; the lists are freed.
     !> Each entry is a pair of its own until then (mirror 0, pref(k) = k).
-    subroutine neighbors_set_rows(nb, start, partner, xi)
+    subroutine neighbors_set_rows(nb, cs, start, partner, xi)
         type(neighbors_t), intent(inout) :: nb
+        type(contact_store_t), intent(inout) :: cs
         integer(ip), allocatable, intent(inout) :: start(:)
         integer(i8), allocatable, intent(inout) :: partner(:)
         real(wp), allocatable, intent(inout) :: xi(:, :)
         call neighbors_free(nb)
         call move_alloc(start, nb%start)         ! (their device copies go with them)
         call move_alloc(partner, nb%partner)
-        call move_alloc(xi, nb%xi)
+        call store_pairs_take(cs, xi)
         allocate(nb%mirror(size(nb%partner)), nb%pref(size(nb%partner)))
         call acc_data(nb%mirror, acc_create)
         call acc_data(nb%pref, acc_create)
@@ -974,13 +874,14 @@ contains
     !> Rows of history for particles 1..n_own from pairs as neighbors_history gives them
     !> (ordered by ids), on the device (neighbors_set_rows): a pair goes to the row of each
     !> of its particles held here, negated in the higher id's row.
-    subroutine neighbors_set_history(nb, n_own, gid, order, pair, xi)
+    subroutine neighbors_set_history(nb, cs, n_own, gid, order, pair, xi)
         type(neighbors_t), intent(inout) :: nb
+        type(contact_store_t), intent(inout) :: cs
         integer(ip), intent(in) :: n_own
         integer(i8), intent(in) :: gid(:)
         integer(ip), intent(in) :: order(:)      !! the owned particles by increasing id
         integer(i8), intent(in) :: pair(:, :)    !! (2, pairs)
-        real(wp), intent(in) :: xi(:, :)         !! (3, pairs) [m]
+        real(wp), intent(in) :: xi(:, :)         !! (n_pair_history, pairs) [m]
         integer(ip), allocatable :: start(:)
         integer(i8), allocatable :: partner(:)
         real(wp), allocatable :: hxi(:, :)
@@ -1001,7 +902,8 @@ contains
         do i = 1, n_own
             start(i + 1) = start(i + 1) + start(i)
         end do
-        allocate(partner(max(1, start(n_own + 1) - 1)), hxi(3, max(1, start(n_own + 1) - 1)))
+        allocate(partner(max(1, start(n_own + 1) - 1)), &
+                 hxi(n_pair_history, max(1, start(n_own + 1) - 1)))
         fill = start
         do m = 1, size(pair, 2)
             do k = 1, 2
@@ -1019,52 +921,8 @@ contains
         call acc_data(start, acc_enter)
         call acc_data(partner, acc_enter)
         call acc_data(hxi, acc_enter)
-        call neighbors_set_rows(nb, start, partner, hxi)
+        call neighbors_set_rows(nb, cs, start, partner, hxi)
     end subroutine neighbors_set_history
-
-    !> The pairs ordered by (lower id, higher id), each once (copies from two ranks are
-    !> equal: the two sides of a contact are exact negatives, doc/theory.md section 13).
-    subroutine neighbors_unique_pairs(pair_in, xi_in, pair, xi)
-        integer(i8), intent(in) :: pair_in(:, :)
-        real(wp), intent(in) :: xi_in(:, :)
-        integer(i8), allocatable, intent(out) :: pair(:, :)
-        real(wp), allocatable, intent(out) :: xi(:, :)
-        integer(ip), allocatable :: order(:)
-        logical, allocatable :: first(:)
-        integer :: m
-        order = order_by_id(pair_in(2, :))                  ! stable: by higher id, then
-        order = order(order_by_id(pair_in(1, order)))       ! by lower id
-        allocate(first(size(order)))
-        do m = 1, size(order)
-            first(m) = m == 1
-            if (m > 1) first(m) = any(pair_in(:, order(m)) /= pair_in(:, order(m - 1)))
-        end do
-        order = pack(order, first)
-        pair = pair_in(:, order)
-        xi = xi_in(:, order)
-    end subroutine neighbors_unique_pairs
-
-    !> Order a row of history by partner id (insertion sort: rows are short).
-    pure subroutine sort_history_row(partner, xi)
-        integer(i8), intent(inout) :: partner(:)
-        real(wp), intent(inout) :: xi(:, :)
-        integer(ip) :: a, b
-        integer(i8) :: key
-        real(wp) :: xkey(3)
-        do a = 2, size(partner)
-            key = partner(a)
-            xkey = xi(:, a)
-            b = a - 1
-            do while (b >= 1)
-                if (partner(b) <= key) exit
-                partner(b + 1) = partner(b)
-                xi(:, b + 1) = xi(:, b)
-                b = b - 1
-            end do
-            partner(b + 1) = key
-            xi(:, b + 1) = xkey
-        end do
-    end subroutine sort_history_row
 
     !> Cells of size about h over the box [lo, hi]; the size grows until there are at most
     !> max(27, 4 n_items) cells, so that sparse scenes do not allocate empty space.

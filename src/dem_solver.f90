@@ -20,10 +20,12 @@ module dem_solver
                              neighbors_spatial_order, neighbors_history, neighbors_set_history, &
                              neighbors_data, neighbors_free, neighbors_moved, &
                              neighbors_row_history, neighbors_set_rows
+    use dem_contact_store, only: contact_store_t, store_init, store_walls_permute, &
+                                 store_walls_reserve, store_pairs_data, store_pairs_drop, &
+                                 store_walls_data
     use dem_cells, only: fill_range, kept_indices
     use dem_contacts_pp, only: pp_forces, pp_pair_constants, n_pair_constants
-    use dem_contacts_pw, only: wall_contacts_t, wall_contacts_init, wall_contacts_permute, &
-                               wall_contacts_reserve, pw_forces
+    use dem_contacts_pw, only: pw_forces
     use dem_forces, only: body_forces, external_forces
     use dem_mesh, only: mesh_t, mesh_move
     use dem_outlets, only: outlets_mark
@@ -82,7 +84,7 @@ module dem_solver
     type :: solver_t
         type(particles_t) :: p
         type(neighbors_t) :: nb
-        type(wall_contacts_t) :: wc
+        type(contact_store_t) :: cs   !< the contacts' history
         type(pair_constants_t) :: pc
         type(mesh_t) :: mesh           !< the walls, in their pose at the last force evaluation
         integer(i8) :: step = 0        !< steps done; the time is step * dt
@@ -149,7 +151,7 @@ contains
         s%trace_id = c%trace_id
         call pair_constants_build(c%mats, c%opts, s%pc)
         s%mesh = c%mesh
-        call wall_contacts_init(s%wc, n_mine)
+        call store_init(s%cs, n_mine)
         s%nb%skin = c%skin
         s%imbalance_limit = c%imbalance_limit
         s%sort_cell = 2.0_wp * minval(c%summary%rmin) + c%skin
@@ -177,18 +179,18 @@ contains
         n = fr%n
         s%p%n_own = 0
         call particles_reserve(s%p, n)
-        call wall_contacts_reserve(s%wc, 0, n)
+        call store_walls_reserve(s%cs, 0, n)
         do i = 1, n
             call particles_add(s%p, fr%gid(i), fr%mat(i), fr%radius(i), &
                                c%mats%density(fr%mat(i)), fr%x(:, i), fr%v(:, i), fr%w(:, i))
         end do
         s%p%f(:, 1:n) = fr%f
         s%p%t(:, 1:n) = fr%t
-        s%wc%tri = 0
-        s%wc%xi = 0.0_wp
-        s%wc%tri(:, 1:n) = fr%wall_tri
-        s%wc%xi(:, :, 1:n) = fr%wall_xi
-        call neighbors_set_history(s%nb, n, s%p%gid, [(i, i = 1, n)], fr%pair, fr%pair_xi)
+        s%cs%wall_tri = 0
+        s%cs%wall_xi = 0.0_wp
+        s%cs%wall_tri(:, 1:n) = fr%wall_tri
+        s%cs%wall_xi(:, :, 1:n) = fr%wall_xi
+        call neighbors_set_history(s%nb, s%cs, n, s%p%gid, [(i, i = 1, n)], fr%pair, fr%pair_xi)
         s%trace = 0
         if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:n), s%trace_id, dim=1)
         if (s%trace == 0) s%trace_id = 0
@@ -703,14 +705,15 @@ contains
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
             if (allocated(p%ext)) call external_forces(n, c%dt, p%v, p%ext, p%f, p%t)
             call pp_forces(n, n + p%n_ghost, nb%n_pairs, p%x, p%v, p%w, p%radius, nb%scale, &
-                           nb%pair, nb%pconst, pc%clamp_normal, c%dt, nb%xi, nb%touching, &
+                           nb%pair, nb%pconst, pc%clamp_normal, c%dt, s%cs%xi, s%cs%touching, &
                            nb%acc, p%f, p%t)
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
             call pw_forces(n, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, p%x, p%v, p%w, &
                            p%radius, p%mass, p%mat, nb%wstart, nb%wlist, m%vert, m%mat, m%wall, &
                            m%wall_v, m%wall_w, m%wall_c, pc%kn, pc%sn, pc%st, pc%cn, pc%ct, &
-                           pc%mu, pc%clamp_normal, c%dt, s%wc%tri, s%wc%xi, p%f, p%t, overflow)
+                           pc%mu, pc%clamp_normal, c%dt, s%cs%wall_tri, s%cs%wall_xi, p%f, &
+                           p%t, overflow)
             call timer_stop(s%timers, phase_contacts_pw)
         end associate
         if (overflow > 0) call set_error(err, dem_err_runtime, 'a particle has more separate ' // &
@@ -790,13 +793,13 @@ contains
         call acc_data(order, acc_create)
         call neighbors_spatial_order(m, kept, s%p%x, s%sort_cell, order)
         call particles_permute(s%p, order(1:m))
-        call wall_contacts_permute(s%wc, order(1:m))
+        call store_walls_permute(s%cs, order(1:m))
         if (s%comm%size > 1) then
             call domain_ghosts(s%dom, s%comm, s%p)
             call domain_data(s%dom, acc_enter)
         end if
         if (s%trace_id /= 0) s%trace = particles_find(s%p%n_own, s%p%gid, s%trace_id)
-        call neighbors_build(s%nb, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
+        call neighbors_build(s%nb, s%cs, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
                              s%p%radius, s%mesh, old_index=order)
         associate (nb => s%nb, pc => s%pc)
             allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)), &
@@ -850,15 +853,15 @@ contains
         integer :: status
         logical :: balance
         call kept_particles(s, outlets, kept, m)
-        call neighbors_row_history(s%nb, s%p%n_own, hstart, hpartner, hxi)
+        call neighbors_row_history(s%nb, s%cs, s%p%n_own, hstart, hpartner, hxi)
         imbalance = domain_imbalance(s%comm, m)
         balance = .not. s%distributed .or. imbalance > s%imbalance_limit * s%balanced
         if (balance) then
-            call domain_balance(s%dom, s%comm, m, kept, s%p%x, s%p%radius, s%wc%tri, status)
+            call domain_balance(s%dom, s%comm, m, kept, s%p%x, s%p%radius, s%cs%wall_tri, status)
             if (status /= 1) error stop 'dem: METIS could not partition the blocks'
         end if
         before = momentum_sums(s%comm, m, kept, s%p%mass, s%p%v)
-        call domain_migrate(s%dom, s%comm, s%p, s%wc, m, kept, hstart, hpartner, hxi)
+        call domain_migrate(s%dom, s%comm, s%p, s%cs, m, kept, hstart, hpartner, hxi)
         call acc_data(kept, acc_exit)
         s%distributed = .true.
         if (balance) s%balanced = domain_imbalance(s%comm, s%p%n_own)
@@ -868,7 +871,7 @@ contains
         if (nint(after(1)) /= nint(before(1)) .or. any(abs(after(2:4) - before(2:4)) > &
             1.0e-9_wp * (before(5) + tiny(1.0_wp)))) &
             error stop 'dem: a migration did not conserve the particles or their momentum'
-        call neighbors_set_rows(s%nb, hstart, hpartner, hxi)
+        call neighbors_set_rows(s%nb, s%cs, hstart, hpartner, hxi)
     end subroutine distribute
 
     !> One row of series.csv and of probes.csv, every rank giving its own particles, the sums
@@ -922,7 +925,7 @@ contains
             counts(1) = count_pp_sides(n, n + p%n_ghost, size(s%nb%list, kind=ip), p%x, &
                                        p%radius, s%nb%start, s%nb%list)
         end associate
-        counts(2:3) = [count(s%wc%tri(:, 1:s%p%n_own) > 0, kind=i8), int(s%p%n_own, i8)]
+        counts(2:3) = [count(s%cs%wall_tri(:, 1:s%p%n_own) > 0, kind=i8), int(s%p%n_own, i8)]
         call comm_sum(s%comm, counts)
         counts(1) = counts(1) / 2
     end function contact_counts
@@ -1067,6 +1070,7 @@ contains
         integer(i8) :: bytes(3)
         call particle_data(s, acc_to_host)
         call neighbors_data(s%nb, acc_to_host)
+        call store_pairs_data(s%cs, acc_to_host)
         associate (p => s%p, n => s%p%n_own)
             order = order_by_id(p%gid(1:n))
             fr%time = time_of(s, c, s%step)
@@ -1109,15 +1113,15 @@ contains
         associate (p => s%p, n => s%p%n_own)
             fr%f = p%f(:, order)
             fr%t = p%t(:, order)
-            fr%wall_tri = s%wc%tri(:, order)
-            fr%wall_xi = s%wc%xi(:, :, order)
-            call neighbors_history(s%nb, n, p%gid, order, fr%pair, fr%pair_xi)
+            fr%wall_tri = s%cs%wall_tri(:, order)
+            fr%wall_xi = s%cs%wall_xi(:, :, order)
+            call neighbors_history(s%nb, s%cs, n, p%gid, order, fr%pair, fr%pair_xi)
             if (c%snapshot_contacts) then
                 allocate(fr%contacts(n))
                 do a = 1, n
                     i = order(a)
-                    fr%contacts(a) = count(s%nb%touching(abs(s%nb%pref(s%nb%start(i): &
-                                     s%nb%start(i + 1) - 1)))) + count(s%wc%tri(:, i) > 0)
+                    fr%contacts(a) = count(s%cs%touching(abs(s%nb%pref(s%nb%start(i): &
+                                     s%nb%start(i + 1) - 1)))) + count(s%cs%wall_tri(:, i) > 0)
                 end do
             end if
         end associate
@@ -1243,6 +1247,7 @@ contains
         if (op == acc_exit .and. allocated(s%gone)) call release_gone(s)
         if (op == acc_exit .and. s%lists_on_device) then
             call neighbors_free(s%nb)
+            call store_pairs_drop(s%cs)
             if (s%comm%size > 1) call domain_data(s%dom, op)
             s%lists_on_device = .false.
         end if
@@ -1253,8 +1258,7 @@ contains
         type(solver_t), intent(inout) :: s
         integer, intent(in) :: op
         call particles_data(s%p, op)
-        call acc_data(s%wc%tri, op)
-        call acc_data(s%wc%xi, op)
+        call store_walls_data(s%cs, op)
     end subroutine particle_data
 
     !> The walls (triangles now and at t = 0, materials, velocities), to or from the device.

@@ -10,7 +10,7 @@ program test_checkpoint
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_init, comm_free
     use dem_checkpoint, only: frame_t, frame_spread
-    use dem_contacts_pw, only: max_wall_contacts
+    use dem_contact_store, only: max_wall_contacts
     use dem_assert, only: assert_true, assert_finish
     implicit none
     integer, parameter :: n = 23, n_pairs = 2 * (n - 1) - 2

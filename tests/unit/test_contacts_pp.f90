@@ -8,6 +8,7 @@ program test_contacts_pp
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t
     use dem_neighbors, only: neighbors_t, neighbors_build
+    use dem_contact_store, only: contact_store_t
     use dem_contacts_pp, only: pp_forces, pp_pair_constants, n_pair_constants, fixed_scale
     use dem_contact_hm, only: hm_force
     use dem_vector, only: cross
@@ -24,6 +25,7 @@ program test_contacts_pp
     integer(i8) :: gid(n)
     integer(ip) :: mat(n), i, order(n), trial
     type(neighbors_t) :: nb
+    type(contact_store_t) :: cs
     type(mesh_t) :: no_walls
 
     kn = 4.0_wp / 3.0_wp * e_star
@@ -56,15 +58,15 @@ program test_contacts_pp
         if (trial == 2) order = [(n + 1 - i, i = 1, n)]
         if (trial == 3) order = [(mod(37 * i, n) + 1, i = 1, n)]
         nb = neighbors_t(skin=0.001_wp)
-        call neighbors_build(nb, n, n, gid(order), x(:, order), r(order), no_walls)
+        call neighbors_build(nb, cs, n, n, gid(order), x(:, order), r(order), no_walls)
         allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)), nb%scale(n))
         call pp_pair_constants(n, nb%n_pairs, 1_ip, r(order), m(order), mat, nb%pair, kn, sn, &
                                st, cn, cn, mu, accel_bound, nb%pconst, nb%scale)
         f = 0.0_wp
         t = 0.0_wp
         call pp_forces(n, n, nb%n_pairs, x(:, order), v(:, order), w(:, order), r(order), &
-                       nb%scale, nb%pair, nb%pconst, .false., dt, nb%xi, &
-                       nb%touching, nb%acc, f, t)
+                       nb%scale, nb%pair, nb%pconst, .false., dt, cs%xi, &
+                       cs%touching, nb%acc, f, t)
         back(order) = [(i, i = 1, n)]
         f = f(:, back)                     ! back in the order of the brute force
         t = t(:, back)

@@ -10,9 +10,9 @@
 program test_contacts_pw
     use dem_kinds, only: wp, ip
     use dem_mesh, only: mesh_t, mesh_add_plane, mesh_append
-    use dem_contacts_pw, only: pw_forces, max_wall_contacts, wall_contacts_t, &
-                               wall_contacts_init, wall_contacts_pack, wall_contacts_unpack, &
-                               n_wall_pack_real
+    use dem_contacts_pw, only: pw_forces
+    use dem_contact_store, only: contact_store_t, max_wall_contacts, store_init, &
+                                 store_walls_pack, store_walls_unpack, n_wall_pack_real
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp), r = 0.01_wp, d = 1.0e-5_wp, estar = 1.0e10_wp
@@ -24,7 +24,7 @@ program test_contacts_pw
     integer(ip) :: wtri1(max_wall_contacts, 1)
     real(wp) :: wxi1(3, max_wall_contacts, 1), f1(3, 1), t1(3, 1), worst
     integer(ip), allocatable :: wlist(:)
-    type(wall_contacts_t) :: wa, wb
+    type(contact_store_t) :: wa, wb
     real(wp) :: buf(2 + n_wall_pack_real, 3)
 
     call mesh_add_plane(m, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.05_wp, 10_ip, &
@@ -95,19 +95,19 @@ program test_contacts_pw
     call corner_of_fan(392_ip)
     ! the history of particles 4, 1, 3 of a store, packed after two other rows, unpacked
     ! into particles 2-4 of another
-    call wall_contacts_init(wa, 5_ip)
-    call wall_contacts_init(wb, 6_ip)
+    call store_init(wa, 5_ip)
+    call store_init(wb, 6_ip)
     do i = 1, 5
-        wa%tri(:, i) = [(100 * i + k, k = 1, max_wall_contacts)]
-        call random_number(wa%xi(:, :, i))
+        wa%wall_tri(:, i) = [(100 * i + k, k = 1, max_wall_contacts)]
+        call random_number(wa%wall_xi(:, :, i))
     end do
     buf = -1.0_wp
-    call wall_contacts_pack(wa, 3_ip, [4_ip, 1_ip, 3_ip], 2_ip, buf)
+    call store_walls_pack(wa, 3_ip, [4_ip, 1_ip, 3_ip], 2_ip, buf)
     call assert_true(all(buf(1:2, :) == -1.0_wp), 'packing leaves the rows before it alone')
-    call wall_contacts_unpack(wb, 2_ip, 3_ip, 2_ip, buf)
-    call assert_true(all(wb%tri(:, 2:4) == wa%tri(:, [4, 1, 3])) .and. &
-                     all(wb%xi(:, :, 2:4) == wa%xi(:, :, [4, 1, 3])) .and. &
-                     all(wb%tri(:, [1, 5, 6]) == 0), 'wall history packed and unpacked')
+    call store_walls_unpack(wb, 2_ip, 3_ip, 2_ip, buf)
+    call assert_true(all(wb%wall_tri(:, 2:4) == wa%wall_tri(:, [4, 1, 3])) .and. &
+                     all(wb%wall_xi(:, :, 2:4) == wa%wall_xi(:, :, [4, 1, 3])) .and. &
+                     all(wb%wall_tri(:, [1, 5, 6]) == 0), 'wall history packed and unpacked')
     call assert_finish()
 
 contains

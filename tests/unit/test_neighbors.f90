@@ -13,11 +13,13 @@ program test_neighbors
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
                              neighbors_spatial_order, neighbors_row_history, neighbors_set_rows, &
                              neighbors_entry_history
+    use dem_contact_store, only: contact_store_t
     use dem_mesh, only: closest_point_triangle
     use dem_assert, only: assert_true, assert_finish
     implicit none
     integer(ip), parameter :: n = 300
     type(neighbors_t) :: nb
+    type(contact_store_t) :: cs
     type(mesh_t) :: m
     real(wp) :: x(3, n), r(n), u, ratio, q(3), hk(3)
     integer(i8) :: gid(n)
@@ -46,7 +48,7 @@ program test_neighbors
             r(i) = 0.01_wp * (1.0_wp + (ratio - 1.0_wp) * u**4)
         end do
         nb = neighbors_t(skin=0.004_wp)
-        call neighbors_build(nb, n, n, gid, x, r, m)
+        call neighbors_build(nb, cs, n, n, gid, x, r, m)
         ok = .true.
         do i = 1, n
             do j = 1, n
@@ -71,7 +73,7 @@ program test_neighbors
 
         ! history: give each pair a value made of its ids, move a little, rebuild
         do k = 1, nb%n_pairs
-            nb%xi(:, k) = side_xi(gid(nb%pair(1, k)), gid(nb%pair(2, k)))
+            cs%xi(:, k) = side_xi(gid(nb%pair(1, k)), gid(nb%pair(2, k)))
         end do
         call assert_true(nb%n_pairs == size(nb%list) / 2, 'each pair is stored once')
         call assert_true(.not. neighbors_stale(nb, n, x, m), 'fresh lists are not stale')
@@ -79,19 +81,19 @@ program test_neighbors
         call assert_true(.not. neighbors_stale(nb, n, x, m), 'moved less than skin/2')
         x(2, 9) = x(2, 9) + 0.55_wp * nb%skin
         call assert_true(neighbors_stale(nb, n, x, m), 'moved more than skin/2')
-        call neighbors_build(nb, n, n, gid, x, r, m)
+        call neighbors_build(nb, cs, n, n, gid, x, r, m)
         ok = .true.
         do i = 1, n
             do k = nb%start(i), nb%start(i + 1) - 1
                 j = nb%list(k)
                 ! pairs within the old reach kept their history; new pairs start at zero
-                hk = neighbors_entry_history(nb, k)
+                hk = neighbors_entry_history(nb, cs, k)
                 if (all(hk == 0.0_wp)) cycle
                 ok = ok .and. all(hk == side_xi(gid(i), gid(j)))
             end do
         end do
         call assert_true(ok, 'history follows its pair through a rebuild')
-        call assert_true(count(nb%xi(1, 1:nb%n_pairs) /= 0.0_wp) >= nb%n_pairs - 2 * n / 10, &
+        call assert_true(count(cs%xi(1, 1:nb%n_pairs) /= 0.0_wp) >= nb%n_pairs - 2 * n / 10, &
                          'most pairs kept their history')
 
         ! re-sort the particles in space and rebuild: the history follows the pairs
@@ -101,18 +103,18 @@ program test_neighbors
         x = x(:, order)
         r = r(order)
         gid = gid(order)
-        call neighbors_build(nb, n, n, gid, x, r, m, old_index=order)
+        call neighbors_build(nb, cs, n, n, gid, x, r, m, old_index=order)
         ok = .true.
         do i = 1, n
             do k = nb%start(i), nb%start(i + 1) - 1
                 j = nb%list(k)
-                hk = neighbors_entry_history(nb, k)
+                hk = neighbors_entry_history(nb, cs, k)
                 if (all(hk == 0.0_wp)) cycle
                 ok = ok .and. all(hk == side_xi(gid(i), gid(j)))
             end do
         end do
         call assert_true(ok, 'history follows its pair through a re-sort')
-        call assert_true(count(nb%xi(1, 1:nb%n_pairs) /= 0.0_wp) >= nb%n_pairs - 2 * n / 10, &
+        call assert_true(count(cs%xi(1, 1:nb%n_pairs) /= 0.0_wp) >= nb%n_pairs - 2 * n / 10, &
                          'the pairs kept their history through the re-sort')
 
         ! remove every third particle (as an outlet does) and rebuild: still brute force
@@ -121,7 +123,7 @@ program test_neighbors
         xk(:, 1:nk) = x(:, kept)
         rk(1:nk) = r(kept)
         gk(1:nk) = gid(kept)
-        call neighbors_build(nb, nk, nk, gk(1:nk), xk(:, 1:nk), rk(1:nk), m, old_index=kept)
+        call neighbors_build(nb, cs, nk, nk, gk(1:nk), xk(:, 1:nk), rk(1:nk), m, old_index=kept)
         ok = .true.
         do i = 1, nk
             do j = 1, nk
@@ -134,7 +136,7 @@ program test_neighbors
                 end if
             end do
             do k = nb%start(i), nb%start(i + 1) - 1
-                hk = neighbors_entry_history(nb, k)
+                hk = neighbors_entry_history(nb, cs, k)
                 if (all(hk == 0.0_wp)) cycle
                 ok = ok .and. all(hk == side_xi(gk(i), gk(nb%list(k))))
             end do
@@ -145,14 +147,14 @@ program test_neighbors
     ! rows of history: each pair holds its value from its first particle's side; a third of
     ! the pairs out of contact (zero)
     nb = neighbors_t(skin=0.004_wp)
-    call neighbors_build(nb, n, n, gid, x, r, m)
+    call neighbors_build(nb, cs, n, n, gid, x, r, m)
     do k = 1, nb%n_pairs
         i = nb%pair(1, k)
         j = nb%pair(2, k)
-        nb%xi(:, k) = 0.0_wp
-        if (touching(gid(i), gid(j))) nb%xi(:, k) = side_xi(gid(i), gid(j))
+        cs%xi(:, k) = 0.0_wp
+        if (touching(gid(i), gid(j))) cs%xi(:, k) = side_xi(gid(i), gid(j))
     end do
-    call neighbors_row_history(nb, n, hstart, hpartner, hxi)
+    call neighbors_row_history(nb, cs, n, hstart, hpartner, hxi)
     ok = .true.
     do i = 1, n
         want = nb%partner(nb%start(i):nb%start(i + 1) - 1)
@@ -165,13 +167,13 @@ program test_neighbors
         end do
     end do
     call assert_true(ok, 'rows of history: each pair with history, from its own side, by id')
-    call neighbors_set_rows(nb, hstart, hpartner, hxi)
-    call neighbors_build(nb, n, n, gid, x, r, m)
+    call neighbors_set_rows(nb, cs, hstart, hpartner, hxi)
+    call neighbors_build(nb, cs, n, n, gid, x, r, m)
     ok = .true.
     do i = 1, n
         do k = nb%start(i), nb%start(i + 1) - 1
             j = nb%list(k)
-            hk = neighbors_entry_history(nb, k)
+            hk = neighbors_entry_history(nb, cs, k)
             if (touching(gid(i), gid(j))) then
                 ok = ok .and. all(hk == side_xi(gid(i), gid(j)))
             else

@@ -1,0 +1,339 @@
+!> The history of the contacts, in one place: the tangential displacement of every particle
+!> pair in contact, numbered as the neighbour lists number their pairs (dem_neighbors), and of
+!> every particle's wall contacts, in slots per particle keyed by triangle. This module gives
+!> the contact kernels their arrays and moves the history across list rebuilds (carried by
+!> partner id), between ranks (packed rows) and into and out of checkpoints (pairs by id).
+!> Every array of history has n_pair_history or n_wall_history reals per contact: a new
+!> per-contact quantity (a rolling spring, say) is a larger constant here and its kernel.
+module dem_contact_store
+    use dem_kinds, only: wp, ip, i8
+    use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int
+    use dem_particles, only: order_by_id
+    use dem_acc, only: acc_data, acc_to_host, acc_exit, acc_enter, acc_create
+    implicit none
+    private
+    public :: contact_store_t, n_pair_history, n_wall_history, max_wall_contacts, &
+              n_wall_pack_real, store_pairs_new, store_pairs_take, store_pairs_drop, &
+              store_pairs_data, store_walls_data, &
+              store_init, store_walls_reserve, store_walls_reserve_on_device, &
+              store_walls_permute, store_walls_pack, store_walls_unpack, store_unique_pairs, &
+              carry_history, touching_from_history, history_counts, history_fill, &
+              side_history, sort_history_row
+
+    integer, parameter :: n_pair_history = 3     !< reals per particle pair: xi [m]
+    integer, parameter :: n_wall_history = 3     !< reals per wall contact: xi [m]
+    integer(ip), parameter :: max_wall_contacts = 8     !< wall contact slots per particle
+    !> reals per packed particle (the triangles travel as reals: exact below 2^53)
+    integer, parameter :: n_wall_pack_real = (1 + n_wall_history) * max_wall_contacts
+
+    type :: contact_store_t
+        !> history of each pair p of the lists (of their first particle's side), and whether
+        !> the pair is in contact (xi /= 0 only then); after a migration or a restart, until
+        !> the next list build, the history of rows of entries (dem_neighbors' set_rows)
+        real(wp), allocatable :: xi(:, :)        !< (n_pair_history, pair)
+        logical, allocatable :: touching(:)
+        integer(ip), allocatable :: wall_tri(:, :)   !< (slot, particle); 0: a free slot
+        real(wp), allocatable :: wall_xi(:, :, :)    !< (n_wall_history, slot, particle)
+    end type contact_store_t
+
+contains
+
+    !> No history for n_pairs new pairs (on the device, not set: the caller fills xi).
+    subroutine store_pairs_new(cs, n_pairs)
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), intent(in) :: n_pairs
+        call store_pairs_drop(cs)
+        allocate(cs%xi(n_pair_history, max(1, n_pairs)), cs%touching(max(1, n_pairs)))
+        call acc_data(cs%xi, acc_create)
+        call acc_data(cs%touching, acc_create)
+    end subroutine store_pairs_new
+
+    !> The pair history becomes xi (on the device), its pairs' touching flags unset.
+    subroutine store_pairs_take(cs, xi)
+        type(contact_store_t), intent(inout) :: cs
+        real(wp), allocatable, intent(inout) :: xi(:, :)
+        call store_pairs_drop(cs)
+        call move_alloc(xi, cs%xi)               ! (its device copy goes with it)
+        allocate(cs%touching(size(cs%xi, 2)))
+        call acc_data(cs%touching, acc_create)
+    end subroutine store_pairs_take
+
+    !> The pair history off the device and freed.
+    subroutine store_pairs_drop(cs)
+        type(contact_store_t), intent(inout) :: cs
+        if (allocated(cs%xi)) then
+            call acc_data(cs%xi, acc_exit)
+            deallocate(cs%xi)
+        end if
+        if (allocated(cs%touching)) then
+            call acc_data(cs%touching, acc_exit)
+            deallocate(cs%touching)
+        end if
+    end subroutine store_pairs_drop
+
+    !> An OpenACC data operation (dem_acc) on the pair history (it follows the lists).
+    subroutine store_pairs_data(cs, op)
+        type(contact_store_t), intent(inout) :: cs
+        integer, intent(in) :: op
+        if (allocated(cs%xi)) call acc_data(cs%xi, op)
+        if (allocated(cs%touching)) call acc_data(cs%touching, op)
+    end subroutine store_pairs_data
+
+    !> An OpenACC data operation on the wall-contact history (it follows the particles).
+    subroutine store_walls_data(cs, op)
+        type(contact_store_t), intent(inout) :: cs
+        integer, intent(in) :: op
+        call acc_data(cs%wall_tri, op)
+        call acc_data(cs%wall_xi, op)
+    end subroutine store_walls_data
+
+    !> An empty store, with wall slots for `capacity` particles.
+    subroutine store_init(cs, capacity)
+        type(contact_store_t), intent(out) :: cs
+        integer(ip), intent(in) :: capacity
+        allocate(cs%wall_tri(max_wall_contacts, capacity), &
+                 cs%wall_xi(n_wall_history, max_wall_contacts, capacity))
+        cs%wall_tri = 0
+        cs%wall_xi = 0.0_wp
+    end subroutine store_init
+
+    !> Room for the history of `need` particles; the first n_keep keep theirs (the rule of
+    !> storage_capacity, as for the particles).
+    subroutine store_walls_reserve(cs, n_keep, need)
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), intent(in) :: n_keep, need
+        integer(ip) :: capacity
+        capacity = storage_capacity(size(cs%wall_tri, 2, kind=ip), need)
+        if (capacity == size(cs%wall_tri, 2)) return
+        call storage_resize(cs%wall_tri, n_keep, capacity)
+        call storage_resize(cs%wall_xi, n_keep, capacity)
+    end subroutine store_walls_reserve
+
+    !> store_walls_reserve for history that is on the device: when the store must grow or
+    !> shrink, it goes through the host (as particles_reserve_on_device).
+    subroutine store_walls_reserve_on_device(cs, n_keep, need)
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), intent(in) :: n_keep, need
+        if (storage_capacity(size(cs%wall_tri, 2, kind=ip), need) == size(cs%wall_tri, 2)) &
+            return
+        call acc_data(cs%wall_tri, acc_to_host)
+        call acc_data(cs%wall_xi, acc_to_host)
+        call acc_data(cs%wall_tri, acc_exit)
+        call acc_data(cs%wall_xi, acc_exit)
+        call store_walls_reserve(cs, n_keep, need)
+        call acc_data(cs%wall_tri, acc_enter)
+        call acc_data(cs%wall_xi, acc_enter)
+    end subroutine store_walls_reserve_on_device
+
+    !> Reorder the history with the particles: particle i becomes the one stored at order(i);
+    !> the slots of particles left out are emptied.
+    subroutine store_walls_permute(cs, order)
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), intent(in) :: order(:)
+        call permute_int(max_wall_contacts, size(cs%wall_tri, 2, kind=ip), &
+                         size(order, kind=ip), order, cs%wall_tri)
+        call permute_real(n_wall_history * max_wall_contacts, size(cs%wall_tri, 2, kind=ip), &
+                          size(order, kind=ip), order, cs%wall_xi)
+    end subroutine store_walls_permute
+
+    !> The history of the particles idx(1:n) for another rank, into rows row0 + 1 ..
+    !> row0 + n_wall_pack_real of rbuf (on the device if the arrays are there, as dem_storage's
+    !> kernels).
+    subroutine store_walls_pack(cs, n, idx, row0, rbuf)
+        type(contact_store_t), intent(in) :: cs
+        integer(ip), intent(in) :: n, row0
+        integer(ip), intent(in) :: idx(n)
+        real(wp), intent(inout) :: rbuf(:, :)
+        call pack_walls(size(cs%wall_tri, 2, kind=ip), n, idx, cs%wall_tri, cs%wall_xi, &
+                        size(rbuf, 1, kind=ip), row0, rbuf)
+    end subroutine store_walls_pack
+
+    subroutine pack_walls(capacity, n, idx, tri, xi, rows, row0, rbuf)
+        integer(ip), intent(in) :: capacity, n, rows, row0
+        integer(ip), intent(in) :: idx(n), tri(max_wall_contacts, capacity)
+        real(wp), intent(in) :: xi(n_wall_history * max_wall_contacts, capacity)
+        real(wp), intent(inout) :: rbuf(rows, n)
+        integer(ip) :: k, j
+        !$acc parallel loop gang vector copyin(idx, tri, xi) copy(rbuf)
+        do k = 1, n
+            do j = 1, max_wall_contacts
+                rbuf(row0 + j, k) = real(tri(j, idx(k)), wp)
+            end do
+            do j = 1, n_wall_history * max_wall_contacts
+                rbuf(row0 + max_wall_contacts + j, k) = xi(j, idx(k))
+            end do
+        end do
+    end subroutine pack_walls
+
+    !> Store the packed history of n particles for particles first, first + 1, ...
+    !> (store_walls_pack's inverse).
+    subroutine store_walls_unpack(cs, first, n, row0, rbuf)
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), intent(in) :: first, n, row0
+        real(wp), intent(in) :: rbuf(:, :)
+        call unpack_walls(size(cs%wall_tri, 2, kind=ip), first, n, size(rbuf, 1, kind=ip), &
+                          row0, rbuf, cs%wall_tri, cs%wall_xi)
+    end subroutine store_walls_unpack
+
+    subroutine unpack_walls(capacity, first, n, rows, row0, rbuf, tri, xi)
+        integer(ip), intent(in) :: capacity, first, n, rows, row0
+        real(wp), intent(in) :: rbuf(rows, n)
+        integer(ip), intent(inout) :: tri(max_wall_contacts, capacity)
+        real(wp), intent(inout) :: xi(n_wall_history * max_wall_contacts, capacity)
+        integer(ip) :: k, j
+        !$acc parallel loop gang vector copyin(rbuf) copy(tri, xi)
+        do k = 1, n
+            do j = 1, max_wall_contacts
+                tri(j, first + k - 1) = nint(rbuf(row0 + j, k), ip)
+            end do
+            do j = 1, n_wall_history * max_wall_contacts
+                xi(j, first + k - 1) = rbuf(row0 + max_wall_contacts + j, k)
+            end do
+        end do
+    end subroutine unpack_walls
+
+    !> Copy the history of the partners a new row shares with the particle's old row
+    !> (old_row(i)) into the pairs the new row evaluates; both rows are ordered by partner
+    !> id, so one merge pass finds them. The old entries' history is seen from the old row's
+    !> side (side_history).
+    subroutine carry_history(n_own, n_old_rows, n_entries, n_pairs, n_old, n_old_pairs, &
+                             old_row, start, partner, pref, xi, old_start, old_partner, &
+                             old_pref, old_xi)
+        integer(ip), intent(in) :: n_own, n_old_rows, n_entries, n_pairs, n_old, n_old_pairs
+        integer(ip), intent(in) :: old_row(n_own), start(n_own + 1), old_start(n_old_rows)
+        integer(i8), intent(in) :: partner(n_entries), old_partner(n_old)
+        integer(ip), intent(in) :: pref(n_entries), old_pref(n_old)
+        real(wp), intent(inout) :: xi(n_pair_history, max(1, n_pairs))
+        real(wp), intent(in) :: old_xi(n_pair_history, n_old_pairs)
+        integer(ip) :: i, a, b, b_end
+        !$acc parallel loop gang vector default(present) private(a, b, b_end)
+        do i = 1, n_own
+            b = old_start(old_row(i))
+            b_end = old_start(old_row(i) + 1) - 1
+            do a = start(i), start(i + 1) - 1
+                do while (b <= b_end)
+                    if (old_partner(b) >= partner(a)) exit
+                    b = b + 1
+                end do
+                if (b > b_end) exit
+                if (old_partner(b) == partner(a) .and. pref(a) > 0) &
+                    call side_history(n_old, n_old_pairs, b, old_pref, old_xi, xi(:, pref(a)))
+            end do
+        end do
+    end subroutine carry_history
+
+    !> touching(p) = the pair has history (the contact kernel resets both when it ends).
+    subroutine touching_from_history(n_pairs, xi, touching)
+        integer(ip), intent(in) :: n_pairs
+        real(wp), intent(in) :: xi(n_pair_history, max(1, n_pairs))
+        logical, intent(inout) :: touching(max(1, n_pairs))
+        integer(ip) :: p
+        !$acc parallel loop gang vector default(present)
+        do p = 1, n_pairs
+            touching(p) = any(xi(:, p) /= 0.0_wp)
+        end do
+    end subroutine touching_from_history
+
+    !> cnt(i) = the entries of row i with history (side_history nonzero).
+    subroutine history_counts(n_own, n_entries, n_pairs, start, pref, xi, cnt)
+        integer(ip), intent(in) :: n_own, n_entries, n_pairs
+        integer(ip), intent(in) :: start(n_own + 1), pref(n_entries)
+        real(wp), intent(in) :: xi(n_pair_history, n_pairs)
+        integer(ip), intent(inout) :: cnt(n_own)
+        integer(ip) :: i, k, m
+        real(wp) :: h(n_pair_history)
+        !$acc parallel loop gang vector default(present) private(k, m, h)
+        do i = 1, n_own
+            m = 0
+            do k = start(i), start(i + 1) - 1
+                call side_history(n_entries, n_pairs, k, pref, xi, h)
+                if (any(h /= 0.0_wp)) m = m + 1
+            end do
+            cnt(i) = m
+        end do
+    end subroutine history_counts
+
+    !> The entries with history of each row i into hpartner/hxi from hstart(i), in order.
+    subroutine history_fill(n_own, n_entries, n_pairs, start, partner, pref, xi, hstart, n_h, &
+                            hpartner, hxi)
+        integer(ip), intent(in) :: n_own, n_entries, n_pairs, n_h
+        integer(ip), intent(in) :: start(n_own + 1), pref(n_entries), hstart(n_own + 1)
+        integer(i8), intent(in) :: partner(n_entries)
+        real(wp), intent(in) :: xi(n_pair_history, n_pairs)
+        integer(i8), intent(inout) :: hpartner(n_h)
+        real(wp), intent(inout) :: hxi(n_pair_history, n_h)
+        integer(ip) :: i, k, m
+        real(wp) :: h(n_pair_history)
+        !$acc parallel loop gang vector default(present) private(k, m, h)
+        do i = 1, n_own
+            m = hstart(i)
+            do k = start(i), start(i + 1) - 1
+                call side_history(n_entries, n_pairs, k, pref, xi, h)
+                if (all(h == 0.0_wp)) cycle
+                hpartner(m) = partner(k)
+                hxi(:, m) = h
+                m = m + 1
+            end do
+        end do
+    end subroutine history_fill
+
+    !> The displacement of entry k seen from its row's particle: its pair's, or, when the
+    !> partner evaluates the pair (pref < 0), its pair's negated (the two sides are exact
+    !> negatives, doc/theory.md section 13).
+    pure subroutine side_history(n_entries, n_pairs, k, pref, xi, h)
+        !$acc routine seq
+        integer(ip), intent(in) :: n_entries, n_pairs, k
+        integer(ip), intent(in) :: pref(n_entries)
+        real(wp), intent(in) :: xi(n_pair_history, n_pairs)
+        real(wp), intent(out) :: h(n_pair_history)
+        if (pref(k) < 0) then
+            h = -xi(:, -pref(k))
+        else
+            h = xi(:, pref(k))
+        end if
+    end subroutine side_history
+
+    !> The pairs ordered by (lower id, higher id), each once (copies from two ranks are
+    !> equal: the two sides of a contact are exact negatives, doc/theory.md section 13).
+    subroutine store_unique_pairs(pair_in, xi_in, pair, xi)
+        integer(i8), intent(in) :: pair_in(:, :)
+        real(wp), intent(in) :: xi_in(:, :)
+        integer(i8), allocatable, intent(out) :: pair(:, :)
+        real(wp), allocatable, intent(out) :: xi(:, :)
+        integer(ip), allocatable :: order(:)
+        logical, allocatable :: first(:)
+        integer :: m
+        order = order_by_id(pair_in(2, :))                  ! stable: by higher id, then
+        order = order(order_by_id(pair_in(1, order)))       ! by lower id
+        allocate(first(size(order)))
+        do m = 1, size(order)
+            first(m) = m == 1
+            if (m > 1) first(m) = any(pair_in(:, order(m)) /= pair_in(:, order(m - 1)))
+        end do
+        order = pack(order, first)
+        pair = pair_in(:, order)
+        xi = xi_in(:, order)
+    end subroutine store_unique_pairs
+
+    !> Order a row of history by partner id (insertion sort: rows are short).
+    pure subroutine sort_history_row(partner, xi)
+        integer(i8), intent(inout) :: partner(:)
+        real(wp), intent(inout) :: xi(:, :)
+        integer(ip) :: a, b
+        integer(i8) :: key
+        real(wp) :: xkey(n_pair_history)
+        do a = 2, size(partner)
+            key = partner(a)
+            xkey = xi(:, a)
+            b = a - 1
+            do while (b >= 1)
+                if (partner(b) <= key) exit
+                partner(b + 1) = partner(b)
+                xi(:, b + 1) = xi(:, b)
+                b = b - 1
+            end do
+            partner(b + 1) = key
+            xi(:, b + 1) = xkey
+        end do
+    end subroutine sort_history_row
+end module dem_contact_store
