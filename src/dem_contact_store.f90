@@ -15,7 +15,7 @@ module dem_contact_store
     public :: contact_store_t, n_pair_history, n_wall_history, max_wall_contacts, &
               n_wall_pack_real, store_pairs_new, store_pairs_take, store_pairs_drop, &
               store_pairs_data, store_walls_data, &
-              store_init, store_walls_reserve, store_walls_reserve_on_device, &
+              store_init, store_walls_reserve, store_walls_reserve_on_device, store_walls_restore, &
               store_walls_permute, store_walls_pack, store_walls_unpack, store_unique_pairs, &
               carry_history, touching_from_history, history_counts, history_fill, &
               side_history, sort_history_row
@@ -48,7 +48,8 @@ contains
         call acc_data(cs%touching, acc_create)
     end subroutine store_pairs_new
 
-    !> The pair history becomes xi (on the device), its pairs' touching flags unset.
+    !> The pair history becomes xi (on the device); the touching flags are allocated, not
+    !> set (the next list build sets them from the history).
     subroutine store_pairs_take(cs, xi)
         type(contact_store_t), intent(inout) :: cs
         real(wp), allocatable, intent(inout) :: xi(:, :)
@@ -96,6 +97,20 @@ contains
         cs%wall_tri = 0
         cs%wall_xi = 0.0_wp
     end subroutine store_init
+
+    !> The wall history of particles 1..n from a checkpoint's frame (tri, xi ordered as the
+    !> particles are); the slots of the particles beyond are emptied.
+    subroutine store_walls_restore(cs, n, tri, xi)
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), intent(in) :: n
+        integer(ip), intent(in) :: tri(max_wall_contacts, n)
+        real(wp), intent(in) :: xi(n_wall_history, max_wall_contacts, n)
+        call store_walls_reserve(cs, 0, n)
+        cs%wall_tri = 0
+        cs%wall_xi = 0.0_wp
+        cs%wall_tri(:, 1:n) = tri
+        cs%wall_xi(:, :, 1:n) = xi
+    end subroutine store_walls_restore
 
     !> Room for the history of `need` particles; the first n_keep keep theirs (the rule of
     !> storage_capacity, as for the particles).

@@ -852,8 +852,9 @@ contains
     end function neighbors_entry_history
 
     !> Make rows of history (as neighbors_row_history gives them, on the device) the lists'
-    !> history, for the next neighbors_build to carry into its lists; the lists are freed.
-    !> Each entry is a pair of its own until then (mirror 0, pref(k) = k).
+    !> rows and the store's pair history, for the next neighbors_build to carry into its
+    !> lists; the lists are freed. Each entry is a pair of its own until then (mirror 0,
+    !> pref(k) = k).
     subroutine neighbors_set_rows(nb, cs, start, partner, xi)
         type(neighbors_t), intent(inout) :: nb
         type(contact_store_t), intent(inout) :: cs

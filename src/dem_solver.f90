@@ -21,7 +21,7 @@ module dem_solver
                              neighbors_data, neighbors_free, neighbors_moved, &
                              neighbors_row_history, neighbors_set_rows
     use dem_contact_store, only: contact_store_t, store_init, store_walls_permute, &
-                                 store_walls_reserve, store_pairs_data, store_pairs_drop, &
+                                 store_walls_restore, store_pairs_data, store_pairs_drop, &
                                  store_walls_data
     use dem_cells, only: fill_range, kept_indices
     use dem_contacts_pp, only: pp_forces, pp_pair_constants, n_pair_constants
@@ -179,17 +179,13 @@ contains
         n = fr%n
         s%p%n_own = 0
         call particles_reserve(s%p, n)
-        call store_walls_reserve(s%cs, 0, n)
         do i = 1, n
             call particles_add(s%p, fr%gid(i), fr%mat(i), fr%radius(i), &
                                c%mats%density(fr%mat(i)), fr%x(:, i), fr%v(:, i), fr%w(:, i))
         end do
         s%p%f(:, 1:n) = fr%f
         s%p%t(:, 1:n) = fr%t
-        s%cs%wall_tri = 0
-        s%cs%wall_xi = 0.0_wp
-        s%cs%wall_tri(:, 1:n) = fr%wall_tri
-        s%cs%wall_xi(:, :, 1:n) = fr%wall_xi
+        call store_walls_restore(s%cs, n, fr%wall_tri, fr%wall_xi)
         call neighbors_set_history(s%nb, s%cs, n, s%p%gid, [(i, i = 1, n)], fr%pair, fr%pair_xi)
         s%trace = 0
         if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:n), s%trace_id, dim=1)
