@@ -8,6 +8,7 @@ module dem_input
     use dem_namelist_scan, only: nml_file_t, nml_block_t, nml_scan, nml_items, nml_location
     use dem_case, only: case_t, time_scales_t, case_time_scales, case_summarize, case_speed_bound
     use dem_comm, only: comm_t, comm_any
+    use dem_materials, only: contact_options_t
     use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion
     use dem_stl, only: stl_read
     use dem_particle_file, only: read_particle_file
@@ -31,7 +32,8 @@ module dem_input
         'gpu_aware_mpi', &
         'output: dir interval trace_id snapshot_interval snapshot_force snapshot_contacts ' // &
         'checkpoint_interval checkpoint_keep', &
-        'contact_model: tangential_stiffness_factor tangential_damping clamp_normal', &
+        'contact_model: variant tangential_stiffness_factor tangential_damping clamp_normal ' // &
+        'tangential_history lever_velocity lever_torque reset_pair_history', &
         'material: name density youngs_modulus poisson_ratio rigid', &
         'pair: materials restitution friction', &
         'particle: id material radius position velocity angular_velocity', &
@@ -163,7 +165,8 @@ contains
 
         dt = unset
         t_end = unset
-        integrator = 'symplectic_euler'
+        integrator = merge('velocity_verlet ', 'symplectic_euler', &
+                           c%integrator == integrator_verlet)   ! (a contact variant's)
         gravity = [0.0_wp, 0.0_wp, -9.81_wp]
         expected_speed = 0.0_wp
         skin = unset
@@ -332,44 +335,132 @@ contains
         c%checkpoint_keep = checkpoint_keep
     end subroutine read_output
 
-    !> &contact_model: variants of Hertz-Mindlin that imitate other codes (doc/theory.md).
+    !> &contact_model: variants of Hertz-Mindlin that imitate other codes (doc/theory.md,
+    !> section 3). A named `variant` sets every other key (and the integrator &run takes if it
+    !> names none); keys given beside it override it.
     subroutine read_contact_model(nf, c, err)
         type(nml_file_t), intent(in) :: nf
         type(case_t), intent(inout) :: c
         type(error_t), intent(inout) :: err
+        character(len=name_len) :: variant  ! 'dem' (default) | 'liggghts' | 'mercurydpm' | 'yade'
         real(wp) :: tangential_stiffness_factor  ! k_t = factor 8 G* sqrt(R* d), > 0, default 1
                                                   ! (MercuryDPM: 2/3)
         logical :: tangential_damping  ! damp the tangential spring, default T (MercuryDPM: F)
         logical :: clamp_normal        ! no attractive normal force, default F (Yade: T)
-        namelist /contact_model/ tangential_stiffness_factor, tangential_damping, clamp_normal
+        character(len=name_len) :: tangential_history  ! 'keep_length' (default): turned into
+                                       ! the tangent plane keeping its length, then advanced;
+                                       ! 'project': advanced, then projected (LIGGGHTS)
+        character(len=name_len) :: lever_velocity  ! the rotation's lever in the relative
+                                       ! velocity: 'radius' (default) | 'mid_overlap' (R - d/2)
+        character(len=name_len) :: lever_torque    ! and in the torque: the same choices
+        logical :: reset_pair_history  ! a pair's tangential history is cleared when its
+                                       ! contact ends, default T; F: kept while the pair is in
+                                       ! the neighbour list, and continued by its next contact
+                                       ! (LIGGGHTS 3.8.0)
+        namelist /contact_model/ variant, tangential_stiffness_factor, tangential_damping, &
+            clamp_normal, tangential_history, lever_velocity, lever_torque, reset_pair_history
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
-        character(len=:), allocatable :: text
+        character(len=:), allocatable :: text, at
+        integer, allocatable :: starts(:)
+        character(len=32), allocatable :: keys(:)
+        type(contact_options_t) :: o
 
-        tangential_stiffness_factor = c%opts%tangential_stiffness_factor
-        tangential_damping = c%opts%tangential_damping
-        clamp_normal = c%opts%clamp_normal
-        select case (count_blocks(nf, 'contact_model'))
-        case (0)
-            return
-        case (1)
-            b = nf%blocks(block_index(nf, 'contact_model', 1))
-            do k_item = 0, block_item_count(b)
-                text = block_text(b, k_item)
-                read(text, nml=contact_model, iostat=ios, iomsg=msg)
-                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
-            end do
-            if (err%failed()) return
-            if (.not. check_positive(nml_location(nf, b), tangential_stiffness_factor, &
-                                     'tangential_stiffness_factor', '[-]', err)) return
-        case default
+        if (count_blocks(nf, 'contact_model') == 0) return
+        if (count_blocks(nf, 'contact_model') > 1) then
             call set_error(err, dem_err_input, nf%path // ': more than one &contact_model group')
             return
+        end if
+        b = nf%blocks(block_index(nf, 'contact_model', 1))
+        at = nml_location(nf, b)
+        variant = 'dem'
+        tangential_stiffness_factor = 1.0_wp
+        tangential_damping = .true.
+        clamp_normal = .false.
+        tangential_history = 'keep_length'
+        lever_velocity = 'radius'
+        lever_torque = 'radius'
+        reset_pair_history = .true.
+        do k_item = 0, block_item_count(b)
+            text = block_text(b, k_item)
+            read(text, nml=contact_model, iostat=ios, iomsg=msg)
+            if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+        end do
+        if (err%failed()) return
+        ! what the variant sets, then the keys given beside it
+        select case (variant)
+        case ('dem')
+        case ('liggghts')                 ! LIGGGHTS 3.8, gran model hertz tangential history
+            o%keep_length = .false.
+            o%shift_v = 0.5_wp
+            o%shift_t = 0.5_wp
+            o%reset_pair_history = .false.
+            c%integrator = integrator_verlet
+        case ('mercurydpm')               ! MercuryDPM r5523, the benchmark's drivers
+            o%tangential_stiffness_factor = 2.0_wp / 3.0_wp
+            o%tangential_damping = .false.
+            o%keep_length = .false.
+            o%shift_v = 0.5_wp
+            o%shift_t = 0.5_wp
+            c%integrator = integrator_verlet
+        case ('yade')                     ! Yade 2023, Law2_ScGeom_MindlinPhys_Mindlin
+            o%clamp_normal = .true.
+            o%shift_t = 0.5_wp
+        case default
+            call set_error(err, dem_err_input, at // ": key 'variant': '" // trim(variant) // &
+                "' is not known (accepted: dem, liggghts, mercurydpm, yade)")
+            return
         end select
-        c%opts%tangential_stiffness_factor = tangential_stiffness_factor
-        c%opts%tangential_damping = tangential_damping
-        c%opts%clamp_normal = clamp_normal
+        call nml_items(b%text, starts, keys)
+        if (given('tangential_stiffness_factor')) then
+            if (.not. check_positive(at, tangential_stiffness_factor, &
+                                     'tangential_stiffness_factor', '[-]', err)) return
+            o%tangential_stiffness_factor = tangential_stiffness_factor
+        end if
+        if (given('tangential_damping')) o%tangential_damping = tangential_damping
+        if (given('clamp_normal')) o%clamp_normal = clamp_normal
+        if (given('tangential_history')) then
+            select case (tangential_history)
+            case ('keep_length', 'project')
+                o%keep_length = tangential_history == 'keep_length'
+            case default
+                call set_error(err, dem_err_input, at // ": key 'tangential_history': '" // &
+                    trim(tangential_history) // "' is not known (accepted: keep_length, project)")
+                return
+            end select
+        end if
+        if (given('lever_velocity')) then
+            if (.not. lever_shift(lever_velocity, 'lever_velocity', o%shift_v)) return
+        end if
+        if (given('lever_torque')) then
+            if (.not. lever_shift(lever_torque, 'lever_torque', o%shift_t)) return
+        end if
+        if (given('reset_pair_history')) o%reset_pair_history = reset_pair_history
+        c%opts = o
+    contains
+        logical function given(key)
+            character(len=*), intent(in) :: key
+            given = any(keys == key)
+        end function given
+
+        !> The shift of a lever R - shift d named by the key `key`.
+        logical function lever_shift(value, key, shift) result(ok)
+            character(len=*), intent(in) :: value, key
+            real(wp), intent(out) :: shift
+            ok = .true.
+            select case (value)
+            case ('radius')
+                shift = 0.0_wp
+            case ('mid_overlap')
+                shift = 0.5_wp
+            case default
+                ok = .false.
+                shift = 0.0_wp
+                call set_error(err, dem_err_input, at // ": key '" // key // "': '" // &
+                    trim(value) // "' is not known (accepted: radius, mid_overlap)")
+            end select
+        end function lever_shift
     end subroutine read_contact_model
 
     !> &material (one per material).

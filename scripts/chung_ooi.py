@@ -119,3 +119,23 @@ def oblique_results(final_csv):
     v_contact = f["vx"] - p["R"] * spin
     rebound = np.degrees(np.arctan2(v_contact, f["vz"]))
     return et, spin, rebound, f["vz"] / vn
+
+
+CHUNG_OOI_CASES = ("test1_sphere_sphere", "test2_sphere_wall", "test3_restitution",
+                   "test4_oblique")
+
+
+def summary(stem, out):
+    """The measured quantities of one test from its outputs in `out` (contact.csv or
+    final.csv), as {(stem, quantity, index): value}: peak overlap and force and duration
+    (tests 1-2), restitution per sphere (test 3), tangential restitution, spin, rebound angle
+    and normal restitution per angle (test 4)."""
+    if stem in ("test1_sphere_sphere", "test2_sphere_wall"):
+        values = contact_metrics(f"{out}/contact.csv")
+        return {(stem, q, 0): v for q, v in zip(("max_overlap", "max_force", "duration"), values)}
+    if stem == "test3_restitution":
+        e = restitutions(f"{out}/final.csv", TEST3["v"])
+        return {(stem, "restitution", k): v for k, v in enumerate(e)}
+    names = ("tangential_restitution", "spin", "rebound_angle", "normal_restitution")
+    return {(stem, q, k): v for q, a in zip(names, oblique_results(f"{out}/final.csv"))
+            for k, v in enumerate(a)}

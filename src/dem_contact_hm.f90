@@ -16,11 +16,12 @@ contains
     !> Force of one contact on body i. The normal `nrm` points from i to its partner; `vrel`
     !> is the velocity of i minus that of the partner at the contact point. The tangential
     !> displacement `xi` (of i relative to the partner) is turned into the current tangent
-    !> plane keeping its length and advanced by vt dt. When the spring force exceeds the Coulomb
+    !> plane keeping its length and advanced by vt dt (`keep_length`), or advanced by vt dt and
+    !> then projected into the plane (LIGGGHTS 3.8). When the spring force exceeds the Coulomb
     !> limit mu |F_n| the contact slides: the spring is rescaled to the limit and the tangential
     !> damping is dropped (as LIGGGHTS, MUSEN, MercuryDPM and Yade do).
     pure subroutine hm_force(overlap, nrm, vrel, rstar, mstar, kn, sn, st, cn, ct, mu, &
-                             clamp_normal, dt, xi, fn, ft)
+                             clamp_normal, keep_length, dt, xi, fn, ft)
         !$acc routine seq
         real(wp), intent(in) :: overlap   !! d_n > 0 [m]
         real(wp), intent(in) :: nrm(3)    !! unit normal from i to the partner
@@ -34,6 +35,8 @@ contains
         real(wp), intent(in) :: ct        !! tangential damping factor [-]
         real(wp), intent(in) :: mu        !! sliding friction [-]
         logical, intent(in) :: clamp_normal  !! no attractive normal force (Yade)
+        logical, intent(in) :: keep_length   !! the history turned keeping its length (else
+                                             !! advanced, then projected: LIGGGHTS)
         real(wp), intent(in) :: dt        !! time step [s]
         real(wp), intent(inout) :: xi(3)  !! tangential spring displacement [m]
         real(wp), intent(out) :: fn       !! normal force, repulsive > 0 [N]
@@ -41,8 +44,8 @@ contains
         real(wp) :: f(1)
         call hm_lanes(1_ip, [overlap], nrm(1:1), nrm(2:2), nrm(3:3), vrel(1:1), vrel(2:2), &
                       vrel(3:3), [rstar], [kn], [st], [cn * sqrt(sn * mstar)], &
-                      [ct * sqrt(st * mstar)], [mu], clamp_normal, dt, xi(1:1), xi(2:2), &
-                      xi(3:3), f, ft(1:1), ft(2:2), ft(3:3))
+                      [ct * sqrt(st * mstar)], [mu], clamp_normal, keep_length, dt, xi(1:1), &
+                      xi(2:2), xi(3:3), f, ft(1:1), ft(2:2), ft(3:3))
         fn = f(1)
     end subroutine hm_force
 
@@ -51,7 +54,7 @@ contains
     !> dtan = ct sqrt(st m*) (the particle-pair kernel keeps them from the list build). The
     !> operations of each lane are those of one contact, in the same order.
     pure subroutine hm_lanes(m, overlap, n1, n2, n3, v1, v2, v3, rstar, kn, st, dn, dtan, mu, &
-                             clamp_normal, dt, x1, x2, x3, fn, f1, f2, f3)
+                             clamp_normal, keep_length, dt, x1, x2, x3, fn, f1, f2, f3)
         !$acc routine seq
         integer(ip), intent(in) :: m
         real(wp), intent(in) :: overlap(m)                 !! [m]
@@ -60,7 +63,7 @@ contains
         real(wp), intent(in) :: rstar(m), kn(m), st(m), mu(m)
         real(wp), intent(in) :: dn(m)        !! cn sqrt(sn m*) [kg^(1/2) Pa^(1/2)]
         real(wp), intent(in) :: dtan(m)      !! ct sqrt(st m*) [kg^(1/2) Pa^(1/2)]
-        logical, intent(in) :: clamp_normal
+        logical, intent(in) :: clamp_normal, keep_length
         real(wp), intent(in) :: dt                         !! [s]
         real(wp), intent(inout) :: x1(m), x2(m), x3(m)     !! tangential displacements [m]
         real(wp), intent(out) :: fn(m)                     !! normal forces [N]
@@ -83,30 +86,43 @@ contains
             t3(l) = v3(l) - vn * n3(l)
         end do
 
-        ! the spring into the tangent plane, keeping its length, then advanced by vt dt
-        do l = 1, m
-            len_old = x1(l) * x1(l) + x2(l) * x2(l) + x3(l) * x3(l)
-            if (len_old > 0.0_wp) then
+        ! the spring into the tangent plane, keeping its length, then advanced by vt dt; or
+        ! (LIGGGHTS) advanced, then its normal part removed
+        if (keep_length) then
+            do l = 1, m
+                len_old = x1(l) * x1(l) + x2(l) * x2(l) + x3(l) * x3(l)
+                if (len_old > 0.0_wp) then
+                    s = x1(l) * n1(l) + x2(l) * n2(l) + x3(l) * n3(l)
+                    x1(l) = x1(l) - s * n1(l)
+                    x2(l) = x2(l) - s * n2(l)
+                    x3(l) = x3(l) - s * n3(l)
+                    len_new = x1(l) * x1(l) + x2(l) * x2(l) + x3(l) * x3(l)
+                    if (len_new > 0.0_wp) then
+                        g = sqrt(len_old / len_new)
+                        x1(l) = x1(l) * g
+                        x2(l) = x2(l) * g
+                        x3(l) = x3(l) * g
+                    else
+                        x1(l) = 0.0_wp
+                        x2(l) = 0.0_wp
+                        x3(l) = 0.0_wp
+                    end if
+                end if
+                x1(l) = x1(l) + t1(l) * dt
+                x2(l) = x2(l) + t2(l) * dt
+                x3(l) = x3(l) + t3(l) * dt
+            end do
+        else
+            do l = 1, m
+                x1(l) = x1(l) + t1(l) * dt
+                x2(l) = x2(l) + t2(l) * dt
+                x3(l) = x3(l) + t3(l) * dt
                 s = x1(l) * n1(l) + x2(l) * n2(l) + x3(l) * n3(l)
                 x1(l) = x1(l) - s * n1(l)
                 x2(l) = x2(l) - s * n2(l)
                 x3(l) = x3(l) - s * n3(l)
-                len_new = x1(l) * x1(l) + x2(l) * x2(l) + x3(l) * x3(l)
-                if (len_new > 0.0_wp) then
-                    g = sqrt(len_old / len_new)
-                    x1(l) = x1(l) * g
-                    x2(l) = x2(l) * g
-                    x3(l) = x3(l) * g
-                else
-                    x1(l) = 0.0_wp
-                    x2(l) = 0.0_wp
-                    x3(l) = 0.0_wp
-                end if
-            end if
-            x1(l) = x1(l) + t1(l) * dt
-            x2(l) = x2(l) + t2(l) * dt
-            x3(l) = x3(l) + t3(l) * dt
-        end do
+            end do
+        end if
 
         ! spring force, Coulomb limit: sliding rescales the spring to the limit, no damping
         do l = 1, m

@@ -14,7 +14,7 @@ module dem_contact_store
     private
     public :: contact_store_t, n_pair_history, n_wall_history, max_wall_contacts, &
               n_wall_pack_real, store_pairs_new, store_pairs_take, store_pairs_drop, &
-              store_pairs_data, store_walls_data, &
+              store_pairs_data, store_pairs_forget_parted, store_walls_data, &
               store_init, store_walls_reserve, store_walls_reserve_on_device, store_walls_restore, &
               store_walls_permute, store_walls_pack, store_walls_unpack, store_unique_pairs, &
               carry_history, touching_from_history, history_counts, history_fill, &
@@ -236,6 +236,25 @@ contains
             end do
         end do
     end subroutine carry_history
+
+    !> The history of the pairs not in contact cleared (LIGGGHTS 3.8.0 keeps the history of
+    !> a contact that has ended only until the next list build).
+    subroutine store_pairs_forget_parted(cs, n_pairs)
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), intent(in) :: n_pairs
+        call forget_parted(n_pairs, cs%touching, cs%xi)
+    end subroutine store_pairs_forget_parted
+
+    subroutine forget_parted(n_pairs, touching, xi)
+        integer(ip), intent(in) :: n_pairs
+        logical, intent(in) :: touching(max(1, n_pairs))
+        real(wp), intent(inout) :: xi(n_pair_history, max(1, n_pairs))
+        integer(ip) :: p
+        !$acc parallel loop gang vector default(present)
+        do p = 1, n_pairs
+            if (.not. touching(p)) xi(:, p) = 0.0_wp
+        end do
+    end subroutine forget_parted
 
     !> touching(p) = the pair has history (the contact kernel resets both when it ends).
     subroutine touching_from_history(n_pairs, xi, touching)

@@ -67,9 +67,14 @@ contains
     !> Add the contact force and torque of every overlapping pair to the owned particles.
     !> Pairs not in contact have their tangential history reset. The pairs are taken in tiles
     !> of `tile`: the overlapping pairs of a tile are gathered into lanes and the contact law
-    !> runs over those lanes at once (hm_lanes).
+    !> runs over those lanes at once (hm_lanes). The lever of a particle's rotation in the
+    !> relative velocity is R - shift_v d, in the torque R - shift_t d (0: the radius; 1/2:
+    !> the contact point at mid-overlap, as LIGGGHTS). With `reset`, a pair's history is
+    !> cleared when its contact ends; without, it is kept while the pair is listed (LIGGGHTS
+    !> 3.8.0) and continued by its next contact.
     subroutine pp_forces(n_own, n_all, n_pairs, x, v, w, radius, scale, pair, pconst, &
-                         clamp_normal, dt, xi, touching, acc, f, t)
+                         clamp_normal, keep_length, shift_v, shift_t, reset, dt, xi, touching, &
+                         acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
         real(wp), intent(in) :: x(3, n_all), v(3, n_all), w(3, n_all)  !! [m], [m/s], [rad/s]
@@ -77,10 +82,13 @@ contains
         real(wp), intent(in) :: scale(n_all)      !! fixed-point scales (pp_pair_constants)
         integer(ip), intent(in) :: pair(2, n_pairs)  !! the two particles of a pair
         real(wp), intent(in) :: pconst(n_pair_constants, n_pairs)
-        logical, intent(in) :: clamp_normal
+        logical, intent(in) :: clamp_normal, keep_length   !! (hm_lanes)
+        real(wp), intent(in) :: shift_v, shift_t     !! levers R - shift d [-]
+        logical, intent(in) :: reset                 !! the history cleared when a contact ends
         real(wp), intent(in) :: dt                   !! [s]
         real(wp), intent(inout) :: xi(3, n_pairs)    !! tangential history of the first [m]
-        logical, intent(inout) :: touching(n_pairs)  !! in contact (xi /= 0 only if so)
+        logical, intent(inout) :: touching(n_pairs)  !! in contact (with `reset`, xi /= 0
+                                                     !! only if so)
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
                                                      !! (zero between calls)
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m]
@@ -88,7 +96,8 @@ contains
         integer(ip) :: lp(tile + 1)
         logical :: over
         integer(i8) :: kf(3), kc(3)
-        real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj
+        real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, &
+                    ri, rj, gi, gj
         real(wp), dimension(tile + 1) :: e1, e2, e3, e4
         real(wp), dimension(tile) :: ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, &
                                      dtan, mu, x1, x2, x3, fn, f1, f2, f3
@@ -96,7 +105,8 @@ contains
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, over) &
-        !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj) &
+        !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, ri, rj) &
+        !$acc private(gi, gj) &
         !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu) &
         !$acc private(x1, x2, x3, fn, f1, f2, f3)
         do p0 = 0, n_pairs - 1, tile
@@ -121,7 +131,7 @@ contains
                 if (over .neqv. touching(p)) then
                     if (.not. over) then                      ! the contact has ended
                         touching(p) = .false.
-                        xi(:, p) = 0.0_wp
+                        if (reset) xi(:, p) = 0.0_wp
                     end if
                 end if
             end do
@@ -136,9 +146,11 @@ contains
                 n2(l) = e2(l) * inv
                 n3(l) = e3(l) * inv
                 ov(l) = (radius(i) + radius(j)) - dist
-                ws1 = radius(i) * w(1, i) + radius(j) * w(1, j)
-                ws2 = radius(i) * w(2, i) + radius(j) * w(2, j)
-                ws3 = radius(i) * w(3, i) + radius(j) * w(3, j)
+                ri = radius(i) - shift_v * ov(l)
+                rj = radius(j) - shift_v * ov(l)
+                ws1 = ri * w(1, i) + rj * w(1, j)
+                ws2 = ri * w(2, i) + rj * w(2, j)
+                ws3 = ri * w(3, i) + rj * w(3, j)
                 v1(l) = v(1, i) - v(1, j) + (ws2 * n3(l) - ws3 * n2(l))
                 v2(l) = v(2, i) - v(2, j) + (ws3 * n1(l) - ws1 * n3(l))
                 v3(l) = v(3, i) - v(3, j) + (ws1 * n2(l) - ws2 * n1(l))
@@ -153,7 +165,7 @@ contains
                 x3(l) = xi(3, p)
             end do
             call hm_lanes(m, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu, &
-                          clamp_normal, dt, x1, x2, x3, fn, f1, f2, f3)
+                          clamp_normal, keep_length, dt, x1, x2, x3, fn, f1, f2, f3)
             ! the history back, and F and n x F_t into both particles' sums
             do l = 1, m
                 p = lp(l)
@@ -169,10 +181,17 @@ contains
                 cp(1) = n2(l) * f3(l) - n3(l) * f2(l)
                 cp(2) = n3(l) * f1(l) - n1(l) * f3(l)
                 cp(3) = n1(l) * f2(l) - n2(l) * f1(l)
+                ! the torque's sums hold n x F_t times lever / R (times R after the pass)
+                gi = 1.0_wp
+                gj = 1.0_wp
+                if (shift_t /= 0.0_wp) then
+                    gi = 1.0_wp - shift_t * ov(l) / radius(i)
+                    gj = 1.0_wp - shift_t * ov(l) / radius(j)
+                end if
                 si = scale(i)
                 do c = 1, 3
                     kf(c) = to_fixed(fp(c) * si)
-                    kc(c) = to_fixed(cp(c) * si)
+                    kc(c) = to_fixed(cp(c) * gi * si)
                     !$acc atomic update
                     acc(c, i) = acc(c, i) + kf(c)
                     !$acc atomic update
@@ -180,10 +199,10 @@ contains
                 end do
                 if (j > n_own) cycle
                 sj = scale(j)
-                if (sj /= si) then                 ! (the same words where the scales are)
+                if (sj /= si .or. gj /= gi) then   ! (the same words where these are)
                     do c = 1, 3
                         kf(c) = to_fixed(fp(c) * sj)
-                        kc(c) = to_fixed(cp(c) * sj)
+                        kc(c) = to_fixed(cp(c) * gj * sj)
                     end do
                 end if
                 do c = 1, 3

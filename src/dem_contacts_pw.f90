@@ -173,10 +173,12 @@ contains
     end subroutine history_slots
 
     !> Add the wall contact forces and torques to every owned particle. `overflow` counts
-    !> particles with more separate contacts than the history store holds.
+    !> particles with more separate contacts than the history store holds. The levers of the
+    !> rotation are R - shift_v d and R - shift_t d, as in pp_forces.
     subroutine pw_forces(n_own, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, mat, wstart, &
                          wlist, vert, tmat, twall, wall_v, wall_w, wall_c, kn, sn, st, cn, ct, &
-                         mu, clamp_normal, dt, wtri, wxi, f, t, overflow)
+                         mu, clamp_normal, keep_length, shift_v, shift_t, dt, wtri, wxi, f, t, &
+                         overflow)
         integer(ip), intent(in) :: n_own, n_cand, n_tri, n_wall, nm
         real(wp), intent(in) :: x(3, n_own), v(3, n_own), w(3, n_own)  !! [m], [m/s], [rad/s]
         real(wp), intent(in) :: radius(n_own), mass(n_own)             !! [m], [kg]
@@ -190,7 +192,8 @@ contains
         real(wp), intent(in) :: wall_c(3, n_wall)   !! a point of its rotation axis [m]
         real(wp), intent(in) :: kn(nm, nm), sn(nm, nm), st(nm, nm)   !! [Pa]
         real(wp), intent(in) :: cn(nm, nm), ct(nm, nm), mu(nm, nm)   !! [-]
-        logical, intent(in) :: clamp_normal
+        logical, intent(in) :: clamp_normal, keep_length              !! (hm_force)
+        real(wp), intent(in) :: shift_v, shift_t                      !! [-]
         real(wp), intent(in) :: dt                                    !! [s]
         integer(ip), intent(inout) :: wtri(max_wall_contacts, n_own)
         real(wp), intent(inout) :: wxi(n_wall_history, max_wall_contacts, n_own)  !! [m]
@@ -255,16 +258,18 @@ contains
                 dist = sqrt(sum((q(:, c) - x(:, i))**2))
                 nrm = (q(:, c) - x(:, i)) / dist
                 ! minus the wall's velocity at the contact point
-                vrel = v(:, i) + cross(r * w(:, i), nrm) - wall_v(:, twall(tri)) &
+                vrel = v(:, i) + cross((r - shift_v * (r - dist)) * w(:, i), nrm) &
+                       - wall_v(:, twall(tri)) &
                        - cross(wall_w(:, twall(tri)), q(:, c) - wall_c(:, twall(tri)))
                 b = tmat(tri)
                 call hm_force(r - dist, nrm, vrel, r, mass(i), kn(a, b), sn(a, b), st(a, b), &
-                              cn(a, b), ct(a, b), mu(a, b), clamp_normal, dt, xik(1:3), fn, ft)
+                              cn(a, b), ct(a, b), mu(a, b), clamp_normal, keep_length, dt, &
+                              xik(1:3), fn, ft)
                 ns = ns + 1
                 new_tri(ns) = tri
                 new_xi(:, ns) = xik
                 fi = fi - fn * nrm + ft
-                ti = ti + r * cross(nrm, ft)
+                ti = ti + (r - shift_t * (r - dist)) * cross(nrm, ft)
             end do
             wtri(1:ns, i) = new_tri(1:ns)
             wxi(:, 1:ns, i) = new_xi(:, 1:ns)

@@ -25,6 +25,13 @@ module dem_materials
         real(wp) :: tangential_stiffness_factor = 1.0_wp  !< 2/3 imitates MercuryDPM
         logical :: tangential_damping = .true.            !< .false. imitates MercuryDPM
         logical :: clamp_normal = .false.                 !< .true. imitates Yade
+        logical :: keep_length = .true.     !< the history turned keeping its length; .false.:
+                                            !< advanced, then projected (LIGGGHTS)
+        real(wp) :: shift_v = 0.0_wp        !< rotation's lever R - shift_v d in v_rel
+        real(wp) :: shift_t = 0.0_wp        !< and R - shift_t d in the torque (1/2: LIGGGHTS)
+        logical :: reset_pair_history = .true.  !< a pair's history cleared when its contact
+                                                !< ends; .false.: kept while the pair is listed
+                                                !< (LIGGGHTS 3.8.0)
     end type contact_options_t
 
     !> Kernel constants per material pair (i, j), symmetric.
@@ -35,7 +42,10 @@ module dem_materials
         real(wp), allocatable :: cn(:, :)     !< -2 sqrt(5/6) beta (>= 0) [-]
         real(wp), allocatable :: ct(:, :)     !< cn, or 0 without tangential damping [-]
         real(wp), allocatable :: mu(:, :)     !< sliding friction [-]
-        logical :: clamp_normal = .false.
+        logical :: clamp_normal = .false.     !< (contact_options_t)
+        logical :: keep_length = .true.
+        real(wp) :: shift_v = 0.0_wp, shift_t = 0.0_wp
+        logical :: reset_pair_history = .true.
     end type pair_constants_t
 
 contains
@@ -88,6 +98,10 @@ contains
         pc%ct = 0.0_wp
         pc%mu = 0.0_wp
         pc%clamp_normal = opts%clamp_normal
+        pc%keep_length = opts%keep_length
+        pc%shift_v = opts%shift_v
+        pc%shift_t = opts%shift_t
+        pc%reset_pair_history = opts%reset_pair_history
         do b = 1, n
             do a = 1, n
                 if (.not. mats%pair_defined(a, b)) cycle

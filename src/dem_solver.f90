@@ -22,7 +22,7 @@ module dem_solver
                              neighbors_row_history, neighbors_set_rows
     use dem_contact_store, only: contact_store_t, store_init, store_walls_permute, &
                                  store_walls_restore, store_pairs_data, store_pairs_drop, &
-                                 store_walls_data
+                                 store_walls_data, store_pairs_forget_parted
     use dem_cells, only: fill_range, kept_indices
     use dem_contacts_pp, only: pp_forces, pp_pair_constants, n_pair_constants
     use dem_contacts_pw, only: pw_forces
@@ -701,15 +701,16 @@ contains
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
             if (allocated(p%ext)) call external_forces(n, c%dt, p%v, p%ext, p%f, p%t)
             call pp_forces(n, n + p%n_ghost, nb%n_pairs, p%x, p%v, p%w, p%radius, nb%scale, &
-                           nb%pair, nb%pconst, pc%clamp_normal, c%dt, s%cs%xi, s%cs%touching, &
+                           nb%pair, nb%pconst, pc%clamp_normal, pc%keep_length, pc%shift_v, &
+                           pc%shift_t, pc%reset_pair_history, c%dt, s%cs%xi, s%cs%touching, &
                            nb%acc, p%f, p%t)
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
             call pw_forces(n, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, p%x, p%v, p%w, &
                            p%radius, p%mass, p%mat, nb%wstart, nb%wlist, m%vert, m%mat, m%wall, &
                            m%wall_v, m%wall_w, m%wall_c, pc%kn, pc%sn, pc%st, pc%cn, pc%ct, &
-                           pc%mu, pc%clamp_normal, c%dt, s%cs%wall_tri, s%cs%wall_xi, p%f, &
-                           p%t, overflow)
+                           pc%mu, pc%clamp_normal, pc%keep_length, pc%shift_v, pc%shift_t, &
+                           c%dt, s%cs%wall_tri, s%cs%wall_xi, p%f, p%t, overflow)
             call timer_stop(s%timers, phase_contacts_pw)
         end associate
         if (overflow > 0) call set_error(err, dem_err_runtime, 'a particle has more separate ' // &
@@ -780,6 +781,8 @@ contains
         logical, intent(in) :: outlets           !! remove the parked particles
         integer(ip), allocatable :: order(:), kept(:)
         integer(ip) :: m
+        if (.not. s%pc%reset_pair_history .and. s%lists_on_device) &
+            call store_pairs_forget_parted(s%cs, s%nb%n_pairs)
         if (s%comm%size > 1) then
             if (s%lists_on_device) call domain_data(s%dom, acc_exit)
             call distribute(s, outlets)

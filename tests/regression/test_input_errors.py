@@ -120,6 +120,12 @@ bad("dt_unstable", sub("dt = 1e-7", "dt = 1e-4"), "run", "dt", "stability bound"
 bad("bad_integrator", sub("t_end = 1e-5,", "t_end = 1e-5, integrator = 'rk4',"), "run",
     "integrator")
 bad("zero_normal", sub("normal = 0, 0, 1", "normal = 0, 0, 0"), "wall_plane", "normal")
+bad("unknown_variant", GOOD + "&contact_model variant = 'lammps' /\n", "contact_model",
+    "variant", "accepted: dem, liggghts, mercurydpm, yade")
+bad("unknown_lever", GOOD + "&contact_model variant = 'liggghts', lever_torque = 'rim' /\n",
+    "contact_model", "lever_torque", "accepted: radius, mid_overlap")
+bad("unknown_history", GOOD + "&contact_model tangential_history = 'rotate' /\n",
+    "contact_model", "tangential_history", "accepted: keep_length, project")
 bad("unknown_group", GOOD + "&gravity g = 9.81 /\n", "gravity", None, "unknown namelist group")
 bad("unclosed_group", GOOD + "&particle material = 'glass', radius = 0.01\n", "particle",
     None, "not closed")

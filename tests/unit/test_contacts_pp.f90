@@ -3,7 +3,8 @@
 !> floating point: the same forces and torques to the rounding of the fixed point (half a
 !> unit of its last place per contact) and of the floating-point sums; bit for bit the same
 !> forces whatever order the particles are stored in; and Newton's third law (the contact
-!> forces sum to zero, to the fixed point's rounding).
+!> forces sum to zero, to the fixed point's rounding). Both levers of the rotation: the radius,
+!> and R - d/2 (the contact point at mid-overlap, LIGGGHTS's).
 program test_contacts_pp
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t
@@ -23,7 +24,8 @@ program test_contacts_pp
     logical :: ok
     real(wp) :: kn(1, 1), sn(1, 1), st(1, 1), cn(1, 1), mu(1, 1)
     integer(i8) :: gid(n)
-    integer(ip) :: mat(n), i, order(n), trial
+    integer(ip) :: mat(n), i, order(n), trial, variant
+    real(wp) :: shift
     type(neighbors_t) :: nb
     type(contact_store_t) :: cs
     type(mesh_t) :: no_walls
@@ -45,50 +47,54 @@ program test_contacts_pp
     call random_number(w)
     w = 100.0_wp * (w - 0.5_wp)
     gid = [(int(7 * i + 3, i8), i = 1, n)]
-    call brute_force(fb, tb)
-    ! each term of a fixed-point sum is off by at most half a unit, 1 / (2 scale); the
-    ! floating-point sums by a few roundings of the largest term
-    quantum = [(1.0_wp / fixed_scale(m(i) * accel_bound), i = 1, n)]
-    tol_f = contacts * (0.5_wp * quantum + 4.0_wp * epsilon(1.0_wp) * big)
-    tol_t = r * tol_f
+    do variant = 1, 2
+        shift = 0.5_wp * (variant - 1)
+        call brute_force(fb, tb)
+        ! each term of a fixed-point sum is off by at most half a unit, 1 / (2 scale); the
+        ! floating-point sums by a few roundings of the largest term
+        quantum = [(1.0_wp / fixed_scale(m(i) * accel_bound), i = 1, n)]
+        tol_f = contacts * (0.5_wp * quantum + 4.0_wp * epsilon(1.0_wp) * big)
+        tol_t = r * tol_f
 
-    do trial = 1, 3
-        ! store the particles in another order each time
-        order = [(i, i = 1, n)]
-        if (trial == 2) order = [(n + 1 - i, i = 1, n)]
-        if (trial == 3) order = [(mod(37 * i, n) + 1, i = 1, n)]
-        nb = neighbors_t(skin=0.001_wp)
-        call neighbors_build(nb, cs, n, n, gid(order), x(:, order), r(order), no_walls)
-        allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)), nb%scale(n))
-        call pp_pair_constants(n, nb%n_pairs, 1_ip, r(order), m(order), mat, nb%pair, kn, sn, &
-                               st, cn, cn, mu, accel_bound, nb%pconst, nb%scale)
-        f = 0.0_wp
-        t = 0.0_wp
-        call pp_forces(n, n, nb%n_pairs, x(:, order), v(:, order), w(:, order), r(order), &
-                       nb%scale, nb%pair, nb%pconst, .false., dt, cs%xi, &
-                       cs%touching, nb%acc, f, t)
-        back(order) = [(i, i = 1, n)]
-        f = f(:, back)                     ! back in the order of the brute force
-        t = t(:, back)
-        call assert_true(all(abs(f - fb) <= spread(tol_f, 1, 3)) .and. &
-                         all(abs(t - tb) <= spread(tol_t, 1, 3)), &
-                         'one pass equals both-sides brute force to the roundings')
-        if (trial == 1) then
-            f1 = f
-            t1 = t
-        end if
-        call assert_true(all(f == f1) .and. all(t == t1), &
-                         'the same forces bit for bit in any storage order')
-        call assert_true(all(nb%acc == 0), 'the sums are cleared for the next step')
-        call assert_true(2 * count(nb%mirror < 0) == size(nb%list), &
-                         'half the entries are evaluated by the partner')
-        call assert_true(2 * nb%n_pairs == size(nb%list) .and. &
-                         count(nb%pref < 0) == nb%n_pairs, 'each pair is stored once')
-        do i = 1, 3
-            call assert_close(sum(f(i, :)), 0.0_wp, 0.0_wp, 'contact forces sum to zero', &
-                              sum(contacts * quantum) + n * epsilon(1.0_wp) * maxval(abs(f)))
+        do trial = 1, 3
+            ! store the particles in another order each time
+            order = [(i, i = 1, n)]
+            if (trial == 2) order = [(n + 1 - i, i = 1, n)]
+            if (trial == 3) order = [(mod(37 * i, n) + 1, i = 1, n)]
+            nb = neighbors_t(skin=0.001_wp)
+            call neighbors_build(nb, cs, n, n, gid(order), x(:, order), r(order), no_walls)
+            allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)), nb%scale(n))
+            call pp_pair_constants(n, nb%n_pairs, 1_ip, r(order), m(order), mat, nb%pair, kn, sn, &
+                                   st, cn, cn, mu, accel_bound, nb%pconst, nb%scale)
+            f = 0.0_wp
+            t = 0.0_wp
+            call pp_forces(n, n, nb%n_pairs, x(:, order), v(:, order), w(:, order), r(order), &
+                           nb%scale, nb%pair, nb%pconst, .false., .true., shift, shift, .true., dt, &
+                           cs%xi, &
+                           cs%touching, nb%acc, f, t)
+            back(order) = [(i, i = 1, n)]
+            f = f(:, back)                     ! back in the order of the brute force
+            t = t(:, back)
+            call assert_true(all(abs(f - fb) <= spread(tol_f, 1, 3)) .and. &
+                             all(abs(t - tb) <= spread(tol_t, 1, 3)), &
+                             'one pass equals both-sides brute force to the roundings')
+            if (trial == 1) then
+                f1 = f
+                t1 = t
+            end if
+            call assert_true(all(f == f1) .and. all(t == t1), &
+                             'the same forces bit for bit in any storage order')
+            call assert_true(all(nb%acc == 0), 'the sums are cleared for the next step')
+            call assert_true(2 * count(nb%mirror < 0) == size(nb%list), &
+                             'half the entries are evaluated by the partner')
+            call assert_true(2 * nb%n_pairs == size(nb%list) .and. &
+                             count(nb%pref < 0) == nb%n_pairs, 'each pair is stored once')
+            do i = 1, 3
+                call assert_close(sum(f(i, :)), 0.0_wp, 0.0_wp, 'contact forces sum to zero', &
+                                  sum(contacts * quantum) + n * epsilon(1.0_wp) * maxval(abs(f)))
+            end do
+            deallocate(nb%pconst, nb%scale)
         end do
-        deallocate(nb%pconst, nb%scale)
     end do
     call assert_true(maxval(abs(fb)) > 0.0_wp, 'there are contacts')
     ok = .true.                            ! the scale puts the bound in [2^56, 2^57)
@@ -107,7 +113,7 @@ contains
     subroutine brute_force(fo, to)
         real(wp), intent(out) :: fo(3, n), to(3, n)
         integer(ip) :: a, b, byid(n)
-        real(wp) :: d(3), dist, nrm(3), vrel(3), xi(3), fn, ft(3)
+        real(wp) :: d(3), dist, nrm(3), vrel(3), xi(3), fn, ft(3), ov
         byid = [(i, i = 1, n)]           ! gid grows with the index here
         fo = 0.0_wp
         to = 0.0_wp
@@ -121,15 +127,17 @@ contains
                 if (sum(d**2) >= (r(a) + r(b))**2) cycle
                 dist = sqrt(d(1)**2 + d(2)**2 + d(3)**2)
                 nrm = d * (1.0_wp / dist)
-                vrel = v(:, a) - v(:, b) + cross(r(a) * w(:, a) + r(b) * w(:, b), nrm)
+                ov = r(a) + r(b) - dist
+                vrel = v(:, a) - v(:, b) + cross((r(a) - shift * ov) * w(:, a) &
+                                                 + (r(b) - shift * ov) * w(:, b), nrm)
                 xi = 0.0_wp
-                call hm_force(r(a) + r(b) - dist, nrm, vrel, r(a) * r(b) / (r(a) + r(b)), &
+                call hm_force(ov, nrm, vrel, r(a) * r(b) / (r(a) + r(b)), &
                               m(a) * m(b) / (m(a) + m(b)), kn(1, 1), sn(1, 1), st(1, 1), &
-                              cn(1, 1), cn(1, 1), mu(1, 1), .false., dt, xi, fn, ft)
+                              cn(1, 1), cn(1, 1), mu(1, 1), .false., .true., dt, xi, fn, ft)
                 fo(:, a) = fo(:, a) + (-fn * nrm + ft)
                 contacts(a) = contacts(a) + 1
                 big(a) = max(big(a), maxval(abs(-fn * nrm + ft)))
-                to(:, a) = to(:, a) + r(a) * cross(nrm, ft)
+                to(:, a) = to(:, a) + (r(a) - shift * ov) * cross(nrm, ft)
             end do
         end do
     end subroutine brute_force
