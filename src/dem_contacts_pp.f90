@@ -96,17 +96,22 @@ contains
         integer(ip) :: lp(tile + 1)
         logical :: over
         integer(i8) :: kf(3), kc(3)
-        real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, &
-                    ri, rj, gi, gj
+        real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, g, sv, &
+                    st_
+        logical :: shifted_v, shifted_t
         real(wp), dimension(tile + 1) :: e1, e2, e3, e4
         real(wp), dimension(tile) :: ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, &
                                      dtan, mu, x1, x2, x3, fn, f1, f2, f3
 
+        sv = shift_v
+        st_ = shift_t
+        shifted_v = shift_v /= 0.0_wp
+        shifted_t = shift_t /= 0.0_wp
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, over) &
         !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, ri, rj) &
-        !$acc private(gi, gj) &
+        !$acc private(g) firstprivate(sv, st_, shifted_v, shifted_t) &
         !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu) &
         !$acc private(x1, x2, x3, fn, f1, f2, f3)
         do p0 = 0, n_pairs - 1, tile
@@ -146,11 +151,9 @@ contains
                 n2(l) = e2(l) * inv
                 n3(l) = e3(l) * inv
                 ov(l) = (radius(i) + radius(j)) - dist
-                ri = radius(i) - shift_v * ov(l)
-                rj = radius(j) - shift_v * ov(l)
-                ws1 = ri * w(1, i) + rj * w(1, j)
-                ws2 = ri * w(2, i) + rj * w(2, j)
-                ws3 = ri * w(3, i) + rj * w(3, j)
+                ws1 = radius(i) * w(1, i) + radius(j) * w(1, j)
+                ws2 = radius(i) * w(2, i) + radius(j) * w(2, j)
+                ws3 = radius(i) * w(3, i) + radius(j) * w(3, j)
                 v1(l) = v(1, i) - v(1, j) + (ws2 * n3(l) - ws3 * n2(l))
                 v2(l) = v(2, i) - v(2, j) + (ws3 * n1(l) - ws1 * n3(l))
                 v3(l) = v(3, i) - v(3, j) + (ws1 * n2(l) - ws2 * n1(l))
@@ -164,6 +167,20 @@ contains
                 x2(l) = xi(2, p)
                 x3(l) = xi(3, p)
             end do
+            if (shifted_v) then     ! levers R - shift_v d: less shift_v d (w_i + w_j) x n
+                do l = 1, m
+                    p = lp(l)
+                    i = pair(1, p)
+                    j = pair(2, p)
+                    g = sv * ov(l)
+                    ws1 = g * (w(1, i) + w(1, j))
+                    ws2 = g * (w(2, i) + w(2, j))
+                    ws3 = g * (w(3, i) + w(3, j))
+                    v1(l) = v1(l) - (ws2 * n3(l) - ws3 * n2(l))
+                    v2(l) = v2(l) - (ws3 * n1(l) - ws1 * n3(l))
+                    v3(l) = v3(l) - (ws1 * n2(l) - ws2 * n1(l))
+                end do
+            end if
             call hm_lanes(m, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu, &
                           clamp_normal, keep_length, dt, x1, x2, x3, fn, f1, f2, f3)
             ! the history back, and F and n x F_t into both particles' sums
@@ -181,17 +198,10 @@ contains
                 cp(1) = n2(l) * f3(l) - n3(l) * f2(l)
                 cp(2) = n3(l) * f1(l) - n1(l) * f3(l)
                 cp(3) = n1(l) * f2(l) - n2(l) * f1(l)
-                ! the torque's sums hold n x F_t times lever / R (times R after the pass)
-                gi = 1.0_wp
-                gj = 1.0_wp
-                if (shift_t /= 0.0_wp) then
-                    gi = 1.0_wp - shift_t * ov(l) / radius(i)
-                    gj = 1.0_wp - shift_t * ov(l) / radius(j)
-                end if
                 si = scale(i)
                 do c = 1, 3
                     kf(c) = to_fixed(fp(c) * si)
-                    kc(c) = to_fixed(cp(c) * gi * si)
+                    kc(c) = to_fixed(cp(c) * si)
                     !$acc atomic update
                     acc(c, i) = acc(c, i) + kf(c)
                     !$acc atomic update
@@ -199,10 +209,10 @@ contains
                 end do
                 if (j > n_own) cycle
                 sj = scale(j)
-                if (sj /= si .or. gj /= gi) then   ! (the same words where these are)
+                if (sj /= si) then                 ! (the same words where the scales are)
                     do c = 1, 3
                         kf(c) = to_fixed(fp(c) * sj)
-                        kc(c) = to_fixed(cp(c) * gj * sj)
+                        kc(c) = to_fixed(cp(c) * sj)
                     end do
                 end if
                 do c = 1, 3
@@ -212,6 +222,28 @@ contains
                     acc(c + 3, j) = acc(c + 3, j) + kc(c)
                 end do
             end do
+            if (shifted_t) then     ! levers R - shift_t d: the torques less shift_t d n x F_t
+                do l = 1, m
+                    p = lp(l)
+                    i = pair(1, p)
+                    j = pair(2, p)
+                    cp(1) = n2(l) * f3(l) - n3(l) * f2(l)
+                    cp(2) = n3(l) * f1(l) - n1(l) * f3(l)
+                    cp(3) = n1(l) * f2(l) - n2(l) * f1(l)
+                    g = -st_ * ov(l)
+                    do c = 1, 3      ! (the sums hold the torques over the radius)
+                        kc(c) = to_fixed(cp(c) * (g / radius(i)) * scale(i))
+                        !$acc atomic update
+                        acc(c + 3, i) = acc(c + 3, i) + kc(c)
+                    end do
+                    if (j > n_own) cycle
+                    do c = 1, 3
+                        kc(c) = to_fixed(cp(c) * (g / radius(j)) * scale(j))
+                        !$acc atomic update
+                        acc(c + 3, j) = acc(c + 3, j) + kc(c)
+                    end do
+                end do
+            end if
         end do
 
         ! the sums into the forces and torques, and cleared for the next call
