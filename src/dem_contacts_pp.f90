@@ -110,8 +110,8 @@ contains
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, over) &
-        !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, ri, rj) &
-        !$acc private(g) firstprivate(sv, st_, shifted_v, shifted_t) &
+        !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g) &
+        !$acc firstprivate(sv, st_, shifted_v, shifted_t) &
         !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu) &
         !$acc private(x1, x2, x3, fn, f1, f2, f3)
         do p0 = 0, n_pairs - 1, tile
