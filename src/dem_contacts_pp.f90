@@ -65,7 +65,7 @@ contains
     end subroutine pp_pair_constants
 
     !> Add the contact force and torque of every overlapping pair to the owned particles.
-    !> Pairs not in contact have their tangential history reset. The pairs are taken in tiles
+    !> The pairs are taken in tiles
     !> of `tile`: the overlapping pairs of a tile are gathered into lanes and the contact law
     !> runs over those lanes at once (hm_lanes). The lever of a particle's rotation in the
     !> relative velocity is R - shift_v d, in the torque R - shift_t d (0: the radius; 1/2:

@@ -781,6 +781,8 @@ contains
         logical, intent(in) :: outlets           !! remove the parked particles
         integer(ip), allocatable :: order(:), kept(:)
         integer(ip) :: m
+        ! a list build during the run ends the history of the parted pairs that keep it
+        ! (reset_pair_history false, doc/theory.md section 3); not the first build of a run
         if (.not. s%pc%reset_pair_history .and. s%lists_on_device) &
             call store_pairs_forget_parted(s%cs, s%nb%n_pairs)
         if (s%comm%size > 1) then
