@@ -9,6 +9,7 @@ program dem_main
                    solver_particles, solver_particle_steps, solver_parallel_stats, i8
     use dem_comm, only: comm_t, comm_init, comm_free, comm_max
     use dem_signals, only: signals_install
+    use dem_integrate, only: integrator_verlet
     implicit none
     type(comm_t) :: comm
     type(case_t) :: c
@@ -138,6 +139,9 @@ contains
             write(output_unit, '(a)') '  Hertz contact time   n/a (nothing moves or falls; ' // &
                 'set &run expected_speed)'
         end if
+        write(output_unit, '(a)') '  contact law          Hertz-Mindlin, variant ' // &
+            trim(c%opts%variant) // ' (&contact_model), ' // &
+            trim(merge('velocity Verlet ', 'symplectic Euler', c%integrator == integrator_verlet))
         write(output_unit, '(a,es12.5,a,i0,a)') '  dt                   ', c%dt, ' s (', &
             ceiling(c%t_end / c%dt - 1.0e-9_wp), ' steps)'
         write(output_unit, '(a,f10.4)') '  dt / Rayleigh time   ', c%dt / ts%rayleigh

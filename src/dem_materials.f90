@@ -22,6 +22,7 @@ module dem_materials
 
     !> Variants of the Hertz-Mindlin law used by other codes (doc/theory.md, section 3).
     type :: contact_options_t
+        character(len=16) :: variant = 'dem'              !< the named variant chosen
         real(wp) :: tangential_stiffness_factor = 1.0_wp  !< 2/3 imitates MercuryDPM
         logical :: tangential_damping = .true.            !< .false. imitates MercuryDPM
         logical :: clamp_normal = .false.                 !< .true. imitates Yade

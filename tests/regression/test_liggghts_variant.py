@@ -16,6 +16,7 @@ pair's history when the contact ends), so that the comparison can fail.
 usage: test_liggghts_variant.py DEM WORKDIR"""
 import csv
 import os
+import subprocess
 import sys
 
 import numpy as np
@@ -64,6 +65,12 @@ for name, body, within in (("bed_liggghts", text, True),
     else:
         check(dx > 1e3 * POS_TOL and dv > 1e3 * VEL_TOL,
               f"{name}: the default law is far from LIGGGHTS ({dx:.3g} m, {dv:.3g} m/s)")
+
+# dem --check names the law and the integrator the variant takes
+r = subprocess.run([dem, "--check", os.path.join(work, "bed_liggghts.nml")], capture_output=True,
+                   text=True)
+check("contact law          Hertz-Mindlin, variant liggghts (&contact_model), velocity Verlet"
+      in r.stdout, f"dem --check names the variant and its integrator:\n{r.stdout}")
 
 # Chung & Ooi tests 1-4 with the variant against LIGGGHTS's quantities
 reference = {}
