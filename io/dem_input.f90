@@ -374,14 +374,7 @@ contains
         end if
         b = nf%blocks(block_index(nf, 'contact_model', 1))
         at = nml_location(nf, b)
-        variant = 'dem'
-        tangential_stiffness_factor = 1.0_wp
-        tangential_damping = .true.
-        clamp_normal = .false.
-        tangential_history = 'keep_length'
-        lever_velocity = 'radius'
-        lever_torque = 'radius'
-        reset_pair_history = .true.
+        variant = 'dem'             ! (the other keys are used only where given)
         do k_item = 0, block_item_count(b)
             text = block_text(b, k_item)
             read(text, nml=contact_model, iostat=ios, iomsg=msg)

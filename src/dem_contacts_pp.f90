@@ -97,7 +97,7 @@ contains
         logical :: over
         integer(i8) :: kf(3), kc(3)
         real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, g, sv, &
-                    st_
+                    st_, ri, rj
         logical :: shifted_v, shifted_t
         real(wp), dimension(tile + 1) :: e1, e2, e3, e4
         real(wp), dimension(tile) :: ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, &
@@ -110,7 +110,7 @@ contains
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, over) &
-        !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g) &
+        !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g, ri, rj) &
         !$acc firstprivate(sv, st_, shifted_v, shifted_t) &
         !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu) &
         !$acc private(x1, x2, x3, fn, f1, f2, f3)
@@ -167,18 +167,19 @@ contains
                 x2(l) = xi(2, p)
                 x3(l) = xi(3, p)
             end do
-            if (shifted_v) then     ! levers R - shift_v d: less shift_v d (w_i + w_j) x n
+            if (shifted_v) then     ! the relative velocities again, with levers R - shift_v d
                 do l = 1, m
                     p = lp(l)
                     i = pair(1, p)
                     j = pair(2, p)
-                    g = sv * ov(l)
-                    ws1 = g * (w(1, i) + w(1, j))
-                    ws2 = g * (w(2, i) + w(2, j))
-                    ws3 = g * (w(3, i) + w(3, j))
-                    v1(l) = v1(l) - (ws2 * n3(l) - ws3 * n2(l))
-                    v2(l) = v2(l) - (ws3 * n1(l) - ws1 * n3(l))
-                    v3(l) = v3(l) - (ws1 * n2(l) - ws2 * n1(l))
+                    ri = radius(i) - sv * ov(l)
+                    rj = radius(j) - sv * ov(l)
+                    ws1 = ri * w(1, i) + rj * w(1, j)
+                    ws2 = ri * w(2, i) + rj * w(2, j)
+                    ws3 = ri * w(3, i) + rj * w(3, j)
+                    v1(l) = v(1, i) - v(1, j) + (ws2 * n3(l) - ws3 * n2(l))
+                    v2(l) = v(2, i) - v(2, j) + (ws3 * n1(l) - ws1 * n3(l))
+                    v3(l) = v(3, i) - v(3, j) + (ws1 * n2(l) - ws2 * n1(l))
                 end do
             end if
             call hm_lanes(m, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu, &
@@ -222,23 +223,26 @@ contains
                     acc(c + 3, j) = acc(c + 3, j) + kc(c)
                 end do
             end do
-            if (shifted_t) then     ! levers R - shift_t d: the torques less shift_t d n x F_t
-                do l = 1, m
+            if (shifted_t) then     ! levers R - shift_t d: each torque word replaced by that
+                do l = 1, m         ! of n x F_t (R - shift_t d) / R (the sums are over R)
                     p = lp(l)
                     i = pair(1, p)
                     j = pair(2, p)
                     cp(1) = n2(l) * f3(l) - n3(l) * f2(l)
                     cp(2) = n3(l) * f1(l) - n1(l) * f3(l)
                     cp(3) = n1(l) * f2(l) - n2(l) * f1(l)
-                    g = -st_ * ov(l)
-                    do c = 1, 3      ! (the sums hold the torques over the radius)
-                        kc(c) = to_fixed(cp(c) * (g / radius(i)) * scale(i))
+                    si = scale(i)
+                    g = 1.0_wp - st_ * ov(l) / radius(i)
+                    do c = 1, 3
+                        kc(c) = to_fixed(cp(c) * g * si) - to_fixed(cp(c) * si)
                         !$acc atomic update
                         acc(c + 3, i) = acc(c + 3, i) + kc(c)
                     end do
                     if (j > n_own) cycle
+                    sj = scale(j)
+                    g = 1.0_wp - st_ * ov(l) / radius(j)
                     do c = 1, 3
-                        kc(c) = to_fixed(cp(c) * (g / radius(j)) * scale(j))
+                        kc(c) = to_fixed(cp(c) * g * sj) - to_fixed(cp(c) * sj)
                         !$acc atomic update
                         acc(c + 3, j) = acc(c + 3, j) + kc(c)
                     end do

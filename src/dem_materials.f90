@@ -43,10 +43,7 @@ module dem_materials
         real(wp), allocatable :: cn(:, :)     !< -2 sqrt(5/6) beta (>= 0) [-]
         real(wp), allocatable :: ct(:, :)     !< cn, or 0 without tangential damping [-]
         real(wp), allocatable :: mu(:, :)     !< sliding friction [-]
-        logical :: clamp_normal = .false.     !< (contact_options_t)
-        logical :: keep_length = .true.
-        real(wp) :: shift_v = 0.0_wp, shift_t = 0.0_wp
-        logical :: reset_pair_history = .true.
+        type(contact_options_t) :: opts       !< the variant's switches, for the kernels
     end type pair_constants_t
 
 contains
@@ -98,11 +95,7 @@ contains
         pc%cn = 0.0_wp
         pc%ct = 0.0_wp
         pc%mu = 0.0_wp
-        pc%clamp_normal = opts%clamp_normal
-        pc%keep_length = opts%keep_length
-        pc%shift_v = opts%shift_v
-        pc%shift_t = opts%shift_t
-        pc%reset_pair_history = opts%reset_pair_history
+        pc%opts = opts
         do b = 1, n
             do a = 1, n
                 if (.not. mats%pair_defined(a, b)) cycle

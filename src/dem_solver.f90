@@ -697,20 +697,21 @@ contains
             call domain_update(s%dom, s%comm, s%p)
         end if
         call timer_stop(s%timers, phase_neighbors)
-        associate (p => s%p, nb => s%nb, pc => s%pc, m => s%mesh, n => s%p%n_own)
+        associate (p => s%p, nb => s%nb, pc => s%pc, o => s%pc%opts, m => s%mesh, &
+                   n => s%p%n_own)
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
             if (allocated(p%ext)) call external_forces(n, c%dt, p%v, p%ext, p%f, p%t)
             call pp_forces(n, n + p%n_ghost, nb%n_pairs, p%x, p%v, p%w, p%radius, nb%scale, &
-                           nb%pair, nb%pconst, pc%clamp_normal, pc%keep_length, pc%shift_v, &
-                           pc%shift_t, pc%reset_pair_history, c%dt, s%cs%xi, s%cs%touching, &
+                           nb%pair, nb%pconst, o%clamp_normal, o%keep_length, o%shift_v, &
+                           o%shift_t, o%reset_pair_history, c%dt, s%cs%xi, s%cs%touching, &
                            nb%acc, p%f, p%t)
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
             call pw_forces(n, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, p%x, p%v, p%w, &
                            p%radius, p%mass, p%mat, nb%wstart, nb%wlist, m%vert, m%mat, m%wall, &
                            m%wall_v, m%wall_w, m%wall_c, pc%kn, pc%sn, pc%st, pc%cn, pc%ct, &
-                           pc%mu, pc%clamp_normal, pc%keep_length, pc%shift_v, pc%shift_t, &
-                           c%dt, s%cs%wall_tri, s%cs%wall_xi, p%f, p%t, overflow)
+                           pc%mu, o%clamp_normal, o%keep_length, o%shift_v, o%shift_t, c%dt, &
+                           s%cs%wall_tri, s%cs%wall_xi, p%f, p%t, overflow)
             call timer_stop(s%timers, phase_contacts_pw)
         end associate
         if (overflow > 0) call set_error(err, dem_err_runtime, 'a particle has more separate ' // &
@@ -783,7 +784,7 @@ contains
         integer(ip) :: m
         ! a list build during the run ends the history of the parted pairs that keep it
         ! (reset_pair_history false, doc/theory.md section 3); not the first build of a run
-        if (.not. s%pc%reset_pair_history .and. s%lists_on_device) &
+        if (.not. s%pc%opts%reset_pair_history .and. s%lists_on_device) &
             call store_pairs_forget_parted(s%cs, s%nb%n_pairs)
         if (s%comm%size > 1) then
             if (s%lists_on_device) call domain_data(s%dom, acc_exit)
