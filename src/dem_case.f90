@@ -7,7 +7,7 @@ module dem_case
     use dem_outlets, only: outlet_t
     use dem_probes, only: probe_t
     use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt, &
-                            tangential_critical_dt
+                            tangential_critical_dt, squeeze_critical_dt
     use dem_comm, only: comm_t, comm_sum, comm_max
     implicit none
     private
@@ -18,6 +18,7 @@ module dem_case
     !> (case_summarize).
     type :: summary_t
         real(wp), allocatable :: rmin(:)    !< smallest radius of each material, huge if none [m]
+        real(wp), allocatable :: rmax(:)    !< largest radius of each material, 0 if none [m]
         real(wp) :: mass = 0.0_wp           !< total mass [kg]
         real(wp) :: speed = 0.0_wp          !< largest initial speed [m/s]
         real(wp) :: low = 0.0_wp            !< lowest and highest centre along gravity [m]
@@ -63,6 +64,10 @@ module dem_case
         type(summary_t) :: summary                    !< of the particles of all ranks
     end type case_t
 
+    !> The share of the one-contact bound above which deep, loaded resting beds were seen to
+    !> rattle (doc/theory.md, section 6: from 0.62 of it; quiet up to 0.55).
+    real(wp), parameter :: packed_share = 0.6_wp
+
     !> Time scales of a case and the bound they put on dt.
     type :: time_scales_t
         real(wp) :: rayleigh = huge(1.0_wp)     !< Rayleigh time of the smallest particle [s]
@@ -73,6 +78,7 @@ module dem_case
         real(wp) :: critical = huge(1.0_wp)     !< step limit of its normal and tangential modes [s]
         real(wp) :: bound = huge(1.0_wp)        !< min(rayleigh, critical) [s]
         character(len=:), allocatable :: bound_name  !< what sets the bound
+        real(wp) :: packed = huge(1.0_wp)       !< packed_share of the bound [s]
     end type time_scales_t
 
 contains
@@ -97,10 +103,11 @@ contains
         type(case_t), intent(inout) :: c
         type(comm_t), intent(in) :: comm
         real(wp), parameter :: pi = acos(-1.0_wp)
-        real(wp) :: e(3), g, big(c%mats%n + 3), mass(1)
+        real(wp) :: e(3), g, big(2 * c%mats%n + 3), mass(1)
         integer(ip) :: i, a
         associate (sm => c%summary)
             sm%rmin = spread(huge(1.0_wp), 1, c%mats%n)
+            sm%rmax = spread(0.0_wp, 1, c%mats%n)
             sm%mass = 0.0_wp
             sm%speed = 0.0_wp
             sm%low = huge(1.0_wp)
@@ -111,17 +118,19 @@ contains
             do i = 1, c%n_held
                 a = c%mat(i)
                 sm%rmin(a) = min(sm%rmin(a), c%radius(i))
+                sm%rmax(a) = max(sm%rmax(a), c%radius(i))
                 sm%mass = sm%mass + 4.0_wp / 3.0_wp * pi * c%radius(i)**3 * c%mats%density(a)
                 sm%speed = max(sm%speed, norm2(c%v(:, i)))
                 sm%low = min(sm%low, dot_product(e, c%x(:, i)))
                 sm%high = max(sm%high, dot_product(e, c%x(:, i)))
             end do
-            big = [-sm%rmin, sm%speed, -sm%low, sm%high]
+            big = [-sm%rmin, sm%rmax, sm%speed, -sm%low, sm%high]
             call comm_max(comm, big)
             sm%rmin = -big(1:c%mats%n)
-            sm%speed = big(c%mats%n + 1)
-            sm%low = -big(c%mats%n + 2)
-            sm%high = big(c%mats%n + 3)
+            sm%rmax = big(c%mats%n + 1:2 * c%mats%n)
+            sm%speed = big(2 * c%mats%n + 1)
+            sm%low = -big(2 * c%mats%n + 2)
+            sm%high = big(2 * c%mats%n + 3)
             mass = sm%mass
             call comm_sum(comm, mass)
             sm%mass = mass(1)
@@ -159,7 +168,9 @@ contains
 
     !> Rayleigh time of the smallest particle, shortest Hertz contact time over the material
     !> pairs present (smallest radius of each material; particle pairs meet at twice the
-    !> expected speed, particles hit walls at it), and the stability bound on dt. The expected
+    !> expected speed, particles hit walls at it), and the stability bound on dt: those
+    !> contacts' step limits, and those of the smallest sphere of each material squeezed by
+    !> the largest of each material, where heavier, at the expected speed. The expected
     !> speed is the largest of expected_speed, the initial speeds and the free-fall speed.
     !> From the case's summary (case_summarize): the Rayleigh time grows with the radius, so
     !> the smallest sphere of each material has the shortest of its material.
@@ -167,11 +178,12 @@ contains
         type(case_t), intent(in) :: c
         type(time_scales_t), intent(out) :: ts
         real(wp), parameter :: pi = acos(-1.0_wp)
-        real(wp) :: rmin(c%mats%n), tr, estar, gstar, ma, mb, mstar, rstar
+        real(wp) :: rmin(c%mats%n), rmax(c%mats%n), tr, estar, gstar, ma, mb, mh, mstar, rstar
         logical :: wall_mat(c%mats%n)
         integer(ip) :: a, b
 
         rmin = c%summary%rmin
+        rmax = c%summary%rmax
         ts%speed = max(c%expected_speed, fall_speed(c), c%summary%speed)
         do a = 1, c%mats%n
             if (rmin(a) == huge(1.0_wp)) cycle
@@ -196,6 +208,9 @@ contains
                         mstar = ma * mb / (ma + mb)
                         rstar = rmin(a) * rmin(b) / (rmin(a) + rmin(b))
                         call update(a, b, mstar, rstar, estar, gstar, 2.0_wp * ts%speed)
+                        mh = 4.0_wp / 3.0_wp * pi * rmax(b)**3 * c%mats%density(b)
+                        if (mh > ma) call squeeze(a, b, ma, mh, rmin(a) * rmax(b) &
+                                                  / (rmin(a) + rmax(b)), estar, gstar)
                     end if
                     if (wall_mat(b) .and. c%mats%pair_defined(a, b)) then
                         call effective_moduli(c%mats, a, b, estar, gstar)
@@ -206,6 +221,7 @@ contains
         end if
 
         ts%bound = min(ts%rayleigh, ts%critical)
+        ts%packed = packed_share * ts%bound
         if (ts%rayleigh <= ts%critical) then
             ts%bound_name = 'the Rayleigh time of the smallest particle'
         else
@@ -228,5 +244,21 @@ contains
                     zeta * sqrt(3.5_wp)))
             end if
         end subroutine update
+
+        !> Step limits of a sphere of material a_ (mass m_) squeezed by one of material b_
+        !> (mass mh_) at the expected speed; the damping ratios of the squeezed sphere's
+        !> modes, sqrt(2) and sqrt(5) times the pair's (doc/theory.md, section 6).
+        subroutine squeeze(a_, b_, m_, mh_, rstar_, estar_, gstar_)
+            integer(ip), intent(in) :: a_, b_
+            real(wp), intent(in) :: m_, mh_, rstar_, estar_, gstar_
+            real(wp) :: zeta, st
+            zeta = sqrt(5.0_wp / 6.0_wp) * abs(damping_ratio(c%mats%restitution(a_, b_)))
+            st = 0.0_wp
+            if (c%mats%friction(a_, b_) > 0.0_wp) &
+                st = 8.0_wp * gstar_ * c%opts%tangential_stiffness_factor
+            ts%critical = min(ts%critical, squeeze_critical_dt(m_, mh_, rstar_, estar_, st, &
+                ts%speed, sqrt(2.0_wp) * zeta, &
+                merge(sqrt(5.0_wp) * zeta, 0.0_wp, c%opts%tangential_damping)))
+        end subroutine squeeze
     end subroutine case_time_scales
 end module dem_case

@@ -149,12 +149,21 @@ contains
             c%dt / ts%contact
         write(output_unit, '(a,es12.5,a)') '  stability bound      ', ts%bound, &
             ' s (' // ts%bound_name // ')'
+        write(output_unit, '(a,es12.5,a,f4.2,a)') '  loaded packings      ', ts%packed, &
+            ' s (', ts%packed / ts%bound, ' of the bound: deep resting beds have rattled above it; ' &
+            // 'doc/theory.md, section 6)'
         write(output_unit, '(a,es12.5,a)') '  instability guard    ', c%max_speed, &
             ' m/s (&run max_speed)'
         write(output_unit, '(a,f10.3,a)') '  estimated memory     ', mem, ' MiB'
         write(output_unit, '(a)') '  output directory     ' // c%output_dir
-        if (c%dt > ts%bound) write(output_unit, '(a)') '  warning: dt exceeds the ' // &
-            'stability bound (allow_unstable = .true.)'
+        if (c%dt > ts%bound) then
+            write(output_unit, '(a)') '  warning: dt exceeds the stability bound ' // &
+                '(allow_unstable = .true.)'
+        else if (c%dt > ts%packed) then
+            write(output_unit, '(a)') '  warning: dt exceeds the loaded packings'' step: ' // &
+                'a deep resting bed may rattle at it (its spheres spin up instead of ' // &
+                'coming to rest); check series.csv''s kinetic_rotational, or lower dt'
+        end if
     end subroutine print_check
 
     !> Steps, time per particle-step and time per phase of the run (rank 0's clocks). The

@@ -4,7 +4,7 @@ module dem_timestep
     implicit none
     private
     public :: rayleigh_time, hertz_max_overlap, hertz_max_force, hertz_contact_time, &
-              hertz_critical_dt, tangential_critical_dt, step_limit
+              hertz_critical_dt, tangential_critical_dt, squeeze_critical_dt, step_limit
 
     real(wp), parameter :: pi = acos(-1.0_wp)
 
@@ -69,4 +69,20 @@ contains
         dtc = step_limit(sqrt(3.5_wp * st * sqrt(rstar &
               * hertz_max_overlap(mstar, rstar, estar, speed)) / mstar), zeta)
     end function tangential_critical_dt
+
+    !> Step limit of a sphere of mass m squeezed by a heavier body of mass mh, arriving at
+    !> `speed`, against a backing: two contacts, each at the overlap d that stores a quarter
+    !> of mh speed^2; the normal mode omega^2 = 2 S_n(d)/m, and with friction (st > 0) the
+    !> spin mode omega^2 = 5 S_t(d)/m, S_t = st sqrt(R* d) [s].
+    elemental real(wp) function squeeze_critical_dt(m, mh, rstar, estar, st, speed, zeta, &
+            zeta_t) result(dtc)
+        real(wp), intent(in) :: m, mh, rstar, estar, speed   !! [kg], [kg], [m], [Pa], [m/s]
+        real(wp), intent(in) :: st      !! 8 G* times the stiffness factor, 0 without friction
+        real(wp), intent(in) :: zeta    !! normal damping ratio of the mode [-]
+        real(wp), intent(in) :: zeta_t  !! spin damping ratio of the mode [-]
+        real(wp) :: root
+        root = sqrt(rstar * hertz_max_overlap(0.5_wp * mh, rstar, estar, speed))
+        dtc = step_limit(sqrt(4.0_wp * estar * root / m), zeta)
+        if (st > 0.0_wp) dtc = min(dtc, step_limit(sqrt(5.0_wp * st * root / m), zeta_t))
+    end function squeeze_critical_dt
 end module dem_timestep

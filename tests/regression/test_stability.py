@@ -22,11 +22,22 @@
    sqrt(2 K_rot / (N I)) ends below its start and below 1 rad/s); at 100 us, which dem's
    bound for one contact (about 104 us here) admits, the same bed rattles: its spheres spin
    up to more than 10 rad/s within 5 ms and stay so (doc/benchmarks.md, the soft silos'
-   step). The second run shows that the first check can fail; when the bound learns of
-   loaded beds, it will need allow_unstable.
+   step). The second run shows that the first check can fail. dem warns of it: 100 us is
+   above the step for loaded packings (0.6 of the bound) that dem prints, 50 us below it.
+4. A size ratio of 20: 3000 spheres of radius 0.25 mm settling on a plane while 6 of 5 mm
+   (8000 times heavier) fall onto them, E = 5e7 Pa. The bound's contacts include each
+   material's smallest sphere squeezed by its largest (doc/theory.md, section 6): a run at
+   0.9 of the bound that `dem --check` prints completes, its kinetic + gravitational energy
+   never above its start (the spheres start apart and at rest or falling: what the contacts
+   store as elastic energy or dissipate comes from it; a blow-up adds energy). At 3 us,
+   0.73 of the bound
+   of the two-body contacts alone (4.11 us), the bound refuses dt, and with allow_unstable
+   the instability guard stops the run (exit 3): the check above can fail.
 usage: test_stability.py DEM WORKDIR"""
 import math
 import os
+import re
+import subprocess
 import sys
 
 import numpy as np
@@ -132,8 +143,12 @@ fill = co.read_csv(os.path.join(work, "output", "bed_fill", "series.csv"))
 check(fill["time"][-1] < 0.4 - 1e-9, f"bed: not settled by 0.4 s (t = {fill['time'][-1]})")
 settled = os.path.join(work, "output", "bed_fill", "final.csv")
 for dt, quiet in (("5e-05", True), ("1e-04", False)):
-    run_dem(dem, bed_case(f"bed_dt{dt}", f"&run dt = {dt}, t_end = 0.05, gravity = 0, 0, -87 /\n",
-                          f"&particle_file file = '{settled}' /\n"), work)
+    rc, out, err = run_dem(dem, bed_case(f"bed_dt{dt}", f"&run dt = {dt}, t_end = 0.05, "
+                                         "gravity = 0, 0, -87 /\n",
+                                         f"&particle_file file = '{settled}' /\n"), work)
+    warned = "warning: dt exceeds the loaded packings' step" in out
+    check(warned != quiet, f"bed at dt {dt}: the loaded packings' warning "
+          + ("missing" if not warned else "given at a step where the bed rests"))
     s = co.read_csv(os.path.join(work, "output", f"bed_dt{dt}", "series.csv"))
     spin = np.sqrt(2.0 * s["kinetic_rotational"] / (N * inertia))     # rms rate [rad/s]
     print(f"bed at dt {dt} (no allow_unstable): rms spin {spin[0]:.3g} rad/s at the start, "
@@ -144,4 +159,49 @@ for dt, quiet in (("5e-05", True), ("1e-04", False)):
     else:
         check(spin[1:].min() > 10.0, f"bed at dt {dt}: did not rattle (rms spin "
               f"{spin[1:].min():.3g} rad/s): the check above cannot tell")
+# 4. a size ratio of 20
+RATIO = """&output dir = 'output/{name}', interval = 0.001 /
+&material name = 'soft', density = 2500, youngs_modulus = 5e7, poisson_ratio = 0.25 /
+&material name = 'wall', density = 7800, youngs_modulus = 2e11, poisson_ratio = 0.3 /
+&pair materials = 'soft', 'soft', restitution = 0.5, friction = 0.5 /
+&pair materials = 'soft', 'wall', restitution = 0.5, friction = 0.5 /
+&wall_plane material = 'wall', point = 0, 0, 0, normal = 0, 0, 1, half_width = 0.1 /
+&wall_plane material = 'wall', point = 0, 0, 0, normal = 1, 0, 0, half_width = 0.1 /
+&wall_plane material = 'wall', point = 0.02, 0, 0, normal = -1, 0, 0, half_width = 0.1 /
+&wall_plane material = 'wall', point = 0, 0, 0, normal = 0, 1, 0, half_width = 0.1 /
+&wall_plane material = 'wall', point = 0, 0.02, 0, normal = 0, -1, 0, half_width = 0.1 /
+&insert n = 3000, material = 'soft', radius_min = 2.5e-4, region = 'box',
+        box_min = 0.0003, 0.0003, 0.0003, box_max = 0.0197, 0.0197, 0.003, seed = 1 /
+&insert n = 6, material = 'soft', radius_min = 5e-3, region = 'box', box_min = 0, 0, 0.005,
+        box_max = 0.02, 0.02, 0.04, velocity = 0, 0, -0.3, seed = 2 /
+"""
+
+
+def ratio_case(name, dt, extra=""):
+    path = os.path.join(work, name + ".nml")
+    with open(path, "w") as f:
+        f.write(f"&run dt = {dt!r}, t_end = 0.03, gravity = 0, 0, -9.81{extra} /\n"
+                + RATIO.format(name=name))
+    return path
+
+
+r = subprocess.run([dem, "--check", ratio_case("ratio_check", 1e-6)], capture_output=True,
+                   text=True)
+bound = float(re.search(r"stability bound +(\S+) s", r.stdout).group(1))
+print(f"size ratio 20: stability bound {bound:.4g} s")
+run_dem(dem, ratio_case("ratio_stable", 0.9 * bound), work)
+s = co.read_csv(os.path.join(work, "output", "ratio_stable", "series.csv"))
+energy = s["kinetic_translational"] + s["kinetic_rotational"] + s["potential_gravity"]
+rise = energy.max() / energy[0] - 1.0
+print(f"size ratio 20 at 0.9 of the bound: energy {energy[0]:.6g} J at the start, at most "
+      f"{energy.max():.6g} J, {energy[-1]:.4g} J at the end")
+check(rise <= 1e-12, f"size ratio 20 at 0.9 of the bound: the energy rose above its start "
+      f"by {rise:.3g} of it")
+rc, out, err = run_dem(dem, ratio_case("ratio_refused", 3e-6), work, expect_rc=2)
+check(rc == 2 and "exceeds the stability bound" in out + err,
+      "size ratio 20 at 3 us: not refused by the bound")
+rc, out, err = run_dem(dem, ratio_case("ratio_unstable", 3e-6, ", allow_unstable = .true."),
+                       work, expect_rc=3)
+check(rc == 3 and "unstable" in out + err,
+      "size ratio 20 at 3 us with allow_unstable: the guard did not stop it")
 finish()
