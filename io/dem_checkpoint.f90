@@ -346,19 +346,38 @@ contains
         name = step_file('checkpoints/checkpoint_', step)
     end function checkpoint_file
 
-    !> The newest checkpoint of an output directory (named by checkpoints/latest); '' if none.
-    function checkpoint_latest(dir) result(path)
+    !> The newest checkpoint of an output directory (named by checkpoints/latest); '' if
+    !> there is no latest. With err, a latest that names nothing (empty, unreadable) or a
+    !> file that is not there is an error: the folder was damaged, a fresh start would
+    !> silently redo the run.
+    function checkpoint_latest(dir, err) result(path)
         character(len=*), intent(in) :: dir
+        type(error_t), intent(inout), optional :: err
         character(len=:), allocatable :: path
         character(len=512) :: name
+        character(len=*), parameter :: fix = ': dem --restart CHECKPOINT CASE continues ' // &
+            'from a checkpoint of that folder; removing the folder starts the run afresh'
         integer :: u, ios
+        logical :: there
         path = ''
+        inquire(file=dir // '/checkpoints/latest', exist=there)
+        if (.not. there) return
+        name = ''
         open(newunit=u, file=dir // '/checkpoints/latest', status='old', action='read', &
              iostat=ios)
-        if (ios /= 0) return
-        read(u, '(a)', iostat=ios) name
-        close(u)
-        if (ios == 0) path = dir // '/' // trim(name)
+        if (ios == 0) then
+            read(u, '(a)', iostat=ios) name
+            close(u)
+        end if
+        if (ios /= 0 .or. len_trim(name) == 0) then
+            if (present(err)) call set_error(err, dem_err_input, dir // &
+                '/checkpoints/latest: empty or unreadable, so it names no checkpoint' // fix)
+            return
+        end if
+        path = dir // '/' // trim(name)
+        inquire(file=path, exist=there)
+        if (.not. there .and. present(err)) call set_error(err, dem_err_input, dir // &
+            '/checkpoints/latest: names ' // trim(name) // ', which is not there' // fix)
     end function checkpoint_latest
 
     !> The steps of the checkpoints that were kept when checkpoint `path` was written (it

@@ -31,7 +31,7 @@ module dem_input
         'stop_kinetic_energy max_speed wall_time_limit progress_interval imbalance_limit ' // &
         'gpu_aware_mpi', &
         'output: dir interval trace_id snapshot_interval snapshot_force snapshot_contacts ' // &
-        'checkpoint_interval checkpoint_keep', &
+        'checkpoint_interval checkpoint_keep overwrite', &
         'contact_model: variant tangential_stiffness_factor tangential_damping clamp_normal ' // &
         'tangential_history lever_velocity lever_torque reset_pair_history', &
         'material: name density youngs_modulus poisson_ratio rigid', &
@@ -268,8 +268,9 @@ contains
         real(wp) :: checkpoint_interval  ! checkpoints [s], >= 0, default 0 (only at the end
                                          ! and when a run is stopped)
         integer :: checkpoint_keep       ! checkpoints kept, >= 1, default 2
+        logical :: overwrite             ! a fresh run replaces another run's outputs, default F
         namelist /output/ dir, interval, trace_id, snapshot_interval, snapshot_force, &
-            snapshot_contacts, checkpoint_interval, checkpoint_keep
+            snapshot_contacts, checkpoint_interval, checkpoint_keep, overwrite
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
@@ -284,6 +285,7 @@ contains
         snapshot_contacts = .false.
         checkpoint_interval = 0.0_wp
         checkpoint_keep = 2
+        overwrite = .false.
         select case (count_blocks(nf, 'output'))
         case (0)
         case (1)
@@ -333,6 +335,7 @@ contains
         c%snapshot_contacts = snapshot_contacts
         c%checkpoint_interval = checkpoint_interval
         c%checkpoint_keep = checkpoint_keep
+        c%output_overwrite = overwrite
     end subroutine read_output
 
     !> &contact_model: variants of Hertz-Mindlin that imitate other codes (doc/theory.md,

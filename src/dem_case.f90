@@ -51,6 +51,7 @@ module dem_case
         logical :: snapshot_contacts = .false.        !< and contact counts
         real(wp) :: checkpoint_interval = 0.0_wp      !< [s], 0: at the end and at stops only
         integer(ip) :: checkpoint_keep = 2            !< checkpoints kept on disk
+        logical :: output_overwrite = .false.         !< a fresh run replaces another's outputs
         type(materials_t) :: mats
         type(contact_options_t) :: opts
         integer(ip) :: n_particles = 0                !< over all ranks

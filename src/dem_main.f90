@@ -68,7 +68,10 @@ program dem_main
         if (err%failed()) call fail(err)
         call finish(0)
     end if
-    if (resume) restart = checkpoint_latest(c%output_dir)
+    if (resume) then
+        restart = checkpoint_latest(c%output_dir, err)
+        if (err%failed()) call fail(err)
+    end if
     if (len(restart) > 0) then
         call checkpoint_read(restart, c, comm, fr, err)
         if (err%failed()) call fail(err)

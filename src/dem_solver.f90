@@ -40,6 +40,7 @@ module dem_solver
                               checkpoint_file, checkpoint_latest, checkpoint_kept
     use dem_xdmf, only: xdmf_write, snapshot_file
     use dem_files, only: make_directory, file_remove, file_rename
+    use dem_folder, only: folder_claim
     use dem_signals, only: signal_received
     use dem_text, only: itoa, real_text, duration_text
     use dem_acc, only: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device, &
@@ -308,7 +309,10 @@ contains
                     if (.not. err%failed() .and. size(s%snap_step) > 0) &
                         call write_xdmf(s, c, err)
                 else
-                    call output_open(r%out, c%output_dir, s%trace > 0, columns, err)
+                    call folder_claim(c%output_dir, c%source, c%input_text, &
+                                      c%output_overwrite, err)
+                    if (.not. err%failed()) &
+                        call output_open(r%out, c%output_dir, s%trace > 0, columns, err)
                 end if
             end if
             if (failed_anywhere(s, err)) return

@@ -1,0 +1,127 @@
+!> An output folder belongs to one run (doc/running.md): a fresh run writes its case text to
+!> input.nml there first. A folder that holds the outputs of a run of another case (its
+!> input.nml differs, or it has outputs and no input.nml) is refused unless `overwrite`; a
+!> folder of the same case, or one overwritten, is cleared of the old run's outputs first,
+!> so that no later snapshot, checkpoint or row of the old run is left beside the new one.
+module dem_folder
+    use dem_error, only: error_t, set_error, dem_err_input, dem_err_io
+    use dem_files, only: file_exists, file_remove, file_rename, make_directory
+    use dem_text, only: read_line
+    use dem_checkpoint, only: checkpoint_latest, checkpoint_kept, checkpoint_file
+    use dem_kinds, only: i8
+    implicit none
+    private
+    public :: folder_claim
+
+    !> The name of the case text in the folder.
+    character(len=*), parameter :: marker = 'input.nml'
+    !> The outputs of a run, beside its snapshots and checkpoints.
+    character(len=16), parameter :: outputs(6) = [character(len=16) :: 'series.csv', &
+        'probes.csv', 'contact.csv', 'final.csv', 'final.csv.part', 'snapshots.xmf']
+
+contains
+
+    !> Claim folder `dir` for a fresh run of the case `source` whose text is `text` (rank 0).
+    subroutine folder_claim(dir, source, text, overwrite, err)
+        character(len=*), intent(in) :: dir, source, text
+        logical, intent(in) :: overwrite
+        type(error_t), intent(inout) :: err
+        character(len=*), parameter :: ways = ': &output overwrite = .true. replaces ' // &
+            'them, another &output dir keeps them, dem --resume continues that run'
+        logical :: used, same
+        integer :: k
+        call make_directory(dir, err)
+        if (err%failed()) return
+        used = file_exists(dir // '/' // marker) .or. file_exists(dir // '/checkpoints/latest')
+        do k = 1, size(outputs)
+            used = used .or. file_exists(dir // '/' // trim(outputs(k)))
+        end do
+        if (used) then
+            same = file_exists(dir // '/' // marker)
+            if (same) same = file_text(dir // '/' // marker) == text
+            if (.not. (same .or. overwrite)) then
+                if (file_exists(dir // '/' // marker)) then
+                    call set_error(err, dem_err_input, dir // ': holds the outputs of a run ' // &
+                        'of another case (its ' // marker // ' is not the text of ' // source // &
+                        ')' // ways)
+                else
+                    call set_error(err, dem_err_input, dir // ': holds the outputs of ' // &
+                        'another run (it has no ' // marker // ')' // ways)
+                end if
+                return
+            end if
+            call clear(dir)
+        end if
+        call write_marker(dir, text, err)
+    end subroutine folder_claim
+
+    !> Remove the outputs of the run in `dir`: the files above, the snapshots snapshots.xmf
+    !> names, the checkpoints latest names and those kept with it, latest itself.
+    subroutine clear(dir)
+        character(len=*), intent(in) :: dir
+        character(len=:), allocatable :: latest, line
+        integer(i8), allocatable :: kept(:)
+        integer :: k, u, ios, at, ends
+        if (file_exists(dir // '/snapshots.xmf')) then
+            open(newunit=u, file=dir // '/snapshots.xmf', status='old', action='read', &
+                 iostat=ios)
+            do while (ios == 0)
+                call read_line(u, line, ios)
+                if (ios /= 0) exit
+                at = index(line, 'snapshots/snapshot_')
+                ends = index(line, '.h5')
+                if (at > 0 .and. ends > at) call file_remove(dir // '/' // line(at:ends + 2))
+            end do
+            close(u, iostat=ios)
+        end if
+        latest = checkpoint_latest(dir)
+        if (len(latest) > 0) then
+            kept = checkpoint_kept(latest)
+            do k = 1, size(kept)
+                call file_remove(dir // '/' // checkpoint_file(kept(k)))
+            end do
+            call file_remove(latest)
+        end if
+        call file_remove(dir // '/checkpoints/latest')
+        do k = 1, size(outputs)
+            call file_remove(dir // '/' // trim(outputs(k)))
+        end do
+        call file_remove(dir // '/' // marker)
+    end subroutine clear
+
+    !> The whole text of a file ('' if it cannot be read).
+    function file_text(path) result(text)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: text
+        integer :: u, ios
+        integer(i8) :: n
+        open(newunit=u, file=path, status='old', action='read', access='stream', &
+             form='unformatted', iostat=ios)
+        if (ios /= 0) then
+            text = ''
+            return
+        end if
+        inquire(unit=u, size=n)
+        allocate(character(len=n) :: text)
+        if (n > 0) read(u, iostat=ios) text
+        close(u)
+        if (ios /= 0) text = ''
+    end function file_text
+
+    !> Write the case text to dir/input.nml (through a .part file and a rename: whole or not
+    !> there).
+    subroutine write_marker(dir, text, err)
+        character(len=*), intent(in) :: dir, text
+        type(error_t), intent(inout) :: err
+        integer :: u, ios
+        open(newunit=u, file=dir // '/' // marker // '.part', status='replace', &
+             action='write', access='stream', form='unformatted', iostat=ios)
+        if (ios == 0) write(u, iostat=ios) text
+        if (ios == 0) close(u, iostat=ios)
+        if (ios /= 0) then
+            call set_error(err, dem_err_io, dir // '/' // marker // ': cannot write it')
+            return
+        end if
+        call file_rename(dir // '/' // marker // '.part', dir // '/' // marker, err)
+    end subroutine write_marker
+end module dem_folder
