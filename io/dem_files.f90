@@ -1,12 +1,22 @@
 !> File-system operations the Fortran standard lacks, through the C library (POSIX):
-!> creating directories, renaming (atomic within a file system), removing and truncating.
+!> creating directories, renaming (atomic within a file system), removing and truncating;
+!> and text files whose every write is checked (cfile_t, C stdio): gfortran's FLUSH and CLOSE
+!> report no error when the disk is full, fwrite and fflush do.
 module dem_files
-    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_long, c_null_char
+    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_long, c_null_char, c_ptr, &
+                                           c_null_ptr, c_associated, c_size_t
     use dem_kinds, only: i8
     use dem_error, only: error_t, set_error, dem_err_io
     implicit none
     private
     public :: make_directory, file_rename, file_remove, file_truncate, file_exists
+    public :: cfile_t, cfile_open, cfile_write, cfile_size, cfile_close
+
+    !> A text file open for writing through C stdio.
+    type :: cfile_t
+        type(c_ptr) :: fp = c_null_ptr
+        character(len=:), allocatable :: path
+    end type cfile_t
 
     interface
         integer(c_int) function c_mkdir(path, mode) bind(C, name='mkdir')
@@ -27,6 +37,28 @@ module dem_files
             character(kind=c_char), intent(in) :: path(*)
             integer(c_long), value :: length
         end function c_truncate
+        type(c_ptr) function c_fopen(path, mode) bind(C, name='fopen')
+            import :: c_char, c_ptr
+            character(kind=c_char), intent(in) :: path(*), mode(*)
+        end function c_fopen
+        integer(c_size_t) function c_fwrite(buf, size, n, fp) bind(C, name='fwrite')
+            import :: c_char, c_size_t, c_ptr
+            character(kind=c_char), intent(in) :: buf(*)
+            integer(c_size_t), value :: size, n
+            type(c_ptr), value :: fp
+        end function c_fwrite
+        integer(c_int) function c_fflush(fp) bind(C, name='fflush')
+            import :: c_int, c_ptr
+            type(c_ptr), value :: fp
+        end function c_fflush
+        integer(c_long) function c_ftell(fp) bind(C, name='ftell')
+            import :: c_long, c_ptr
+            type(c_ptr), value :: fp
+        end function c_ftell
+        integer(c_int) function c_fclose(fp) bind(C, name='fclose')
+            import :: c_int, c_ptr
+            type(c_ptr), value :: fp
+        end function c_fclose
     end interface
 
 contains
@@ -78,4 +110,46 @@ contains
         character(len=*), intent(in) :: path
         inquire(file=path, exist=exists)
     end function file_exists
+
+    !> Open `path` for writing: anew, or with `append` at its end.
+    subroutine cfile_open(f, path, append, err)
+        type(cfile_t), intent(out) :: f
+        character(len=*), intent(in) :: path
+        logical, intent(in) :: append
+        type(error_t), intent(inout) :: err
+        f%path = path
+        f%fp = c_fopen(path // c_null_char, merge('a', 'w', append) // c_null_char)
+        if (.not. c_associated(f%fp)) call set_error(err, dem_err_io, path // ': cannot write')
+    end subroutine cfile_open
+
+    !> Write `text` and a line end, and flush; ios /= 0 if not all of it reached the file.
+    subroutine cfile_write(f, text, ios)
+        type(cfile_t), intent(in) :: f
+        character(len=*), intent(in) :: text
+        integer, intent(out) :: ios
+        character(len=len(text) + 1, kind=c_char) :: line
+        ios = 1
+        if (.not. c_associated(f%fp)) return
+        line = text // achar(10)
+        if (c_fwrite(line, 1_c_size_t, int(len(line), c_size_t), f%fp) /= len(line)) return
+        if (c_fflush(f%fp) /= 0) return
+        ios = 0
+    end subroutine cfile_write
+
+    !> The position at the end of what was written [bytes] (-1 if not open).
+    integer(i8) function cfile_size(f) result(bytes)
+        type(cfile_t), intent(in) :: f
+        bytes = -1
+        if (c_associated(f%fp)) bytes = int(c_ftell(f%fp), i8)
+    end function cfile_size
+
+    !> Close the file (nothing if not open); ios /= 0 if the close failed.
+    subroutine cfile_close(f, ios)
+        type(cfile_t), intent(inout) :: f
+        integer, intent(out) :: ios
+        ios = 0
+        if (.not. c_associated(f%fp)) return
+        if (c_fclose(f%fp) /= 0) ios = 1
+        f%fp = c_null_ptr
+    end subroutine cfile_close
 end module dem_files

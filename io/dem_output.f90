@@ -2,10 +2,13 @@
 !> interval), probes.csv (the probes' values at the same times), histogram_<probe>.csv
 !> (once each), contact.csv (the traced particle's contact, every step) and final.csv (the
 !> particles at the end, in the particle-file columns). Rows are flushed as written, so a
-!> run that stops loses nothing already written. A restarted run cuts series.csv,
+!> run that stops loses nothing already written. Every row is checked as written (the write
+!> and the flush): a row that cannot be written whole (a full disk) is cut off again, the
+!> file closed, and the error names the file, so a reader never sees a torn row. A restarted run cuts series.csv,
 !> probes.csv and contact.csv back to their length at its checkpoint and appends to them.
 module dem_output
-    use dem_files, only: make_directory, file_truncate, file_rename
+    use dem_files, only: make_directory, file_truncate, file_rename, cfile_t, cfile_open, &
+                         cfile_write, cfile_size, cfile_close
     use dem_comm, only: comm_t, comm_barrier, comm_any
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io, dem_err_input
@@ -27,9 +30,9 @@ module dem_output
     !> Open files of a run.
     type :: output_t
         character(len=:), allocatable :: dir
-        integer :: series = -1
-        integer :: contact = -1
-        integer :: probes = -1
+        type(cfile_t) :: series
+        type(cfile_t) :: contact
+        type(cfile_t) :: probes
     end type output_t
 
 
@@ -70,26 +73,22 @@ contains
     function output_sizes(out) result(bytes)
         type(output_t), intent(in) :: out
         integer(i8) :: bytes(3)
-        integer :: units(3), k
-        units = [out%series, out%contact, out%probes]
-        bytes = 0
-        do k = 1, 3
-            if (units(k) == -1) cycle
-            flush(units(k))
-            inquire(unit=units(k), size=bytes(k))
-        end do
+        bytes = max(0_i8, [cfile_size(out%series), cfile_size(out%contact), &
+                           cfile_size(out%probes)])
     end function output_sizes
 
     !> One row of probes.csv (not-a-number where a probe has nothing to measure).
-    subroutine output_probes(out, time, step, values)
-        type(output_t), intent(in) :: out
+    subroutine output_probes(out, time, step, values, err)
+        type(output_t), intent(inout) :: out
         real(wp), intent(in) :: time             !! [s]
         integer(i8), intent(in) :: step
         real(wp), intent(in) :: values(:)
-        if (out%probes == -1) return
-        write(out%probes, '(' // real_fmt // ',",",i0,*(:,",",' // real_fmt // '))') time, step, &
+        type(error_t), intent(inout) :: err
+        character(len=32 * (size(values) + 2)) :: row
+        if (cfile_size(out%probes) < 0 .or. err%failed()) return
+        write(row, '(' // real_fmt // ',",",i0,*(:,",",' // real_fmt // '))') time, step, &
             values
-        flush(out%probes)
+        call write_row(out%probes, trim(row), err)
     end subroutine output_probes
 
     !> histogram_<name>.csv: one row per bin, bin_lo,bin_hi,radial,angular,vertical, with a
@@ -101,7 +100,9 @@ contains
         integer(i8), intent(in) :: counts(0:, :) !! (bin, component)
         type(error_t), intent(inout) :: err
         real(wp) :: edges(0:size(counts, 1)), width
-        integer :: u, k, bins
+        type(cfile_t) :: f
+        character(len=128) :: row
+        integer :: k, bins
         bins = size(counts, 1) - 2
         width = (v_max - v_min) / bins
         edges(0) = -huge(1.0_wp)
@@ -111,13 +112,14 @@ contains
         end do
         edges(bins + 1) = v_max
         call open_csv(dir // '/histogram_' // trim(name) // '.csv', &
-                      'bin_lo,bin_hi,radial,angular,vertical', u, err)
-        if (err%failed()) return
+                      'bin_lo,bin_hi,radial,angular,vertical', f, err)
         do k = 0, bins + 1
-            write(u, '(a,",",a,3(",",i0))') edge_text(edges(k)), edge_text(edges(k + 1)), &
+            if (err%failed()) exit
+            write(row, '(a,",",a,3(",",i0))') edge_text(edges(k)), edge_text(edges(k + 1)), &
                 counts(k, :)
+            call write_row(f, trim(row), err)
         end do
-        close(u)
+        call close_file(f, err)
     contains
         function edge_text(e) result(text)
             real(wp), intent(in) :: e
@@ -135,24 +137,31 @@ contains
     end subroutine output_histogram
 
     !> One row of series.csv.
-    subroutine output_series(out, time, step, n, removed, n_pp, n_pw, ke_t, ke_r, pe, vmax)
-        type(output_t), intent(in) :: out
+    subroutine output_series(out, time, step, n, removed, n_pp, n_pw, ke_t, ke_r, pe, vmax, &
+                             err)
+        type(output_t), intent(inout) :: out
         real(wp), intent(in) :: time, ke_t, ke_r, pe, vmax  !! [s], [J], [J], [J], [m/s]
         integer(i8), intent(in) :: step, removed
         integer(ip), intent(in) :: n, n_pp, n_pw
-        write(out%series, '(' // real_fmt // ',5(",",i0),4(",",' // real_fmt // '))') &
+        type(error_t), intent(inout) :: err
+        character(len=320) :: row
+        if (err%failed()) return
+        write(row, '(' // real_fmt // ',5(",",i0),4(",",' // real_fmt // '))') &
             time, step, n, removed, n_pp, n_pw, ke_t, ke_r, pe, vmax
-        flush(out%series)
-        if (out%contact /= -1) flush(out%contact)
+        call write_row(out%series, trim(row), err)
     end subroutine output_series
 
     !> One row of contact.csv.
-    subroutine output_contact(out, time, overlap, fn, ft, x, v, w)
-        type(output_t), intent(in) :: out
+    subroutine output_contact(out, time, overlap, fn, ft, x, v, w, err)
+        type(output_t), intent(inout) :: out
         real(wp), intent(in) :: time, overlap, fn, ft  !! [s], [m], [N], [N]
         real(wp), intent(in) :: x(3), v(3), w(3)       !! [m], [m/s], [rad/s]
-        write(out%contact, '(' // real_fmt // ',12(",",' // real_fmt // '))') &
-            time, overlap, fn, ft, x, v, w
+        type(error_t), intent(inout) :: err
+        character(len=400) :: row
+        if (err%failed()) return
+        write(row, '(' // real_fmt // ',12(",",' // real_fmt // '))') time, overlap, fn, ft, &
+            x, v, w
+        call write_row(out%contact, trim(row), err)
     end subroutine output_contact
 
     !> final.csv in directory `dir`: the particles of every rank, one row each, in the order
@@ -166,24 +175,24 @@ contains
         real(wp), intent(in) :: radius(:), x(:, :), v(:, :), w(:, :)
         type(error_t), intent(inout) :: err
         character(len=:), allocatable :: part
-        integer :: u, i, q, ios
+        type(cfile_t) :: f
+        character(len=400) :: row
+        integer :: i, q
         part = dir // '/final.csv.part'
         do q = 0, comm%size - 1
             if (q == comm%rank) then
                 if (q == 0) then
-                    call open_csv(part, final_header, u, err)
+                    call open_csv(part, final_header, f, err)
                 else
-                    open(newunit=u, file=part, status='old', position='append', &
-                         action='write', iostat=ios)
-                    if (ios /= 0) call set_error(err, dem_err_io, part // ': cannot write')
+                    call cfile_open(f, part, .true., err)
                 end if
-                if (.not. err%failed()) then
-                    do i = 1, size(gid)
-                        write(u, '(i0,",",a,10(",",' // real_fmt // '))') gid(i), &
-                            trim(mat(i)), radius(i), x(:, i), v(:, i), w(:, i)
-                    end do
-                    close(u)
-                end if
+                do i = 1, size(gid)
+                    if (err%failed()) exit
+                    write(row, '(i0,",",a,10(",",' // real_fmt // '))') gid(i), trim(mat(i)), &
+                        radius(i), x(:, i), v(:, i), w(:, i)
+                    call write_row(f, trim(row), err)
+                end do
+                call close_file(f, err)
             end if
             call comm_barrier(comm)
         end do
@@ -191,16 +200,43 @@ contains
         if (comm%rank == 0) call file_rename(part, dir // '/final.csv', err)
     end subroutine output_final
 
-    !> Close the open files.
-    subroutine output_close(out)
+    !> Close the open files (a close that fails names its file in err).
+    subroutine output_close(out, err)
         type(output_t), intent(inout) :: out
-        if (out%series /= -1) close(out%series)
-        if (out%contact /= -1) close(out%contact)
-        if (out%probes /= -1) close(out%probes)
-        out%series = -1
-        out%contact = -1
-        out%probes = -1
+        type(error_t), intent(inout) :: err
+        call close_file(out%series, err)
+        call close_file(out%contact, err)
+        call close_file(out%probes, err)
     end subroutine output_close
+
+    !> Write one row; a row not written whole (a full disk) is cut off again (the file back
+    !> to its length before it) and the file closed, and err names the file.
+    subroutine write_row(f, row, err)
+        type(cfile_t), intent(inout) :: f
+        character(len=*), intent(in) :: row
+        type(error_t), intent(inout) :: err
+        type(error_t) :: ignored
+        integer(i8) :: before
+        integer :: ios
+        if (err%failed()) return
+        before = cfile_size(f)
+        call cfile_write(f, row, ios)
+        if (ios == 0) return
+        call cfile_close(f, ios)
+        if (before >= 0) call file_truncate(f%path, before, ignored)
+        call set_error(err, dem_err_io, f%path // ': cannot write to it (the disk may be ' // &
+                       'full); the rows before are whole')
+    end subroutine write_row
+
+    !> Close a file (if open); a failed close names it in err.
+    subroutine close_file(f, err)
+        type(cfile_t), intent(inout) :: f
+        type(error_t), intent(inout) :: err
+        integer :: ios
+        call cfile_close(f, ios)
+        if (ios /= 0 .and. .not. err%failed()) call set_error(err, dem_err_io, f%path // &
+            ': cannot close it (the disk may be full)')
+    end subroutine close_file
 
     !> A file that a continued run appends to (one of at least `keep` > 0 bytes) must have
     !> the run's columns; checked for every file before any is cut back.
@@ -232,31 +268,22 @@ contains
 
     !> Open a CSV file with its header; with keep > 0, an existing file of at least keep
     !> bytes is cut to keep bytes and appended to instead.
-    subroutine open_csv(path, header, u, err, keep)
+    subroutine open_csv(path, header, f, err, keep)
         character(len=*), intent(in) :: path, header
-        integer, intent(out) :: u
+        type(cfile_t), intent(out) :: f
         type(error_t), intent(inout) :: err
         integer(i8), intent(in), optional :: keep
-        integer :: ios
         integer(i8) :: bytes
-        u = -1
         bytes = -1
         if (present(keep)) then
             if (keep > 0) inquire(file=path, size=bytes)
             if (bytes >= keep .and. keep > 0) then
                 call file_truncate(path, keep, err)
-                if (err%failed()) return
-                open(newunit=u, file=path, status='old', position='append', action='write', &
-                     iostat=ios)
-                if (ios /= 0) call set_error(err, dem_err_io, path // ': cannot write')
+                if (.not. err%failed()) call cfile_open(f, path, .true., err)
                 return
             end if
         end if
-        open(newunit=u, file=path, status='replace', action='write', iostat=ios)
-        if (ios /= 0) then
-            call set_error(err, dem_err_io, path // ': cannot write')
-            return
-        end if
-        write(u, '(a)') header
+        call cfile_open(f, path, .false., err)
+        call write_row(f, header, err)
     end subroutine open_csv
 end module dem_output

@@ -547,7 +547,8 @@ contains
                               fr%v, fr%w, err)
             bad = failed_anywhere(s, err)
         end if
-        if (s%comm%rank == 0) call output_close(s%run%out)
+        if (s%comm%rank == 0) call output_close(s%run%out, err)
+        bad = failed_anywhere(s, err)
         call device_data(s, acc_exit)
     end subroutine solver_finish
 
@@ -621,7 +622,7 @@ contains
     subroutine run_control(s, c, out, started, step_seconds, written, show, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        type(output_t), intent(in) :: out
+        type(output_t), intent(inout) :: out
         real(wp), intent(in) :: started, step_seconds
         logical, intent(in) :: written
         logical, intent(inout) :: show
@@ -887,7 +888,7 @@ contains
     subroutine write_series(s, c, out, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        type(output_t), intent(in) :: out
+        type(output_t), intent(inout) :: out
         type(error_t), intent(inout) :: err
         real(wp) :: ke_t, ke_r, pe, vmax
         integer(i8) :: counts(3), bytes(3), n(1)
@@ -908,7 +909,7 @@ contains
             settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
             if (s%comm%rank == 0) call output_series(out, time_of(s, c, s%step), s%step, &
                 int(n(1), ip), s%removed, int(counts(1), ip), int(counts(2), ip), ke_t, ke_r, pe, &
-                vmax)
+                vmax, err)
             call write_probes(s, c, out, err)
         end associate
         if (s%comm%rank == 0) then
@@ -942,7 +943,7 @@ contains
     subroutine write_probes(s, c, out, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        type(output_t), intent(in) :: out
+        type(output_t), intent(inout) :: out
         type(error_t), intent(inout) :: err
         real(wp), allocatable :: values(:)
         integer(i8), allocatable :: counts(:, :)
@@ -961,7 +962,7 @@ contains
                     c%probes(k)%v_min, c%probes(k)%v_max, counts, err)
             end do
         end associate
-        if (s%comm%rank == 0) call output_probes(out, t, s%step, values)
+        if (s%comm%rank == 0) call output_probes(out, t, s%step, values, err)
     contains
         !> A histogram at time t_h is written at the first row at or after it: this one if the
         !> row one output interval earlier was before it.
@@ -976,7 +977,7 @@ contains
     subroutine write_trace(s, c, out, time, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        type(output_t), intent(in) :: out
+        type(output_t), intent(inout) :: out
         real(wp), intent(in) :: time
         type(error_t), intent(inout) :: err
         real(wp) :: overlap, fn, ft
@@ -992,7 +993,8 @@ contains
             end if
             call contact_trace(i, p%n_own + p%n_ghost, p%x, p%radius, p%mass, p%f, c%gravity, &
                                s%mesh, overlap, fn, ft)
-            call output_contact(out, time, overlap, fn, ft, p%x(:, i), p%v(:, i), p%w(:, i))
+            call output_contact(out, time, overlap, fn, ft, p%x(:, i), p%v(:, i), p%w(:, i), &
+                                err)
         end associate
     end subroutine write_trace
 
@@ -1069,7 +1071,7 @@ contains
     subroutine capture(s, c, out, fr, local)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        type(output_t), intent(in) :: out
+        type(output_t), intent(inout) :: out
         type(frame_t), intent(out) :: fr
         logical, intent(in), optional :: local
         integer(ip), allocatable :: order(:)
@@ -1180,7 +1182,7 @@ contains
     subroutine write_checkpoint(s, c, out, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        type(output_t), intent(in) :: out
+        type(output_t), intent(inout) :: out
         type(error_t), intent(inout) :: err
         type(frame_t) :: fr
         if (err%failed()) return
