@@ -2,10 +2,11 @@
 !> interval), probes.csv (the probes' values at the same times), histogram_<probe>.csv
 !> (once each), contact.csv (the traced particle's contact, every step) and final.csv (the
 !> particles at the end, in the particle-file columns). Rows are flushed as written, so a
-!> run that stops loses nothing already written. Every row is checked as written (the write
-!> and the flush): a row that cannot be written whole (a full disk) is cut off again, the
-!> file closed, and the error names the file, so a reader never sees a torn row. A restarted run cuts series.csv,
-!> probes.csv and contact.csv back to their length at its checkpoint and appends to them.
+!> run that stops loses nothing already written, and checked as written (the write and the
+!> flush, through C stdio: dem_files): a row that cannot be written whole (a full disk) is
+!> cut off again, the file closed, and the error names the file, so a reader never sees a
+!> torn row. A restarted run cuts series.csv, probes.csv and contact.csv back to their
+!> length at its checkpoint and appends to them.
 module dem_output
     use dem_files, only: make_directory, file_truncate, file_rename, cfile_t, cfile_open, &
                          cfile_write, cfile_size, cfile_close

@@ -153,8 +153,8 @@ contains
         write(output_unit, '(a,es12.5,a)') '  stability bound      ', ts%bound, &
             ' s (' // ts%bound_name // ')'
         write(output_unit, '(a,es12.5,a,f4.2,a)') '  loaded packings      ', ts%packed, &
-            ' s (', ts%packed / ts%bound, ' of the bound: deep resting beds have rattled above it; ' &
-            // 'doc/theory.md, section 6)'
+            ' s (', ts%packed / ts%bound, ' of the bound: deep resting beds have rattled ' // &
+            'above it; doc/theory.md, section 6)'
         write(output_unit, '(a,es12.5,a)') '  instability guard    ', c%max_speed, &
             ' m/s (&run max_speed)'
         write(output_unit, '(a,f10.3,a)') '  estimated memory     ', mem, ' MiB'

@@ -112,17 +112,20 @@ for integrator in ("symplectic_euler", "velocity_verlet"):
         check(np.all(f[key] == 0.0), f"{integrator}: {key} left the axis of symmetry")
     check_close(f["vx"][1], 100.0, 1e-3, f"{integrator}: elastic rebound speed")
 
+def box_walls(side):
+    """The floor z = 0 and four side walls of a square box of `side` m, of material 'wall'."""
+    planes = [("0, 0, 0", "0, 0, 1"), ("0, 0, 0", "1, 0, 0"), (f"{side}, 0, 0", "-1, 0, 0"),
+              ("0, 0, 0", "0, 1, 0"), (f"0, {side}, 0", "0, -1, 0")]
+    return "".join(f"&wall_plane material = 'wall', point = {p}, normal = {n}, "
+                   "half_width = 0.1 /\n" for p, n in planes)
+
+
 # 3. a loaded resting bed of soft spheres
 BED = """&material name = 'soft', density = 2000, youngs_modulus = 1e6, poisson_ratio = 0.2 /
 &material name = 'wall', density = 7200, youngs_modulus = 2.1e11, poisson_ratio = 0.2 /
 &pair materials = 'soft', 'soft', restitution = 0.4, friction = 0.4 /
 &pair materials = 'soft', 'wall', restitution = 0.4, friction = 0.2 /
-&wall_plane material = 'wall', point = 0, 0, 0, normal = 0, 0, 1, half_width = 0.1 /
-&wall_plane material = 'wall', point = 0, 0, 0, normal = 1, 0, 0, half_width = 0.1 /
-&wall_plane material = 'wall', point = 0.04, 0, 0, normal = -1, 0, 0, half_width = 0.1 /
-&wall_plane material = 'wall', point = 0, 0, 0, normal = 0, 1, 0, half_width = 0.1 /
-&wall_plane material = 'wall', point = 0, 0.04, 0, normal = 0, -1, 0, half_width = 0.1 /
-"""
+""" + box_walls(0.04)
 N, R_BED = 600, 0.002
 inertia = 0.4 * co.sphere_mass(2000.0, R_BED) * R_BED**2
 
@@ -165,12 +168,7 @@ RATIO = """&output dir = 'output/{name}', interval = 0.001 /
 &material name = 'wall', density = 7800, youngs_modulus = 2e11, poisson_ratio = 0.3 /
 &pair materials = 'soft', 'soft', restitution = 0.5, friction = 0.5 /
 &pair materials = 'soft', 'wall', restitution = 0.5, friction = 0.5 /
-&wall_plane material = 'wall', point = 0, 0, 0, normal = 0, 0, 1, half_width = 0.1 /
-&wall_plane material = 'wall', point = 0, 0, 0, normal = 1, 0, 0, half_width = 0.1 /
-&wall_plane material = 'wall', point = 0.02, 0, 0, normal = -1, 0, 0, half_width = 0.1 /
-&wall_plane material = 'wall', point = 0, 0, 0, normal = 0, 1, 0, half_width = 0.1 /
-&wall_plane material = 'wall', point = 0, 0.02, 0, normal = 0, -1, 0, half_width = 0.1 /
-&insert n = 3000, material = 'soft', radius_min = 2.5e-4, region = 'box',
+""" + box_walls(0.02) + """&insert n = 3000, material = 'soft', radius_min = 2.5e-4, region = 'box',
         box_min = 0.0003, 0.0003, 0.0003, box_max = 0.0197, 0.0197, 0.003, seed = 1 /
 &insert n = 6, material = 'soft', radius_min = 5e-3, region = 'box', box_min = 0, 0, 0.005,
         box_max = 0.02, 0.02, 0.04, velocity = 0, 0, -0.3, seed = 2 /
