@@ -302,6 +302,11 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'dir': must not be empty")
                 return
             end if
+            if (trace_id /= 0 .and. comm%size > 1) then
+                call set_error(err, dem_err_input, at // ": key 'trace_id': tracing runs on " // &
+                               'one MPI rank')
+                return
+            end if
             if (trace_id /= 0) then              ! (the same on every rank)
                 if (.not. comm_any(comm, any(c%gid(1:c%n_held) == trace_id))) then
                     call set_error(err, dem_err_input, at // ": key 'trace_id': no particle " // &
@@ -912,13 +917,8 @@ contains
             case ('plane')
                 if (.not. check_vector(at, point, 'point', .true., err)) return
                 if (.not. check_vector(at, normal, 'normal', .true., err)) return
-                if (all(normal == 0.0_wp)) then
-                    call set_error(err, dem_err_input, at // ": key 'normal': a non-zero " // &
-                                   'vector is required')
-                    return
-                end if
-                c%outlets(k) = outlet_t(kind=outlet_plane, point=point, &
-                                        normal=normal / norm2(normal))
+                if (.not. check_direction(at, normal, 'normal', err)) return
+                c%outlets(k) = outlet_t(kind=outlet_plane, point=point, normal=normal)
             case ('box')
                 if (.not. check_vector(at, box_min, 'box_min', .true., err)) return
                 if (.not. check_vector(at, box_max, 'box_max', .true., err)) return
@@ -1093,11 +1093,7 @@ contains
             if (im == 0) return
             if (.not. check_vector(at, point, 'point', .true., err)) return
             if (.not. check_vector(at, normal, 'normal', .true., err)) return
-            if (all(normal == 0.0_wp)) then
-                call set_error(err, dem_err_input, at // ": key 'normal': a non-zero vector " // &
-                               'is required')
-                return
-            end if
+            if (.not. check_direction(at, normal, 'normal', err)) return
             if (.not. check_positive(at, half_width, 'half_width', '[m]', err)) return
             if (divisions < 1) then
                 call set_error(err, dem_err_input, at // ": key 'divisions': must be >= 1")
@@ -1162,11 +1158,7 @@ contains
             if (.not. check_vector(at, velocity, 'velocity', .false., err)) return
             if (.not. check_vector(at, rotation_point, 'rotation_point', .false., err)) return
             if (.not. check_vector(at, rotation_axis, 'rotation_axis', .false., err)) return
-            if (all(rotation_axis == 0.0_wp)) then
-                call set_error(err, dem_err_input, at // ": key 'rotation_axis': a non-zero " // &
-                               'vector is required')
-                return
-            end if
+            if (.not. check_direction(at, rotation_axis, 'rotation_axis', err)) return
             if (.not. in_range(angular_velocity, -unset, unset, .false., .false.)) then
                 call set_error(err, dem_err_input, at // ": key 'angular_velocity': must be finite")
                 return
@@ -1427,6 +1419,22 @@ contains
             ok = .true.
         end if
     end function check_vector
+
+    !> A direction: `val` (finite) made a unit vector, scaled by its largest component first
+    !> so that no square underflows (1e-300, 0, 0 is the x axis); zero is refused.
+    logical function check_direction(at, val, key, err) result(ok)
+        character(len=*), intent(in) :: at, key
+        real(wp), intent(inout) :: val(3)
+        type(error_t), intent(inout) :: err
+        ok = any(val /= 0.0_wp)
+        if (.not. ok) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': a non-zero " // &
+                           'vector is required')
+            return
+        end if
+        val = val / maxval(abs(val))
+        val = val / norm2(val)
+    end function check_direction
 
     !> A file named in a case: absolute, or relative to the case file's directory.
     function relative_to(case_path, file) result(path)

@@ -298,8 +298,6 @@ contains
             do k = 1, size(c%probes)
                 columns = columns // probe_header(c%probes(k), c%mats%name, r%probed)
             end do
-            if (s%comm%size > 1 .and. s%trace_id /= 0) call set_error(err, dem_err_runtime, &
-                c%source // ': &output trace_id: tracing runs on one MPI rank')
             if (.not. failed_anywhere(s, err)) call solver_prepare(s, c, err)
             if (err%failed()) return
             if (s%comm%rank == 0) then  ! the CSV files are rank 0's

@@ -144,6 +144,27 @@ for key, value, group, line in (("max_speed", "0", "run", RUN),
                                 ("snapshot_force", "'yes'", "output", OUT)):
     bad(f"bad_{key}", sub(line, line[:-2] + f", {key} = {value} /"), group, key)
 
+# directions given by tiny vectors are directions: a sphere resting on the plane of normal
+# (0, 0, 1e-300) ends where it does on the plane of normal (0, 0, 1), byte for byte (a
+# normalization that squared the components underflowed to 0/0: issue 30, item 7)
+PLANE = """&run dt = 1e-5, t_end = 0.002, gravity = 0, 0, -9.81 /
+&material name = 'glass', density = 2500, youngs_modulus = 1e7, poisson_ratio = 0.25 /
+&pair materials = 'glass', 'glass', restitution = 0.5, friction = 0.3 /
+&wall_plane material = 'glass', point = 0, 0, 0, normal = 0, 0, {nz}, half_width = 0.05 /
+&particle id = 1, material = 'glass', radius = 1e-3, position = 0, 0, 0.0011 /
+"""
+finals = []
+for name, nz in (("normal_unit", "1"), ("normal_tiny", "1e-300")):
+    path = os.path.join(work, name + ".nml")
+    with open(path, "w") as f:
+        f.write(PLANE.format(nz=nz))
+    r, d = run([path], name)
+    check(r.returncode == 0, f"{name}: exit {r.returncode}: {r.stderr.strip()}")
+    final = os.path.join(d, "output", name, "final.csv")
+    finals.append(open(final).read() if os.path.exists(final) else None)
+check(finals[0] is not None and finals[0] == finals[1],
+      "normal = 0, 0, 1e-300: the run differs from normal = 0, 0, 1")
+
 # command line
 r, _ = run(["--version"], "version")
 check(r.returncode == 0 and r.stdout.startswith("dem "), f"--version: {r.stdout} {r.stderr}")

@@ -267,4 +267,19 @@ for ranks in (1, 2, 3):
     r = run(case, ranks, code=2)
     check("particle 1 is of material 'M1', which the case does not define" in r.stderr,
           f"snapshot of undefined materials on {ranks} ranks: {r.stderr.strip()[-500:]}")
+
+# tracing is for one rank: on two, --check and the run both refuse it as bad input (exit 2,
+# naming &output's trace_id), where the run used to stop at its start with exit 3
+case = os.path.join(work, "trace_2.nml")
+with open(case, "w") as f:
+    f.write("""&run dt = 1e-5, t_end = 1e-4, gravity = 0, 0, -9.81 /
+&output dir = 'trace_2', trace_id = 1 /
+&material name = 'glass', density = 2500, youngs_modulus = 1e7, poisson_ratio = 0.25 /
+&pair materials = 'glass', 'glass', restitution = 0.5, friction = 0.3 /
+&particle id = 1, material = 'glass', radius = 1e-3, position = 0, 0, 0.01 /
+""")
+for args in (["--check"], []):
+    r = run(case, 2, *args, code=2)
+    check("&output" in r.stderr and "key 'trace_id': tracing runs on one MPI rank"
+          in r.stderr, f"trace_id on 2 ranks {args}: {r.stderr.strip()[-500:]}")
 finish()
