@@ -92,7 +92,7 @@ contains
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
                                                      !! (zero between calls)
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m]
-        integer(ip) :: i, j, p, p0, c, l, m
+        integer(ip) :: i, j, p, p0, c, l, m, side
         integer(ip) :: lp(tile + 1)
         logical :: over
         integer(i8) :: kf(3), kc(3)
@@ -110,6 +110,7 @@ contains
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, over) &
+        !$acc private(side) &
         !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g, ri, rj) &
         !$acc firstprivate(sv, st_, shifted_v, shifted_t) &
         !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu) &
@@ -226,25 +227,18 @@ contains
             if (shifted_t) then     ! levers R - shift_t d: each torque word replaced by that
                 do l = 1, m         ! of n x F_t (R - shift_t d) / R (the sums are over R)
                     p = lp(l)
-                    i = pair(1, p)
-                    j = pair(2, p)
                     cp(1) = n2(l) * f3(l) - n3(l) * f2(l)
                     cp(2) = n3(l) * f1(l) - n1(l) * f3(l)
                     cp(3) = n1(l) * f2(l) - n2(l) * f1(l)
-                    si = scale(i)
-                    g = 1.0_wp - st_ * ov(l) / radius(i)
-                    do c = 1, 3
-                        kc(c) = to_fixed(cp(c) * g * si) - to_fixed(cp(c) * si)
-                        !$acc atomic update
-                        acc(c + 3, i) = acc(c + 3, i) + kc(c)
-                    end do
-                    if (j > n_own) cycle
-                    sj = scale(j)
-                    g = 1.0_wp - st_ * ov(l) / radius(j)
-                    do c = 1, 3
-                        kc(c) = to_fixed(cp(c) * g * sj) - to_fixed(cp(c) * sj)
-                        !$acc atomic update
-                        acc(c + 3, j) = acc(c + 3, j) + kc(c)
+                    do side = 1, 2                ! i, then j where this rank owns it
+                        i = pair(side, p)
+                        if (side == 2 .and. i > n_own) exit
+                        g = 1.0_wp - st_ * ov(l) / radius(i)
+                        do c = 1, 3
+                            kc(c) = lever_word(cp(c), g, scale(i))
+                            !$acc atomic update
+                            acc(c + 3, i) = acc(c + 3, i) + kc(c)
+                        end do
                     end do
                 end do
             end if
@@ -276,6 +270,14 @@ contains
         e = ibits(transfer(bound, 1_i8), 52, 11) - 1022_i8
         scale = transfer(ishft(int(fixed_bits, i8) - e + 1023_i8, 52), 1.0_wp)
     end function fixed_scale
+
+    !> The change of a torque word when the lever is g R instead of R: the word of t g (at
+    !> scale s) less the word of t already added.
+    pure integer(i8) function lever_word(t, g, s) result(k)
+        !$acc routine seq
+        real(wp), intent(in) :: t, g, s
+        k = to_fixed(t * g * s) - to_fixed(t * s)
+    end function lever_word
 
     !> y rounded to the nearest integer (halves away from zero), clipped to +-2^61 (16 times
     !> the bound of fixed_scale; a term beyond it is an unstable run's).
