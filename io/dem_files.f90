@@ -9,7 +9,8 @@ module dem_files
     use dem_error, only: error_t, set_error, dem_err_io
     implicit none
     private
-    public :: make_directory, file_rename, file_remove, file_truncate, file_exists
+    public :: make_directory, file_rename, file_remove, file_truncate, file_exists, &
+              input_file_problem
     public :: cfile_t, cfile_open, cfile_write, cfile_size, cfile_close
 
     !> A text file open for writing through C stdio.
@@ -110,6 +111,29 @@ contains
         character(len=*), intent(in) :: path
         inquire(file=path, exist=exists)
     end function file_exists
+
+    !> Why `path` cannot be read as an input file: '' if it can; else that it does not exist,
+    !> is a directory, or is empty or not a regular file (a device or a pipe has no size:
+    !> reading /dev/zero, or a pipe no one writes to, would never end).
+    function input_file_problem(path) result(why)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: why
+        logical :: exists
+        integer(i8) :: bytes
+        why = ''
+        inquire(file=path, exist=exists)
+        if (.not. exists) then
+            why = 'does not exist'
+            return
+        end if
+        inquire(file=path // '/.', exist=exists)
+        if (exists) then
+            why = 'is a directory'
+            return
+        end if
+        inquire(file=path, size=bytes)
+        if (bytes <= 0) why = 'is empty or not a regular file (a device or a pipe)'
+    end function input_file_problem
 
     !> Open `path` for writing: anew, or with `append` at its end.
     subroutine cfile_open(f, path, append, err)

@@ -23,6 +23,7 @@ module dem_h5
                     H5T_STRING_F, H5_REAL_KIND, H5_INTEGER_KIND
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io
+    use dem_files, only: input_file_problem
     use dem_comm, only: comm_t, comm_offset, comm_xor, comm_broadcast, comm_info_null, comm_any
     implicit none
     private
@@ -78,10 +79,10 @@ contains
         type(comm_t), intent(in), optional :: comm
         integer(hid_t) :: fapl
         integer :: e
-        logical :: exists
-        inquire(file=path, exist=exists)
-        if (.not. exists) then
-            call set_error(err, dem_err_io, path // ': no such file')
+        character(len=:), allocatable :: why
+        why = input_file_problem(path)         ! (before MPI-IO tries it and prints errors)
+        if (why /= '') then
+            call set_error(err, dem_err_io, path // ': ' // why)
             return
         end if
         if (present(comm)) then

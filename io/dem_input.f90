@@ -6,7 +6,8 @@ module dem_input
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_namelist_scan, only: nml_file_t, nml_block_t, nml_scan, nml_items, nml_location
-    use dem_case, only: case_t, time_scales_t, case_time_scales, case_summarize, case_speed_bound
+    use dem_case, only: case_t, time_scales_t, case_time_scales, case_summarize, &
+                        case_speed_bound, case_energy_speed
     use dem_comm, only: comm_t, comm_any
     use dem_materials, only: contact_options_t
     use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion
@@ -28,8 +29,8 @@ module dem_input
     !> The groups a case file may hold, and the keys of each (doc/input.md).
     character(len=*), parameter :: input_groups(12) = [character(len=200) :: &
         'run: dt t_end integrator gravity expected_speed skin allow_unstable ' // &
-        'stop_kinetic_energy max_speed wall_time_limit progress_interval imbalance_limit ' // &
-        'gpu_aware_mpi', &
+        'stop_kinetic_energy max_speed max_energy wall_time_limit progress_interval ' // &
+        'imbalance_limit gpu_aware_mpi', &
         'output: dir interval trace_id snapshot_interval snapshot_force snapshot_contacts ' // &
         'checkpoint_interval checkpoint_keep overwrite', &
         'contact_model: variant tangential_stiffness_factor tangential_damping clamp_normal ' // &
@@ -142,6 +143,10 @@ contains
                                     ! spinning with a rim speed above it) stops the run
                                     ! [m/s], > 0, default max(0.1 min radius / dt,
                                     ! 10 x the expected speed of dem --check)
+        real(wp) :: max_energy      ! energy guard: kinetic and elastic energy above this
+                                    ! stops the run [J], > 0, default M v^2 (M the
+                                    ! particles' mass, v the expected speed of dem --check
+                                    ! plus twice the fastest wall surface's)
         real(wp) :: wall_time_limit ! write a checkpoint and stop before this much wall-clock
                                     ! time [s], >= 0, default 0 (none)
         real(wp) :: progress_interval  ! wall-clock time between progress lines [s], >= 0
@@ -153,8 +158,8 @@ contains
         logical :: gpu_aware_mpi    ! in an OpenACC build on several ranks, hand device
                                     ! addresses of the halo buffers to MPI, default false
         namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable, &
-            stop_kinetic_energy, max_speed, wall_time_limit, progress_interval, imbalance_limit, &
-            gpu_aware_mpi
+            stop_kinetic_energy, max_speed, max_energy, wall_time_limit, progress_interval, &
+            imbalance_limit, gpu_aware_mpi
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
@@ -173,6 +178,7 @@ contains
         allow_unstable = .false.
         stop_kinetic_energy = 0.0_wp
         max_speed = unset
+        max_energy = unset
         wall_time_limit = 0.0_wp
         progress_interval = 10.0_wp
         imbalance_limit = 1.1_wp
@@ -221,6 +227,10 @@ contains
         if (max_speed /= unset) then
             if (.not. check_positive(at, max_speed, 'max_speed', '[m/s]', err)) return
         end if
+        if (max_energy /= unset) then
+            if (.not. check_positive(at, max_energy, 'max_energy', '[J]', err)) return
+            c%max_energy = max_energy
+        end if
         if (.not. in_range(wall_time_limit, 0.0_wp, unset, .true., .false.)) then
             call set_error(err, dem_err_input, at // ": key 'wall_time_limit': must be >= 0 [s]")
             return
@@ -242,6 +252,7 @@ contains
         call case_time_scales(c, ts)
         if (max_speed == unset) max_speed = case_speed_bound(c, ts)
         c%max_speed = max_speed
+        c%energy_speed = case_energy_speed(c, ts)
         if (dt > ts%bound .and. .not. allow_unstable) then
             write(s1, '(es10.3)') dt
             write(s2, '(es10.3)') ts%bound

@@ -4,6 +4,7 @@
 module dem_namelist_scan
     use dem_text, only: read_line
     use dem_error, only: error_t, set_error, dem_err_input
+    use dem_files, only: input_file_problem
     implicit none
     private
     public :: nml_block_t, nml_file_t, nml_scan, nml_items, nml_location
@@ -50,10 +51,15 @@ contains
         nf%path = path
         nf%text = ''
         allocate(nf%blocks(0))
+        if (input_file_problem(path) /= '') then
+            call set_error(err, dem_err_input, path // ': the namelist file ' // &
+                           input_file_problem(path))
+            return
+        end if
         open(newunit=u, file=path, status='old', action='read', iostat=ios)
         if (ios /= 0) then
             call set_error(err, dem_err_input, path // ': cannot open the namelist file ' // &
-                           '(missing or unreadable)')
+                           '(unreadable)')
             return
         end if
         in_group = .false.

@@ -9,6 +9,7 @@ module dem_particle_file
     use dem_kinds, only: wp, ip, i8
     use dem_text, only: read_line
     use dem_error, only: error_t, set_error, dem_err_input
+    use dem_files, only: input_file_problem
     use dem_checkpoint, only: snapshot_read_particles
     use dem_comm, only: comm_t, comm_any
     implicit none
@@ -49,6 +50,11 @@ contains
         real(wp) :: val(10)
 
         n_rows = 0
+        if (input_file_problem(path) /= '') then
+            call set_error(err, dem_err_input, path // ': the particle file ' // &
+                           input_file_problem(path))
+            return
+        end if
         if (is_hdf5(path)) then
             if (whole) then
                 call snapshot_read_particles(path, names, gid, mat, radius, x, v, w, n_rows, err)

@@ -19,6 +19,7 @@ module dem_stl
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, i8
     use dem_error, only: error_t, set_error, dem_err_input
+    use dem_files, only: input_file_problem
     use dem_text, only: itoa
     implicit none
     private
@@ -84,11 +85,16 @@ contains
             call set_error(err, dem_err_input, path // ': the STL scale must be finite and > 0')
             return
         end if
+        if (input_file_problem(path) /= '') then
+            call set_error(err, dem_err_input, path // ': the STL file ' // &
+                           input_file_problem(path))
+            return
+        end if
         open(newunit=u, file=path, access='stream', form='unformatted', status='old', &
              action='read', iostat=ios)
         if (ios /= 0) then
             call set_error(err, dem_err_input, path // ': cannot open the STL file ' // &
-                           '(missing or unreadable)')
+                           '(unreadable)')
             return
         end if
         inquire(unit=u, size=fsize)

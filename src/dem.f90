@@ -4,7 +4,8 @@ module dem
     use dem_kinds, only: wp, ip, i8
     use dem_version, only: dem_version_string
     use dem_error, only: error_t
-    use dem_case, only: case_t, time_scales_t, case_time_scales, case_release_particles
+    use dem_case, only: case_t, time_scales_t, case_time_scales, case_release_particles, &
+                        case_energy_bound
     use dem_input, only: read_case
     use dem_solver, only: solver_t, solver_init, solver_prepare, solver_restore, solver_run, solver_particles, &
                           solver_particle_steps, solver_parallel_stats, &
@@ -14,7 +15,7 @@ module dem
     implicit none
     private
     public :: wp, ip, i8, dem_version_string, error_t, case_t, time_scales_t, &
-              case_time_scales, case_release_particles, read_case, &
+              case_time_scales, case_release_particles, case_energy_bound, read_case, &
               solver_t, solver_init, solver_prepare, &
               solver_restore, solver_run, solver_particles, solver_particle_steps, &
               solver_parallel_stats, &

@@ -3,7 +3,7 @@
 module dem_case
     use dem_kinds, only: wp, ip, i8
     use dem_materials, only: materials_t, contact_options_t, effective_moduli, damping_ratio
-    use dem_mesh, only: mesh_t
+    use dem_mesh, only: mesh_t, mesh_speed_bound
     use dem_outlets, only: outlet_t
     use dem_probes, only: probe_t
     use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt, &
@@ -12,7 +12,7 @@ module dem_case
     implicit none
     private
     public :: case_t, time_scales_t, case_time_scales, case_summarize, case_particle_materials, &
-              case_speed_bound, case_release_particles
+              case_speed_bound, case_energy_speed, case_energy_bound, case_release_particles
 
     !> What the time scales and the checks need of the particles of all ranks
     !> (case_summarize).
@@ -39,6 +39,8 @@ module dem_case
         logical :: allow_unstable = .false.           !< run even above the stability bound
         real(wp) :: stop_kinetic_energy = 0.0_wp      !< stop once the kinetic energy is below [J]
         real(wp) :: max_speed = huge(1.0_wp)          !< instability guard [m/s]
+        real(wp) :: max_energy = 0.0_wp               !< energy guard [J], 0: case_energy_bound
+        real(wp) :: energy_speed = 0.0_wp             !< its speed (case_energy_speed) [m/s]
         real(wp) :: wall_time_limit = 0.0_wp          !< checkpoint and stop before [s], 0: none
         real(wp) :: progress_interval = 0.0_wp        !< between progress lines [s], 0: none
         real(wp) :: imbalance_limit = 1.1_wp          !< repartition above this load ratio
@@ -166,6 +168,26 @@ contains
         type(time_scales_t), intent(in) :: ts
         speed = max(0.1_wp * minval(c%summary%rmin) / c%dt, 10.0_wp * ts%speed)
     end function case_speed_bound
+
+    !> The speed of the energy guard [m/s]: the expected speed (ts%speed) plus twice the
+    !> fastest surface speed of a moving wall (what a wall's elastic hit adds).
+    pure real(wp) function case_energy_speed(c, ts) result(speed)
+        type(case_t), intent(in) :: c
+        type(time_scales_t), intent(in) :: ts
+        speed = ts%speed + 2.0_wp * mesh_speed_bound(c%mesh)
+    end function case_energy_speed
+
+    !> The energy guard's bound [J] for particles of total mass `mass` [kg]: &run max_energy,
+    !> or else twice their kinetic energy were they all at the guard's speed, M v_e^2
+    !> (doc/theory.md, section 6); none (huge) without a speed.
+    pure real(wp) function case_energy_bound(c, mass) result(bound)
+        type(case_t), intent(in) :: c
+        real(wp), intent(in) :: mass
+        bound = c%max_energy
+        if (bound > 0.0_wp) return
+        bound = huge(1.0_wp)
+        if (c%energy_speed > 0.0_wp) bound = mass * c%energy_speed**2
+    end function case_energy_bound
 
     !> Rayleigh time of the smallest particle, shortest Hertz contact time over the material
     !> pairs present (smallest radius of each material; particle pairs meet at twice the

@@ -8,36 +8,40 @@ module dem_diagnostics
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t, closest_point_triangle
     use dem_comm, only: comm_t, comm_max, comm_sum
-    use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total
+    use dem_contact_store, only: max_wall_contacts
+    use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total, &
+                             fixed_split, fixed_sum_add_words
     implicit none
     private
-    public :: energies, count_pp_sides, deep_overlap_id, first_nonfinite, count_unstable, &
-              contact_trace, momentum_sums
+    public :: energies, elastic_energy, count_pp_sides, deep_overlap_id, deep_wall_id, &
+              first_nonfinite, &
+              count_unstable, contact_trace, momentum_sums
 
 contains
 
-    !> Kinetic (translational, rotational) and gravitational potential energy [J], and the
-    !> largest speed [m/s], of the particles of all ranks (each gives its n owned ones); the
-    !> sums in fixed point, the same on any number of ranks; collective.
-    subroutine energies(comm, n, mass, inv_inertia, x, v, w, gravity, ke_t, ke_r, pe, vmax)
+    !> Kinetic (translational, rotational) and gravitational potential energy [J], the
+    !> largest speed [m/s] and the mass [kg] of the particles of all ranks (each gives its n
+    !> owned ones); the sums in fixed point, the same on any number of ranks; collective.
+    subroutine energies(comm, n, mass, inv_inertia, x, v, w, gravity, ke_t, ke_r, pe, vmax, &
+                        mass_total)
         type(comm_t), intent(in) :: comm
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: mass(:), inv_inertia(:), x(:, :), v(:, :), w(:, :)
         real(wp), intent(in) :: gravity(3)
-        real(wp), intent(out) :: ke_t, ke_r, pe, vmax
+        real(wp), intent(out) :: ke_t, ke_r, pe, vmax, mass_total
         real(wp), allocatable :: e(:, :)
-        real(wp) :: sums(3, 1), top(1)
+        real(wp) :: sums(4, 1), top(1)
         type(fixed_sum_t) :: fixed
         integer(ip) :: i
-        allocate(e(3, n))
+        allocate(e(4, n))
         top = 0.0_wp
         do i = 1, n
             e(:, i) = [0.5_wp * mass(i) * dot_product(v(:, i), v(:, i)), &
                        0.5_wp * dot_product(w(:, i), w(:, i)) / inv_inertia(i), &
-                       -mass(i) * dot_product(gravity, x(:, i))]
+                       -mass(i) * dot_product(gravity, x(:, i)), mass(i)]
             top = max(top, norm2(v(:, i)))
         end do
-        call fixed_sum_start(fixed, comm, [(max(0.0_wp, maxval(abs(e(i, :)))), i = 1, 3)], &
+        call fixed_sum_start(fixed, comm, [(max(0.0_wp, maxval(abs(e(i, :)))), i = 1, 4)], &
                              int(n), 1)
         do i = 1, n
             call fixed_sum_add(fixed, e(:, i), 1)
@@ -47,8 +51,102 @@ contains
         ke_t = sums(1, 1)
         ke_r = sums(2, 1)
         pe = sums(3, 1)
+        mass_total = sums(4, 1)
         vmax = top(1)
     end subroutine energies
+
+    !> The elastic energy of the normal springs of all contacts [J] (doc/theory.md, section 6):
+    !> each overlapping pair of the owned particles' list entries gives half of its energy
+    !> from each side, each wall contact of their slots the energy at its triangle's closest
+    !> point now; summed in fixed point, the same on any number of ranks; collective. The
+    !> kernels run where the arrays are (on the device in a run of an OpenACC build).
+    real(wp) function elastic_energy(comm, n_own, n_all, n_entries, x, radius, mat, start, &
+                                     list, nm, kn, wall_tri, mesh) result(energy)
+        type(comm_t), intent(in) :: comm
+        integer(ip), intent(in) :: n_own, n_all, n_entries, nm
+        real(wp), intent(in) :: x(3, n_all), radius(n_all)   !! [m]
+        integer(ip), intent(in) :: mat(n_all), start(n_own + 1), list(n_entries)
+        real(wp), intent(in) :: kn(nm, nm)                   !! (4/3) E* [Pa]
+        integer(ip), intent(in) :: wall_tri(max_wall_contacts, n_own)
+        type(mesh_t), intent(in) :: mesh
+        type(fixed_sum_t) :: fixed
+        integer(i8) :: hi, lo, terms
+        real(wp) :: top, sums(1, 1)
+        ! the largest term and the count first (words at scale 0 are zero), then the words
+        call elastic_terms(n_own, n_all, n_entries, x, radius, mat, start, list, nm, kn, &
+                           wall_tri, mesh%n_tri, mesh%vert, mesh%mat, 0.0_wp, 1.0_wp, top, &
+                           terms, hi, lo)
+        call fixed_sum_start(fixed, comm, [top], int(terms), 1)
+        call elastic_terms(n_own, n_all, n_entries, x, radius, mat, start, list, nm, kn, &
+                           wall_tri, mesh%n_tri, mesh%vert, mesh%mat, fixed%scale(1), &
+                           fixed%scale2, top, terms, hi, lo)
+        call fixed_sum_add_words(fixed, [hi], [lo], 1)
+        call fixed_sum_total(fixed, comm, sums)
+        energy = sums(1, 1)
+    end function elastic_energy
+
+    !> The terms of elastic_energy: their largest, their count, and the sums of their two
+    !> fixed-point words at (scale, scale2) (fixed_split). Reductions, on the device.
+    subroutine elastic_terms(n_own, n_all, n_entries, x, radius, mat, start, list, nm, kn, &
+                             wall_tri, n_tri, vert, tmat, scale, scale2, top, terms, hi, lo)
+        integer(ip), intent(in) :: n_own, n_all, n_entries, nm, n_tri
+        real(wp), intent(in) :: x(3, n_all), radius(n_all)   !! [m]
+        integer(ip), intent(in) :: mat(n_all), start(n_own + 1), list(n_entries)
+        real(wp), intent(in) :: kn(nm, nm)                   !! [Pa]
+        integer(ip), intent(in) :: wall_tri(max_wall_contacts, n_own)
+        real(wp), intent(in) :: vert(3, 3, n_tri)            !! [m]
+        integer(ip), intent(in) :: tmat(n_tri)
+        real(wp), intent(in) :: scale, scale2
+        real(wp), intent(out) :: top                         !! [J]
+        integer(i8), intent(out) :: terms, hi, lo
+        integer(ip) :: i, k, j, tri, feature
+        integer(i8) :: kw, rw
+        real(wp) :: d, e, q(3)
+        top = 0.0_wp
+        terms = 0
+        hi = 0
+        lo = 0
+        !$acc parallel loop gang vector default(present) private(j, tri, feature, kw, rw, d, e, q) &
+        !$acc reduction(max:top) reduction(+:terms, hi, lo)
+        do i = 1, n_own
+            do k = start(i), start(i + 1) - 1
+                j = list(k)
+                d = radius(i) + radius(j) - sqrt((x(1, j) - x(1, i))**2 + &
+                    (x(2, j) - x(2, i))**2 + (x(3, j) - x(3, i))**2)
+                if (.not. d > 0.0_wp) cycle
+                e = 0.5_wp * hertz_energy(kn(mat(i), mat(j)), &
+                                          radius(i) * radius(j) / (radius(i) + radius(j)), d)
+                call fixed_split(e, scale, scale2, kw, rw)
+                top = max(top, e)
+                terms = terms + 1
+                hi = hi + kw
+                lo = lo + rw
+            end do
+            do k = 1, max_wall_contacts
+                tri = wall_tri(k, i)
+                if (tri == 0) exit
+                call closest_point_triangle(x(:, i), vert(:, 1, tri), vert(:, 2, tri), &
+                                            vert(:, 3, tri), q, feature)
+                d = radius(i) - sqrt((q(1) - x(1, i))**2 + (q(2) - x(2, i))**2 + &
+                                     (q(3) - x(3, i))**2)
+                if (.not. d > 0.0_wp) cycle
+                e = hertz_energy(kn(mat(i), tmat(tri)), radius(i), d)
+                call fixed_split(e, scale, scale2, kw, rw)
+                top = max(top, e)
+                terms = terms + 1
+                hi = hi + kw
+                lo = lo + rw
+            end do
+        end do
+    end subroutine elastic_terms
+
+    !> The energy of a Hertz spring at overlap d, the work of F = kn sqrt(R*) d^(3/2):
+    !> (2/5) kn sqrt(R*) d^(5/2) [J].
+    pure real(wp) function hertz_energy(kn, rstar, d) result(e)
+        !$acc routine seq
+        real(wp), intent(in) :: kn, rstar, d   !! [Pa], [m], [m]
+        e = 0.4_wp * kn * sqrt(rstar) * d**2 * sqrt(d)
+    end function hertz_energy
 
     !> Of the pairs in the owned particles' list entries that overlap by more than half the
     !> smaller radius (deeper than any contact of a sound state: bad input), the smallest
@@ -80,6 +178,32 @@ contains
         end do
         if (id == huge(1_i8)) id = 0
     end function deep_overlap_id
+
+    !> The smallest id of the owned particles that overlap a wall by more than half their
+    !> radius (a candidate triangle nearer to the centre than that: bad input, as for pairs;
+    !> a centre on the surface has no normal); 0 if there is none. A reduction, on the device.
+    integer(i8) function deep_wall_id(n_own, n_cand, n_tri, gid, x, radius, wstart, wlist, &
+                                      vert) result(id)
+        integer(ip), intent(in) :: n_own, n_cand, n_tri
+        integer(i8), intent(in) :: gid(n_own)
+        real(wp), intent(in) :: x(3, n_own), radius(n_own), vert(3, 3, n_tri)   !! [m]
+        integer(ip), intent(in) :: wstart(n_own + 1), wlist(n_cand)
+        integer(ip) :: i, k, tri, feature
+        real(wp) :: q(3)
+        id = huge(1_i8)
+        !$acc parallel loop gang vector default(present) private(tri, feature, q) &
+        !$acc reduction(min:id)
+        do i = 1, n_own
+            do k = wstart(i), wstart(i + 1) - 1
+                tri = wlist(k)
+                call closest_point_triangle(x(:, i), vert(:, 1, tri), vert(:, 2, tri), &
+                                            vert(:, 3, tri), q, feature)
+                if ((q(1) - x(1, i))**2 + (q(2) - x(2, i))**2 + (q(3) - x(3, i))**2 &
+                    < (0.5_wp * radius(i))**2) id = min(id, gid(i))
+            end do
+        end do
+        if (id == huge(1_i8)) id = 0
+    end function deep_wall_id
 
     !> Number of overlapping particle pairs among the owned particles' list entries, counted
     !> from both sides: summed over the ranks, twice the number of contacts. A reduction, on

@@ -2,7 +2,8 @@
 program dem_main
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use dem, only: wp, dem_version_string, error_t, case_t, time_scales_t, case_time_scales, &
-                   case_release_particles, read_case, solver_t, solver_init, solver_prepare, &
+                   case_release_particles, case_energy_bound, read_case, solver_t, solver_init, &
+                   solver_prepare, &
                    solver_restore, &
                    solver_run, stop_wall_time, stop_signal, frame_t, checkpoint_read, &
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
@@ -128,7 +129,10 @@ contains
         type(time_scales_t) :: ts
         real(wp) :: mem
         call case_time_scales(c, ts)
-        mem = (850.0_wp * c%n_particles + 80.0_wp * c%mesh%n_tri) / 2.0_wp**20
+        ! peak resident sizes measured (doc/running.md): 28 MiB for a sphere on a plane, plus
+        ! about 2000 bytes per particle (beds of 25 000 and 100 000) and 540 per triangle
+        ! (planes of 0.5 and 2 million)
+        mem = 28.0_wp + (2000.0_wp * c%n_particles + 540.0_wp * c%mesh%n_tri) / 2.0_wp**20
         write(output_unit, '(a)') 'case ' // c%source
         write(output_unit, '(a,i0,a,i0,a)') '  particles            ', c%n_particles, &
             ' (wall triangles ', c%mesh%n_tri, ')'
@@ -157,7 +161,11 @@ contains
             'above it; doc/theory.md, section 6)'
         write(output_unit, '(a,es12.5,a)') '  instability guard    ', c%max_speed, &
             ' m/s (&run max_speed)'
-        write(output_unit, '(a,f10.3,a)') '  estimated memory     ', mem, ' MiB'
+        if (case_energy_bound(c, c%summary%mass) < huge(1.0_wp)) &
+            write(output_unit, '(a,es12.5,a)') '  energy guard         ', &
+                case_energy_bound(c, c%summary%mass), ' J (kinetic and elastic, at the start; ' &
+                // '&run max_energy)'
+        write(output_unit, '(a,f10.3,a)') '  estimated memory     ', mem, ' MiB (on one rank)'
         write(output_unit, '(a)') '  output directory     ' // c%output_dir
         if (c%dt > ts%bound) then
             write(output_unit, '(a)') '  warning: dt exceeds the stability bound ' // &

@@ -7,7 +7,7 @@ module dem_mesh
     implicit none
     private
     public :: mesh_t, mesh_append, mesh_add_plane, mesh_set_motion, mesh_move, &
-              closest_point_triangle, feature_face, feature_edge, feature_vertex
+              mesh_speed_bound, closest_point_triangle, feature_face, feature_edge, feature_vertex
 
     integer(ip), parameter :: feature_face = 0    !< closest point inside the triangle
     integer(ip), parameter :: feature_edge = 1    !< closest point on an edge
@@ -175,6 +175,29 @@ contains
         end do
     end subroutine place_triangles
 
+    !> The fastest surface speed of any wall's motion [m/s]: its translation speed plus its
+    !> angular speed times the distance of its farthest corner from its axis (which the
+    !> translation carries and the rotation keeps).
+    pure real(wp) function mesh_speed_bound(m) result(speed)
+        type(mesh_t), intent(in) :: m
+        real(wp) :: r(3), reach
+        integer(ip) :: w, i, k
+        speed = 0.0_wp
+        do w = 1, m%n_wall
+            reach = 0.0_wp
+            if (m%omega(w) /= 0.0_wp) then
+                do i = m%first(w), m%last(w)
+                    do k = 1, 3
+                        r = m%ref(:, k, i) - m%pivot(:, w)
+                        r = r - dot_product(r, m%axis(:, w)) * m%axis(:, w)
+                        reach = max(reach, norm2(r))
+                    end do
+                end do
+            end if
+            speed = max(speed, norm2(m%lin_v(:, w)) + abs(m%omega(w)) * reach)
+        end do
+    end function mesh_speed_bound
+
     !> Append a flat square wall of side 2 half_width, centred on `point`, facing `normal`,
     !> cut into divisions x divisions squares of two triangles each.
     subroutine mesh_add_plane(m, point, normal, half_width, divisions, mat)
@@ -184,8 +207,8 @@ contains
         real(wp), intent(in) :: half_width   !! half the side of the square [m]
         integer(ip), intent(in) :: divisions !! squares along each side
         integer(ip), intent(in) :: mat       !! material index
-        real(wp) :: n(3), a(3), b(3), h, corner(3, 0:divisions, 0:divisions)
-        real(wp), allocatable :: vert(:, :, :)
+        real(wp) :: n(3), a(3), b(3), h
+        real(wp), allocatable :: vert(:, :, :), corner(:, :, :)   ! (not on the stack)
         integer(ip) :: i, j, k
 
         n = normal / norm2(normal)
@@ -198,6 +221,7 @@ contains
         a = a / norm2(a)
         b = cross(n, a)
         h = 2.0_wp * half_width / divisions
+        allocate(corner(3, 0:divisions, 0:divisions))
         do j = 0, divisions
             do i = 0, divisions
                 corner(:, i, j) = point + (i * h - half_width) * a + (j * h - half_width) * b

@@ -9,7 +9,7 @@ module dem_solver
     use dem_comm, only: comm_t, comm_any, comm_sum, comm_max, comm_gather, comm_node_rank, &
                         comm_counts, comm_exchange
     use dem_case, only: case_t, time_scales_t, case_time_scales, case_particle_materials, &
-                        case_speed_bound
+                        case_speed_bound, case_energy_bound
     use dem_particles, only: particles_t, particles_init, particles_add, particles_permute, &
                              particles_reserve, order_by_id, particles_find, particles_park, &
                              particles_data
@@ -30,8 +30,9 @@ module dem_solver
     use dem_mesh, only: mesh_t, mesh_move
     use dem_outlets, only: outlets_mark
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
-    use dem_diagnostics, only: energies, count_pp_sides, first_nonfinite, count_unstable, &
-                               contact_trace, deep_overlap_id, momentum_sums
+    use dem_diagnostics, only: energies, elastic_energy, count_pp_sides, first_nonfinite, &
+                               count_unstable, contact_trace, deep_overlap_id, deep_wall_id, &
+                               momentum_sums
     use dem_output, only: output_t, output_open, output_series, output_contact, &
                           output_final, output_close, output_sizes, output_probes, &
                           output_histogram
@@ -334,8 +335,9 @@ contains
 
     !> Decompose space (several ranks), put the state on the device and build the lists. A
     !> run that does not continue a checkpoint checks its particles first: ids unique, then,
-    !> from the lists, no two overlapping by more than half the smaller radius (an input
-    !> error naming the smallest ids). Collective: on failure, err is set on every rank.
+    !> from the lists, none overlapping a wall by more than half its radius and no two
+    !> overlapping by more than half the smaller radius (an input error naming the smallest
+    !> ids). Collective: on failure, err is set on every rank.
     subroutine solver_prepare(s, c, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -353,6 +355,13 @@ contains
         call rebuild(s, outlets=.false.)
         if (s%restarted) return
         associate (p => s%p, n => s%p%n_own)
+            if (s%mesh%n_tri > 0) then
+                ids(1) = smallest(deep_wall_id(n, size(s%nb%wlist, kind=ip), s%mesh%n_tri, &
+                                  p%gid, p%x, p%radius, s%nb%wstart, s%nb%wlist, s%mesh%vert))
+                if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particle ' &
+                    // itoa(ids(1)) // ' overlaps a wall by more than half its radius')
+                if (failed_anywhere(s, err)) return
+            end if
             ids(1) = smallest(deep_overlap_id(n, n + p%n_ghost, size(s%nb%list, kind=ip), &
                               p%gid, p%x, p%radius, s%nb%start, s%nb%list, 0_i8))
             if (ids(1) == 0) return
@@ -500,6 +509,10 @@ contains
                 if (failed_anywhere(s, err)) exit
             end if
             if (written) then
+                if (.not. (due(r%every) .or. s%step == r%n_end)) then   ! (a row checked it)
+                    call energy_guard(s, c, err)
+                    if (failed_anywhere(s, err)) exit
+                end if
                 call write_checkpoint(s, c, r%out, err)
                 if (failed_anywhere(s, err)) exit
             end if
@@ -888,20 +901,17 @@ contains
         type(case_t), intent(in) :: c
         type(output_t), intent(inout) :: out
         type(error_t), intent(inout) :: err
-        real(wp) :: ke_t, ke_r, pe, vmax
+        real(wp) :: ke_t, ke_r, pe, vmax, mass
         integer(i8) :: counts(3), bytes(3), n(1)
         logical :: settled
         call settle_outlets(s)
-        call particle_data(s, acc_to_host)
-        if (comm_any(s%comm, first_nonfinite(s%p%n_own, s%p%x, s%p%v, s%p%w) > 0)) then
-            call unstable(s, c, err)
-            return
-        end if
+        call energy_guard(s, c, err)
+        if (err%failed()) return
         counts = contact_counts(s)
         call capture(s, c, out, s%good, local=.true.)
         associate (p => s%p, k => s%p%n_own)
             call energies(s%comm, k, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, ke_t, &
-                          ke_r, pe, vmax)
+                          ke_r, pe, vmax, mass)
             n = k
             call comm_sum(s%comm, n)
             settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
@@ -918,6 +928,32 @@ contains
         end if
         s%settled = settled
     end subroutine write_series
+
+    !> The state's checks at a row of series.csv or a checkpoint, before it becomes the last
+    !> good state: finite, and its kinetic and elastic energy within case_energy_bound (the
+    !> energy guard, doc/theory.md, section 6); else the run stops (unstable). Collective;
+    !> brings the particles to the host.
+    subroutine energy_guard(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        real(wp) :: ke_t, ke_r, pe, vmax, mass, energy
+        call particle_data(s, acc_to_host)
+        if (comm_any(s%comm, first_nonfinite(s%p%n_own, s%p%x, s%p%v, s%p%w) > 0)) then
+            call unstable(s, c, err)
+            return
+        end if
+        if (s%comm%size > 1) call domain_update(s%dom, s%comm, s%p)   ! the ghosts' positions
+        associate (p => s%p, k => s%p%n_own)
+            call energies(s%comm, k, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, ke_t, &
+                          ke_r, pe, vmax, mass)
+            energy = ke_t + ke_r + elastic_energy(s%comm, k, k + p%n_ghost, &
+                size(s%nb%list, kind=ip), p%x, p%radius, p%mat, s%nb%start, s%nb%list, &
+                c%mats%n, s%pc%kn, s%cs%wall_tri, s%mesh)
+        end associate
+        if (energy > case_energy_bound(c, mass)) &
+            call unstable(s, c, err, [energy, case_energy_bound(c, mass)])
+    end subroutine energy_guard
 
     !> Particle contacts (pairs), wall contacts and particles, over the ranks (the ghosts
     !> are brought to the owned particles' step first): the pairs counted on the device, the
@@ -998,18 +1034,20 @@ contains
 
     !> The instability guard has tripped: write the last good state as a checkpoint (unless a
     !> checkpoint, which passed the guard too, is newer), and stop the run naming the
-    !> offending particle of lowest id, the time and the likely cause.
-    subroutine unstable(s, c, err)
+    !> offending particle of lowest id, the time and the likely cause. With `energy` (the
+    !> energy and its bound [J]), the energy guard has: the fastest particle is named.
+    subroutine unstable(s, c, err, energy)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
+        real(wp), intent(in), optional :: energy(2)
         type(frame_t) :: good
         type(error_t) :: write_err
         character(len=:), allocatable :: what, saved
         integer(i8), allocatable :: ids(:)
         real(wp), allocatable :: speeds(:)
         integer(ip) :: i, bad
-        real(wp) :: speed
+        real(wp) :: speed, v_i
         call particle_data(s, acc_to_host)
         bad = 0
         speed = ieee_value(speed, ieee_quiet_nan)     ! a non-finite state
@@ -1019,14 +1057,19 @@ contains
                     if (bad == 0 .or. p%gid(i) < p%gid(max(bad, 1))) bad = i
                 end if
             end do
-            if (bad == 0) then
+            if (bad == 0) then             ! the fastest, or the lowest id above max_speed
                 do i = 1, p%n_own
-                    if (max(norm2(p%v(:, i)), norm2(p%w(:, i)) * p%radius(i)) < c%max_speed) cycle
+                    v_i = max(norm2(p%v(:, i)), norm2(p%w(:, i)) * p%radius(i))
+                    if (.not. present(energy) .and. v_i < c%max_speed) cycle
                     if (bad > 0) then
-                        if (p%gid(i) > p%gid(bad)) cycle
+                        if (present(energy) .and. v_i /= speed) then
+                            if (v_i < speed) cycle
+                        else if (p%gid(i) > p%gid(bad)) then
+                            cycle
+                        end if
                     end if
                     bad = i
-                    speed = max(norm2(p%v(:, i)), norm2(p%w(:, i)) * p%radius(i))
+                    speed = v_i
                 end do
             end if
             call comm_gather(s%comm, [merge(p%gid(max(bad, 1)), 0_i8, bad > 0)], ids)
@@ -1034,10 +1077,17 @@ contains
         end associate
         what = ''
         if (s%comm%rank == 0) then              ! the offender of lowest id, any rank
+            if (present(energy)) then            ! (or the fastest)
+                where (ids > 0 .and. speeds < maxval(speeds, mask=ids > 0)) ids = 0
+            end if
             i = minloc(ids, mask=ids > 0, dim=1)
             what = 'unstable: particle ' // itoa(ids(i))
             if (ieee_is_nan(speeds(i))) then
                 what = what // ' has a non-finite state'
+            else if (present(energy)) then
+                what = what // ' moves at ' // real_text(speeds(i)) // ' m/s, the fastest, ' // &
+                       'as the kinetic and elastic energy, ' // real_text(energy(1)) // &
+                       ' J, exceeds the bound ' // real_text(energy(2)) // ' J (&run max_energy)'
             else
                 what = what // ' moves at ' // real_text(speeds(i)) // ' m/s, above the bound ' &
                        // real_text(c%max_speed) // ' m/s (&run max_speed)'

@@ -157,7 +157,16 @@ refused(["--restart", snapshot, case_a], [out_a], READ_ERRORS,
         [snapshot, "not a dem checkpoint"], "snapshot given as a checkpoint")
 nowhere = os.path.join(bad_dir, "no_such_checkpoint.h5")
 refused(["--restart", nowhere, case_a], [out_a], READ_ERRORS,
-        [nowhere, "no such file"], "checkpoint that does not exist")
+        [nowhere, "does not exist"], "checkpoint that does not exist")
+# not files to read: one line, no Open MPI read errors before it (issue 30, item 9), and no
+# read that never ends (/dev/zero, item 8)
+empty = os.path.join(bad_dir, "empty.h5")
+open(empty, "w").close()
+for path, why, what in ((bad_dir, "is a directory", "a directory"),
+                        (empty, "is empty or not a regular file", "an empty file"),
+                        ("/dev/zero", "is empty or not a regular file", "/dev/zero")):
+    refused(["--restart", path, case_a], [out_a], READ_ERRORS, [path, why],
+            f"{what} given as a checkpoint")
 
 for name, (_, differs) in others.items():
     out = os.path.join(work, "out_" + name)

@@ -2,6 +2,7 @@
 code 2, and leaves no output behind. Also the command line: --version, --help, --check.
 usage: test_input_errors.py DEM WORKDIR"""
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -164,6 +165,53 @@ for name, nz in (("normal_unit", "1"), ("normal_tiny", "1e-300")):
     finals.append(open(final).read() if os.path.exists(final) else None)
 check(finals[0] is not None and finals[0] == finals[1],
       "normal = 0, 0, 1e-300: the run differs from normal = 0, 0, 1")
+
+# a sphere centred on a wall (no normal: NaN at the first step before, issue 30, item 7), or
+# nearer to it than half its radius, is bad input, as two such spheres are; at 0.51 of the
+# radius it is a contact, and --check accepts it
+for name, z, ok in (("on_plane", "0", False), ("deep_in_plane", "4.9e-4", False),
+                    ("in_plane", "5.1e-4", True)):
+    text = PLANE.format(nz="1").replace("position = 0, 0, 0.0011", f"position = 0, 0, {z}")
+    if ok:
+        path = os.path.join(work, name + ".nml")
+        with open(path, "w") as f:
+            f.write(text)
+        r, _ = run(["--check", path], name)
+        check(r.returncode == 0, f"{name}: --check exit {r.returncode}: {r.stderr.strip()}")
+    else:
+        bad(name, text, None, None, "particle 1 overlaps a wall by more than half its radius")
+
+# files that are not regular files are refused at once (issue 30, item 8: /dev/zero as a
+# particle file read for ever): the case file itself, a particle file, an STL file
+for name, args in (("case_dev_zero", ["--check", "/dev/zero"]),
+                   ("case_directory", ["--check", work])):
+    r, _ = run(args, name)
+    check(r.returncode == 2 and f"{args[1]}: the namelist file " in r.stderr,
+          f"{name}: exit {r.returncode}: {r.stderr.strip()}")
+stl_line = "&wall_mesh material = 'steel', file = '/dev/zero' /\n"
+for name, text, what in (("particles_dev_zero", GOOD + "&particle_file file = '/dev/zero' /\n",
+                          "/dev/zero: the particle file is empty or not a regular file"),
+                         ("stl_dev_zero", GOOD + stl_line,
+                          "/dev/zero: the STL file is empty or not a regular file")):
+    bad(name, text, None, None, what)
+
+# the memory estimate of --check is within a factor of 2 of the peak resident size on a
+# large mesh (issue 30, item 8: a plane of 18 million triangles reached 5.9 GB with 1.4 GB
+# estimated, and a plane's corners on the stack crashed it): a plane of a million triangles
+big = os.path.join(work, "big_plane.nml")
+with open(big, "w") as f:
+    f.write(PLANE.format(nz="1").replace("half_width = 0.05", "half_width = 0.05, "
+                                         "divisions = 700").replace("t_end = 0.002",
+                                                                     "t_end = 2e-5"))
+r, _ = run([big], "big_plane")
+estimate = re.search(r"estimated memory +(\S+) MiB", r.stdout)
+peak = re.search(r"memory: peak resident +(\S+) MiB", r.stdout)
+check(r.returncode == 0 and estimate and peak, f"big plane: exit {r.returncode} "
+      f"{r.stderr.strip()}, or no estimate or peak printed")
+if estimate and peak:
+    ratio = float(peak.group(1)) / float(estimate.group(1))
+    print(f"big plane: estimated {estimate.group(1)} MiB, peak resident {peak.group(1)} MiB")
+    check(0.5 <= ratio <= 2.0, f"big plane: peak / estimate = {ratio:.3g}, outside 0.5..2")
 
 # command line
 r, _ = run(["--version"], "version")

@@ -33,6 +33,18 @@
    0.73 of the bound
    of the two-body contacts alone (4.11 us), the bound refuses dt, and with allow_unstable
    the instability guard stops the run (exit 3): the check above can fail.
+5. The energy guard: the head-on glass spheres of part 2 at +-25 m/s, with restitution 1,
+   run with allow_unstable at 2 and 5 times the stability bound that `dem --check` prints.
+   Their speeds stay below the speed guard's bound (250 m/s: 10 v), but the overlap
+   overshoots and the elastic energy grows past the energy guard's bound, M v^2
+   (M the mass of both, v = 25 m/s, the expected speed: twice the kinetic energy at the
+   start): the run stops with exit 3 and a message naming the energy guard, and names a
+   checkpoint. Its state, read here, has a kinetic + elastic energy (the Hertz spring
+   energy (2/5) (4/3) E* sqrt(R*) d^(5/2) from its overlap, computed here) within the
+   bound; run on from it at a twentieth of the bound, the spheres rebound with that
+   energy (e = 1: within 1e-3), so the state the guard names is one a smaller step can
+   continue. Before the energy guard, the named state was mid-contact at an overshot
+   overlap and such a continuation rebounded several times faster than it came in.
 usage: test_stability.py DEM WORKDIR"""
 import math
 import os
@@ -40,6 +52,7 @@ import re
 import subprocess
 import sys
 
+import h5py
 import numpy as np
 
 from regression_util import HERE, check, check_close, finish, run_dem
@@ -202,4 +215,59 @@ rc, out, err = run_dem(dem, ratio_case("ratio_unstable", 3e-6, ", allow_unstable
                        work, expect_rc=3)
 check(rc == 3 and "unstable" in out + err,
       "size ratio 20 at 3 us with allow_unstable: the guard did not stop it")
+
+# 5. the energy guard
+HEAD_ON = """&material name = 'glass', density = 2800.0, youngs_modulus = 48.0e9, poisson_ratio = 0.2 /
+&pair materials = 'glass', 'glass', restitution = 1.0, friction = 0.35 /
+"""
+V5, R5 = 25.0, 0.01
+M5 = 2.0 * co.sphere_mass(2800.0, R5)
+ESTAR5 = 48.0e9 / (2.0 * (1.0 - 0.2**2))
+
+
+def head_on_case(name, dt, t_end, particles, extra=""):
+    path = os.path.join(work, name + ".nml")
+    with open(path, "w") as f:
+        f.write(f"&run dt = {dt!r}, t_end = {t_end!r}, gravity = 0, 0, 0, expected_speed = "
+                f"{V5}{extra} /\n&output dir = 'output/{name}', interval = 1e-5 /\n" + HEAD_ON
+                + "".join(f"&particle id = {k + 1}, material = 'glass', radius = {R5}, "
+                          f"position = {x!r}, 0, 0, velocity = {v!r}, 0, 0 /\n"
+                          for k, (x, v) in enumerate(particles)))
+    return path
+
+
+start5 = [(-0.0105, V5), (0.0105, -V5)]
+r = subprocess.run([dem, "--check", head_on_case("head_on_check", 1e-7, 2e-4, start5)],
+                   capture_output=True, text=True)
+bound5 = float(re.search(r"stability bound +(\S+) s", r.stdout).group(1))
+guard5 = float(re.search(r"energy guard +(\S+) J", r.stdout).group(1))
+check_close(guard5, M5 * V5**2, 1e-4, "energy guard: the bound M v^2 that --check prints")
+for k in (2, 5):
+    rc, out, err = run_dem(dem, head_on_case(f"head_on_x{k}", k * bound5, 2e-4, start5,
+                                             ", allow_unstable = .true."), work, expect_rc=3)
+    m = re.search(r"the kinetic and elastic energy, (\S+) J, exceeds the bound (\S+) J "
+                  r"\(&run max_energy\).* is in (\S+)$", err.strip())
+    check(m is not None, f"energy guard at {k} x the bound: not stopped by it: {err!r}")
+    if m is None:
+        continue
+    check_close(float(m.group(2)), guard5, 1e-4, f"energy guard at {k} x the bound: its bound")
+    with h5py.File(os.path.join(work, m.group(3)), "r") as f:
+        t_good = float(f["time"][()])
+        x = f["particles"]["position"][()][:, 0]
+        v = f["particles"]["velocity"][()][:, 0]
+    d = max(0.0, 2.0 * R5 - (x[1] - x[0]))
+    e_good = 0.5 * (M5 / 2.0) * (v**2).sum() \
+        + 0.4 * (4.0 / 3.0) * ESTAR5 * math.sqrt(R5 / 2.0) * d**2.5
+    print(f"energy guard at {k} x the bound: stopped, the named state at t = {t_good:.4g} s "
+          f"has overlap {d:.3g} m and energy {e_good:.6g} J (bound {guard5:.6g} J)")
+    check(e_good <= guard5, f"energy guard at {k} x the bound: the named state's energy "
+                            f"{e_good:.6g} J is above the bound {guard5:.6g} J")
+    run_dem(dem, head_on_case(f"head_on_x{k}_on", bound5 / 20.0, 2e-4,
+                              list(zip(x.tolist(), v.tolist()))), work)
+    f = co.read_csv(os.path.join(work, "output", f"head_on_x{k}_on", "final.csv"))
+    e_end = 0.5 * (M5 / 2.0) * (f["vx"]**2).sum()
+    check(f["x"][1] - f["x"][0] > 2.0 * R5, f"energy guard at {k} x the bound: the "
+                                             "continued spheres did not separate")
+    check_close(e_end, e_good, 1e-3, f"energy guard at {k} x the bound: the energy after "
+                                     "the continued rebound")
 finish()

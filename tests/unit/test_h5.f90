@@ -88,7 +88,7 @@ program test_h5
                      'truncated file: ' // message(err))
     err = error_t()
     call h5_open(f, 'no_such_file.h5', err, comm)
-    call assert_true(index(message(err), 'no_such_file.h5: no such file') == 1, 'missing file')
+    call assert_true(index(message(err), 'no_such_file.h5: does not exist') == 1, 'missing file')
 
     call comm_free(comm)
     call assert_finish()
