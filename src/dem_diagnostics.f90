@@ -73,40 +73,42 @@ contains
         integer(i8) :: hi, lo, terms
         real(wp) :: top, sums(1, 1)
         ! the largest term and the count first (words at scale 0 are zero), then the words
-        call elastic_terms(n_own, n_all, n_entries, x, radius, mat, start, list, nm, kn, &
-                           wall_tri, mesh%n_tri, mesh%vert, mesh%mat, 0.0_wp, 1.0_wp, top, &
-                           terms, hi, lo)
+        call terms_of_all(0.0_wp, 1.0_wp)
         call fixed_sum_start(fixed, comm, [top], int(terms), 1)
-        call elastic_terms(n_own, n_all, n_entries, x, radius, mat, start, list, nm, kn, &
-                           wall_tri, mesh%n_tri, mesh%vert, mesh%mat, fixed%scale(1), &
-                           fixed%scale2, top, terms, hi, lo)
+        call terms_of_all(fixed%scale(1), fixed%scale2)
         call fixed_sum_add_words(fixed, [hi], [lo], 1)
         call fixed_sum_total(fixed, comm, sums)
         energy = sums(1, 1)
+    contains
+        subroutine terms_of_all(scale, scale2)
+            real(wp), intent(in) :: scale, scale2
+            top = 0.0_wp
+            terms = 0
+            hi = 0
+            lo = 0
+            call pair_elastic_terms(n_own, n_all, n_entries, x, radius, mat, start, list, nm, &
+                                    kn, scale, scale2, top, terms, hi, lo)
+            if (mesh%n_tri > 0) call wall_elastic_terms(n_own, x, radius, mat, nm, kn, &
+                wall_tri, mesh%n_tri, mesh%vert, mesh%mat, scale, scale2, top, terms, hi, lo)
+        end subroutine terms_of_all
     end function elastic_energy
 
-    !> The terms of elastic_energy: their largest, their count, and the sums of their two
-    !> fixed-point words at (scale, scale2) (fixed_split). Reductions, on the device.
-    subroutine elastic_terms(n_own, n_all, n_entries, x, radius, mat, start, list, nm, kn, &
-                             wall_tri, n_tri, vert, tmat, scale, scale2, top, terms, hi, lo)
-        integer(ip), intent(in) :: n_own, n_all, n_entries, nm, n_tri
+    !> The pairs' terms of elastic_energy, added to: their largest, their count, and the
+    !> sums of their two fixed-point words at (scale, scale2) (fixed_split). Reductions, on
+    !> the device.
+    subroutine pair_elastic_terms(n_own, n_all, n_entries, x, radius, mat, start, list, nm, &
+                                  kn, scale, scale2, top, terms, hi, lo)
+        integer(ip), intent(in) :: n_own, n_all, n_entries, nm
         real(wp), intent(in) :: x(3, n_all), radius(n_all)   !! [m]
         integer(ip), intent(in) :: mat(n_all), start(n_own + 1), list(n_entries)
         real(wp), intent(in) :: kn(nm, nm)                   !! [Pa]
-        integer(ip), intent(in) :: wall_tri(max_wall_contacts, n_own)
-        real(wp), intent(in) :: vert(3, 3, n_tri)            !! [m]
-        integer(ip), intent(in) :: tmat(n_tri)
         real(wp), intent(in) :: scale, scale2
-        real(wp), intent(out) :: top                         !! [J]
-        integer(i8), intent(out) :: terms, hi, lo
-        integer(ip) :: i, k, j, tri, feature
+        real(wp), intent(inout) :: top                       !! [J]
+        integer(i8), intent(inout) :: terms, hi, lo
+        integer(ip) :: i, k, j
         integer(i8) :: kw, rw
-        real(wp) :: d, e, q(3)
-        top = 0.0_wp
-        terms = 0
-        hi = 0
-        lo = 0
-        !$acc parallel loop gang vector default(present) private(j, tri, feature, kw, rw, d, e, q) &
+        real(wp) :: d, e
+        !$acc parallel loop gang vector default(present) private(j, kw, rw, d, e) &
         !$acc reduction(max:top) reduction(+:terms, hi, lo)
         do i = 1, n_own
             do k = start(i), start(i + 1) - 1
@@ -122,6 +124,28 @@ contains
                 hi = hi + kw
                 lo = lo + rw
             end do
+        end do
+    end subroutine pair_elastic_terms
+
+    !> The wall contacts' terms of elastic_energy, added to as in pair_elastic_terms.
+    subroutine wall_elastic_terms(n_own, x, radius, mat, nm, kn, wall_tri, n_tri, vert, tmat, &
+                                  scale, scale2, top, terms, hi, lo)
+        integer(ip), intent(in) :: n_own, nm, n_tri
+        real(wp), intent(in) :: x(3, n_own), radius(n_own)   !! [m]
+        integer(ip), intent(in) :: mat(n_own)
+        real(wp), intent(in) :: kn(nm, nm)                   !! [Pa]
+        integer(ip), intent(in) :: wall_tri(max_wall_contacts, n_own)
+        real(wp), intent(in) :: vert(3, 3, n_tri)            !! [m]
+        integer(ip), intent(in) :: tmat(n_tri)
+        real(wp), intent(in) :: scale, scale2
+        real(wp), intent(inout) :: top                       !! [J]
+        integer(i8), intent(inout) :: terms, hi, lo
+        integer(ip) :: i, k, tri, feature
+        integer(i8) :: kw, rw
+        real(wp) :: d, e, q(3)
+        !$acc parallel loop gang vector default(present) private(tri, feature, kw, rw, d, e, q) &
+        !$acc reduction(max:top) reduction(+:terms, hi, lo)
+        do i = 1, n_own
             do k = 1, max_wall_contacts
                 tri = wall_tri(k, i)
                 if (tri == 0) exit
@@ -138,7 +162,7 @@ contains
                 lo = lo + rw
             end do
         end do
-    end subroutine elastic_terms
+    end subroutine wall_elastic_terms
 
     !> The energy of a Hertz spring at overlap d, the work of F = kn sqrt(R*) d^(3/2):
     !> (2/5) kn sqrt(R*) d^(5/2) [J].
