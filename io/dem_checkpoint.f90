@@ -390,7 +390,7 @@ contains
         integer(i8), allocatable :: dims(:)
         allocate(steps(0))
         call h5_open(h, path, err)
-        call h5_dims(h, '/state/checkpoint_step', dims, err)
+        call h5_dims(h, '/state/checkpoint_step', dims, err, 1)
         if (.not. err%failed()) then
             deallocate(steps)
             allocate(steps(dims(1)))
@@ -445,7 +445,7 @@ contains
         type(error_t), intent(inout) :: err
         type(h5_file_t) :: h
         integer(i8), allocatable :: dims(:)
-        integer(i8) :: n_case, first, n
+        integer(i8) :: n_case, first, n, prev(1)
         integer(ip) :: settled, nm
         character(len=:), allocatable :: format
         character(len=32), allocatable :: names(:)
@@ -464,7 +464,7 @@ contains
         end if
 
         ! the case it belongs to
-        call h5_dims(h, '/case/material_properties', dims, err)
+        call h5_dims(h, '/case/material_properties', dims, err, 2)
         if (.not. err%failed()) then
             nm = int(dims(2), ip)
             allocate(names(nm), props(4, nm))
@@ -485,7 +485,7 @@ contains
         call h5_read(h, '/case/particles', n_case, err)
         if (.not. err%failed() .and. n_case /= c%n_particles) call differs('particle count: ' &
             // itoa(n_case) // ' there, ' // itoa(int(c%n_particles, i8)) // ' here')
-        call h5_dims(h, '/case/wall_reference', dims, err)
+        call h5_dims(h, '/case/wall_reference', dims, err, 2)
         if (.not. err%failed()) then
             if (dims(2) /= 3 * c%mesh%n_tri) then
                 call differs('walls: ' // itoa(dims(2) / 3) // ' triangles there, ' // &
@@ -510,7 +510,7 @@ contains
                 if (any(ref /= corners(pose, .false.))) call differs('wall motion')
             end if
         end if
-        call h5_dims(h, '/particles/id', dims, err)
+        call h5_dims(h, '/particles/id', dims, err, 1)
         if (err%failed()) then
             call h5_close(h, err)
             return
@@ -537,7 +537,7 @@ contains
         call h5_read(h, '/particles/torque', fr%t, err, first)
         call h5_read(h, '/state/wall_contact_triangle', fr%wall_tri, err, first)
         call h5_read(h, '/state/wall_contact_history', fr%wall_xi, err, first)
-        call h5_dims(h, '/state/pair', dims, err)
+        call h5_dims(h, '/state/pair', dims, err, 2)
         if (.not. err%failed()) then
             call share(dims(2), first, n)           ! this rank's part of the pairs
             allocate(fr%pair(2, n), fr%pair_xi(n_pair_history, n))
@@ -557,21 +557,46 @@ contains
         call read_i8_list('/state/snapshot_step', fr%snap_step)
         call read_i8_list('/state/snapshot_particles', fr%snap_n)
         call read_i8_list('/state/checkpoint_step', fr%ckpt_step)
-        call h5_dims(h, '/state/snapshot_time', dims, err)
+        call h5_dims(h, '/state/snapshot_time', dims, err, 1)
         if (.not. err%failed()) then
             allocate(fr%snap_time(dims(1)))
             call h5_read(h, '/state/snapshot_time', fr%snap_time, err)
         end if
+        prev = ids_before(fr%gid, fr%n)
         if (.not. err%failed()) then
             if (comm_any(comm, any(fr%mat < 1 .or. fr%mat > c%mats%n) .or. &
                          any(fr%radius <= 0.0_wp) .or. &
-                         any(fr%wall_tri < 0 .or. fr%wall_tri > c%mesh%n_tri))) &
+                         any(fr%wall_tri < 0 .or. fr%wall_tri > c%mesh%n_tri))) then
                 call set_error(err, dem_err_input, path // ': the particle data are not ' // &
                                'consistent (damaged file?)')
+            else if (comm_any(comm, any(fr%gid <= 0) .or. &
+                              any(fr%gid(2:) <= fr%gid(:fr%n - 1)) .or. &
+                              any(fr%gid(1:min(fr%n, 1)) <= prev(1)))) then
+                call set_error(err, dem_err_input, path // ': the particle ids are not ' // &
+                               'positive and increasing, each given once (damaged file?)')
+            else if (fr%step < 0 .or. fr%step0 < 0 .or. fr%step0 > fr%step .or. &
+                     .not. (fr%dt > 0.0_wp .and. fr%dt < huge(1.0_wp)) .or. &
+                     .not. (fr%time >= 0.0_wp .and. fr%time < huge(1.0_wp)) .or. &
+                     fr%removed < 0) then
+                call set_error(err, dem_err_input, path // ': the run state (step, time, ' // &
+                               'dt) is not consistent (damaged file?)')
+            end if
         end if
         call h5_close(h, err)
         if (.not. err%failed()) call pairs_to_particles(fr, comm)
     contains
+        !> The last id of the ranks before this one (0 if they hold none): the blocks' ids
+        !> must go on increasing from it; collective.
+        function ids_before(gid, n) result(last)
+            integer(i8), intent(in) :: gid(:)
+            integer(ip), intent(in) :: n
+            integer(i8) :: last(1), lasts(comm%size)
+            lasts = -huge(1_i8)
+            if (n > 0) lasts(comm%rank + 1) = gid(n)
+            call comm_max(comm, lasts)
+            last = max(0_i8, maxval(lasts(1:comm%rank)))
+        end function ids_before
+
         !> Rank r's part of m rows: rows first + 1 ... first + count, first = r m / P (as
         !> the blocks of frame_spread).
         subroutine share(m, first, count)
@@ -592,7 +617,7 @@ contains
             character(len=*), intent(in) :: name
             integer(i8), allocatable, intent(out) :: a(:)
             integer(i8), allocatable :: d(:)
-            call h5_dims(h, name, d, err)
+            call h5_dims(h, name, d, err, 1)
             if (err%failed()) then
                 allocate(a(0))
                 return
@@ -627,12 +652,12 @@ contains
         n_rows = 0
         call h5_open(h, path, err, comm)
         if (err%failed()) return
-        call h5_dims(h, '/materials/name', dims, err)
+        call h5_dims(h, '/materials/name', dims, err, 1)
         if (.not. err%failed()) then
             allocate(file_names(dims(1)), to_case(dims(1)))
             call h5_read(h, '/materials/name', file_names, err)
         end if
-        call h5_dims(h, '/particles/id', dims, err)
+        call h5_dims(h, '/particles/id', dims, err, 1)
         if (err%failed()) then
             call h5_close(h, err)
             return

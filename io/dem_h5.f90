@@ -71,32 +71,33 @@ contains
         if (f%id < 0) call set_error(err, dem_err_io, path // ': cannot create the file')
     end subroutine h5_create
 
-    !> Open a file for reading: collective on `comm`, or by this rank alone without it.
+    !> Open a file for reading: by every rank of `comm` together (each reads the file on its
+    !> own, not through MPI-IO, whose errors on a damaged file would reach the terminal:
+    !> the ranks agree on the outcome), or by this rank alone without it.
     subroutine h5_open(f, path, err, comm)
         type(h5_file_t), intent(out) :: f
         character(len=*), intent(in) :: path
         type(error_t), intent(inout) :: err
         type(comm_t), intent(in), optional :: comm
-        integer(hid_t) :: fapl
         integer :: e
+        logical :: failed
         character(len=:), allocatable :: why
-        why = input_file_problem(path)         ! (before MPI-IO tries it and prints errors)
+        why = input_file_problem(path)         ! (before the library tries it)
         if (why /= '') then
             call set_error(err, dem_err_io, path // ': ' // why)
             return
         end if
+        f%path = path
+        call h5open_f(e)
+        if (e == 0) call h5eset_auto_f(0, e)
+        if (e == 0) call h5fopen_f(path, H5F_ACC_RDONLY_F, f%id, e)
+        failed = e /= 0 .or. f%id < 0
         if (present(comm)) then
-            call start(f, path, comm, fapl, err)
-            if (err%failed()) return
-            call h5fopen_f(path, H5F_ACC_RDONLY_F, f%id, e, access_prp=fapl)
-            call h5pclose_f(fapl, e)
-        else
-            f%path = path
-            call h5open_f(e)
-            if (e == 0) call h5eset_auto_f(0, e)
-            if (e == 0) call h5fopen_f(path, H5F_ACC_RDONLY_F, f%id, e)
+            f%comm = comm
+            failed = comm_any(comm, failed)
         end if
-        if (e /= 0 .or. f%id < 0) then
+        if (failed) then
+            if (f%id >= 0 .and. e == 0) call h5fclose_f(f%id, e)
             f%id = -1
             call set_error(err, dem_err_io, path // ': not a readable HDF5 file (truncated ' // &
                            'or damaged?)')
@@ -165,27 +166,41 @@ contains
     end function h5_exists
 
     !> The shape of a dataset, in Fortran order (empty for a scalar).
-    subroutine h5_dims(f, name, dims, err)
+    subroutine h5_dims(f, name, dims, err, rank)
         type(h5_file_t), intent(in) :: f
         character(len=*), intent(in) :: name
         integer(i8), allocatable, intent(out) :: dims(:)
         type(error_t), intent(inout) :: err
+        integer, intent(in), optional :: rank   !! the rank it must have (else: damaged)
         integer(hid_t) :: dset, space
         integer(hsize_t) :: d(7), dmax(7)
-        integer :: e, r
+        integer :: e(4), r
         allocate(dims(0))
         if (err%failed()) return
         if (.not. h5_exists(f, name)) then
             call set_error(err, dem_err_io, f%path // ': dataset ' // name // ' is missing')
             return
         end if
-        call h5dopen_f(f%id, name, dset, e)
-        call h5dget_space_f(dset, space, e)
-        call h5sget_simple_extent_ndims_f(space, r, e)
-        call h5sget_simple_extent_dims_f(space, d(1:r), dmax(1:r), e)
+        e = 0
+        r = -1
+        call h5dopen_f(f%id, name, dset, e(1))
+        if (e(1) == 0) call h5dget_space_f(dset, space, e(2))
+        if (all(e == 0)) call h5sget_simple_extent_ndims_f(space, r, e(3))
+        if (all(e == 0) .and. r >= 0 .and. r <= 7) then
+            call h5sget_simple_extent_dims_f(space, d(1:r), dmax(1:r), e(4))
+            if (e(4) == r) e(4) = 0                  ! (it gives the rank on success)
+        end if
+        if (e(2) == 0 .and. e(1) == 0) call h5sclose_f(space, e(2))
+        if (e(1) == 0) call h5dclose_f(dset, e(1))
+        if (any(e /= 0) .or. r < 0 .or. r > 7) then
+            call set_error(err, dem_err_io, f%path // ': dataset ' // name // ' is damaged')
+            return
+        end if
         dims = int(d(1:r), i8)
-        call h5sclose_f(space, e)
-        call h5dclose_f(dset, e)
+        if (present(rank)) then
+            if (r /= rank .or. any(dims < 0)) call set_error(err, dem_err_io, f%path // &
+                ': dataset ' // name // ' is damaged (its shape)')
+        end if
     end subroutine h5_dims
 
     !> The length of the strings of dataset `name`; 0 if it is missing or not text.
@@ -409,7 +424,7 @@ contains
         integer(i8), allocatable :: have(:)
         integer(i8), target :: stored
         integer(i8) :: offset, total, sum, expect(size(dims))
-        integer(hid_t) :: dset, t, attr, fspace, mspace, xfer
+        integer(hid_t) :: dset, t, attr, fspace, mspace
         integer(hsize_t) :: offs(size(dims))
         type(c_ptr) :: to, to_sum
         integer(size_t) :: tsize
@@ -469,11 +484,8 @@ contains
                 call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offs, dims, e2)
             end if
             e = ior(e, e2)
-            call h5pcreate_f(H5P_DATASET_XFER_F, xfer, e2)
-            call h5pset_dxpl_mpio_f(xfer, H5FD_MPIO_COLLECTIVE_F, e2)
-            if (product(have) > 0) call h5dread_f(dset, mem_type, to, e2, mspace, fspace, xfer)
+            if (product(have) > 0) call h5dread_f(dset, mem_type, to, e2, mspace, fspace)
             e = ior(e, e2)
-            call h5pclose_f(xfer, e2)
             call h5sclose_f(mspace, e2)
             call h5sclose_f(fspace, e2)
         else if (product(dims) > 0) then

@@ -61,7 +61,7 @@ contains
         h = 2.0_wp * big
         lo = lo - h
         hi = hi + h
-        dims = max(1, min(512, ceiling((hi - lo) / h)))
+        dims = max(1, ceiling(min(512.0_wp, (hi - lo) / h)))   ! (a huge box: no overflow)
         h = maxval((hi - lo) / dims)
         dims = max(1, ceiling((hi - lo) / h))
         ! the old spheres near the region, then the new ones, in one linked cell list

@@ -943,7 +943,7 @@ contains
         real(wp), intent(inout) :: h
         integer(ip), intent(out) :: n(3)
         do
-            n = max(1, ceiling((hi - lo) / h))
+            n = max(1, ceiling(min((hi - lo) / h, 1.0e9_wp)))   ! (a huge box: no overflow)
             if (real(n(1), wp) * n(2) * n(3) <= max_cells) exit
             h = h * 1.26_wp
         end do

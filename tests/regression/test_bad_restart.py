@@ -14,6 +14,10 @@ damaged known here, independently of the solver:
 - a copy of the checkpoint without the dataset /state/pair_history (made with h5py);
 - a snapshot of the run instead of a checkpoint;
 - a file that does not exist;
+- crafted files whose checksums are valid: a particle id given twice, a negative id, a
+  negative step;
+- a directory, an empty file and /dev/zero given as the checkpoint (refused before HDF5
+  or MPI-IO reads them);
 - --restart with too few arguments (a usage error);
 - a run with a probe, restarted from its first checkpoint with the probe renamed: the
   columns of its probes.csv are not those of the changed case, and neither probes.csv nor
@@ -31,6 +35,7 @@ import subprocess
 import sys
 
 import h5py
+import numpy as np
 
 from regression_util import check, finish, run_dem
 import checkpoint_util as cu
@@ -89,7 +94,38 @@ with h5py.File(missing, "r") as f:
     check("state/pair_history" not in f and "state/pair" in f,
           "the copy without /state/pair_history is not as intended")
 
-# checkpoints of other cases: the same case changed in one respect, restarted from `good`
+# crafted: whole files with valid checksums (recomputed here) whose particle ids repeat or
+# are negative, or whose step is negative (issue 30, item 9)
+def crafted(name, dataset, change):
+    path = os.path.join(bad_dir, name + ".h5")
+    shutil.copy(good, path)
+    with h5py.File(path, "r+") as f:
+        d = f[dataset]
+        a = d[()]
+        a = change(a)
+        d[()] = a
+        d.attrs["checksum"] = np.int64(cu.checksum(cu.dataset_bytes(d)))
+    check(not cu.bad_checksums(path), f"{name}: the crafted file's checksums do not match")
+    return path
+
+
+def twice(a):
+    a = a.copy()
+    a[1] = a[0]
+    return a
+
+
+def negative(a):
+    a = a.copy()
+    a[0] = -5
+    return a
+
+
+crafted_files = [(crafted("duplicate_id", "/particles/id", twice), "particle ids", "repeated id"),
+                 (crafted("negative_id", "/particles/id", negative), "particle ids",
+                  "negative id"),
+                 (crafted("negative_step", "/step", lambda a: np.int64(-3)), "run state",
+                  "negative step")]
 others = {
     "youngs_modulus": (dict(E="2e7"), "material properties"),
     # a material renamed: the materials (names and properties) differ; the message may
@@ -158,6 +194,9 @@ refused(["--restart", snapshot, case_a], [out_a], READ_ERRORS,
 nowhere = os.path.join(bad_dir, "no_such_checkpoint.h5")
 refused(["--restart", nowhere, case_a], [out_a], READ_ERRORS,
         [nowhere, "does not exist"], "checkpoint that does not exist")
+for path, says, what in crafted_files:
+    refused(["--restart", path, case_a], [out_a], READ_ERRORS, [path, says, "not"],
+            f"crafted checkpoint ({what})")
 # not files to read: one line, no Open MPI read errors before it (issue 30, item 9), and no
 # read that never ends (/dev/zero, item 8)
 empty = os.path.join(bad_dir, "empty.h5")

@@ -163,7 +163,7 @@ program test_stl
 
     ! --- errors: opening, empty, no triangles, scale ---
     call expect_error('no/such/file.stl', 1.0_wp, [character(len=40) :: 'no/such/file.stl', &
-                      'cannot open'], 'missing file')
+                      'does not exist'], 'missing file')
     call write_bytes(f_bad, '')
     call expect_error(f_bad, 1.0_wp, [character(len=40) :: f_bad, 'empty'], 'empty file')
     call write_lines(f_bad, [character(len=40) :: 'solid nothing', 'endsolid nothing'])
