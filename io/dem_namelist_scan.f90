@@ -2,7 +2,7 @@
 !> every error can name the file, the line, the group and the key. Comments (`!` to the end
 !> of the line, outside quotes) are removed; each group becomes one line of text.
 module dem_namelist_scan
-    use dem_text, only: read_line
+    use dem_text, only: read_line, without_bom
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_files, only: input_file_problem
     implicit none
@@ -70,6 +70,7 @@ contains
         do
             call read_line(u, line, ios)
             if (ios /= 0) exit
+            if (lineno == 0) line = without_bom(line)
             nf%text = nf%text // line // new_line('a')
             lineno = lineno + 1
             write(num, '(i0)') lineno

@@ -7,7 +7,7 @@
 module dem_particle_file
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
-    use dem_text, only: read_line
+    use dem_text, only: read_line, without_bom
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_files, only: input_file_problem
     use dem_checkpoint, only: snapshot_read_particles
@@ -85,7 +85,7 @@ contains
             close(u)
             return
         end if
-        call split(line, fields)
+        call split(without_bom(line), fields)
         col = 0
         do k = 1, size(fields)
             do j = 1, 6

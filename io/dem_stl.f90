@@ -20,7 +20,7 @@ module dem_stl
     use dem_kinds, only: wp, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_files, only: input_file_problem
-    use dem_text, only: itoa
+    use dem_text, only: itoa, excerpt
     implicit none
     private
     public :: stl_read
@@ -299,7 +299,7 @@ contains
                     return
                 else if (.not. keyword_is(r%buf(ts:te), 'loop')) then
                     call set_error(err, dem_err_input, here() // "unexpected keyword '" // &
-                                   r%buf(ts:te) // "' after 'outer' (expected 'loop')")
+                                   excerpt(r%buf(ts:te)) // "' after 'outer' (expected 'loop')")
                     return
                 end if
                 state = st_loop
@@ -323,11 +323,11 @@ contains
                         call parse_real(r%buf(ts:te), x, stat)
                         if (stat == num_bad) then
                             call set_error(err, dem_err_input, here() // 'malformed vertex ' // &
-                                "line: '" // r%buf(ts:te) // "' is not a number")
+                                "line: '" // excerpt(r%buf(ts:te)) // "' is not a number")
                             return
                         else if (stat == num_infinite .or. abs(x) > xmax) then
                             call set_error(err, dem_err_input, here() // 'vertex coordinate ' // &
-                                "'" // r%buf(ts:te) // "' is not finite (NaN, Inf or out of " // &
+                                "'" // excerpt(r%buf(ts:te)) // "' is not finite (NaN, Inf or out of " // &
                                 'range once scaled)')
                             return
                         end if
@@ -337,7 +337,7 @@ contains
                     call next_token(r%buf, ts, le, te)
                     if (te >= ts) then
                         call set_error(err, dem_err_input, here() // 'malformed vertex line: ' // &
-                            "unexpected '" // r%buf(ts:te) // "' after the 3 coordinates")
+                            "unexpected '" // excerpt(r%buf(ts:te)) // "' after the 3 coordinates")
                         return
                     end if
                     cycle                                ! nothing else on the line
@@ -401,7 +401,7 @@ contains
         subroutine unexpected(wanted)
             character(len=*), intent(in) :: wanted  !! the keywords allowed here
             call set_error(err, dem_err_input, here() // "unexpected keyword '" // &
-                           r%buf(ts:te) // "' (expected '" // wanted // "')")
+                           excerpt(r%buf(ts:te)) // "' (expected '" // wanted // "')")
         end subroutine unexpected
     end subroutine read_ascii
 

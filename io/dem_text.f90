@@ -3,7 +3,7 @@ module dem_text
     use dem_kinds, only: wp, i8
     implicit none
     private
-    public :: read_line, itoa, real_text, duration_text, step_file
+    public :: read_line, itoa, real_text, duration_text, step_file, without_bom, excerpt
 
     !> itoa(k): an integer (default or 64-bit) as text, without blanks.
     interface itoa
@@ -32,6 +32,25 @@ contains
             if (line(len(line):) == achar(13)) line = line(:len(line) - 1)
         end if
     end subroutine read_line
+
+    !> `line` without a UTF-8 byte-order mark at its start (as some editors write).
+    pure function without_bom(line) result(s)
+        character(len=*), intent(in) :: line
+        character(len=:), allocatable :: s
+        s = line
+        if (len(line) >= 3) then
+            if (line(1:3) == char(239) // char(187) // char(191)) s = line(4:)
+        end if
+    end function without_bom
+
+    !> `s` as a message quotes it: whole if short, else its first 40 characters and its
+    !> length (a garbage token of megabytes is not copied into an error).
+    pure function excerpt(s) result(e)
+        character(len=*), intent(in) :: s
+        character(len=:), allocatable :: e
+        e = s
+        if (len(s) > 60) e = s(1:40) // '... (' // itoa_i8(int(len(s), i8)) // ' characters)'
+    end function excerpt
 
     pure function itoa_i8(k) result(s)
         integer(i8), intent(in) :: k

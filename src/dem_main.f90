@@ -256,6 +256,7 @@ contains
     subroutine fail(e)
         type(error_t), intent(in) :: e
         if (comm%rank == 0) write(error_unit, '(a)') 'dem: error: ' // e%message
+        flush(error_unit)                  ! (before MPI and HDF5 end, whatever they do then)
         call finish(e%code)
     end subroutine fail
 

@@ -195,6 +195,29 @@ for name, text, what in (("particles_dev_zero", GOOD + "&particle_file file = '/
                           "/dev/zero: the STL file is empty or not a regular file")):
     bad(name, text, None, None, what)
 
+# a UTF-8 byte-order mark (as some editors write) at the start of a case file or a particle
+# file is not part of its first line (issue 30, item 9: "header has no column 'id'"); a
+# garbage token of 5 MB in an STL file is quoted in its error by its first characters only
+BOM = "\ufeff"
+bom_csv = os.path.join(work, "bom.csv")
+with open(bom_csv, "w", encoding="utf-8") as f:
+    f.write(BOM + "id,material,radius,x,y,z\n1,glass,0.001,0,0,0.0011\n")
+bom_case = os.path.join(work, "bom_case.nml")
+with open(bom_case, "w", encoding="utf-8") as f:
+    f.write(BOM + PLANE.format(nz="1").replace(
+        "&particle id = 1, material = 'glass', radius = 1e-3, position = 0, 0, 0.0011 /",
+        f"&particle_file file = '{bom_csv}' /"))
+r, _ = run(["--check", bom_case], "bom")
+check(r.returncode == 0, f"byte-order marks: --check exit {r.returncode}: {r.stderr.strip()}")
+garbage_stl = os.path.join(work, "garbage.stl")
+with open(garbage_stl, "w") as f:
+    f.write("solid w\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 " + "7x" * 2500000
+            + "\n")
+bad("stl_garbage", GOOD + f"&wall_mesh material = 'steel', file = '{garbage_stl}' /\n", None,
+    None, "(5000000 characters)")
+r, _ = run(["--check", os.path.join(work, "stl_garbage.nml")], "stl_garbage_length")
+check(len(r.stderr) < 2000, f"stl_garbage: the error is {len(r.stderr)} characters long")
+
 # the memory estimate of --check is within a factor of 2 of the peak resident size on a
 # large mesh (issue 30, item 8: a plane of 18 million triangles reached 5.9 GB with 1.4 GB
 # estimated, and a plane's corners on the stack crashed it): a plane of a million triangles
