@@ -10,7 +10,7 @@ module dem_files
     implicit none
     private
     public :: make_directory, file_rename, file_remove, file_truncate, file_exists, &
-              input_file_problem
+              input_file_problem, file_write_bytes
     public :: cfile_t, cfile_open, cfile_write, cfile_size, cfile_close
 
     !> A text file open for writing through C stdio.
@@ -134,6 +134,28 @@ contains
         inquire(file=path, size=bytes)
         if (bytes <= 0) why = 'is empty or not a regular file (a device or a pipe)'
     end function input_file_problem
+
+    !> Write `bytes` as the whole file `path` (created or replaced), checking the write, its
+    !> flush and the close; a file not written whole is removed.
+    subroutine file_write_bytes(path, bytes, err)
+        character(len=*), intent(in) :: path
+        character(kind=c_char), intent(in) :: bytes(:)
+        type(error_t), intent(inout) :: err
+        type(c_ptr) :: fp
+        logical :: ok
+        fp = c_fopen(path // c_null_char, 'w' // c_null_char)
+        if (.not. c_associated(fp)) then
+            call set_error(err, dem_err_io, path // ': cannot write')
+            return
+        end if
+        ok = c_fwrite(bytes, 1_c_size_t, size(bytes, kind=c_size_t), fp) == size(bytes)
+        ok = c_fflush(fp) == 0 .and. ok
+        ok = c_fclose(fp) == 0 .and. ok
+        if (.not. ok) then
+            call file_remove(path)
+            call set_error(err, dem_err_io, path // ': cannot write it (the disk may be full)')
+        end if
+    end subroutine file_write_bytes
 
     !> Open `path` for writing: anew, or with `append` at its end.
     subroutine cfile_open(f, path, append, err)

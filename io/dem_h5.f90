@@ -6,10 +6,12 @@
 !> is refused with the name of the damaged dataset instead of being used. Errors are
 !> returned, never printed by the HDF5 library.
 module dem_h5
-    use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_f_pointer, c_int8_t
+    use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_f_pointer, c_int8_t, c_char, &
+                                           c_null_ptr
     use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5eset_auto_f, h5pcreate_f, h5pclose_f, &
                     h5pset_fapl_mpio_f, h5pset_dxpl_mpio_f, h5pset_obj_track_times_f, &
-                    h5fcreate_f, h5fopen_f, h5fclose_f, &
+                    h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, h5fget_file_image_f, &
+                    h5pset_fapl_core_f, H5F_SCOPE_GLOBAL_F, &
                     h5gcreate_f, h5gclose_f, h5screate_f, h5screate_simple_f, h5sclose_f, &
                     h5sselect_hyperslab_f, h5sselect_none_f, h5sget_simple_extent_ndims_f, &
                     h5sget_simple_extent_dims_f, h5dcreate_f, h5dopen_f, h5dclose_f, &
@@ -23,7 +25,7 @@ module dem_h5
                     H5T_STRING_F, H5_REAL_KIND, H5_INTEGER_KIND
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io
-    use dem_files, only: input_file_problem
+    use dem_files, only: input_file_problem, file_write_bytes
     use dem_comm, only: comm_t, comm_offset, comm_xor, comm_broadcast, comm_info_null, comm_any
     implicit none
     private
@@ -35,6 +37,7 @@ module dem_h5
         integer(hid_t) :: id = -1
         character(len=:), allocatable :: path
         type(comm_t) :: comm
+        logical :: in_memory = .false.  !< built in memory, written out whole at close
     end type h5_file_t
 
     !> h5_write(f, name, a, err [, distributed]): a dataset of reals, integers, 64-bit
@@ -56,7 +59,9 @@ module dem_h5
 
 contains
 
-    !> Create (or replace) a file; collective.
+    !> Create (or replace) a file; collective. On several ranks they write it together
+    !> through MPI-IO; one rank builds it in memory and writes it out whole at h5_close,
+    !> checking that write (a full disk is then an error, not a crash of the library).
     subroutine h5_create(f, path, comm, err)
         type(h5_file_t), intent(out) :: f
         character(len=*), intent(in) :: path
@@ -64,8 +69,23 @@ contains
         type(error_t), intent(inout) :: err
         integer(hid_t) :: fapl
         integer :: e
-        call start(f, path, comm, fapl, err)
-        if (err%failed()) return
+        f%path = path
+        f%comm = comm
+        f%in_memory = comm%size == 1
+        call h5open_f(e)
+        if (e == 0) call h5eset_auto_f(0, e)
+        if (e == 0) call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, e)
+        if (e == 0) then
+            if (f%in_memory) then           ! grown 4 MiB at a time, no file behind it
+                call h5pset_fapl_core_f(fapl, int(4 * 2**20, size_t), .false., e)
+            else
+                call h5pset_fapl_mpio_f(fapl, comm%handle(), comm_info_null(), e)
+            end if
+        end if
+        if (e /= 0) then
+            call set_error(err, dem_err_io, path // ': the HDF5 library cannot start')
+            return
+        end if
         call h5fcreate_f(path, H5F_ACC_TRUNC_F, f%id, e, access_prp=fapl)
         call h5pclose_f(fapl, e)
         if (f%id < 0) call set_error(err, dem_err_io, path // ': cannot create the file')
@@ -104,33 +124,32 @@ contains
         end if
     end subroutine h5_open
 
-    !> The library, silenced, and file-access properties for MPI-IO on `comm`.
-    subroutine start(f, path, comm, fapl, err)
-        type(h5_file_t), intent(inout) :: f
-        character(len=*), intent(in) :: path
-        type(comm_t), intent(in) :: comm
-        integer(hid_t), intent(out) :: fapl
-        type(error_t), intent(inout) :: err
-        integer :: e
-        f%path = path
-        f%comm = comm
-        call h5open_f(e)
-        if (e == 0) call h5eset_auto_f(0, e)
-        if (e == 0) call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, e)
-        if (e == 0) call h5pset_fapl_mpio_f(fapl, comm%handle(), comm_info_null(), e)
-        if (e /= 0) call set_error(err, dem_err_io, path // ': the HDF5 library cannot start')
-    end subroutine start
-
     !> Close the file (everything written is then on disk); collective.
     subroutine h5_close(f, err)
         type(h5_file_t), intent(inout) :: f
         type(error_t), intent(inout) :: err
-        integer :: e
+        integer :: e, e2
+        integer(size_t) :: n
+        character(kind=c_char), allocatable, target :: image(:)
+        type(c_ptr) :: at
         if (f%id < 0) return
-        call h5fclose_f(f%id, e)
+        e = 0
+        if (f%in_memory) then               ! the image, then the file written from it
+            call h5fflush_f(f%id, H5F_SCOPE_GLOBAL_F, e)
+            at = c_null_ptr
+            if (e == 0) call h5fget_file_image_f(f%id, at, 0_size_t, e, n)
+            if (e == 0) then
+                allocate(image(n))
+                at = c_loc(image)
+                call h5fget_file_image_f(f%id, at, n, e)
+            end if
+        end if
+        call h5fclose_f(f%id, e2)
         f%id = -1
+        e = ior(e, e2)
         if (e /= 0 .and. .not. err%failed()) call set_error(err, dem_err_io, f%path // &
                                                             ': cannot close the file')
+        if (f%in_memory .and. .not. err%failed()) call file_write_bytes(f%path, image, err)
     end subroutine h5_close
 
     !> Create a group (its parent must exist); collective.
@@ -327,7 +346,7 @@ contains
         end if
         ok = ior(ok, e)
         call h5pcreate_f(H5P_DATASET_XFER_F, xfer, e)
-        call h5pset_dxpl_mpio_f(xfer, H5FD_MPIO_COLLECTIVE_F, e)
+        if (.not. f%in_memory) call h5pset_dxpl_mpio_f(xfer, H5FD_MPIO_COLLECTIVE_F, e)
         if (product(fdims) > 0) then     ! an empty dataset has no storage to write to
             call h5dwrite_f(dset, mem_type, buf, e, mspace, fspace, xfer)
             ok = ior(ok, e)

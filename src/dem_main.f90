@@ -129,10 +129,10 @@ contains
         type(time_scales_t) :: ts
         real(wp) :: mem
         call case_time_scales(c, ts)
-        ! peak resident sizes measured (doc/running.md): 28 MiB for a sphere on a plane, plus
-        ! about 2000 bytes per particle (beds of 25 000 and 100 000) and 540 per triangle
-        ! (planes of 0.5 and 2 million)
-        mem = 28.0_wp + (2000.0_wp * c%n_particles + 540.0_wp * c%mesh%n_tri) / 2.0_wp**20
+        ! peak resident sizes measured (doc/running.md): 31 MiB for a sphere on a plane, plus
+        ! about 2900 bytes per particle (a bed of 25 000) and 790 per triangle (planes of
+        ! 0.5 and 2 million), a checkpoint built in memory included
+        mem = 31.0_wp + (2900.0_wp * c%n_particles + 790.0_wp * c%mesh%n_tri) / 2.0_wp**20
         write(output_unit, '(a)') 'case ' // c%source
         write(output_unit, '(a,i0,a,i0,a)') '  particles            ', c%n_particles, &
             ' (wall triangles ', c%mesh%n_tri, ')'
