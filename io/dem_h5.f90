@@ -60,8 +60,9 @@ module dem_h5
 contains
 
     !> Create (or replace) a file; collective. On several ranks they write it together
-    !> through MPI-IO; one rank builds it in memory and writes it out whole at h5_close,
-    !> checking that write (a full disk is then an error, not a crash of the library).
+    !> through MPI-IO; one rank builds it in memory (the file on disk empty meanwhile) and
+    !> writes it out whole at h5_close, checking that write (a full disk is then an error,
+    !> not a crash of the library).
     subroutine h5_create(f, path, comm, err)
         type(h5_file_t), intent(out) :: f
         character(len=*), intent(in) :: path
@@ -72,6 +73,10 @@ contains
         f%path = path
         f%comm = comm
         f%in_memory = comm%size == 1
+        if (f%in_memory) then               ! the file is there (empty) while it is built
+            call file_write_bytes(path, [character(kind=c_char) ::], err)
+            if (err%failed()) return
+        end if
         call h5open_f(e)
         if (e == 0) call h5eset_auto_f(0, e)
         if (e == 0) call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, e)

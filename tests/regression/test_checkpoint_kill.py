@@ -6,7 +6,8 @@ motion; it writes a checkpoint every 2500 steps. With DEM_CHECKPOINT_PAUSE set, 
 sleeps in the middle of every checkpoint write (the particle data written, the file not yet
 closed). We wait until the .part file of the second checkpoint appears and kill the process
 there, which no handler can catch. Then:
-1. the interrupted checkpoint is left as an incomplete <name>.part, never under its final
+1. the interrupted checkpoint is left as an incomplete <name>.part (on one rank an empty
+   one: the file is built in memory and written out at its close), never under its final
    name, and a restart from it is refused; checkpoints/latest still names the first
    checkpoint, which is complete: every dataset's checksum, recomputed here from its
    definition (not by the solver), matches, and its particles, walls and run state are bit
