@@ -11,7 +11,7 @@ module dem_folder
     use dem_kinds, only: i8
     implicit none
     private
-    public :: folder_claim
+    public :: folder_claim, folder_conflict
 
     !> The name of the case text in the folder.
     character(len=*), parameter :: marker = 'input.nml'
@@ -26,34 +26,46 @@ contains
         character(len=*), intent(in) :: dir, source, text
         logical, intent(in) :: overwrite
         type(error_t), intent(inout) :: err
-        character(len=*), parameter :: ways = ': &output overwrite = .true. replaces ' // &
-            'them, another &output dir keeps them, dem --resume continues that run'
-        logical :: used, same
-        integer :: k
+        character(len=:), allocatable :: conflict
         call make_directory(dir, err)
         if (err%failed()) return
+        conflict = folder_conflict(dir, source, text)
+        if (conflict /= '' .and. .not. overwrite) then
+            call set_error(err, dem_err_input, conflict)
+            return
+        end if
+        if (folder_used(dir)) call clear(dir)
+        call write_marker(dir, text, err)
+    end subroutine folder_claim
+
+    !> Why a fresh run of the case `source` (text `text`) may not write into `dir` without
+    !> `&output overwrite`: it holds the outputs of another case's run, or of a run without
+    !> input.nml; '' if it may (empty, missing, or the same case's).
+    function folder_conflict(dir, source, text) result(why)
+        character(len=*), intent(in) :: dir, source, text
+        character(len=:), allocatable :: why
+        character(len=*), parameter :: ways = ': &output overwrite = .true. replaces ' // &
+            'them, another &output dir keeps them, dem --resume continues that run'
+        why = ''
+        if (.not. folder_used(dir)) return
+        if (file_exists(dir // '/' // marker)) then
+            if (file_text(dir // '/' // marker) /= text) why = dir // ': holds the outputs ' &
+                // 'of a run of another case (its ' // marker // ' is not the text of ' // &
+                source // ')' // ways
+        else
+            why = dir // ': holds the outputs of another run (it has no ' // marker // ')' // ways
+        end if
+    end function folder_conflict
+
+    !> Whether `dir` holds a run's case text or outputs.
+    logical function folder_used(dir) result(used)
+        character(len=*), intent(in) :: dir
+        integer :: k
         used = file_exists(dir // '/' // marker) .or. file_exists(dir // '/checkpoints/latest')
         do k = 1, size(outputs)
             used = used .or. file_exists(dir // '/' // trim(outputs(k)))
         end do
-        if (used) then
-            same = file_exists(dir // '/' // marker)
-            if (same) same = file_text(dir // '/' // marker) == text
-            if (.not. (same .or. overwrite)) then
-                if (file_exists(dir // '/' // marker)) then
-                    call set_error(err, dem_err_input, dir // ': holds the outputs of a run ' // &
-                        'of another case (its ' // marker // ' is not the text of ' // source // &
-                        ')' // ways)
-                else
-                    call set_error(err, dem_err_input, dir // ': holds the outputs of ' // &
-                        'another run (it has no ' // marker // ')' // ways)
-                end if
-                return
-            end if
-            call clear(dir)
-        end if
-        call write_marker(dir, text, err)
-    end subroutine folder_claim
+    end function folder_used
 
     !> Remove the outputs of the run in `dir`: the files above, the snapshots snapshots.xmf
     !> names, the checkpoints latest names and those kept with it, latest itself.

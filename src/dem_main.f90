@@ -10,6 +10,7 @@ program dem_main
                    solver_particles, solver_particle_steps, solver_parallel_stats, i8
     use dem_comm, only: comm_t, comm_init, comm_free, comm_max
     use dem_signals, only: signals_install
+    use dem_folder, only: folder_conflict
     use dem_integrate, only: integrator_verlet
     implicit none
     type(comm_t) :: comm
@@ -67,6 +68,11 @@ program dem_main
     if (check_only) then               ! the checks of a run's start: ids, overlaps
         call solver_prepare(s, c, err)
         if (err%failed()) call fail(err)
+        if (comm%rank == 0 .and. .not. c%output_overwrite) then   ! (--resume may continue)
+            if (folder_conflict(c%output_dir, c%source, c%input_text) /= '') &
+                write(output_unit, '(a)') '  warning: a fresh run stops at once: ' // &
+                    folder_conflict(c%output_dir, c%source, c%input_text)
+        end if
         call finish(0)
     end if
     if (resume) then

@@ -5,6 +5,8 @@ run to its end. Then, each judged from the files in the folder (listed and hashe
 1. The case edited (another friction), run afresh into the same folder: refused with exit
    status 2 and a message naming the folder and the way out; the folder byte for byte as it
    was (issue 30: the old run's checkpoint would have been resumed with the new case).
+   `dem --check` of the edited case warns that a fresh run would stop so (exit 0: a
+   --resume may still continue the run), and of the unchanged case does not.
 2. The same with `&output overwrite = .true.` and t_end = 0.025: it runs, and the folder
    then holds this run's outputs only: its input.nml is the edited case, series.csv ends at
    0.025 s, and no snapshot or checkpoint of a step after the new run's last is left (the
@@ -89,6 +91,14 @@ text = run([case(mu=0.6)], 2)
 check("output/box: holds the outputs of a run of another case" in text
       and "overwrite = .true." in text, f"edited case: the message: {text.strip()[-300:]}")
 check(folder() == first, "edited case: the folder changed")
+# --check says so (a warning: --resume of an edited case may still continue the run), and
+# says nothing of the kind for the case whose run it is
+text = run(["--check", case(mu=0.6)], 0)
+check("warning: a fresh run stops at once: " in text and "holds the outputs of a run of "
+      "another case" in text, f"edited case: --check does not warn: {text.strip()[-300:]}")
+text = run(["--check", case()], 0)
+check("warning: a fresh run stops" not in text, "the same case: --check warns")
+check(folder() == first, "--check: the folder changed")
 
 # 2. with overwrite, a shorter run
 run([case(t_end=0.025, mu=0.6, extra=", overwrite = .true.")], 0)
