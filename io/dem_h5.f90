@@ -70,11 +70,12 @@ contains
         type(error_t), intent(inout) :: err
         integer(hid_t) :: fapl
         integer :: e
+        character(kind=c_char) :: none(0)
         f%path = path
         f%comm = comm
         f%in_memory = comm%size == 1
         if (f%in_memory) then               ! the file is there (empty) while it is built
-            call file_write_bytes(path, [character(kind=c_char) ::], err)
+            call file_write_bytes(path, none, err)
             if (err%failed()) return
         end if
         call h5open_f(e)
