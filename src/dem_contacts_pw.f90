@@ -7,7 +7,6 @@ module dem_contacts_pw
     use dem_kinds, only: wp, ip
     use dem_contact_hm, only: hm_force
     use dem_mesh, only: closest_point_triangle, feature_face
-    use dem_vector, only: cross
     use dem_contact_store, only: max_wall_contacts, n_wall_history
     implicit none
     private
@@ -175,11 +174,13 @@ contains
     !> Add the wall contact forces and torques to every owned particle. `overflow` counts
     !> particles with more separate contacts than the history store holds. The levers of the
     !> rotation are R - shift_v d and R - shift_t d, as in pp_forces.
-    subroutine pw_forces(n_own, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, mat, wstart, &
-                         wlist, vert, tmat, twall, wall_v, wall_w, wall_c, kn, sn, st, cn, ct, &
-                         mu, clamp_normal, keep_length, shift_v, shift_t, dt, wtri, wxi, f, t, &
-                         overflow)
+    subroutine pw_forces(n_own, n_row, row, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, &
+                         mat, wstart, wlist, vert, tmat, twall, wall_v, wall_w, wall_c, kn, sn, &
+                         st, cn, ct, mu, clamp_normal, keep_length, shift_v, shift_t, dt, wtri, &
+                         wxi, f, t, overflow)
         integer(ip), intent(in) :: n_own, n_cand, n_tri, n_wall, nm
+        integer(ip), intent(in) :: n_row, row(:)   !! the particles near walls or with wall
+                                                   !! history (dem_neighbors)
         real(wp), intent(in) :: x(3, n_own), v(3, n_own), w(3, n_own)  !! [m], [m/s], [rad/s]
         real(wp), intent(in) :: radius(n_own), mass(n_own)             !! [m], [kg]
         integer(ip), intent(in) :: mat(n_own)
@@ -199,21 +200,22 @@ contains
         real(wp), intent(inout) :: wxi(n_wall_history, max_wall_contacts, n_own)  !! [m]
         real(wp), intent(inout) :: f(3, n_own), t(3, n_own)           !! [N], [N m]
         integer(ip), intent(out) :: overflow
-        integer(ip) :: i, k, c, nc, ns, a, b, tri, feat(max_wall_candidates)
+        integer(ip) :: i, k, c, nc, ns, a, b, tri, feat(max_wall_candidates), kr, wl
         integer(ip) :: new_tri(max_wall_contacts), ctri(max_wall_candidates), fk
         integer(ip) :: slot(max_wall_candidates)
         real(wp) :: q(3, max_wall_candidates), qk(3)
         real(wp) :: cv(3, 3, max_wall_candidates), new_xi(n_wall_history, max_wall_contacts)
-        real(wp) :: nrm(3), vrel(3), xik(n_wall_history), fn, ft(3), fi(3), ti(3), dist, r, tol
+        real(wp) :: nrm(3), vrel(3), xik(n_wall_history), fn, ft(3), fi(3), ti(3), dist, r, tol, &
+                    ws(3), d(3), lever
         logical :: keep(max_wall_candidates), many, over
 
         overflow = 0
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
         !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk) &
         !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, tol, keep, slot) &
-        !$acc private(many, over)
-        do i = 1, n_own
-            if (wstart(i + 1) == wstart(i) .and. wtri(1, i) == 0) cycle   ! no wall near
+        !$acc private(many, over, i, wl, ws, d, lever)
+        do kr = 1, n_row
+            i = row(kr)
             r = radius(i)
             tol = 1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
             nc = 0
@@ -258,9 +260,16 @@ contains
                 dist = sqrt(sum((q(:, c) - x(:, i))**2))
                 nrm = (q(:, c) - x(:, i)) / dist
                 ! minus the wall's velocity at the contact point
-                vrel = v(:, i) + cross((r - shift_v * (r - dist)) * w(:, i), nrm) &
-                       - wall_v(:, twall(tri)) &
-                       - cross(wall_w(:, twall(tri)), q(:, c) - wall_c(:, twall(tri)))
+                wl = twall(tri)
+                lever = r - shift_v * (r - dist)
+                ws = lever * w(:, i)
+                d = q(:, c) - wall_c(:, wl)
+                vrel(1) = v(1, i) + (ws(2) * nrm(3) - ws(3) * nrm(2)) - wall_v(1, wl) &
+                          - (wall_w(2, wl) * d(3) - wall_w(3, wl) * d(2))
+                vrel(2) = v(2, i) + (ws(3) * nrm(1) - ws(1) * nrm(3)) - wall_v(2, wl) &
+                          - (wall_w(3, wl) * d(1) - wall_w(1, wl) * d(3))
+                vrel(3) = v(3, i) + (ws(1) * nrm(2) - ws(2) * nrm(1)) - wall_v(3, wl) &
+                          - (wall_w(1, wl) * d(2) - wall_w(2, wl) * d(1))
                 b = tmat(tri)
                 call hm_force(r - dist, nrm, vrel, r, mass(i), kn(a, b), sn(a, b), st(a, b), &
                               cn(a, b), ct(a, b), mu(a, b), clamp_normal, keep_length, dt, &
@@ -269,7 +278,10 @@ contains
                 new_tri(ns) = tri
                 new_xi(:, ns) = xik
                 fi = fi - fn * nrm + ft
-                ti = ti + (r - shift_t * (r - dist)) * cross(nrm, ft)
+                lever = r - shift_t * (r - dist)
+                ti(1) = ti(1) + lever * (nrm(2) * ft(3) - nrm(3) * ft(2))
+                ti(2) = ti(2) + lever * (nrm(3) * ft(1) - nrm(1) * ft(3))
+                ti(3) = ti(3) + lever * (nrm(1) * ft(2) - nrm(2) * ft(1))
             end do
             wtri(1:ns, i) = new_tri(1:ns)
             wxi(:, 1:ns, i) = new_xi(:, 1:ns)

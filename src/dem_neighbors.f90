@@ -49,6 +49,8 @@ module dem_neighbors
                                               !< particles' sums, zero between steps
         integer(ip), allocatable :: wstart(:) !< wall row i is wstart(i):wstart(i+1)-1
         integer(ip), allocatable :: wlist(:)  !< candidate triangle
+        integer(ip) :: n_wrow = 0             !< particles the wall kernel visits:
+        integer(ip), allocatable :: wrow(:)   !< those with candidates or wall history
         real(wp), allocatable :: x_ref(:, :)  !< positions at the last build [m]
         real(wp), allocatable :: vert_ref(:, :, :)  !< moving walls' vertices then [m]
     end type neighbors_t
@@ -193,7 +195,7 @@ contains
         integer(ip), intent(in), optional :: old_index(:)
         integer(ip), allocatable :: old_start(:), same(:), level(:), cell(:), gstart(:), &
                                     gitem(:), cnt(:), n_of(:, :), off(:), pstart(:)
-        integer(ip), allocatable :: old_pref(:)
+        integer(ip), allocatable :: old_pref(:), found(:), cstart(:)
         integer(i8), allocatable :: old_partner(:)
         real(wp), allocatable :: old_xi(:, :), rmax(:), origin(:, :), h(:)
         real(wp) :: lo(3), hi(3), margin
@@ -256,9 +258,21 @@ contains
         call grid_cells(n_all, n_levels, x, level, origin, h, n_of, off, cell)
         call bin_items(n_all, n_cells, cell, gstart, gitem, cnt)
 
-        ! particle pairs within R_i + R_j + skin: count, then fill, then each row by id
+        ! particle pairs within R_i + R_j + skin: the candidates of each row counted from
+        ! the cells' counts (a bound), the pairs found into rows of that size, then packed
+        ! into nb%list and each row ordered by id
         call pair_rows(.false., n_own, n_all, n_levels, x, radius, nb%skin, rmax, origin, h, &
-                       n_of, off, n_cells, gstart, gitem, nb%start, size(cnt, kind=ip), cnt)
+                       n_of, off, n_cells, gstart, gitem, nb%start, size(cnt, kind=ip), cnt, cnt)
+        call prefix_sum(n_own, cnt, nb%start)
+        call acc_data(nb%start(n_own + 1:n_own + 1), acc_to_host)
+        allocate(found(max(1, nb%start(n_own + 1) - 1)))
+        call acc_data(found, acc_create)
+        call pair_rows(.true., n_own, n_all, n_levels, x, radius, nb%skin, rmax, origin, h, &
+                       n_of, off, n_cells, gstart, gitem, nb%start, size(found, kind=ip), found, &
+                       cnt)
+        allocate(cstart(n_own + 1))
+        call acc_data(cstart, acc_create)
+        call copy_range(n_own + 1, nb%start, cstart)
         call prefix_sum(n_own, cnt, nb%start)
         call acc_data(nb%start(n_own + 1:n_own + 1), acc_to_host)
         n_entries = nb%start(n_own + 1) - 1
@@ -268,8 +282,9 @@ contains
         call acc_data(nb%partner, acc_create)
         call acc_data(nb%mirror, acc_create)
         call acc_data(nb%pref, acc_create)
-        call pair_rows(.true., n_own, n_all, n_levels, x, radius, nb%skin, rmax, origin, h, &
-                       n_of, off, n_cells, gstart, gitem, nb%start, n_entries, nb%list)
+        call pack_rows(n_own, size(found, kind=ip), n_entries, cstart, found, nb%start, nb%list)
+        call acc_data(cstart, acc_exit)
+        call acc_data(found, acc_exit)
         call pair_partners(n_own, n_all, n_entries, gid, nb%start, nb%list, nb%partner, &
                            nb%mirror)
 
@@ -318,6 +333,7 @@ contains
 
         call build_wall_list(nb, n_own, n_all, x, radius, mesh, lo, hi, &
                              2.0_wp * rmax(0) + nb%skin)
+        if (mesh%n_tri > 0) call wall_rows_visited(nb, cs, n_own)
         nb%n_builds = nb%n_builds + 1
     end subroutine neighbors_build
 
@@ -416,10 +432,11 @@ contains
     end subroutine grid_cells
 
     !> The partners of each owned particle i (within R_i + R_j + skin) from the cells of
-    !> every level's grid its reach covers: their number into out(i) (fill false), or the
-    !> partners into out(start(i):start(i + 1) - 1) (fill true).
+    !> every level's grid its reach covers. Without `fill`, out(i) = the particles in those
+    !> cells (a bound of its partners, found without a distance); with `fill`, the partners
+    !> into out(start(i):), their number into cnt(i).
     subroutine pair_rows(fill, n_own, n_all, n_levels, x, radius, skin, rmax, origin, h, n_of, &
-                         off, n_cells, gstart, gitem, start, n_out, out)
+                         off, n_cells, gstart, gitem, start, n_out, out, cnt)
         logical, intent(in) :: fill
         integer(ip), intent(in) :: n_own, n_all, n_levels, n_cells, n_out
         real(wp), intent(in) :: x(3, n_all), radius(n_all), skin
@@ -427,11 +444,11 @@ contains
                                 h(0:n_levels - 1)
         integer(ip), intent(in) :: n_of(3, 0:n_levels - 1), off(0:n_levels - 1)
         integer(ip), intent(in) :: gstart(n_cells + 1), gitem(max(1, n_all)), start(n_own + 1)
-        integer(ip), intent(inout) :: out(n_out)
-        integer(ip) :: i, j, k, l, m, cx, cy, cz, c0(3), c1(3), c(3), cell
+        integer(ip), intent(inout) :: out(n_out), cnt(:)
+        integer(ip) :: i, j, k, l, m, cy, cz, c0(3), c1(3), c(3), cell, last
         real(wp) :: reach, lo(3), hi(3)
         !$acc parallel loop gang vector default(present) copyin(rmax, origin, h, n_of, off) &
-        !$acc private(j, k, l, m, cx, cy, cz, c0, c1, c, cell, reach, lo, hi)
+        !$acc private(j, k, l, m, cy, cz, c0, c1, c, cell, last, reach, lo, hi)
         do i = 1, n_own
             k = 0
             do l = 0, n_levels - 1
@@ -441,29 +458,64 @@ contains
                 hi = x(:, i) + reach
                 c0 = cell_coords(lo, origin(:, l), h(l), n_of(:, l))
                 c1 = cell_coords(hi, origin(:, l), h(l), n_of(:, l))
+                ! the cells c0(1)..c1(1) of a row along x are numbered in a row, and their
+                ! particles follow each other in gitem
                 do cz = c0(3), c1(3)
                     do cy = c0(2), c1(2)
-                        do cx = c0(1), c1(1)
-                            c(1) = cx
-                            c(2) = cy
-                            c(3) = cz
-                            cell = off(l) + cell_number(c, n_of(:, l))
-                            do m = gstart(cell), gstart(cell + 1) - 1
-                                j = gitem(m)
-                                if (j == i) cycle
-                                if ((x(1, j) - x(1, i))**2 + (x(2, j) - x(2, i))**2 &
-                                    + (x(3, j) - x(3, i))**2 &
-                                    >= (radius(i) + radius(j) + skin)**2) cycle
-                                if (fill) out(start(i) + k) = j
-                                k = k + 1
-                            end do
+                        c(1) = c0(1)
+                        c(2) = cy
+                        c(3) = cz
+                        cell = off(l) + cell_number(c, n_of(:, l))
+                        last = cell + c1(1) - c0(1)
+                        if (.not. fill) then
+                            k = k + gstart(last + 1) - gstart(cell)
+                            cycle
+                        end if
+                        do m = gstart(cell), gstart(last + 1) - 1
+                            j = gitem(m)
+                            if (j == i) cycle
+                            if ((x(1, j) - x(1, i))**2 + (x(2, j) - x(2, i))**2 &
+                                + (x(3, j) - x(3, i))**2 &
+                                >= (radius(i) + radius(j) + skin)**2) cycle
+                            out(start(i) + k) = j
+                            k = k + 1
                         end do
                     end do
                 end do
             end do
-            if (.not. fill) out(i) = k
+            if (fill) then
+                cnt(i) = k
+            else
+                out(i) = k
+            end if
         end do
     end subroutine pair_rows
+
+    !> The rows found(from(i):from(i) + n_i - 1), n_i = to(i + 1) - to(i), packed into
+    !> list(to(i):to(i + 1) - 1).
+    subroutine pack_rows(n_own, n_found, n_list, from, found, to, list)
+        integer(ip), intent(in) :: n_own, n_found, n_list
+        integer(ip), intent(in) :: from(n_own + 1), found(n_found), to(n_own + 1)
+        integer(ip), intent(inout) :: list(n_list)
+        integer(ip) :: i, k
+        !$acc parallel loop gang vector default(present) private(k)
+        do i = 1, n_own
+            do k = 0, to(i + 1) - to(i) - 1
+                list(to(i) + k) = found(from(i) + k)
+            end do
+        end do
+    end subroutine pack_rows
+
+    !> b(1:n) = a(1:n).
+    subroutine copy_range(n, a, b)
+        integer(ip), intent(in) :: n, a(n)
+        integer(ip), intent(inout) :: b(n)
+        integer(ip) :: k
+        !$acc parallel loop gang vector default(present)
+        do k = 1, n
+            b(k) = a(k)
+        end do
+    end subroutine copy_range
 
     !> Each row ordered by the partners' global ids (insertion sort: rows are short), the
     !> partners' ids, and the mirror entries: the partner's entry for the same pair (a binary
@@ -627,6 +679,52 @@ contains
         call acc_data(box, acc_exit)
     end subroutine build_wall_list
 
+    !> The particles the wall kernel visits until the next build, in order: those with
+    !> candidate triangles, and those with wall history (which the kernel clears when they
+    !> have no candidates); nb%wrow(1:nb%n_wrow). The store holds the wall history of the
+    !> particles as they are now ordered (store_init, store_walls_permute).
+    subroutine wall_rows_visited(nb, cs, n_own)
+        type(neighbors_t), intent(inout) :: nb
+        type(contact_store_t), intent(in) :: cs
+        integer(ip), intent(in) :: n_own
+        integer(ip), allocatable :: cnt(:), start(:)
+        allocate(cnt(max(1, n_own)), start(n_own + 1))
+        call acc_data(cnt, acc_create)
+        call acc_data(start, acc_create)
+        call visited_flags(n_own, nb%wstart, cs%wall_tri, cnt)
+        call prefix_sum(n_own, cnt, start)
+        call acc_data(start(n_own + 1:n_own + 1), acc_to_host)
+        nb%n_wrow = start(n_own + 1) - 1
+        allocate(nb%wrow(max(1, nb%n_wrow)))
+        call acc_data(nb%wrow, acc_create)
+        call visited_rows(n_own, cnt, start, nb%wrow)
+        call acc_data(start, acc_exit)
+        call acc_data(cnt, acc_exit)
+    end subroutine wall_rows_visited
+
+    !> cnt(i) = 1 where particle i has candidate triangles or wall history, else 0.
+    subroutine visited_flags(n_own, wstart, wall_tri, cnt)
+        integer(ip), intent(in) :: n_own, wstart(n_own + 1)
+        integer(ip), intent(in) :: wall_tri(:, :)
+        integer(ip), intent(inout) :: cnt(max(1, n_own))
+        integer(ip) :: i
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n_own
+            cnt(i) = merge(1, 0, wstart(i + 1) > wstart(i) .or. wall_tri(1, i) /= 0)
+        end do
+    end subroutine visited_flags
+
+    !> row(start(i)) = i where cnt(i) = 1.
+    subroutine visited_rows(n_own, cnt, start, row)
+        integer(ip), intent(in) :: n_own, cnt(max(1, n_own)), start(n_own + 1)
+        integer(ip), intent(inout) :: row(:)
+        integer(ip) :: i
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n_own
+            if (cnt(i) == 1) row(start(i)) = i
+        end do
+    end subroutine visited_rows
+
     !> The box of cells (lowest, highest coordinates) each triangle's bounding box covers,
     !> and its number of cells (0 when the triangle lies outside [lo, hi]).
     subroutine triangle_boxes(n_tri, vert, lo, hi, h, n, box, tcount)
@@ -751,6 +849,7 @@ contains
         if (allocated(nb%wstart)) call acc_data(nb%wstart, op)
         if (allocated(nb%wlist)) call acc_data(nb%wlist, op)
         if (op == acc_to_host) return
+        if (allocated(nb%wrow)) call acc_data(nb%wrow, op)
         if (allocated(nb%pair)) call acc_data(nb%pair, op)
         if (allocated(nb%pconst)) call acc_data(nb%pconst, op)
         if (allocated(nb%scale)) call acc_data(nb%scale, op)

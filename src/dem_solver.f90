@@ -723,8 +723,9 @@ contains
                            nb%acc, p%f, p%t)
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
-            call pw_forces(n, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, p%x, p%v, p%w, &
-                           p%radius, p%mass, p%mat, nb%wstart, nb%wlist, m%vert, m%mat, m%wall, &
+            call pw_forces(n, nb%n_wrow, nb%wrow, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, &
+                           p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%wstart, nb%wlist, m%vert, &
+                           m%mat, m%wall, &
                            m%wall_v, m%wall_w, m%wall_c, pc%kn, pc%sn, pc%st, pc%cn, pc%ct, &
                            pc%mu, o%clamp_normal, o%keep_length, o%shift_v, o%shift_t, c%dt, &
                            s%cs%wall_tri, s%cs%wall_xi, p%f, p%t, overflow)

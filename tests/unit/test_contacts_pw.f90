@@ -175,7 +175,8 @@ contains
         st = 8.0_wp * 0.4e10_wp
         fo = 0.0_wp
         to = 0.0_wp
-        call pw_forces(1_ip, mm%n_tri, mm%n_tri, mm%n_wall, 2_ip, x, v, w, [r], [1.0e-3_wp], &
+        call pw_forces(1_ip, 1_ip, [1_ip], mm%n_tri, mm%n_tri, mm%n_wall, 2_ip, x, v, w, [r], &
+                       [1.0e-3_wp], &
                        [1_ip], [1_ip, mm%n_tri + 1], wlist, mm%vert, mm%mat, mm%wall, &
                        mm%wall_v, mm%wall_w, mm%wall_c, kn, &
                        2.0_wp * estar + zero, st, zero, zero, mu, .false., .true., 0.0_wp, &

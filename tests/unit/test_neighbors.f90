@@ -13,7 +13,7 @@ program test_neighbors
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
                              neighbors_spatial_order, neighbors_row_history, neighbors_set_rows, &
                              neighbors_entry_history
-    use dem_contact_store, only: contact_store_t
+    use dem_contact_store, only: contact_store_t, store_init
     use dem_mesh, only: closest_point_triangle
     use dem_assert, only: assert_true, assert_finish
     implicit none
@@ -35,6 +35,7 @@ program test_neighbors
     logical :: ok
 
     call random_seed()
+    call store_init(cs, n)             ! no wall history
     ! 9800 triangles on the floor, 200 on a side wall
     call mesh_add_plane(m, [0.5_wp, 0.5_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.5_wp, 70_ip, 1_ip)
     call mesh_add_plane(m, [1.0_wp, 0.5_wp, 0.5_wp], [-1.0_wp, 0.0_wp, 0.0_wp], 0.5_wp, 10_ip, &
