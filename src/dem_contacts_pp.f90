@@ -1,6 +1,6 @@
 !> Particle-particle contact forces (doc/theory.md, section 2) in one pass over the pairs.
-!> The neighbour lists hold every pair once in a compact store (dem_neighbors), with the
-!> constants of the pair taken at the list build (pp_pair_constants). Each pair's force and
+!> The neighbour lists hold every pair once in a compact store (dem_neighbors); the
+!> constants of a pair in contact come from the two particles' radii, masses and materials. Each pair's force and
 !> n x F_t are added to both particles in 64-bit fixed point (doc/theory.md, section 13):
 !> integer sums do not depend on the order of their terms, so the forces are the same bit
 !> for bit whatever order pairs are evaluated in, where particles are stored and on any
@@ -10,13 +10,7 @@ module dem_contacts_pp
     use dem_contact_hm, only: hm_lanes, max_lanes
     implicit none
     private
-    public :: pp_forces, pp_pair_constants, n_pair_constants, fixed_scale
-
-    !> the constants of a pair: R*, kn, st, cn sqrt(sn m*), ct sqrt(st m*), mu (R_i + R_j is
-    !> taken from the radii, which the kernel reads anyway: the pass over every pair then
-    !> reads 12 bytes of a pair that does not touch, not its constants)
-    integer, parameter :: c_rstar = 1, c_kn = 2, c_st = 3, c_dn = 4, c_dt = 5, c_mu = 6, &
-                          n_pair_constants = 6
+    public :: pp_forces, pp_scales, fixed_scale
 
     !> one-word fixed point (fixed_scale): terms within the bound take at most 57 bits; terms
     !> are clipped at 16 times the bound, so that sums of up to 4 clipped terms still fit
@@ -28,60 +22,41 @@ module dem_contacts_pp
 
 contains
 
-    !> The constants of each pair (i, j) = pair(:, p) from the particles' radii, masses and
-    !> materials, computed as the contact law would compute them at every step, and each
-    !> particle's fixed-point scale.
-    subroutine pp_pair_constants(n_all, n_pairs, nm, radius, mass, mat, pair, kn, sn, st, cn, &
-                                 ct, mu, accel_bound, pconst, scale)
-        integer(ip), intent(in) :: n_all, n_pairs, nm
-        real(wp), intent(in) :: radius(n_all), mass(n_all)  !! [m], [kg]
-        integer(ip), intent(in) :: mat(n_all), pair(2, n_pairs)
-        real(wp), intent(in) :: kn(nm, nm), sn(nm, nm), st(nm, nm)  !! [Pa]
-        real(wp), intent(in) :: cn(nm, nm), ct(nm, nm), mu(nm, nm)  !! [-]
+    !> Each particle's fixed-point scale (fixed_scale of m accel_bound).
+    subroutine pp_scales(n_all, mass, accel_bound, scale)
+        integer(ip), intent(in) :: n_all
+        real(wp), intent(in) :: mass(n_all)       !! [kg]
         real(wp), intent(in) :: accel_bound  !! m accel_bound bounds a particle's force [m/s^2]
-        real(wp), intent(inout) :: pconst(n_pair_constants, n_pairs)
-        real(wp), intent(inout) :: scale(n_all)  !! fixed_scale of m accel_bound
-        integer(ip) :: p, i, j, a, b
-        real(wp) :: rsum, mstar
+        real(wp), intent(inout) :: scale(n_all)
+        integer(ip) :: i
         !$acc parallel loop gang vector default(present)
         do i = 1, n_all
             scale(i) = fixed_scale(mass(i) * accel_bound)
         end do
-        !$acc parallel loop gang vector default(present) private(i, j, a, b, rsum, mstar)
-        do p = 1, n_pairs
-            i = pair(1, p)
-            j = pair(2, p)
-            a = mat(i)
-            b = mat(j)
-            rsum = radius(i) + radius(j)
-            mstar = mass(i) * mass(j) / (mass(i) + mass(j))
-            pconst(c_rstar, p) = radius(i) * radius(j) / rsum
-            pconst(c_kn, p) = kn(a, b)
-            pconst(c_st, p) = st(a, b)
-            pconst(c_dn, p) = cn(a, b) * sqrt(sn(a, b) * mstar)
-            pconst(c_dt, p) = ct(a, b) * sqrt(st(a, b) * mstar)
-            pconst(c_mu, p) = mu(a, b)
-        end do
-    end subroutine pp_pair_constants
+    end subroutine pp_scales
 
-    !> Add the contact force and torque of every overlapping pair to the owned particles.
-    !> The pairs are taken in tiles
+    !> Add the contact force and torque of every overlapping pair to the owned particles
+    !> (the pair's constants, doc/theory.md section 1, from the material pair's table and the
+    !> two particles' radii and masses, when it touches). The pairs are taken in tiles
     !> of `tile`: the overlapping pairs of a tile are gathered into lanes and the contact law
     !> runs over those lanes at once (hm_lanes). The lever of a particle's rotation in the
     !> relative velocity is R - shift_v d, in the torque R - shift_t d (0: the radius; 1/2:
     !> the contact point at mid-overlap, as LIGGGHTS). With `reset`, a pair's history is
     !> cleared when its contact ends; without, it is kept while the pair is listed (LIGGGHTS
     !> 3.8.0) and continued by its next contact.
-    subroutine pp_forces(n_own, n_all, n_pairs, x, v, w, radius, scale, pair, pconst, &
-                         clamp_normal, keep_length, shift_v, shift_t, reset, dt, xi, touching, &
-                         acc, f, t)
+    subroutine pp_forces(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
+                         kn_ab, sn_ab, st_ab, cn_ab, ct_ab, mu_ab, clamp_normal, keep_length, shift_v, &
+                         shift_t, reset, dt, xi, touching, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
+        integer(ip), intent(in) :: nm             !! materials
         real(wp), intent(in) :: x(3, n_all), v(3, n_all), w(3, n_all)  !! [m], [m/s], [rad/s]
-        real(wp), intent(in) :: radius(n_all)     !! [m]
-        real(wp), intent(in) :: scale(n_all)      !! fixed-point scales (pp_pair_constants)
+        real(wp), intent(in) :: radius(n_all), mass(n_all)  !! [m], [kg]
+        integer(ip), intent(in) :: mat(n_all)
+        real(wp), intent(in) :: scale(n_all)      !! fixed-point scales (pp_scales)
         integer(ip), intent(in) :: pair(2, n_pairs)  !! the two particles of a pair
-        real(wp), intent(in) :: pconst(n_pair_constants, n_pairs)
+        real(wp), intent(in) :: kn_ab(nm, nm), sn_ab(nm, nm), st_ab(nm, nm)  !! [Pa]
+        real(wp), intent(in) :: cn_ab(nm, nm), ct_ab(nm, nm), mu_ab(nm, nm)  !! [-]
         logical, intent(in) :: clamp_normal, keep_length   !! (hm_lanes)
         real(wp), intent(in) :: shift_v, shift_t     !! levers R - shift d [-]
         logical, intent(in) :: reset                 !! the history cleared when a contact ends
@@ -92,12 +67,12 @@ contains
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
                                                      !! (zero between calls)
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m]
-        integer(ip) :: i, j, p, p0, c, l, m, side
+        integer(ip) :: i, j, p, p0, c, l, m, side, a, b
         integer(ip) :: lp(tile + 1)
         logical :: over
         integer(i8) :: kf(3), kc(3)
         real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, g, sv, &
-                    st_, ri, rj
+                    st_, ri, rj, mstar
         logical :: shifted_v, shifted_t
         real(wp), dimension(tile + 1) :: e1, e2, e3, e4
         real(wp), dimension(tile) :: ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, &
@@ -110,7 +85,7 @@ contains
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, over) &
-        !$acc private(side) &
+        !$acc private(side, a, b, mstar) &
         !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g, ri, rj) &
         !$acc firstprivate(sv, st_, shifted_v, shifted_t) &
         !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu) &
@@ -158,12 +133,15 @@ contains
                 v1(l) = v(1, i) - v(1, j) + (ws2 * n3(l) - ws3 * n2(l))
                 v2(l) = v(2, i) - v(2, j) + (ws3 * n1(l) - ws1 * n3(l))
                 v3(l) = v(3, i) - v(3, j) + (ws1 * n2(l) - ws2 * n1(l))
-                rs(l) = pconst(c_rstar, p)
-                kn(l) = pconst(c_kn, p)
-                st(l) = pconst(c_st, p)
-                dn(l) = pconst(c_dn, p)
-                dtan(l) = pconst(c_dt, p)
-                mu(l) = pconst(c_mu, p)
+                a = mat(i)
+                b = mat(j)
+                rs(l) = radius(i) * radius(j) / (radius(i) + radius(j))
+                mstar = mass(i) * mass(j) / (mass(i) + mass(j))
+                kn(l) = kn_ab(a, b)
+                st(l) = st_ab(a, b)
+                dn(l) = cn_ab(a, b) * sqrt(sn_ab(a, b) * mstar)
+                dtan(l) = ct_ab(a, b) * sqrt(st_ab(a, b) * mstar)
+                mu(l) = mu_ab(a, b)
                 x1(l) = xi(1, p)
                 x2(l) = xi(2, p)
                 x3(l) = xi(3, p)

@@ -43,7 +43,6 @@ module dem_neighbors
         integer(ip) :: n_pairs = 0            !< pairs evaluated here, each once
         integer(ip), allocatable :: pair(:, :) !< (first, second) particle of each pair; the
                                               !< first is the row's particle that evaluates it
-        real(wp), allocatable :: pconst(:, :) !< constants of each pair (dem_contacts_pp)
         real(wp), allocatable :: scale(:)     !< fixed-point scale of each particle (same)
         integer(i8), allocatable :: acc(:, :) !< work space of the contact kernel: the owned
                                               !< particles' sums, zero between steps
@@ -851,7 +850,6 @@ contains
         if (op == acc_to_host) return
         if (allocated(nb%wrow)) call acc_data(nb%wrow, op)
         if (allocated(nb%pair)) call acc_data(nb%pair, op)
-        if (allocated(nb%pconst)) call acc_data(nb%pconst, op)
         if (allocated(nb%scale)) call acc_data(nb%scale, op)
         if (allocated(nb%acc)) call acc_data(nb%acc, op)
         if (allocated(nb%x_ref)) call acc_data(nb%x_ref, op)

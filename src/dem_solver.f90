@@ -24,7 +24,7 @@ module dem_solver
                                  store_walls_restore, store_pairs_data, store_pairs_drop, &
                                  store_walls_data, store_pairs_forget_parted
     use dem_cells, only: fill_range, kept_indices
-    use dem_contacts_pp, only: pp_forces, pp_pair_constants, n_pair_constants
+    use dem_contacts_pp, only: pp_forces, pp_scales
     use dem_contacts_pw, only: pw_forces
     use dem_forces, only: body_forces, external_forces
     use dem_mesh, only: mesh_t, mesh_move
@@ -717,10 +717,10 @@ contains
                    n => s%p%n_own)
             call body_forces(n, p%mass, c%gravity, p%f, p%t)
             if (allocated(p%ext)) call external_forces(n, c%dt, p%v, p%ext, p%f, p%t)
-            call pp_forces(n, n + p%n_ghost, nb%n_pairs, p%x, p%v, p%w, p%radius, nb%scale, &
-                           nb%pair, nb%pconst, o%clamp_normal, o%keep_length, o%shift_v, &
-                           o%shift_t, o%reset_pair_history, c%dt, s%cs%xi, s%cs%touching, &
-                           nb%acc, p%f, p%t)
+            call pp_forces(n, n + p%n_ghost, nb%n_pairs, c%mats%n, p%x, p%v, p%w, p%radius, &
+                           p%mass, p%mat, nb%scale, nb%pair, pc%kn, pc%sn, pc%st, pc%cn, pc%ct, &
+                           pc%mu, o%clamp_normal, o%keep_length, o%shift_v, o%shift_t, &
+                           o%reset_pair_history, c%dt, s%cs%xi, s%cs%touching, nb%acc, p%f, p%t)
             call timer_stop(s%timers, phase_contacts_pp)
             if (m%n_tri == 0) return
             call pw_forces(n, nb%n_wrow, nb%wrow, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, &
@@ -820,15 +820,9 @@ contains
         if (s%trace_id /= 0) s%trace = particles_find(s%p%n_own, s%p%gid, s%trace_id)
         call neighbors_build(s%nb, s%cs, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
                              s%p%radius, s%mesh, old_index=order)
-        associate (nb => s%nb, pc => s%pc)
-            allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)), &
-                     nb%scale(max(1, s%p%n_own + s%p%n_ghost)))
-            call acc_data(nb%pconst, acc_create)
-            call acc_data(nb%scale, acc_create)
-            call pp_pair_constants(s%p%n_own + s%p%n_ghost, nb%n_pairs, size(pc%kn, 1, kind=ip), &
-                                   s%p%radius, s%p%mass, s%p%mat, nb%pair, pc%kn, pc%sn, pc%st, &
-                                   pc%cn, pc%ct, pc%mu, s%accel_bound, nb%pconst, nb%scale)
-        end associate
+        allocate(s%nb%scale(max(1, s%p%n_own + s%p%n_ghost)))
+        call acc_data(s%nb%scale, acc_create)
+        call pp_scales(s%p%n_own + s%p%n_ghost, s%p%mass, s%accel_bound, s%nb%scale)
         s%lists_on_device = .true.
         call acc_data(order, acc_exit)
         call acc_data(kept, acc_exit)

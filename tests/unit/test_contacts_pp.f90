@@ -10,7 +10,7 @@ program test_contacts_pp
     use dem_mesh, only: mesh_t
     use dem_neighbors, only: neighbors_t, neighbors_build
     use dem_contact_store, only: contact_store_t
-    use dem_contacts_pp, only: pp_forces, pp_pair_constants, n_pair_constants, fixed_scale
+    use dem_contacts_pp, only: pp_forces, pp_scales, fixed_scale
     use dem_contact_hm, only: hm_force
     use dem_vector, only: cross
     use dem_assert, only: assert_true, assert_close, assert_finish
@@ -63,15 +63,14 @@ program test_contacts_pp
             if (trial == 3) order = [(mod(37 * i, n) + 1, i = 1, n)]
             nb = neighbors_t(skin=0.001_wp)
             call neighbors_build(nb, cs, n, n, gid(order), x(:, order), r(order), no_walls)
-            allocate(nb%pconst(n_pair_constants, max(1, nb%n_pairs)), nb%scale(n))
-            call pp_pair_constants(n, nb%n_pairs, 1_ip, r(order), m(order), mat, nb%pair, kn, sn, &
-                                   st, cn, cn, mu, accel_bound, nb%pconst, nb%scale)
+            allocate(nb%scale(n))
+            call pp_scales(n, m(order), accel_bound, nb%scale)
             f = 0.0_wp
             t = 0.0_wp
-            call pp_forces(n, n, nb%n_pairs, x(:, order), v(:, order), w(:, order), r(order), &
-                           nb%scale, nb%pair, nb%pconst, .false., .true., shift, shift, .true., dt, &
-                           cs%xi, &
-                           cs%touching, nb%acc, f, t)
+            call pp_forces(n, n, nb%n_pairs, 1_ip, x(:, order), v(:, order), w(:, order), &
+                           r(order), m(order), mat, nb%scale, nb%pair, kn, sn, st, cn, cn, mu, &
+                           .false., .true., shift, shift, .true., dt, cs%xi, cs%touching, nb%acc, &
+                           f, t)
             back(order) = [(i, i = 1, n)]
             f = f(:, back)                     ! back in the order of the brute force
             t = t(:, back)
@@ -93,7 +92,7 @@ program test_contacts_pp
                 call assert_close(sum(f(i, :)), 0.0_wp, 0.0_wp, 'contact forces sum to zero', &
                                   sum(contacts * quantum) + n * epsilon(1.0_wp) * maxval(abs(f)))
             end do
-            deallocate(nb%pconst, nb%scale)
+            deallocate(nb%scale)
         end do
     end do
     call assert_true(maxval(abs(fb)) > 0.0_wp, 'there are contacts')
