@@ -1,10 +1,11 @@
 !> Particle-particle contact forces (doc/theory.md, section 2) in one pass over the pairs.
 !> The neighbour lists hold every pair once in a compact store (dem_neighbors); the
-!> constants of a pair in contact come from the two particles' radii, masses and materials. Each pair's force and
-!> n x F_t are added to both particles in 64-bit fixed point (doc/theory.md, section 13):
-!> integer sums do not depend on the order of their terms, so the forces are the same bit
-!> for bit whatever order pairs are evaluated in, where particles are stored and on any
-!> number of ranks, and on a GPU the sums are integer atomics.
+!> constants of a pair in contact come from the two particles' radii, masses and materials.
+!> Each pair's force and n x F_t are added to both particles in 64-bit fixed point
+!> (doc/theory.md, section 13): integer sums do not depend on the order of their terms, so
+!> the forces are the same bit for bit whatever order pairs are evaluated in, where
+!> particles are stored and on any number of ranks, and on a GPU the sums are integer
+!> atomics.
 module dem_contacts_pp
     use dem_kinds, only: wp, ip, i8
     use dem_contact_hm, only: hm_lanes, max_lanes
@@ -45,8 +46,8 @@ contains
     !> cleared when its contact ends; without, it is kept while the pair is listed (LIGGGHTS
     !> 3.8.0) and continued by its next contact.
     subroutine pp_forces(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
-                         kn_ab, sn_ab, st_ab, cn_ab, ct_ab, mu_ab, clamp_normal, keep_length, shift_v, &
-                         shift_t, reset, dt, xi, touching, acc, f, t)
+                         kn_ab, sn_ab, st_ab, cn_ab, ct_ab, mu_ab, clamp_normal, keep_length, &
+                         shift_v, shift_t, reset, dt, xi, touching, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
         integer(ip), intent(in) :: nm             !! materials
@@ -84,8 +85,8 @@ contains
         shifted_t = shift_t /= 0.0_wp
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
-        !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, over) &
-        !$acc private(side, a, b, mstar) &
+        !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc) &
+        !$acc private(over, side, a, b, mstar) &
         !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g, ri, rj) &
         !$acc firstprivate(sv, st_, shifted_v, shifted_t) &
         !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu) &
