@@ -906,7 +906,9 @@ contains
     !> ordered by partner id: row i is hpartner(hstart(i):hstart(i + 1) - 1), with the
     !> displacements hxi(:, ...) of particle i's side; what a particle takes to another rank.
     !> Pairs without history (xi = 0) are left out; without rows (no lists yet), all rows are
-    !> empty. Kernels; the rows are left on the device.
+    !> empty. The lists, when there are any, are those of the n_own particles (built for
+    !> them; outlets park particles without removing them). Kernels; the rows are left on
+    !> the device.
     subroutine neighbors_row_history(nb, cs, n_own, hstart, hpartner, hxi)
         type(neighbors_t), intent(in) :: nb
         type(contact_store_t), intent(in) :: cs
@@ -920,8 +922,6 @@ contains
         call acc_data(hstart, acc_create)
         call acc_data(cnt, acc_create)
         if (allocated(nb%start)) then
-            if (size(nb%start) /= n_own + 1) error stop 'dem_neighbors: the history rows ' // &
-                                                       'are not those of the particles'
             call history_counts(n_own, size(nb%partner, kind=ip), size(cs%xi, 2, kind=ip), &
                                 nb%start, nb%pref, cs%xi, cnt)
         else

@@ -1,0 +1,152 @@
+!> Frames: the state of a run captured by particle id (for snapshots, checkpoints, the
+!> final state and the last good state of the instability guard), and a run's state
+!> restored from a checkpoint's frame.
+module dem_frames
+    use dem_kinds, only: wp, ip, i8
+    use dem_case, only: case_t
+    use dem_run_state, only: solver_t, time_of, particle_data
+    use dem_particles, only: particles_add, particles_reserve, order_by_id
+    use dem_neighbors, only: neighbors_history, neighbors_set_history, neighbors_data
+    use dem_contact_store, only: store_walls_restore, store_pairs_data
+    use dem_mesh, only: mesh_t, mesh_move
+    use dem_checkpoint, only: frame_t, frame_spread, checkpoint_latest, checkpoint_kept
+    use dem_output, only: output_t, output_sizes
+    use dem_acc, only: acc_to_host
+    implicit none
+    private
+    public :: capture, frame_restore, mesh_at
+
+contains
+
+    !> Replace the state of a case just set up by solver_init with a checkpoint's (on P
+    !> ranks, each rank the particles it read: checkpoint_read). If dt is
+    !> the checkpoint's, the times of the steps are those of the run that wrote it, so that
+    !> the continuation is bit for bit the same; otherwise time counts on from its time.
+    !> Checkpoints newer than this one (a continuation now abandoned) are removed once the
+    !> run writes its first checkpoint.
+    subroutine frame_restore(s, c, fr)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(frame_t), intent(in) :: fr
+        character(len=:), allocatable :: latest
+        integer(i8), allocatable :: kept(:)
+        integer(ip) :: i, n
+        n = fr%n
+        s%p%n_own = 0
+        call particles_reserve(s%p, n)
+        do i = 1, n
+            call particles_add(s%p, fr%gid(i), fr%mat(i), fr%radius(i), &
+                               c%mats%density(fr%mat(i)), fr%x(:, i), fr%v(:, i), fr%w(:, i))
+        end do
+        s%p%f(:, 1:n) = fr%f
+        s%p%t(:, 1:n) = fr%t
+        call store_walls_restore(s%cs, n, fr%wall_tri, fr%wall_xi)
+        call neighbors_set_history(s%nb, s%cs, n, s%p%gid, [(i, i = 1, n)], fr%pair, fr%pair_xi)
+        s%trace = 0
+        if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:n), s%trace_id, dim=1)
+        if (s%trace == 0) s%trace_id = 0
+        s%step = fr%step
+        if (fr%dt == c%dt) then
+            s%time0 = fr%time0
+            s%step0 = fr%step0
+        else
+            s%time0 = fr%time
+            s%step0 = fr%step
+        end if
+        s%removed = fr%removed
+        s%settled = fr%settled
+        s%rng_state = fr%rng_state
+        s%snap_step = fr%snap_step
+        s%snap_time = fr%snap_time
+        s%snap_n = fr%snap_n
+        s%ckpt_step = fr%ckpt_step
+        latest = checkpoint_latest(c%output_dir)
+        if (len(latest) > 0) then
+            kept = checkpoint_kept(latest)
+            s%stale = pack(kept, kept > fr%step)
+        end if
+        if (s%mesh%moving) call mesh_move(s%mesh, fr%time)
+        s%good = fr                       ! this rank's particles and their pairs (distribute)
+        s%restarted = .true.
+    end subroutine frame_restore
+
+    !> The state now, particles by id, into `fr`, with the per-particle contact counts when
+    !> the snapshots hold them; on several ranks, spread over the ranks in blocks of ids, as
+    !> the files are written (frame_spread). With `local`, each rank keeps its own particles
+    !> (the last good state: spread only if it must be written).
+    subroutine capture(s, c, out, fr, local)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(output_t), intent(inout) :: out
+        type(frame_t), intent(out) :: fr
+        logical, intent(in), optional :: local
+        integer(ip), allocatable :: order(:)
+        integer(i8) :: bytes(3)
+        call particle_data(s, acc_to_host)
+        call neighbors_data(s%nb, acc_to_host)
+        call store_pairs_data(s%cs, acc_to_host)
+        associate (p => s%p, n => s%p%n_own)
+            order = order_by_id(p%gid(1:n))
+            fr%time = time_of(s, c, s%step)
+            fr%step = s%step
+            fr%n = n
+            fr%gid = p%gid(order)
+            fr%mat = p%mat(order)
+            fr%radius = p%radius(order)
+            fr%x = p%x(:, order)
+            fr%v = p%v(:, order)
+            fr%w = p%w(:, order)
+        end associate
+        call capture_history(s, c, order, fr)
+        if (.not. present(local)) call frame_spread(fr, s%comm)
+        fr%time0 = s%time0
+        fr%step0 = s%step0
+        fr%dt = c%dt
+        fr%removed = s%removed
+        fr%settled = s%settled
+        fr%rng_state = s%rng_state
+        if (s%comm%rank == 0) then
+            bytes = output_sizes(out)
+            fr%series_bytes = bytes(1)
+            fr%contact_bytes = bytes(2)
+            fr%probes_bytes = bytes(3)
+        end if
+        fr%snap_step = s%snap_step
+        fr%snap_time = s%snap_time
+        fr%snap_n = s%snap_n
+    end subroutine capture
+
+    !> Forces, torques and contact history of the owned particles `order` (by id) into
+    !> `fr`, and their contact counts when the snapshots hold them.
+    subroutine capture_history(s, c, order, fr)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        integer(ip), intent(in) :: order(:)
+        type(frame_t), intent(inout) :: fr
+        integer(ip) :: a, i
+        associate (p => s%p, n => s%p%n_own)
+            fr%f = p%f(:, order)
+            fr%t = p%t(:, order)
+            fr%wall_tri = s%cs%wall_tri(:, order)
+            fr%wall_xi = s%cs%wall_xi(:, :, order)
+            call neighbors_history(s%nb, s%cs, n, p%gid, order, fr%pair, fr%pair_xi)
+            if (c%snapshot_contacts) then
+                allocate(fr%contacts(n))
+                do a = 1, n
+                    i = order(a)
+                    fr%contacts(a) = count(s%cs%touching(abs(s%nb%pref(s%nb%start(i): &
+                                     s%nb%start(i + 1) - 1)))) + count(s%cs%wall_tri(:, i) > 0)
+                end do
+            end if
+        end associate
+    end subroutine capture_history
+
+    !> The walls in their pose at `time`.
+    function mesh_at(s, time) result(m)
+        type(solver_t), intent(in) :: s
+        real(wp), intent(in) :: time
+        type(mesh_t) :: m
+        m = s%mesh
+        if (m%moving) call mesh_move(m, time)
+    end function mesh_at
+end module dem_frames

@@ -1,0 +1,202 @@
+!> Lists and migration: the particles re-sorted in space and the neighbour lists rebuilt when
+!> they are stale (doc/theory.md, section 9), after the particles have gone to the ranks of
+!> their blocks, repartitioned when the load is out of balance (doc/parallel.md); between
+!> rebuilds, the ghosts refreshed (the halo). The particles that outlets took out are
+!> removed at a rebuild.
+module dem_rebuild
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error, dem_err_runtime
+    use dem_comm, only: comm_any, comm_max, comm_sum
+    use dem_case, only: case_t
+    use dem_run_state, only: solver_t, release_gone
+    use dem_particles, only: particles_permute, particles_find
+    use dem_domain, only: domain_init, domain_data, domain_balance, domain_imbalance, &
+                          domain_migrate, domain_ghosts, domain_update
+    use dem_neighbors, only: neighbors_build, neighbors_stale, neighbors_spatial_order, &
+                             neighbors_row_history, neighbors_set_rows
+    use dem_contact_store, only: store_walls_permute, store_pairs_forget_parted
+    use dem_cells, only: fill_range, kept_indices
+    use dem_contacts_pp, only: pp_scales
+    use dem_diagnostics, only: momentum_sums
+    use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit
+    implicit none
+    private
+    public :: lists_refresh, rebuild, settle_outlets, start_domain
+
+contains
+
+    !> The lists rebuilt when a particle has moved too far for them (on every rank if on
+    !> one), with the parked particles removed; else, on several ranks, the ghosts' positions
+    !> and velocities refreshed from their owners.
+    subroutine lists_refresh(s, err)
+        type(solver_t), intent(inout) :: s
+        type(error_t), intent(inout) :: err
+        logical :: stale
+        stale = neighbors_stale(s%nb, s%p%n_own, s%p%x, s%mesh)
+        if (s%comm%size > 1) stale = comm_any(s%comm, stale)
+        if (stale) then
+            call rebuild(s, s%parked > 0, err)
+        else if (s%comm%size > 1) then                ! only x, v, w of the ghosts change
+            call domain_update(s%dom, s%comm, s%p)
+        end if
+    end subroutine lists_refresh
+
+    !> The blocks of a run on several ranks, over the box of the particles of all ranks and
+    !> the walls.
+    subroutine start_domain(s, c)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        real(wp) :: lo(3), hi(3), p_lo(3), p_hi(3), rmin, extent(7)
+        integer(i8) :: total(1)
+        integer(ip) :: n
+        n = s%p%n_own
+        extent = -huge(1.0_wp)                   ! -lo, hi, -smallest radius
+        if (n > 0) extent = [-minval(s%p%x(:, 1:n), dim=2), maxval(s%p%x(:, 1:n), dim=2), &
+                             -minval(s%p%radius(1:n))]
+        call comm_max(s%comm, extent)
+        total = n
+        call comm_sum(s%comm, total)
+        n = int(total(1), ip)
+        lo = -extent(1:3)
+        hi = extent(4:6)
+        p_lo = lo
+        p_hi = hi
+        if (s%mesh%n_tri > 0) then
+            lo = min(lo, minval(reshape(s%mesh%vert, [3, 3 * s%mesh%n_tri]), dim=2))
+            hi = max(hi, maxval(reshape(s%mesh%vert, [3, 3 * s%mesh%n_tri]), dim=2))
+        end if
+        if (any(lo > hi)) then                     ! nothing at all
+            lo = 0.0_wp
+            hi = 0.0_wp
+        end if
+        if (n == 0) then
+            p_lo = lo
+            p_hi = hi
+        end if
+        rmin = 0.0_wp
+        if (n > 0) rmin = -extent(7)
+        call domain_init(s%dom, s%comm, lo, hi, p_lo, p_hi, 2.0_wp * (2.0_wp * rmin + c%skin), &
+                         c%skin)
+        s%dom%gpu_aware_mpi = c%gpu_aware_mpi
+    end subroutine start_domain
+
+    !> Re-sort the particles in space and rebuild the neighbour lists; the history follows
+    !> the particles. With `outlets`, the particles the outlet flags mark (parked) are
+    !> removed. On several ranks the particles first go to the ranks of their blocks
+    !> (repartitioned when the load is out of balance), and the ghosts are exchanged after
+    !> the re-sort. All of it runs on the device; the host sees counts and the buffers MPI
+    !> sends (and the stores when they must grow or shrink for a rank's share). Collective;
+    !> a failed partition or migration sets err on every rank.
+    subroutine rebuild(s, outlets, err)
+        type(solver_t), intent(inout) :: s
+        logical, intent(in) :: outlets           !! remove the parked particles
+        type(error_t), intent(inout) :: err      !! a failed partition or migration
+        integer(ip), allocatable :: order(:), kept(:)
+        integer(ip) :: m
+        ! a list build during the run ends the history of the parted pairs that keep it
+        ! (reset_pair_history false, doc/theory.md section 3); not the first build of a run
+        if (.not. s%pc%opts%reset_pair_history .and. s%lists_on_device) &
+            call store_pairs_forget_parted(s%cs, s%nb%n_pairs)
+        if (s%comm%size > 1) then
+            if (s%lists_on_device) call domain_data(s%dom, acc_exit)
+            call distribute(s, outlets, err)
+            if (err%failed()) return
+        end if
+        call kept_particles(s, outlets .and. s%comm%size == 1, kept, m)
+        allocate(order(max(1, m)))
+        call acc_data(order, acc_create)
+        call neighbors_spatial_order(m, kept, s%p%x, s%sort_cell, order)
+        call particles_permute(s%p, order(1:m))
+        call store_walls_permute(s%cs, order(1:m))
+        if (s%comm%size > 1) then
+            call domain_ghosts(s%dom, s%comm, s%p)
+            call domain_data(s%dom, acc_enter)
+        end if
+        if (s%trace_id /= 0) s%trace = particles_find(s%p%n_own, s%p%gid, s%trace_id)
+        call neighbors_build(s%nb, s%cs, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
+                             s%p%radius, s%mesh, old_index=order)
+        allocate(s%nb%scale(max(1, s%p%n_own + s%p%n_ghost)))
+        call acc_data(s%nb%scale, acc_create)
+        call pp_scales(s%p%n_own + s%p%n_ghost, s%p%mass, s%accel_bound, s%nb%scale)
+        s%lists_on_device = .true.
+        call acc_data(order, acc_exit)
+        call acc_data(kept, acc_exit)
+        if (allocated(s%gone)) call release_gone(s)   ! made anew for the new order
+        s%parked = 0
+    end subroutine rebuild
+
+    !> kept(1:m): the owned particles that stay in the run, in order; with `outlets`, those
+    !> the outlet flags do not mark. On the device (kept is created there).
+    subroutine kept_particles(s, outlets, kept, m)
+        type(solver_t), intent(in) :: s
+        logical, intent(in) :: outlets
+        integer(ip), allocatable, intent(out) :: kept(:)
+        integer(ip), intent(out) :: m
+        allocate(kept(max(1, s%p%n_own)))
+        call acc_data(kept, acc_create)
+        if (outlets) then
+            call kept_indices(s%p%n_own, s%gone, kept, m)
+        else
+            m = s%p%n_own
+            call fill_range(m, kept, 1, 1)
+        end if
+    end subroutine kept_particles
+
+    !> Give the particles that stay in the run (with `outlets`, the parked ones are removed)
+    !> and their contact history to the ranks of their blocks, rebalancing first when the
+    !> load ratio exceeds the limit times the ratio the last partition achieved (blocks may
+    !> not allow better, and a draining silo's last particles would be repartitioned at every
+    !> rebuild). The pair history travels in rows, each particle's from its own side
+    !> (neighbors_row_history: from the lists, or after a restart from the checkpoint's
+    !> pairs), and is left for the next neighbors_build. The particle count and the momentum
+    !> are checked to be the same after the move (to round-off); a failed partition or
+    !> migration sets err on every rank.
+    subroutine distribute(s, outlets, err)
+        type(solver_t), intent(inout) :: s
+        logical, intent(in) :: outlets
+        type(error_t), intent(inout) :: err
+        integer(ip), allocatable :: kept(:), owned(:), hstart(:)
+        integer(i8), allocatable :: hpartner(:)
+        real(wp), allocatable :: hxi(:, :)
+        real(wp) :: imbalance, before(5), after(5)
+        integer(ip) :: m, n
+        integer :: status
+        logical :: balance
+        call kept_particles(s, outlets, kept, m)
+        call neighbors_row_history(s%nb, s%cs, s%p%n_own, hstart, hpartner, hxi)
+        imbalance = domain_imbalance(s%comm, m)
+        balance = .not. s%distributed .or. imbalance > s%imbalance_limit * s%balanced
+        if (balance) then
+            call domain_balance(s%dom, s%comm, m, kept, s%p%x, s%p%radius, s%cs%wall_tri, status)
+            if (comm_any(s%comm, status /= 1)) then
+                call acc_data(kept, acc_exit)
+                call set_error(err, dem_err_runtime, 'METIS could not partition the blocks ' // &
+                               'of space between the ranks')
+                return
+            end if
+        end if
+        before = momentum_sums(s%comm, m, kept, s%p%mass, s%p%v)
+        call domain_migrate(s%dom, s%comm, s%p, s%cs, m, kept, hstart, hpartner, hxi)
+        call acc_data(kept, acc_exit)
+        s%distributed = .true.
+        if (balance) s%balanced = domain_imbalance(s%comm, s%p%n_own)
+        call kept_particles(s, .false., owned, n)
+        after = momentum_sums(s%comm, n, owned, s%p%mass, s%p%v)
+        call acc_data(owned, acc_exit)
+        if (nint(after(1)) /= nint(before(1)) .or. any(abs(after(2:4) - before(2:4)) > &
+            1.0e-9_wp * (before(5) + tiny(1.0_wp)))) then    ! (global sums: every rank)
+            call set_error(err, dem_err_runtime, 'a migration between the ranks did not ' // &
+                           'conserve the particles or their momentum')
+            return
+        end if
+        call neighbors_set_rows(s%nb, s%cs, hstart, hpartner, hxi)
+    end subroutine distribute
+
+    !> Remove the parked particles now (a rebuild), if there are any: before an output, and
+    !> at the end of an advance; collective.
+    subroutine settle_outlets(s, err)
+        type(solver_t), intent(inout) :: s
+        type(error_t), intent(inout) :: err
+        if (s%parked > 0) call rebuild(s, .true., err)
+    end subroutine settle_outlets
+end module dem_rebuild

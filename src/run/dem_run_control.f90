@@ -1,0 +1,206 @@
+!> Run control: the stop for the wall-time limit or a signal (with a checkpoint), the
+!> instability guard (speeds, finite state, kinetic and elastic energy; doc/theory.md,
+!> section 6) that stops an unstable run with the last good state saved, and the progress
+!> line, which reads the state and changes none of it.
+module dem_run_control
+    use, intrinsic :: iso_fortran_env, only: output_unit
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error, dem_err_runtime
+    use dem_comm, only: comm_any, comm_gather
+    use dem_case, only: case_t, case_energy_bound
+    use dem_run_state, only: solver_t, time_of, summed, particle_data, stop_wall_time, stop_signal
+    use dem_run_output, only: contact_counts, write_checkpoint, write_frame_checkpoint
+    use dem_domain, only: domain_update
+    use dem_diagnostics, only: energies, elastic_energy, first_nonfinite
+    use dem_output, only: output_t
+    use dem_checkpoint, only: frame_t, frame_spread, checkpoint_file
+    use dem_signals, only: signal_received
+    use dem_text, only: itoa, real_text, duration_text
+    use dem_timers, only: wall_seconds, timer_seconds
+    use dem_acc, only: acc_to_host
+    implicit none
+    private
+    public :: run_control, progress, energy_guard, unstable
+
+    !> time left for the end of a stopped run after its checkpoint: closing files, the timing
+    !> report, MPI_Finalize (measured: 50 to 140 ms on one node) [s]
+    real(wp), parameter :: shutdown_seconds = 0.25_wp
+
+contains
+
+    !> Stop the run if a signal came or the wall-time limit is near, after writing a
+    !> checkpoint (unless one was just written). The limit is near when less time is left
+    !> than twice the slowest checkpoint write (before the first: 4 us per particle), two
+    !> steps and the time to shut down (doc/theory.md, section 11). Every rank stops, or none;
+    !> `show` (rank 0's clock says that a progress line is due) becomes every rank's.
+    subroutine run_control(s, c, out, started, step_seconds, written, show, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(output_t), intent(inout) :: out
+        real(wp), intent(in) :: started, step_seconds
+        logical, intent(in) :: written
+        logical, intent(inout) :: show
+        type(error_t), intent(inout) :: err
+        real(wp) :: reserve
+        character(len=:), allocatable :: sig
+        logical :: near, flags(3)
+        sig = signal_received()
+        reserve = 2.0_wp * max(s%ckpt_seconds, 4.0e-6_wp * s%p%n_own) + 2.0_wp * step_seconds &
+                  + shutdown_seconds
+        near = c%wall_time_limit > 0.0_wp .and. &
+               wall_seconds() - started + reserve >= c%wall_time_limit
+        flags = comm_any(s%comm, [len(sig) > 0, near, show])
+        show = flags(3)
+        near = flags(2)
+        if (.not. (flags(1) .or. near)) return
+        if (near) then
+            s%stopped = stop_wall_time
+            s%stop_message = 'the wall-time limit is near'
+        else
+            s%stopped = stop_signal
+            s%stop_message = 'a signal (SIGTERM or SIGUSR1) was received'
+            if (len(sig) > 0) s%stop_message = sig // ' received'
+        end if
+        if (.not. written) call write_checkpoint(s, c, out, err)
+        s%stop_message = s%stop_message // '; stopped at t = ' // real_text(time_of(s, c, &
+            s%step)) // ' s after writing ' // c%output_dir // '/' // &
+            checkpoint_file(s%step) // '; continue with dem --resume ' // c%source
+    end subroutine run_control
+
+    !> The progress line: step, time, percentage, particles, contacts, speed, time left
+    !> (doc/theory.md, section 11). It changes nothing the run computes with: the particles
+    !> that outlets took out are not counted (they are removed at the next rebuild, which
+    !> the line does not bring forward), the host copies and the ghosts are refreshed.
+    subroutine progress(s, c, n_end)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        integer(i8), intent(in) :: n_end
+        real(wp) :: run_seconds, rate, left
+        integer(i8) :: counts(3), particle_steps
+        integer :: k
+        call particle_data(s, acc_to_host)
+        counts = contact_counts(s)
+        counts(3) = counts(3) - s%parked
+        particle_steps = summed(s%comm, s%particle_steps)
+        if (s%comm%rank /= 0) return
+        run_seconds = 0.0_wp
+        do k = 1, size(s%timers%ticks)
+            run_seconds = run_seconds + timer_seconds(s%timers, k)
+        end do
+        rate = real(particle_steps, wp) / max(run_seconds, tiny(1.0_wp))
+        left = real(n_end - s%step, wp) * run_seconds / max(1.0_wp, real(s%steps_run, wp))
+        write(output_unit, '(a,i0,a,es11.4,a,f5.1,a,i0,a,i0,a,es9.2,a,a)') 'progress: step ', &
+            s%step, '  t = ', time_of(s, c, s%step), ' s  ', &
+            100.0_wp * real(s%step - s%step0, wp) / max(1.0_wp, real(n_end - s%step0, wp)), &
+            ' %  particles ', counts(3), '  contacts ', counts(1) + counts(2), '  ', rate, &
+            ' particle-steps/s  left ', duration_text(left)
+        flush(output_unit)
+    end subroutine progress
+
+    !> The state's checks at a row of series.csv or a checkpoint, before it becomes the last
+    !> good state: finite, and its kinetic and elastic energy within case_energy_bound (the
+    !> energy guard, doc/theory.md, section 6); else the run stops (unstable). Collective;
+    !> brings the particles to the host.
+    subroutine energy_guard(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        real(wp) :: ke_t, ke_r, pe, vmax, mass, energy
+        call particle_data(s, acc_to_host)
+        if (comm_any(s%comm, first_nonfinite(s%p%n_own, s%p%x, s%p%v, s%p%w) > 0)) then
+            call unstable(s, c, err)
+            return
+        end if
+        if (s%comm%size > 1) call domain_update(s%dom, s%comm, s%p)   ! the ghosts' positions
+        associate (p => s%p, k => s%p%n_own)
+            call energies(s%comm, k, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, ke_t, &
+                          ke_r, pe, vmax, mass)
+            energy = ke_t + ke_r + elastic_energy(s%comm, k, k + p%n_ghost, &
+                size(s%nb%list, kind=ip), p%x, p%radius, p%mat, s%nb%start, s%nb%list, &
+                c%mats%n, s%pc%kn, s%cs%wall_tri, s%mesh)
+        end associate
+        if (energy > case_energy_bound(c, mass)) &
+            call unstable(s, c, err, [energy, case_energy_bound(c, mass)])
+    end subroutine energy_guard
+
+    !> The instability guard has tripped: write the last good state as a checkpoint (unless a
+    !> checkpoint, which passed the guard too, is newer), and stop the run naming the
+    !> offending particle of lowest id, the time and the likely cause. With `energy` (the
+    !> energy and its bound [J]), the energy guard has: the fastest particle is named.
+    subroutine unstable(s, c, err, energy)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        real(wp), intent(in), optional :: energy(2)
+        type(frame_t) :: good
+        type(error_t) :: write_err
+        character(len=:), allocatable :: what, saved
+        integer(i8), allocatable :: ids(:)
+        real(wp), allocatable :: speeds(:)
+        integer(ip) :: i, bad
+        real(wp) :: speed, v_i
+        call particle_data(s, acc_to_host)
+        bad = 0
+        speed = ieee_value(speed, ieee_quiet_nan)     ! a non-finite state
+        associate (p => s%p)
+            do i = 1, p%n_own
+                if (first_nonfinite(1_ip, p%x(:, i:i), p%v(:, i:i), p%w(:, i:i)) > 0) then
+                    if (bad == 0 .or. p%gid(i) < p%gid(max(bad, 1))) bad = i
+                end if
+            end do
+            if (bad == 0) then             ! the fastest, or the lowest id above max_speed
+                do i = 1, p%n_own
+                    v_i = max(norm2(p%v(:, i)), norm2(p%w(:, i)) * p%radius(i))
+                    if (.not. present(energy) .and. v_i < c%max_speed) cycle
+                    if (bad > 0) then
+                        if (present(energy) .and. v_i /= speed) then
+                            if (v_i < speed) cycle
+                        else if (p%gid(i) > p%gid(bad)) then
+                            cycle
+                        end if
+                    end if
+                    bad = i
+                    speed = v_i
+                end do
+            end if
+            call comm_gather(s%comm, [merge(p%gid(max(bad, 1)), 0_i8, bad > 0)], ids)
+            call comm_gather(s%comm, [speed], speeds)
+        end associate
+        what = ''
+        if (s%comm%rank == 0) then              ! the offender of lowest id, any rank
+            if (present(energy)) then            ! (or the fastest)
+                where (ids > 0 .and. speeds < maxval(speeds, mask=ids > 0)) ids = 0
+            end if
+            i = minloc(ids, mask=ids > 0, dim=1)
+            what = 'unstable: particle ' // itoa(ids(i))
+            if (ieee_is_nan(speeds(i))) then
+                what = what // ' has a non-finite state'
+            else if (present(energy)) then
+                what = what // ' moves at ' // real_text(speeds(i)) // ' m/s, the fastest, ' // &
+                       'as the kinetic and elastic energy, ' // real_text(energy(1)) // &
+                       ' J, exceeds the bound ' // real_text(energy(2)) // ' J (&run max_energy)'
+            else
+                what = what // ' moves at ' // real_text(speeds(i)) // ' m/s, above the bound ' &
+                       // real_text(c%max_speed) // ' m/s (&run max_speed)'
+            end if
+        end if
+        saved = ''
+        if (any(s%ckpt_step > s%good%step)) then     ! a checkpoint newer than the last row
+            saved = '; the last good state is in ' // c%output_dir // '/' // &
+                    checkpoint_file(maxval(s%ckpt_step))
+        else if (allocated(s%good%gid)) then
+            good = s%good                         ! each rank's own particles: spread
+            call frame_spread(good, s%comm)
+            call write_frame_checkpoint(s, c, good, write_err)
+            saved = '; the last good state, at t = ' // real_text(s%good%time) // ' s, is in ' &
+                    // c%output_dir // '/' // checkpoint_file(s%good%step)
+            if (write_err%failed()) saved = '; the last good state could not be written: ' // &
+                                            write_err%message
+        end if
+        call set_error(err, dem_err_runtime, what // ' at t = ' // &
+            real_text(time_of(s, c, s%step)) // ' s; dt is ' // &
+            real_text(c%dt / s%scales%rayleigh) // ' of the Rayleigh time (' // &
+            real_text(s%scales%rayleigh) // ' s): reduce dt' // saved)
+    end subroutine unstable
+end module dem_run_control

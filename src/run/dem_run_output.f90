@@ -1,0 +1,237 @@
+!> The outputs of a run as it goes (doc/output.md): the rows of series.csv and probes.csv,
+!> the histograms, the traced particle's contact.csv, snapshots with their XDMF index, and
+!> checkpoints with checkpoints/latest. Sums over the ranks are in fixed point; rank 0
+!> writes the text files, every rank its part of the HDF5 files.
+module dem_run_output
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error, dem_err_runtime
+    use dem_comm, only: comm_sum
+    use dem_case, only: case_t
+    use dem_run_state, only: solver_t, time_of, particle_data
+    use dem_rebuild, only: settle_outlets
+    use dem_frames, only: capture, mesh_at
+    use dem_domain, only: domain_update
+    use dem_diagnostics, only: energies, count_pp_sides, first_nonfinite, contact_trace
+    use dem_output, only: output_t, output_series, output_contact, output_sizes, &
+                          output_probes, output_histogram
+    use dem_probes, only: probe_values, probe_histogram_counts, probe_histogram
+    use dem_checkpoint, only: frame_t, frame_write, checkpoint_file
+    use dem_xdmf, only: xdmf_write, snapshot_file
+    use dem_files, only: make_directory, file_remove, file_rename
+    use dem_timers, only: wall_seconds
+    use dem_acc, only: acc_data, acc_to_host
+    implicit none
+    private
+    public :: write_series, contact_counts, write_trace, write_snapshot, write_xdmf, &
+              write_checkpoint, write_frame_checkpoint
+
+contains
+
+    !> One row of series.csv and of probes.csv, every rank giving its own particles, the sums
+    !> in fixed point (so that they depend neither on where particles are stored nor on the
+    !> number of ranks); rank 0 writes them. The state, which the caller has checked with the
+    !> instability guard, becomes the last good state (each rank keeps its own particles').
+    subroutine write_series(s, c, out, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(output_t), intent(inout) :: out
+        type(error_t), intent(inout) :: err
+        real(wp) :: ke_t, ke_r, pe, vmax, mass
+        integer(i8) :: counts(3), bytes(3), n(1)
+        logical :: settled
+        counts = contact_counts(s)
+        call capture(s, c, out, s%good, local=.true.)
+        associate (p => s%p, k => s%p%n_own)
+            call energies(s%comm, k, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, ke_t, &
+                          ke_r, pe, vmax, mass)
+            n = k
+            call comm_sum(s%comm, n)
+            settled = s%step > 0 .and. ke_t + ke_r < c%stop_kinetic_energy
+            if (s%comm%rank == 0) call output_series(out, time_of(s, c, s%step), s%step, &
+                int(n(1), ip), s%removed, int(counts(1), ip), int(counts(2), ip), ke_t, ke_r, pe, &
+                vmax, err)
+            call write_probes(s, c, out, err)
+        end associate
+        if (s%comm%rank == 0) then
+            bytes = output_sizes(out)            ! the row just written belongs to the state
+            s%good%series_bytes = bytes(1)
+            s%good%contact_bytes = bytes(2)
+            s%good%probes_bytes = bytes(3)
+        end if
+        s%settled = settled
+    end subroutine write_series
+
+    !> Particle contacts (pairs), wall contacts and particles, over the ranks (the ghosts
+    !> are brought to the owned particles' step first): the pairs counted on the device, the
+    !> wall contacts on the host (the caller has brought the particles there).
+    function contact_counts(s) result(counts)
+        type(solver_t), intent(inout) :: s
+        integer(i8) :: counts(3)
+        if (s%comm%size > 1) call domain_update(s%dom, s%comm, s%p)   ! on the device
+        associate (p => s%p, n => s%p%n_own)
+            counts(1) = count_pp_sides(n, n + p%n_ghost, size(s%nb%list, kind=ip), p%x, &
+                                       p%radius, s%nb%start, s%nb%list)
+        end associate
+        counts(2:3) = [count(s%cs%wall_tri(:, 1:s%p%n_own) > 0, kind=i8), int(s%p%n_own, i8)]
+        call comm_sum(s%comm, counts)
+        counts(1) = counts(1) / 2
+    end function contact_counts
+
+    !> The probes' row of probes.csv, and the histograms due now, from every rank's owned
+    !> particles (reductions on the device), for the materials the case's particles are made
+    !> of; collective, rank 0 writes.
+    subroutine write_probes(s, c, out, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(output_t), intent(inout) :: out
+        type(error_t), intent(inout) :: err
+        real(wp), allocatable :: values(:)
+        integer(i8), allocatable :: counts(:, :)
+        real(wp) :: t
+        integer :: k
+        t = time_of(s, c, s%step)
+        values = [real(wp) ::]
+        associate (p => s%p, n => s%p%n_own)
+            do k = 1, size(c%probes)
+                values = [values, probe_values(s%comm, c%probes(k), s%run%probed, n, p%gid, &
+                                               p%mat, p%mass, p%x, p%v, p%w)]
+                if (c%probes(k)%kind /= probe_histogram .or. &
+                    .not. histogram_due(c%probes(k)%time)) cycle
+                counts = probe_histogram_counts(s%comm, c%probes(k), n, p%x, p%v)
+                if (s%comm%rank == 0) call output_histogram(c%output_dir, c%probes(k)%name, &
+                    c%probes(k)%v_min, c%probes(k)%v_max, counts, err)
+            end do
+        end associate
+        if (s%comm%rank == 0) call output_probes(out, t, s%step, values, err)
+    contains
+        !> A histogram at time t_h is written at the first row at or after it: this one if the
+        !> row one output interval earlier was before it.
+        logical function histogram_due(t_h)
+            real(wp), intent(in) :: t_h
+            histogram_due = t >= t_h .and. &
+                t - max(1.0_wp, real(nint(c%output_interval / c%dt), wp)) * c%dt < t_h
+        end function histogram_due
+    end subroutine write_probes
+
+    !> One row of contact.csv for the traced particle, if its state is finite; else `bad`.
+    subroutine write_trace(s, c, out, time, err, bad)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(output_t), intent(inout) :: out
+        real(wp), intent(in) :: time
+        type(error_t), intent(inout) :: err
+        logical, intent(inout) :: bad          !! set when the traced particle is not finite
+        real(wp) :: overlap, fn, ft
+        integer(ip) :: i
+        if (s%trace == 0 .or. err%failed()) return
+        call particle_data(s, acc_to_host)
+        if (s%mesh%moving) call acc_data(s%mesh%vert, acc_to_host)   ! placed on the device
+        i = s%trace
+        associate (p => s%p)
+            if (first_nonfinite(1_ip, p%x(:, i:i), p%v(:, i:i), p%w(:, i:i)) > 0) then
+                bad = .true.
+                return
+            end if
+            call contact_trace(i, p%n_own + p%n_ghost, p%x, p%radius, p%mass, p%f, c%gravity, &
+                               s%mesh, overlap, fn, ft)
+            call output_contact(out, time, overlap, fn, ft, p%x(:, i), p%v(:, i), p%w(:, i), &
+                                err)
+        end associate
+    end subroutine write_trace
+
+    !> A snapshot of the state now, and the XDMF index updated.
+    subroutine write_snapshot(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        type(frame_t) :: fr
+        type(output_t) :: none
+        integer(i8) :: n_total(1)
+        if (err%failed()) return
+        call make_directory(c%output_dir // '/snapshots', err)
+        if (err%failed()) return
+        call settle_outlets(s, err)
+        if (err%failed()) return
+        call capture(s, c, none, fr)
+        n_total = size(fr%gid, kind=i8)
+        call comm_sum(s%comm, n_total)
+        if (.not. c%snapshot_force) deallocate(fr%f)
+        call frame_write(fr, c, mesh_at(s, fr%time), c%output_dir // '/' // &
+                         snapshot_file(s%step), .false., s%comm, err)
+        if (err%failed()) return
+        s%snap_step = [pack(s%snap_step, s%snap_step < s%step), s%step]
+        s%snap_time = [s%snap_time(1:size(s%snap_step) - 1), fr%time]
+        s%snap_n = [s%snap_n(1:size(s%snap_step) - 1), n_total(1)]
+        call write_xdmf(s, c, err)
+    end subroutine write_snapshot
+
+    subroutine write_xdmf(s, c, err)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        if (s%comm%rank /= 0) return
+        call xdmf_write(c%output_dir // '/snapshots.xmf', s%snap_step, s%snap_time, s%snap_n, &
+                        s%mesh%n_tri, c%snapshot_force, c%snapshot_contacts, err)
+    end subroutine write_xdmf
+
+    !> A checkpoint of the state now.
+    subroutine write_checkpoint(s, c, out, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(output_t), intent(inout) :: out
+        type(error_t), intent(inout) :: err
+        type(frame_t) :: fr
+        if (err%failed()) return
+        call settle_outlets(s, err)
+        if (err%failed()) return
+        call capture(s, c, out, fr)
+        call write_frame_checkpoint(s, c, fr, err)
+    end subroutine write_checkpoint
+
+    !> Write frame `fr` as a checkpoint, point checkpoints/latest at it, and remove the
+    !> checkpoints beyond the last checkpoint_keep.
+    subroutine write_frame_checkpoint(s, c, fr, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(frame_t), intent(inout) :: fr
+        type(error_t), intent(inout) :: err
+        integer(i8), allocatable :: kept(:)
+        real(wp) :: t0
+        integer :: k, u, ios
+        t0 = wall_seconds()
+        call make_directory(c%output_dir // '/checkpoints', err)
+        if (err%failed()) return
+        kept = [pack(s%ckpt_step, s%ckpt_step < fr%step), fr%step]
+        kept = kept(max(1, size(kept) - c%checkpoint_keep + 1):)
+        fr%ckpt_step = kept
+        call frame_write(fr, c, mesh_at(s, fr%time), c%output_dir // '/' // &
+                         checkpoint_file(fr%step), .true., s%comm, err)
+        if (err%failed()) return
+        if (s%comm%rank == 0) call point_latest_and_prune()    ! the files are rank 0's
+        s%ckpt_step = kept                       ! the bookkeeping is every rank's
+        s%stale = [integer(i8) ::]
+        s%ckpt_seconds = max(s%ckpt_seconds, wall_seconds() - t0)
+    contains
+        subroutine point_latest_and_prune()
+            open(newunit=u, file=c%output_dir // '/checkpoints/latest.part', status='replace', &
+                 action='write', iostat=ios)
+            if (ios == 0) write(u, '(a)', iostat=ios) checkpoint_file(fr%step)
+            if (ios == 0) close(u, iostat=ios)
+            if (ios /= 0) then
+                call set_error(err, dem_err_runtime, c%output_dir // '/checkpoints/latest: ' // &
+                               'cannot write')
+                return
+            end if
+            call file_rename(c%output_dir // '/checkpoints/latest.part', &
+                             c%output_dir // '/checkpoints/latest', err)
+            do k = 1, size(s%ckpt_step)
+                if (all(kept /= s%ckpt_step(k))) &
+                    call file_remove(c%output_dir // '/' // checkpoint_file(s%ckpt_step(k)))
+            end do
+            do k = 1, size(s%stale)
+                if (all(kept /= s%stale(k))) &
+                    call file_remove(c%output_dir // '/' // checkpoint_file(s%stale(k)))
+            end do
+        end subroutine point_latest_and_prune
+    end subroutine write_frame_checkpoint
+end module dem_run_output

@@ -1,0 +1,199 @@
+!> The state of a run (solver_t: particles, lists, contact history, walls, ranks, the
+!> bookkeeping of outputs and checkpoints) and what every part of the run layer shares: the
+!> time of a step, the collective error test, and moving the state to and from the device.
+module dem_run_state
+    use, intrinsic :: iso_fortran_env, only: error_unit
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error
+    use dem_comm, only: comm_t, comm_any, comm_max, comm_sum
+    use dem_case, only: case_t, time_scales_t
+    use dem_particles, only: particles_t, particles_data
+    use dem_domain, only: domain_t, domain_data
+    use dem_materials, only: pair_constants_t
+    use dem_neighbors, only: neighbors_t, neighbors_free
+    use dem_contact_store, only: contact_store_t, store_pairs_drop, store_walls_data
+    use dem_mesh, only: mesh_t
+    use dem_output, only: output_t
+    use dem_checkpoint, only: frame_t
+    use dem_timers, only: timers_t
+    use dem_text, only: itoa
+    use dem_acc, only: acc_data, acc_exit
+    implicit none
+    private
+    public :: solver_t, run_t, time_of, failed_anywhere, summed, device_data, particle_data, &
+              wall_motion_data, release_gone, &
+              stop_end, stop_settled, stop_wall_time, stop_signal
+
+    ! why solver_run returned without an error
+    integer, parameter :: stop_end = 0        !< t_end reached
+    integer, parameter :: stop_settled = 1    !< the kinetic energy fell below the threshold
+    integer, parameter :: stop_wall_time = 2  !< the wall-time limit is near (checkpoint written)
+    integer, parameter :: stop_signal = 3     !< SIGTERM or SIGUSR1 (checkpoint written)
+
+    !> The bookkeeping of a run between solver_start and solver_finish.
+    type :: run_t
+        type(output_t) :: out
+        integer(i8) :: n_end = 0               !< the run's last step
+        integer(i8) :: every = 0               !< steps between rows of series.csv (0: none)
+        integer(i8) :: every_snap = 0          !< ... between snapshots
+        integer(i8) :: every_ckpt = 0          !< ... between checkpoints
+        integer(i8) :: out0 = 0                !< the step they count from
+        real(wp) :: dt = 0.0_wp                !< the time step they were counted for [s]
+        real(wp) :: started = 0.0_wp           !< wall-clock start of the program [s]
+        real(wp) :: next_progress = 0.0_wp     !< wall-clock time of the next progress line [s]
+        real(wp) :: last = 0.0_wp              !< wall-clock time of the last step's end [s]
+        logical, allocatable :: probed(:)      !< the materials the probes report (those the
+                                               !< case's particles are made of)
+    end type run_t
+
+    !> The state of a run.
+    type :: solver_t
+        type(particles_t) :: p
+        type(neighbors_t) :: nb
+        type(contact_store_t) :: cs   !< the contacts' history
+        type(pair_constants_t) :: pc
+        type(mesh_t) :: mesh           !< the walls, in their pose at the last force evaluation
+        integer(i8) :: step = 0        !< steps done; the time is step * dt
+        integer(i8) :: trace_id = 0    !< global id of the traced particle, 0: none
+        integer(ip) :: trace = 0       !< its local index
+        real(wp) :: sort_cell = 0.0_wp !< cell size of the spatial order [m]
+        integer(i8) :: removed = 0     !< particles removed by outlets
+        integer(i8), allocatable :: removed_ids(:)  !< their ids on this rank, when allocated
+        logical :: settled = .false.   !< the kinetic energy fell below stop_kinetic_energy
+        integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
+        integer(i8) :: particle_steps = 0  !< this rank's particles in each of them, summed
+        integer(ip) :: particles_most = 0  !< the most particles this rank held in them
+        type(timers_t) :: timers       !< time per phase of those steps
+        type(comm_t) :: comm           !< the ranks of the run
+        type(domain_t) :: dom          !< their blocks and ghosts (more than one rank)
+        real(wp) :: imbalance_limit = 1.0_wp  !< repartition above this load ratio ...
+        real(wp) :: balanced = 1.0_wp  !< ... times the ratio the last partition achieved
+        logical :: distributed = .false.  !< each rank holds only its own particles
+        real(wp) :: time0 = 0.0_wp     !< time of step step0; time = time0 + (step - step0) dt
+        integer(i8) :: step0 = 0
+        integer(i8) :: rng_state = 0   !< the case's random generator
+        logical :: restarted = .false. !< the state comes from a checkpoint
+        integer :: device = -1         !< OpenACC device of this rank (-1: the host)
+        type(run_t) :: run             !< between solver_start and solver_finish
+        logical :: lists_on_device = .false.
+        integer(i8) :: parked = 0         !< particles taken out by outlets, not yet removed
+                                          !< (over the ranks)
+        type(time_scales_t) :: scales     !< of the case's particles (an unstable run's message)
+        real(wp) :: accel_bound = 1.0_wp  !< m accel_bound bounds a particle's force, for the
+                                          !< contact sums' fixed point [m/s^2]
+        logical, allocatable :: gone(:)  !< outlet flags of the owned particles, on the device
+        logical, allocatable :: fresh(:) !< those flagged at the last step
+        type(frame_t) :: good          !< the last state that passed the instability guard
+        integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
+        real(wp), allocatable :: snap_time(:)
+        integer(i8), allocatable :: ckpt_step(:)             !< checkpoints kept
+        integer(i8), allocatable :: stale(:)  !< checkpoints of a continuation abandoned by a
+                                              !< restart from an older one: removed once this
+                                              !< run has written its own
+        real(wp) :: ckpt_seconds = 0.0_wp  !< wall time of the slowest checkpoint write [s]
+        integer :: stopped = stop_end      !< why the last solver_run returned
+        character(len=:), allocatable :: stop_message
+    end type solver_t
+
+contains
+
+    !> The time of a step [s] (doc/theory.md, section 11).
+    pure real(wp) function time_of(s, c, step) result(time)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        integer(i8), intent(in) :: step
+        time = s%time0 + real(step - s%step0, wp) * c%dt
+    end function time_of
+
+    !> True on every rank when `err` is set, or `flag` is true, on any rank. When rank 0 has
+    !> no error of its own, the other ranks print theirs (rank 0 prints its errors at the
+    !> end); the ranks without an error take the largest code of those with one.
+    logical function failed_anywhere(s, err, flag) result(failed)
+        type(solver_t), intent(in) :: s
+        type(error_t), intent(inout) :: err
+        logical, intent(in), optional :: flag
+        logical :: flags(2), root_failed
+        integer :: code(1)
+        flags = [err%failed(), .false.]
+        if (present(flag)) flags(2) = flag
+        if (s%comm%size > 1) flags = comm_any(s%comm, flags)
+        failed = any(flags)
+        if (.not. flags(1) .or. s%comm%size == 1) return
+        code = err%code
+        call comm_max(s%comm, code)
+        root_failed = comm_any(s%comm, s%comm%rank == 0 .and. err%failed())
+        if (err%failed() .and. .not. root_failed) write(error_unit, '(a)') 'dem: error (rank ' &
+            // itoa(s%comm%rank) // '): ' // err%message
+        if (.not. err%failed()) call set_error(err, code(1), 'the run stopped on an error ' // &
+                                               'of another rank (above)')
+    end function failed_anywhere
+
+    !> A count summed over the ranks (collective).
+    integer(i8) function summed(comm, count) result(n)
+        type(comm_t), intent(in) :: comm
+        integer(i8), intent(in) :: count
+        integer(i8) :: a(1)
+        a = count
+        call comm_sum(comm, a)
+        n = a(1)
+    end function summed
+
+    !> Put the state on the device for the whole run (acc_enter), or release it (acc_exit).
+    subroutine device_data(s, op)
+        type(solver_t), intent(inout) :: s
+        integer, intent(in) :: op
+        call particle_data(s, op)
+        call acc_data(s%pc%kn, op)
+        call acc_data(s%pc%sn, op)
+        call acc_data(s%pc%st, op)
+        call acc_data(s%pc%cn, op)
+        call acc_data(s%pc%ct, op)
+        call acc_data(s%pc%mu, op)
+        if (s%mesh%n_tri > 0) then
+            call mesh_data(s%mesh, op)
+        end if
+        if (op == acc_exit .and. allocated(s%gone)) call release_gone(s)
+        if (op == acc_exit .and. s%lists_on_device) then
+            call neighbors_free(s%nb)
+            call store_pairs_drop(s%cs)
+            if (s%comm%size > 1) call domain_data(s%dom, op)
+            s%lists_on_device = .false.
+        end if
+    end subroutine device_data
+
+    !> The per-particle arrays and the wall-contact history, to or from the device.
+    subroutine particle_data(s, op)
+        type(solver_t), intent(inout) :: s
+        integer, intent(in) :: op
+        call particles_data(s%p, op)
+        call store_walls_data(s%cs, op)
+    end subroutine particle_data
+
+    !> The walls (triangles now and at t = 0, materials, velocities), to or from the device.
+    subroutine mesh_data(m, op)
+        type(mesh_t), intent(inout) :: m
+        integer, intent(in) :: op
+        call acc_data(m%vert, op)
+        call acc_data(m%ref, op)
+        call acc_data(m%mat, op)
+        call acc_data(m%wall, op)
+        call wall_motion_data(m, op)
+    end subroutine mesh_data
+
+    !> The walls' velocities and axes now, to or from the device.
+    subroutine wall_motion_data(m, op)
+        type(mesh_t), intent(inout) :: m
+        integer, intent(in) :: op
+        call acc_data(m%wall_v, op)
+        call acc_data(m%wall_w, op)
+        call acc_data(m%wall_c, op)
+    end subroutine wall_motion_data
+
+    !> Take the outlet flags off the device and free them.
+    subroutine release_gone(s)
+        type(solver_t), intent(inout) :: s
+        call acc_data(s%fresh, acc_exit)
+        call acc_data(s%gone, acc_exit)
+        deallocate(s%gone, s%fresh)
+    end subroutine release_gone
+end module dem_run_state

@@ -1,0 +1,282 @@
+!> One time step (doc/theory.md, section 5): `time_step` and `forces` read as the design
+!> does, each line a step and a call into the module named for it (integration:
+!> dem_integrate; walls: dem_mesh; lists, migration and the halo: dem_rebuild; body forces:
+!> dem_forces; particle and wall contacts: dem_contacts_pp, dem_contacts_pw; the guard and
+!> run control: dem_run_control; outlets: dem_outlets; outputs: dem_run_output).
+module dem_step
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error, dem_err_runtime
+    use dem_comm, only: comm_sum
+    use dem_case, only: case_t
+    use dem_run_state, only: solver_t, time_of, failed_anywhere, wall_motion_data, stop_end
+    use dem_rebuild, only: lists_refresh, settle_outlets
+    use dem_forces, only: body_forces, external_forces
+    use dem_contacts_pp, only: pp_forces
+    use dem_contacts_pw, only: pw_forces
+    use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
+    use dem_mesh, only: mesh_move
+    use dem_outlets, only: outlets_mark
+    use dem_particles, only: particles_park
+    use dem_neighbors, only: neighbors_moved
+    use dem_diagnostics, only: count_unstable
+    use dem_run_output, only: write_series, write_trace, write_snapshot, write_checkpoint
+    use dem_run_control, only: run_control, progress, energy_guard, unstable
+    use dem_timers, only: timer_stop, phase_neighbors, phase_contacts_pp, phase_contacts_pw, &
+                          phase_integrate, phase_output, wall_seconds
+    use dem_acc, only: acc_data, acc_enter, acc_create, acc_to_host, acc_to_device
+    implicit none
+    private
+    public :: time_step, forces, write_row
+
+contains
+
+    !> From step s%step to the next: integration around the forces (symplectic Euler: the
+    !> forces at t, then v and x; velocity Verlet: v by half a step and x, the forces at
+    !> t + dt, v by the other half), the guard, outlets, then the outputs that fall due and
+    !> run control. On an error or an instability it returns with err set on every rank.
+    subroutine time_step(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        logical :: verlet, bad
+        verlet = c%integrator == integrator_verlet
+        bad = .false.
+        if (verlet) call verlet_first_half(s, c)               ! v(t + dt/2), x(t + dt)
+        call forces(s, c, time_of(s, c, merge(s%step + 1, s%step, verlet)), err)
+        if (.not. err%failed()) call integrate(s, c, verlet, err, bad)     ! and the trace
+        if (.not. err%failed()) bad = bad .or. speeds_unstable(s, c)      ! the guard
+        if (failed_anywhere(s, err, bad)) then
+            if (.not. err%failed()) then                       ! unstable on some rank
+                s%step = s%step + 1
+                call unstable(s, c, err)
+            end if
+            return
+        end if
+        call timer_stop(s%timers, phase_integrate)
+        call count_step(s)
+        if (size(c%outlets) > 0) call remove_outlet_particles(s, c)      ! outlets
+        call timer_stop(s%timers, phase_neighbors)
+        call outputs_and_control(s, c, err)                   ! probes, outputs, run control
+    end subroutine time_step
+
+    !> The forces and torques at `time` (the time of the positions): walls to their pose,
+    !> lists and migration (or the halo), body forces, particle contacts, wall contacts.
+    subroutine forces(s, c, time, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        real(wp), intent(in) :: time       !! [s]
+        type(error_t), intent(inout) :: err
+        if (s%mesh%moving) call walls_move(s, time)
+        call lists_refresh(s, err)
+        call timer_stop(s%timers, phase_neighbors)
+        if (err%failed()) return
+        call body(s, c)
+        call particle_contacts(s, c)
+        call timer_stop(s%timers, phase_contacts_pp)
+        if (s%mesh%n_tri == 0) return
+        call wall_contacts(s, c, err)
+        call timer_stop(s%timers, phase_contacts_pw)
+    end subroutine forces
+
+    !> Velocity Verlet's first half: v += F dt / 2m, then x += v dt.
+    subroutine verlet_first_half(s, c)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        associate (p => s%p, n => s%p%n_own)
+            call kick(n, 0.5_wp * c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
+            call drift(n, c%dt, p%v, p%x)
+        end associate
+        call timer_stop(s%timers, phase_integrate)
+    end subroutine verlet_first_half
+
+    !> The rest of the step from the forces just computed, and the traced particle's row at
+    !> the time of the state it shows: symplectic Euler writes the row at t, then
+    !> v += F dt / m, x += v dt; velocity Verlet v += F dt / 2m, then the row at t + dt.
+    subroutine integrate(s, c, verlet, err, bad)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        logical, intent(in) :: verlet
+        type(error_t), intent(inout) :: err
+        logical, intent(inout) :: bad      !! the traced particle is not finite
+        associate (p => s%p, n => s%p%n_own)
+            if (.not. verlet) then
+                call write_trace(s, c, s%run%out, time_of(s, c, s%step), err, bad)
+                call timer_stop(s%timers, phase_output)
+                call kick(n, c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
+                call drift(n, c%dt, p%v, p%x)
+                call timer_stop(s%timers, phase_integrate)
+            else
+                call kick(n, 0.5_wp * c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
+                call timer_stop(s%timers, phase_integrate)
+                call write_trace(s, c, s%run%out, time_of(s, c, s%step + 1), err, bad)
+            end if
+        end associate
+    end subroutine integrate
+
+    !> The walls to their pose at `time`, on the device too.
+    subroutine walls_move(s, time)
+        type(solver_t), intent(inout) :: s
+        real(wp), intent(in) :: time
+        call mesh_move(s%mesh, time)
+        call wall_motion_data(s%mesh, acc_to_device)
+    end subroutine walls_move
+
+    !> Gravity, and the coupling's forces where a fluid code sets them.
+    subroutine body(s, c)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        associate (p => s%p, n => s%p%n_own)
+            call body_forces(n, p%mass, c%gravity, p%f, p%t)
+            if (allocated(p%ext)) call external_forces(n, c%dt, p%v, p%ext, p%f, p%t)
+        end associate
+    end subroutine body
+
+    !> The particle-particle contacts of the lists.
+    subroutine particle_contacts(s, c)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        associate (p => s%p, nb => s%nb, pc => s%pc, o => s%pc%opts, n => s%p%n_own)
+            call pp_forces(n, n + p%n_ghost, nb%n_pairs, c%mats%n, p%x, p%v, p%w, p%radius, &
+                           p%mass, p%mat, nb%scale, nb%pair, pc%kn, pc%sn, pc%st, pc%cn, pc%ct, &
+                           pc%mu, o%clamp_normal, o%keep_length, o%shift_v, o%shift_t, &
+                           o%reset_pair_history, c%dt, s%cs%xi, s%cs%touching, nb%acc, p%f, p%t)
+        end associate
+    end subroutine particle_contacts
+
+    !> The particle-wall contacts of the lists' candidate triangles.
+    subroutine wall_contacts(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        integer(ip) :: overflow
+        associate (p => s%p, nb => s%nb, pc => s%pc, o => s%pc%opts, m => s%mesh, &
+                   n => s%p%n_own)
+            call pw_forces(n, nb%n_wrow, nb%wrow, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, &
+                           p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%wstart, nb%wlist, m%vert, &
+                           m%mat, m%wall, m%wall_v, m%wall_w, m%wall_c, pc%kn, pc%sn, pc%st, &
+                           pc%cn, pc%ct, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, &
+                           o%shift_t, c%dt, s%cs%wall_tri, s%cs%wall_xi, p%f, p%t, overflow)
+        end associate
+        if (overflow > 0) call set_error(err, dem_err_runtime, 'a particle has more separate ' &
+            // 'wall contacts than the contact store holds; walls overlap or cross there')
+    end subroutine wall_contacts
+
+    !> The speed guard: a particle above the case's max_speed, or not finite.
+    logical function speeds_unstable(s, c) result(bad)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        bad = count_unstable(s%p%n_own, c%max_speed, s%p%radius, s%p%v, s%p%w) > 0
+    end function speeds_unstable
+
+    !> The step done: counted, with the particles in it.
+    subroutine count_step(s)
+        type(solver_t), intent(inout) :: s
+        s%step = s%step + 1
+        s%steps_run = s%steps_run + 1
+        s%particle_steps = s%particle_steps + s%p%n_own
+        s%particles_most = max(s%particles_most, s%p%n_own)
+    end subroutine count_step
+
+    !> Take the particles that entered an outlet out of the run: they are counted removed and
+    !> parked at once (particles_park: nothing touches them any more), and compacted away at
+    !> the next rebuild, or before the next output (settle_outlets), so that the lists are
+    !> not rebuilt for every particle that leaves. The flags stay on the device from step to
+    !> step, until that compaction.
+    subroutine remove_outlet_particles(s, c)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        integer(i8) :: n_fresh(1)
+        if (.not. allocated(s%gone)) then
+            allocate(s%gone(s%p%n_own), s%fresh(s%p%n_own))
+            s%gone = .false.
+            call acc_data(s%gone, acc_enter)
+            call acc_data(s%fresh, acc_create)
+        end if
+        associate (p => s%p, n => s%p%n_own)
+            n_fresh = outlets_mark(n, p%x, c%outlets, s%gone, s%fresh)
+            if (s%comm%size > 1) call comm_sum(s%comm, n_fresh)
+            if (n_fresh(1) == 0) return
+            s%removed = s%removed + n_fresh(1)
+            s%parked = s%parked + n_fresh(1)
+            if (allocated(s%removed_ids)) then    ! (a coupled run: their ids, on the host)
+                call acc_data(s%fresh, acc_to_host)
+                call acc_data(p%gid, acc_to_host)
+                s%removed_ids = [s%removed_ids, pack(p%gid(1:n), s%fresh)]
+            end if
+            if (s%trace > 0) then                 ! a traced particle that left: no more trace
+                call acc_data(s%fresh(s%trace:s%trace), acc_to_host)
+                if (s%fresh(s%trace)) then
+                    s%trace = 0
+                    s%trace_id = 0
+                end if
+            end if
+            call particles_park(n, s%fresh, p%gid, p%x, p%v, p%w, p%inv_mass, p%inv_inertia)
+            call neighbors_moved(s%nb, n, s%fresh, p%x)
+        end associate
+    end subroutine remove_outlet_particles
+
+    !> A row of series.csv and probes.csv of the state now, which passes the energy guard
+    !> first (the particles that outlets took out removed).
+    subroutine write_row(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        call settle_outlets(s, err)
+        if (.not. err%failed()) call energy_guard(s, c, err)
+        if (.not. err%failed()) call write_series(s, c, s%run%out, err)
+    end subroutine write_row
+
+    !> The outputs that fall due at this step (the same steps on every rank; an error in one,
+    !> a rank's file, is shared by all ranks before the next collective), then run control:
+    !> a stop for the wall-time limit or a signal, and the progress line.
+    subroutine outputs_and_control(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        real(wp) :: step_seconds
+        logical :: row, snap, written, show
+        associate (r => s%run)
+            row = due(r%every) .or. s%step == r%n_end
+            snap = due(r%every_snap) .or. (r%every_snap > 0 .and. s%step == r%n_end)
+            if (row) then
+                call write_row(s, c, err)            ! (it tells whether the run has settled)
+                if (failed_anywhere(s, err)) return
+            end if
+            written = due(r%every_ckpt) .or. s%step == r%n_end .or. s%settled
+            if (snap) then
+                call write_snapshot(s, c, err)
+                if (failed_anywhere(s, err)) return
+            end if
+            if (written) then
+                if (.not. row) then           ! (a row has checked the state)
+                    call energy_guard(s, c, err)
+                    if (failed_anywhere(s, err)) return
+                end if
+                call write_checkpoint(s, c, r%out, err)
+                if (failed_anywhere(s, err)) return
+            end if
+            step_seconds = wall_seconds() - r%last
+            r%last = r%last + step_seconds
+            show = s%comm%rank == 0 .and. c%progress_interval > 0.0_wp &
+                   .and. r%last >= r%next_progress
+            if (s%step < r%n_end) then
+                call run_control(s, c, r%out, r%started, step_seconds, written, show, err)
+            else
+                show = .false.
+            end if
+            if (s%stopped /= stop_end) return
+            if (show) then
+                call progress(s, c, r%n_end)
+                r%next_progress = r%next_progress + c%progress_interval  ! on a fixed schedule
+                if (r%next_progress <= r%last) r%next_progress = r%last + c%progress_interval
+            end if
+        end associate
+        call timer_stop(s%timers, phase_output)
+    contains
+        logical function due(k)
+            integer(i8), intent(in) :: k
+            due = .false.
+            if (k > 0) due = mod(s%step - s%run%out0, k) == 0
+        end function due
+    end subroutine outputs_and_control
+end module dem_step
