@@ -1,12 +1,19 @@
 /* The C interface of dem's CFD coupling (src/dem_coupling.f90, doc/coupling.md).
  *
+ * A coupled run is an opaque handle, dem_coupling *, that dem_coupling_init sets up and
+ * dem_coupling_finalize frees; every other call takes it first. A process can hold several
+ * handles: their runs are independent (each its own case, particles, outputs and duplicate
+ * communicator). A NULL handle is one that holds no run: the calls that can fail return 3
+ * ("not initialised"), the others do nothing, count 0 and give NULL views.
+ *
  * Every call is collective on the communicator given to dem_coupling_init. Calls that can
  * fail return 0 on success, else an error code (2: bad input, 3: the run cannot go on,
  * 4: an output could not be written), with a null-terminated message in `message` (at most
- * message_len bytes with the terminator). SI units. Arrays are of the particles this rank
- * owns, n = dem_coupling_count(), in local order: vectors are 3 doubles per particle
- * (x0 y0 z0 x1 y1 z1 ...). The local order may change at every advance: match particles
- * by their global ids. */
+ * message_len bytes with the terminator). dem_coupling_init keeps that form and hands the
+ * new run back through its first argument, so that a failure still says which kind it is.
+ * SI units. Arrays are of the particles this rank owns, n = dem_coupling_count(run), in
+ * local order: vectors are 3 doubles per particle (x0 y0 z0 x1 y1 z1 ...). The local order
+ * may change at every advance: match particles by their global ids. */
 #ifndef DEM_COUPLING_H
 #define DEM_COUPLING_H
 
@@ -16,73 +23,85 @@
 extern "C" {
 #endif
 
-/* Read the case file and set up its run on a duplicate of the communicator whose Fortran
- * handle is comm_f (MPI_Comm_c2f(comm)); MPI must be initialised. */
-int dem_coupling_init(const char *file, int comm_f, char *message, int message_len);
+/* A coupled run (a Fortran coupling_t). */
+typedef struct dem_coupling dem_coupling;
 
-/* Write the run's final outputs and release it. */
-int dem_coupling_finalize(char *message, int message_len);
+/* Read the case file and set up its run on a duplicate of the communicator whose Fortran
+ * handle is comm_f (MPI_Comm_c2f(comm)); MPI must be initialised. On success *run is the
+ * new run; on failure it is NULL. */
+int dem_coupling_init(dem_coupling **run, const char *file, int comm_f, char *message,
+                      int message_len);
+
+/* Write the run's final outputs, release it and free the handle: *run becomes NULL (also
+ * when the outputs fail, status 4). */
+int dem_coupling_finalize(dem_coupling **run, char *message, int message_len);
 
 /* Advance from t to t + dt in ceiling(dt / case dt) equal sub-steps, ending exactly at
  * t + dt; forces, torques and drag act on every sub-step. */
-int dem_coupling_advance(double dt, char *message, int message_len);
+int dem_coupling_advance(dem_coupling *run, double dt, char *message, int message_len);
 
-double dem_coupling_time(void);          /* the DEM's time [s] */
-int dem_coupling_count(void);            /* particles owned by this rank */
+double dem_coupling_time(const dem_coupling *run);   /* the DEM's time [s] */
+int dem_coupling_count(const dem_coupling *run);     /* particles owned by this rank */
 
 /* Copies of the owned particles: global ids, material indices (the case's &material
  * groups in order, from 1), radii [m], positions [m], velocities [m/s], angular
  * velocities [rad/s]. */
-void dem_coupling_get(int64_t *gid, int *material, double *radius, double *x, double *v,
-                      double *w);
+void dem_coupling_get(const dem_coupling *run, int64_t *gid, int *material, double *radius,
+                      double *x, double *v, double *w);
 
 /* Read-only views (no copy) of the owned particles' ids, radii, positions, velocities and
- * angular velocities: the first dem_coupling_count() entries (vectors: 3 doubles each),
- * valid until the next advance (NULL before init). Do not write through them. */
-void dem_coupling_views(const int64_t **gid, const double **radius, const double **x,
-                        const double **v, const double **w);
+ * angular velocities: the first dem_coupling_count(run) entries (vectors: 3 doubles each),
+ * valid until the run's next advance or its finalize (NULL for a NULL run). Do not write
+ * through them. */
+void dem_coupling_views(const dem_coupling *run, const int64_t **gid, const double **radius,
+                        const double **x, const double **v, const double **w);
 
 /* The device addresses of the positions, velocities and angular velocities in an OpenACC
  * build that runs on a GPU (for the fluid code's own OpenACC or CUDA kernels: the state on
- * the device at the end of the last advance); the host views otherwise. */
-void dem_coupling_device_views(const double **x, const double **v, const double **w);
+ * the device at the end of the last advance); the host views otherwise. Valid as long as
+ * the views. */
+void dem_coupling_device_views(const dem_coupling *run, const double **x, const double **v,
+                               const double **w);
 
 /* External force [N] and torque [N m] per owned particle, until set again. */
-void dem_coupling_set_force(const double *force, const double *torque);
+void dem_coupling_set_force(dem_coupling *run, const double *force, const double *torque);
 
 /* Drag coefficient beta [kg/s] and fluid velocity [m/s] per owned particle: the drag
  * beta (u_f - v) is evaluated at every sub-step. */
-void dem_coupling_set_drag(const double *beta, const double *fluid_velocity);
+void dem_coupling_set_drag(dem_coupling *run, const double *beta, const double *fluid_velocity);
 
 /* The same for n particles given by global id, on any rank (each id once over all ranks):
  * the values go to the owners. Ids that are no particle of the run, or come twice, fail. */
-int dem_coupling_set_force_by_id(int n, const int64_t *ids, const double *force,
-                                 const double *torque, char *message, int message_len);
-int dem_coupling_set_drag_by_id(int n, const int64_t *ids, const double *beta,
-                                const double *fluid_velocity, char *message, int message_len);
+int dem_coupling_set_force_by_id(dem_coupling *run, int n, const int64_t *ids,
+                                 const double *force, const double *torque, char *message,
+                                 int message_len);
+int dem_coupling_set_drag_by_id(dem_coupling *run, int n, const int64_t *ids,
+                                const double *beta, const double *fluid_velocity,
+                                char *message, int message_len);
 
 /* The impulse [N s] force and drag gave each owned particle over the last advance. */
-void dem_coupling_impulse(double *impulse);
+void dem_coupling_impulse(const dem_coupling *run, double *impulse);
 
 /* The particles the outlets removed from this rank during the last advance: how many, and
  * their global ids (over all ranks, each removed particle once). */
-int dem_coupling_removed_count(void);
-void dem_coupling_removed(int64_t *ids);
+int dem_coupling_removed_count(const dem_coupling *run);
+void dem_coupling_removed(const dem_coupling *run, int64_t *ids);
 
 /* Deposit the particles of all ranks onto the Cartesian grid of n[0] x n[1] x n[2] cells of
  * size h from origin (cell c = i + n[0] (j + n[1] k), x fastest), with kernel 1 (cell),
  * 2 (trilinear) or 3 (divided particle volume): the solids volume fraction eps, and per
  * cell the sums of the particle momentum [kg m/s], of beta [kg/s] and of beta v [N]. Every
  * rank gets the whole grid, the same bit for bit on any number of ranks. */
-int dem_coupling_deposit(const double origin[3], const double h[3], const int n[3], int kernel,
-                         double *eps, double *momentum, double *beta_sum, double *beta_v,
-                         char *message, int message_len);
+int dem_coupling_deposit(const dem_coupling *run, const double origin[3], const double h[3],
+                         const int n[3], int kernel, double *eps, double *momentum,
+                         double *beta_sum, double *beta_v, char *message, int message_len);
 
 /* The same onto a list of n_cells cells given by their centres (3 doubles each) and volumes
  * (an unstructured mesh): each particle goes whole to the cell of the nearest centre. */
-int dem_coupling_deposit_cells(int n_cells, const double *centres, const double *volumes,
-                               double *eps, double *momentum, double *beta_sum, double *beta_v,
-                               char *message, int message_len);
+int dem_coupling_deposit_cells(const dem_coupling *run, int n_cells, const double *centres,
+                               const double *volumes, double *eps, double *momentum,
+                               double *beta_sum, double *beta_v, char *message,
+                               int message_len);
 
 #ifdef __cplusplus
 }

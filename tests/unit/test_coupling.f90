@@ -14,9 +14,9 @@ program test_coupling
     use mpi_f08, only: MPI_Init, MPI_Finalize, MPI_COMM_WORLD, MPI_Comm_rank, MPI_Comm_size, &
                        MPI_Allreduce, MPI_DOUBLE_PRECISION, MPI_SUM, MPI_INTEGER, MPI_Barrier
     use dem_kinds, only: wp, i8
-    use dem_coupling, only: coupling_init, coupling_finalize, coupling_advance, coupling_time, &
-                            coupling_count, coupling_get, coupling_set_force, coupling_set_drag, &
-                            coupling_impulse, coupling_views
+    use dem_coupling, only: coupling_t, coupling_init, coupling_finalize, coupling_advance, &
+                            coupling_time, coupling_count, coupling_get, coupling_set_force, &
+                            coupling_set_drag, coupling_impulse, coupling_views
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp), g = 9.81_wp
@@ -29,6 +29,7 @@ program test_coupling
     integer :: mat(1), status, rank, ranks, k, n, n_all
     character(len=256) :: message, case_file
     character(len=64) :: out_dir
+    type(coupling_t), target :: sphere  ! target: the views point into it
     integer(i8), pointer :: gid_view(:)
     real(wp), pointer :: r_view(:), x_view(:, :), v_view(:, :), w_view(:, :)
 
@@ -43,40 +44,41 @@ program test_coupling
     h = dt_fluid / n_sub
 
     ! errors: before init, a missing file, a bad key
-    call coupling_advance(dt_fluid, status, message)
+    call coupling_advance(sphere, dt_fluid, status, message)
     call assert_true(status == 3 .and. index(message, 'not initialised') > 0, &
                      'advance before init: ' // trim(message))
-    call coupling_init('no_such_case.nml', MPI_COMM_WORLD%mpi_val, status, message)
+    call coupling_init(sphere, 'no_such_case.nml', MPI_COMM_WORLD%mpi_val, status, message)
     call assert_true(status /= 0 .and. index(message, 'no_such_case.nml') > 0, &
                      'missing case file: ' // trim(message))
     write(case_file, '(a,i0,a)') 'coupling_bad_', ranks, '.nml'
     call write_case(case_file, 'dt = -1.0')
-    call coupling_init(case_file, MPI_COMM_WORLD%mpi_val, status, message)
+    call coupling_init(sphere, case_file, MPI_COMM_WORLD%mpi_val, status, message)
     call assert_true(status == 2 .and. index(message, 'dt') > 0 .and. &
                      index(message, '&run') > 0, 'bad dt: ' // trim(message))
 
     write(case_file, '(a,i0,a)') 'coupling_', ranks, '.nml'
     call write_case(case_file, 'dt = 3.0e-5')
-    call coupling_init(case_file, MPI_COMM_WORLD%mpi_val, status, message)
+    call coupling_init(sphere, case_file, MPI_COMM_WORLD%mpi_val, status, message)
     call assert_true(status == 0, 'init: ' // trim(message))
-    call coupling_advance(0.0_wp, status, message)
+    call coupling_advance(sphere, 0.0_wp, status, message)
     call assert_true(status == 2 .and. index(message, 'dt') > 0, 'dt = 0: ' // trim(message))
 
     t_fluid = 0.0_wp
     impulse_z = 0.0_wp
     do k = 1, n_advance
-        n = coupling_count()
-        call coupling_set_force(reshape([0.0_wp, 0.0_wp, rho_f * volume * g], [3, n]), &
+        n = coupling_count(sphere)
+        call coupling_set_force(sphere, reshape([0.0_wp, 0.0_wp, rho_f * volume * g], [3, n]), &
                                 reshape([real(wp) ::], [3, n], pad=[0.0_wp]))
-        call coupling_set_drag(spread(beta, 1, n), reshape([real(wp) ::], [3, n], pad=[0.0_wp]))
-        call coupling_advance(dt_fluid, status, message)
+        call coupling_set_drag(sphere, spread(beta, 1, n), &
+                               reshape([real(wp) ::], [3, n], pad=[0.0_wp]))
+        call coupling_advance(sphere, dt_fluid, status, message)
         call assert_true(status == 0, 'advance: ' // trim(message))
         t_fluid = t_fluid + dt_fluid
-        call assert_true(coupling_time() == t_fluid, 'the advance ends at t + dt exactly')
-        n = coupling_count()
-        call coupling_get(gid(1:n), mat(1:n), r(1:n), x(:, 1:n), v(:, 1:n), w(:, 1:n))
-        call coupling_impulse(j(:, 1:n))
-        call coupling_views(gid_view, r_view, x_view, v_view, w_view)
+        call assert_true(coupling_time(sphere) == t_fluid, 'the advance ends at t + dt exactly')
+        n = coupling_count(sphere)
+        call coupling_get(sphere, gid(1:n), mat(1:n), r(1:n), x(:, 1:n), v(:, 1:n), w(:, 1:n))
+        call coupling_impulse(sphere, j(:, 1:n))
+        call coupling_views(sphere, gid_view, r_view, x_view, v_view, w_view)
         call assert_true(size(gid_view) == n .and. all(gid_view == gid(1:n)) .and. &
                          all(r_view == r(1:n)) .and. all(x_view == x(:, 1:n)) .and. &
                          all(v_view == v(:, 1:n)) .and. all(w_view == w(:, 1:n)), &
@@ -93,10 +95,10 @@ program test_coupling
     call assert_close(vz, -v_t, 5.0e-3_wp, 'terminal velocity of Stokes'' law')
     call assert_close(m * vz, impulse_z - m * g * t_fluid, 1.0e-9_wp, &
                       'momentum: the impulses plus gravity''s')
-    n_all = coupling_count()
-    call MPI_Allreduce(coupling_count(), n_all, 1, MPI_INTEGER, MPI_SUM, MPI_COMM_WORLD)
+    n_all = coupling_count(sphere)
+    call MPI_Allreduce(coupling_count(sphere), n_all, 1, MPI_INTEGER, MPI_SUM, MPI_COMM_WORLD)
     call assert_true(n_all == 1, 'one particle over the ranks')
-    call coupling_finalize(status, message)
+    call coupling_finalize(sphere, status, message)
     call assert_true(status == 0, 'finalize: ' // trim(message))
     call MPI_Barrier(MPI_COMM_WORLD)
     call assert_finish()

@@ -18,8 +18,8 @@ program test_deposit
                        MPI_Allreduce, MPI_DOUBLE_PRECISION, MPI_SUM, MPI_Barrier, MPI_Comm, &
                        MPI_Comm_split, MPI_Comm_free
     use dem_kinds, only: wp, i8
-    use dem_coupling, only: coupling_init, coupling_finalize, coupling_advance, coupling_count, &
-                            coupling_get, coupling_set_drag, coupling_deposit, &
+    use dem_coupling, only: coupling_t, coupling_init, coupling_finalize, coupling_advance, &
+                            coupling_count, coupling_get, coupling_set_drag, coupling_deposit, &
                             coupling_set_drag_by_id, coupling_deposit_cells
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
@@ -34,6 +34,7 @@ program test_deposit
     integer :: rank, ranks, status, k
     character(len=256) :: message
     type(MPI_Comm) :: alone
+    type(coupling_t) :: box           ! the run of run_case
 
     call MPI_Init()
     call MPI_Comm_rank(MPI_COMM_WORLD, rank)
@@ -71,12 +72,12 @@ contains
             call write_case(case_file, 'deposit_out_' // tag // trim(int_text(ranks)) // '_' // &
                             trim(int_text(rank)))
         end if
-        call coupling_init(trim(case_file), comm%mpi_val, status, message)
+        call coupling_init(box, trim(case_file), comm%mpi_val, status, message)
         call assert_true(status == 0, 'init: ' // trim(message))
         do kk = 1, 3
-            n = coupling_count()
+            n = coupling_count(box)
             allocate(x(3, n), v(3, n), w(3, n), r(n), gid(n), mat(n), beta(n), uf(3, n))
-            call coupling_get(gid, mat, r, x, v, w)
+            call coupling_get(box, gid, mat, r, x, v, w)
             beta = 1.0e-4_wp * (1 + mod(gid, 5_i8))
             do i = 1, n
                 uf(:, i) = 0.01_wp * [cos(real(gid(i), wp)), sin(real(gid(i), wp)), 0.5_wp]
@@ -84,19 +85,19 @@ contains
             if (checks) then             ! by id, all from the last rank, through the routing
                 call set_all_by_id()
             else
-                call coupling_set_drag(beta, uf)
+                call coupling_set_drag(box, beta, uf)
             end if
-            call coupling_advance(1.0e-3_wp, status, message)
+            call coupling_advance(box, 1.0e-3_wp, status, message)
             call assert_true(status == 0, 'advance: ' // trim(message))
             deallocate(x, v, w, r, gid, mat, beta, uf)
         end do
-        n = coupling_count()
+        n = coupling_count(box)
         allocate(x(3, n), v(3, n), w(3, n), r(n), gid(n), mat(n))
-        call coupling_get(gid, mat, r, x, v, w)
+        call coupling_get(box, gid, mat, r, x, v, w)
         beta = 1.0e-4_wp * (1 + mod(gid, 5_i8))
         do k = 1, 3
-            call coupling_deposit(origin, h, nc, trim(kernels(k)), e(:, k), m(:, :, k), b(:, k), &
-                                  bvel(:, :, k), status, message)
+            call coupling_deposit(box, origin, h, nc, trim(kernels(k)), e(:, k), m(:, :, k), &
+                                  b(:, k), bvel(:, :, k), status, message)
             call assert_true(status == 0 .and. len_trim(message) == 0, &
                              trim(kernels(k)) // ': ' // trim(message))
         end do
@@ -138,26 +139,26 @@ contains
                                   atol=1.0e-15_wp)
             end do
             call list_of_cells()
-            call coupling_deposit(origin, h, [2, 2, 2], 'trilinear', small_eps, small_m, small_b, &
-                                  small_bv, status, message)
+            call coupling_deposit(box, origin, h, [2, 2, 2], 'trilinear', small_eps, small_m, &
+                                  small_b, small_bv, status, message)
             call assert_true(status == 0 .and. index(message, 'outside the grid') > 0, &
                              'a grid that leaves particles out says so: ' // trim(message))
-            call coupling_deposit(origin, h, nc, 'linear', e(:, 1), m(:, :, 1), b(:, 1), &
+            call coupling_deposit(box, origin, h, nc, 'linear', e(:, 1), m(:, :, 1), b(:, 1), &
                                   bvel(:, :, 1), status, message)
             call assert_true(status == 2 .and. index(message, "'linear'") > 0, &
                              'unknown kernel: ' // trim(message))
-            call coupling_deposit(origin, -h, nc, 'cell', e(:, 1), m(:, :, 1), b(:, 1), &
+            call coupling_deposit(box, origin, -h, nc, 'cell', e(:, 1), m(:, :, 1), b(:, 1), &
                                   bvel(:, :, 1), status, message)
             call assert_true(status == 2, 'negative spacing: ' // trim(message))
-            call coupling_set_drag_by_id([1_i8, 1_i8], [1.0_wp, 1.0_wp], &
+            call coupling_set_drag_by_id(box, [1_i8, 1_i8], [1.0_wp, 1.0_wp], &
                                          reshape([(0.0_wp, j = 1, 6)], [3, 2]), status, message)
             call assert_true(status == 2 .and. index(message, 'twice') > 0, &
                              'an id given twice: ' // trim(message))
-            call coupling_set_drag_by_id([1000000_i8], [1.0_wp], reshape([0.0_wp, 0.0_wp, 0.0_wp], &
-                                         [3, 1]), status, message)
+            call coupling_set_drag_by_id(box, [1000000_i8], [1.0_wp], &
+                                         reshape([0.0_wp, 0.0_wp, 0.0_wp], [3, 1]), status, message)
             call assert_true(status == 2, 'an id that is no particle: ' // trim(message))
         end if
-        call coupling_finalize(status, message)
+        call coupling_finalize(box, status, message)
         call assert_true(status == 0, 'finalize: ' // trim(message))
     end subroutine run_case
 
@@ -178,12 +179,12 @@ contains
             end do
         end do
         volumes = product(h)
-        call coupling_deposit_cells(centres, volumes, le, lm, lb, lbv, status, message)
+        call coupling_deposit_cells(box, centres, volumes, le, lm, lb, lbv, status, message)
         call assert_true(status == 0, 'deposit onto a list: ' // trim(message))
         call assert_true(all(le(perm) == eps(:, 1)) .and. all(lm(:, perm) == mom(:, :, 1)) .and. &
                          all(lb(perm) == bsum(:, 1)) .and. all(lbv(:, perm) == bv(:, :, 1)), &
                          'the grid as a list of cells: the cell kernel, bit for bit')
-        call coupling_deposit_cells(centres, -volumes, le, lm, lb, lbv, status, message)
+        call coupling_deposit_cells(box, centres, -volumes, le, lm, lb, lbv, status, message)
         call assert_true(status == 2, 'negative volumes: ' // trim(message))
     end subroutine list_of_cells
 
@@ -199,7 +200,7 @@ contains
             beta_all(i) = 1.0e-4_wp * (1 + mod(ids(i), 5_i8))
             uf_all(:, i) = 0.01_wp * [cos(real(ids(i), wp)), sin(real(ids(i), wp)), 0.5_wp]
         end do
-        call coupling_set_drag_by_id(ids(1:n), beta_all(1:n), uf_all(:, 1:n), status, message)
+        call coupling_set_drag_by_id(box, ids(1:n), beta_all(1:n), uf_all(:, 1:n), status, message)
         call assert_true(status == 0, 'drag by id: ' // trim(message))
     end subroutine set_all_by_id
 

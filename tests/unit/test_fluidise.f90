@@ -13,8 +13,8 @@ program test_fluidise
     use mpi_f08, only: MPI_Init, MPI_Finalize, MPI_COMM_WORLD, MPI_Comm_rank, MPI_Comm_size, &
                        MPI_Allreduce, MPI_DOUBLE_PRECISION, MPI_SUM, MPI_MIN, MPI_Barrier
     use dem_kinds, only: wp, i8
-    use dem_coupling, only: coupling_init, coupling_finalize, coupling_advance, coupling_count, &
-                            coupling_get, coupling_set_drag, coupling_impulse, &
+    use dem_coupling, only: coupling_t, coupling_init, coupling_finalize, coupling_advance, &
+                            coupling_count, coupling_get, coupling_set_drag, coupling_impulse, &
                             coupling_removed_count, coupling_removed
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
@@ -24,6 +24,7 @@ program test_fluidise
     real(wp) :: m, u_lift, z0, z1, z_start, p0(3), p1(3), j_sum(3), z_min
     integer :: rank, ranks, status, k, n_left, removed, balanced
     character(len=256) :: message, case_file
+    type(coupling_t) :: bed
 
     call MPI_Init()
     call MPI_Comm_rank(MPI_COMM_WORLD, rank)
@@ -33,7 +34,7 @@ program test_fluidise
     write(case_file, '(a,i0,a)') 'fluidise_', ranks, '.nml'
     if (rank == 0) call write_case(trim(case_file))
     call MPI_Barrier(MPI_COMM_WORLD)
-    call coupling_init(trim(case_file), MPI_COMM_WORLD%mpi_val, status, message)
+    call coupling_init(bed, trim(case_file), MPI_COMM_WORLD%mpi_val, status, message)
     call assert_true(status == 0, 'init: ' // trim(message))
 
     call flow(0.0_wp, 300)                       ! settle in a still fluid
@@ -64,7 +65,7 @@ program test_fluidise
     call assert_true(balanced > 10, 'advances with the bed off the floor')
     call assert_true(removed > 0 .and. removed == n_total - n_left, &
                      'spheres through the outlet reported once each')
-    call coupling_finalize(status, message)
+    call coupling_finalize(bed, status, message)
     call assert_true(status == 0, 'finalize: ' // trim(message))
     call assert_finish()
     call MPI_Finalize()
@@ -77,9 +78,9 @@ contains
         integer, intent(in) :: steps
         integer :: s, n
         do s = 1, steps
-            n = coupling_count()
-            call coupling_set_drag(spread(beta, 1, n), spread([0.0_wp, 0.0_wp, u], 2, n))
-            call coupling_advance(dt_fluid, status, message)
+            n = coupling_count(bed)
+            call coupling_set_drag(bed, spread(beta, 1, n), spread([0.0_wp, 0.0_wp, u], 2, n))
+            call coupling_advance(bed, dt_fluid, status, message)
             call assert_true(status == 0, 'advance: ' // trim(message))
         end do
     end subroutine flow
@@ -93,9 +94,9 @@ contains
         integer, allocatable :: mat(:)
         real(wp) :: sums(5), low(1)
         integer :: n
-        n = coupling_count()
+        n = coupling_count(bed)
         allocate(x(3, n), v(3, n), w(3, n), r(n), gid(n), mat(n))
-        call coupling_get(gid, mat, r, x, v, w)
+        call coupling_get(bed, gid, mat, r, x, v, w)
         sums = [sum(x(3, :)), m * sum(v(1, :)), m * sum(v(2, :)), m * sum(v(3, :)), real(n, wp)]
         low = minval(x(3, :), dim=1, mask=.true.)
         if (n == 0) low = huge(1.0_wp)
@@ -111,8 +112,8 @@ contains
     subroutine sum_impulse(j)
         real(wp), intent(out) :: j(3)
         real(wp), allocatable :: jj(:, :)
-        allocate(jj(3, coupling_count()))
-        call coupling_impulse(jj)
+        allocate(jj(3, coupling_count(bed)))
+        call coupling_impulse(bed, jj)
         j = sum(jj, dim=2)
         call MPI_Allreduce(j * 1.0_wp, j, 3, MPI_DOUBLE_PRECISION, MPI_SUM, MPI_COMM_WORLD)
     end subroutine sum_impulse
@@ -122,8 +123,8 @@ contains
     integer function removed_ids() result(n_removed)
         integer(i8), allocatable :: ids(:)
         real(wp) :: c(1)
-        allocate(ids(coupling_removed_count()))
-        call coupling_removed(ids)
+        allocate(ids(coupling_removed_count(bed)))
+        call coupling_removed(bed, ids)
         call assert_true(all(ids >= 1 .and. ids <= n_total), 'removed ids are particle ids')
         c = real(size(ids), wp)
         call MPI_Allreduce(c * 1.0_wp, c, 1, MPI_DOUBLE_PRECISION, MPI_SUM, MPI_COMM_WORLD)
@@ -132,7 +133,7 @@ contains
 
     integer function coupling_removed_total() result(n)
         real(wp) :: c(1)
-        c = real(coupling_removed_count(), wp)
+        c = real(coupling_removed_count(bed), wp)
         call MPI_Allreduce(c * 1.0_wp, c, 1, MPI_DOUBLE_PRECISION, MPI_SUM, MPI_COMM_WORLD)
         n = nint(c(1))
     end function coupling_removed_total

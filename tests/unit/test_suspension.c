@@ -78,7 +78,8 @@ int main(int argc, char **argv)
         fclose(c);
     }
     MPI_Barrier(MPI_COMM_WORLD);
-    st = dem_coupling_init(file, MPI_Comm_c2f(MPI_COMM_WORLD), msg, (int)sizeof msg);
+    dem_coupling *run;
+    st = dem_coupling_init(&run, file, MPI_Comm_c2f(MPI_COMM_WORLD), msg, (int)sizeof msg);
     if (st != 0) {
         fprintf(stderr, "init: %s\n", msg);
         MPI_Abort(MPI_COMM_WORLD, 1);
@@ -88,7 +89,8 @@ int main(int argc, char **argv)
     double mean_v = 0.0, mean_rz = 0.0, mean_one_way = 0.0;
     for (int step = 0; step <= steps; step++) {
         /* the fluid: solids fraction and volume flux per cell, counterflow */
-        st = dem_coupling_deposit(origin, h, cells, 3, eps, mom, bsum, bv, msg, (int)sizeof msg);
+        st = dem_coupling_deposit(run, origin, h, cells, 3, eps, mom, bsum, bv, msg,
+                                  (int)sizeof msg);
         check(st == 0, "deposit", st, 0);
         for (int c = 0; c < NZ; c++) {
             eps_f[c] = 1.0 - eps[c];
@@ -96,8 +98,8 @@ int main(int argc, char **argv)
             u_f[c] = -solids_flux / eps_f[c];
         }
         /* ... gives the particles buoyancy and drag towards the fluid of their cell */
-        int n = dem_coupling_count();
-        dem_coupling_get(gid, mat, r, x, v, w);
+        int n = dem_coupling_count(run);
+        dem_coupling_get(run, gid, mat, r, x, v, w);
         double sums[4] = {0.0, 0.0, 0.0, 0.0}, all[4];
         for (int i = 0; i < n; i++) {
             int c = (int)floor((x[3 * i + 2] - origin[2]) / h[2]);
@@ -119,9 +121,9 @@ int main(int argc, char **argv)
         mean_rz = all[1] / all[3];
         mean_one_way = all[2] / all[3];
         if (step == steps) break;
-        dem_coupling_set_force(f, t);
-        dem_coupling_set_drag(beta, uf);
-        st = dem_coupling_advance(dt_fluid, msg, (int)sizeof msg);
+        dem_coupling_set_force(run, f, t);
+        dem_coupling_set_drag(run, beta, uf);
+        st = dem_coupling_advance(run, dt_fluid, msg, (int)sizeof msg);
         check(st == 0, "advance", st, 0);
     }
     if (rank == 0)
@@ -131,7 +133,7 @@ int main(int argc, char **argv)
           mean_v, mean_rz);
     check(fabs(mean_v - mean_one_way) > 0.04 * fabs(mean_rz),
           "distinct from the one-way coupled v_t eps_f^(n-1)", mean_v, mean_one_way);
-    st = dem_coupling_finalize(msg, (int)sizeof msg);
+    st = dem_coupling_finalize(&run, msg, (int)sizeof msg);
     check(st == 0, "finalize", st, 0);
     MPI_Finalize();
     if (failures == 0 && rank == 0) printf("test_suspension: all checks passed\n");
