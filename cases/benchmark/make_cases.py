@@ -35,7 +35,7 @@ paths of the particle files are the outputs of the preparations there:
   impact_<N>[_seed<k>].nml                the steel impactor (R = 10 mm) from z = 0.06 m at
                                           5 m/s for 0.1 s; probe: its state every 1 ms
 
-`scripts/prepare-benchmark CASE` runs a case's preparation(s). The functions take the
+`scripts/bench/prepare-benchmark CASE` runs a case's preparation(s). The functions take the
 particle count and a stiffness scale, so that tests/regression/test_benchmark_cases.py can
 make reduced versions of the same cases."""
 import os
