@@ -76,7 +76,7 @@ SILO_REDUCED_INTERVAL = 0.01                       # ... and the time between th
 SILO_SOFT_DT = 5.0e-5                              # soft silos [s]: 0.10 and 0.13 Rayleigh times
                                                    # of the 4 mm M2 and M1 spheres; 75 and 100
                                                    # us (0.2 of M1's, M2's) let full beds rattle
-                                                   # (doc/benchmarks.md)
+                                                   # (doc/results/benchmarks.md)
 SILO_SOFT_CHECKPOINT = 0.1                         # full soft silos: checkpoint interval [s]
 SILO_SOFT_FILLINGS = 3                             # reduced soft M1 silos: seeds 1-3
 SOFT = 2.0e-3                            # MercuryDPM's -soft drum: E of M1, M2 times this

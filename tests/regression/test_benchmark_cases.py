@@ -22,7 +22,7 @@ hold whatever the size:
    which the bed's push exceeds its weight) its downward speed falls at every sample
    (0.1 ms), until it is 2 mm from the floor; it does not pass the floor (its
    lowest point stays within 2 mm of it: the soft floor contact overlaps that much).
-4. the analysis of doc/benchmarks.md: scripts/post/plot-benchmarks draws the figures of these
+4. the analysis of doc/results/benchmarks.md: scripts/post/plot-benchmarks draws the figures of these
    outputs; its flow-rate fit recovers the slope of an exact line, and its Beverloo k for the
    paper's flow-rate ratio of 3.10 is the paper's 1.26; it finds the reduced silos' fillings
    by their names (the soft ones apart) and takes the rates of those that ran to the case's
@@ -202,7 +202,7 @@ check(z.min() - 0.01 > mc.FLOOR - 0.002, f"impact: the impactor stays above the 
 # 4. analysis
 plot = os.path.join(ROOT, "scripts", "post", "plot-benchmarks")
 # the figures of another output folder go into that folder, not doc/
-docs = os.path.join(ROOT, "doc")
+docs = os.path.join(ROOT, "doc", "figures")
 def stamps():
     return {f: os.stat(os.path.join(docs, f)).st_mtime_ns for f in os.listdir(docs)}
 
@@ -214,7 +214,7 @@ check(r.returncode == 0, f"plot-benchmarks: exit {r.returncode}: {r.stderr.strip
 for png in ("silo", "silo_histogram", "silo_section", "drum"):
     check(os.path.exists(os.path.join(work, mc.OUT, f"benchmark_{png}.png")),
           f"benchmark_{png}.png beside the outputs")
-check(stamps() == before, "plot-benchmarks on another output folder left doc/ as it was")
+check(stamps() == before, "plot-benchmarks on another output folder left doc/figures/ as it was")
 pb = SourceFileLoader("plot_benchmarks", plot).load_module()
 t = np.linspace(0.0, 1.0, 101)
 line = np.zeros(101, dtype=[("time", float), ("silo_M1", float)])
