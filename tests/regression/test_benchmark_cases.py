@@ -22,9 +22,9 @@ hold whatever the size:
    which the bed's push exceeds its weight) its downward speed falls at every sample
    (0.1 ms), until it is 2 mm from the floor; it does not pass the floor (its
    lowest point stays within 2 mm of it: the soft floor contact overlaps that much).
-4. the analysis of doc/results/benchmarks.md: scripts/post/plot-benchmarks draws the figures of these
-   outputs; its flow-rate fit recovers the slope of an exact line, and its Beverloo k for the
-   paper's flow-rate ratio of 3.10 is the paper's 1.26; it finds the reduced silos' fillings
+4. the analysis of doc/results/benchmarks.md: scripts/post/plot-benchmarks draws the figures
+   of these outputs; its flow-rate fit recovers the slope of an exact line, and its Beverloo
+   k for the paper's flow-rate ratio of 3.10 is the paper's 1.26; it finds the reduced silos' fillings
    by their names (the soft ones apart) and takes the rates of those that ran to the case's
    end; the drum's oscillation amplitude, of a cosine whose amplitude halves every second,
    is twice that amplitude in each whole second; the flow rate by second, of a count whose
@@ -201,7 +201,7 @@ check(z.min() - 0.01 > mc.FLOOR - 0.002, f"impact: the impactor stays above the 
 
 # 4. analysis
 plot = os.path.join(ROOT, "scripts", "post", "plot-benchmarks")
-# the figures of another output folder go into that folder, not doc/
+# the figures of another output folder go into that folder, not doc/figures/
 docs = os.path.join(ROOT, "doc", "figures")
 def stamps():
     return {f: os.stat(os.path.join(docs, f)).st_mtime_ns for f in os.listdir(docs)}
