@@ -1,4 +1,4 @@
-"""Reduced versions of the benchmark cases (cases/benchmark/make_cases.py: the same
+"""Reduced versions of the benchmark cases (cases/make_cases.py: the same
 namelists, with fewer particles and Young's moduli scaled down so that dt grows with the
 square root of the scale), prepared and run as the full ones are, checked for what must
 hold whatever the size:
@@ -22,9 +22,9 @@ hold whatever the size:
    which the bed's push exceeds its weight) its downward speed falls at every sample
    (0.1 ms), until it is 2 mm from the floor; it does not pass the floor (its
    lowest point stays within 2 mm of it: the soft floor contact overlaps that much).
-4. the analysis of doc/benchmarks.md: scripts/plot-benchmarks draws the figures of these
-   outputs; its flow-rate fit recovers the slope of an exact line, and its Beverloo k for the
-   paper's flow-rate ratio of 3.10 is the paper's 1.26; it finds the reduced silos' fillings
+4. the analysis of doc/results/benchmarks.md: scripts/post/plot-benchmarks draws the figures
+   of these outputs; its flow-rate fit recovers the slope of an exact line, and its Beverloo
+   k for the paper's flow-rate ratio of 3.10 is the paper's 1.26; it finds the reduced silos' fillings
    by their names (the soft ones apart) and takes the rates of those that ran to the case's
    end; the drum's oscillation amplitude, of a cosine whose amplitude halves every second,
    is twice that amplitude in each whole second; the flow rate by second, of a count whose
@@ -33,10 +33,15 @@ hold whatever the size:
    of each material from the bed's centre, of spheres set at known distances, is those; a
    preparation's end state (energies, centre of mass, spin by eighths of height) is read
    from files made for it.
-5. the namelists in cases/benchmark are make_cases.py's: each it writes is there, with the
-   same text, and there is no other (one edited by hand, or one it no longer writes, fails).
+5. the namelists in cases/silo, cases/drum and cases/impact are make_cases.py's: each it
+   writes is there, with the same text, and there is no other (one edited by hand, or one it
+   no longer writes, fails); none of them is a variant. Every variant, written into a folder
+   under output/ as scripts/bench/prepare-benchmark writes it, finds its walls and names the
+   particle file of its preparation in output/benchmark/; a filling of another seed differs
+   from its case only in the seed, its outputs' folder and the particle file it reads.
 usage: test_benchmark_cases.py DEM WORKDIR [MPIEXEC]"""
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -47,32 +52,55 @@ import numpy as np
 
 from regression_util import ROOT, check, finish
 
-sys.path.insert(0, os.path.join(ROOT, "cases", "benchmark"))
+sys.path.insert(0, os.path.join(ROOT, "cases"))
 import make_cases as mc     # noqa: E402
 import make_geometry as mg  # noqa: E402
 
 dem, work = sys.argv[1], os.path.abspath(sys.argv[2])
 mpiexec = sys.argv[3] if len(sys.argv) > 3 else None
 shutil.rmtree(work, ignore_errors=True)
-cases = os.path.join(work, "cases", "benchmark")
-os.makedirs(os.path.join(cases, "geometry"))
-shutil.copytree(os.path.join(ROOT, "cases", "benchmark", "geometry"),
-                os.path.join(cases, "geometry"), dirs_exist_ok=True)
+for folder in mc.FOLDERS:            # the case folders' walls, for the cases run here
+    shutil.copytree(os.path.join(ROOT, "cases", folder), os.path.join(work, "cases", folder),
+                    ignore=shutil.ignore_patterns("*.nml", "*.md"))
 SCALE = 1e-3
 
-# 5. (first: it needs no run) the committed namelists against their generator
+# 5. (first: it needs no run) the committed namelists against their generator; the variants
 written = mc.files()
-here = {n for n in os.listdir(os.path.join(ROOT, "cases", "benchmark")) if n.endswith(".nml")}
-check(here == set(written), "cases/benchmark: namelists not written by make_cases.py: "
+here = {os.path.join(f, n) for f in mc.FOLDERS for n in os.listdir(os.path.join(ROOT, "cases", f))
+        if n.endswith(".nml")}
+check(here == set(written), "cases: namelists not written by make_cases.py: "
       f"{sorted(here - set(written))}; missing: {sorted(set(written) - here)}")
 for name in sorted(here & set(written)):
-    with open(os.path.join(ROOT, "cases", "benchmark", name)) as f:
-        check(f.read() == written[name], f"cases/benchmark/{name} differs from what "
-              "make_cases.py writes (run it)")
+    with open(os.path.join(ROOT, "cases", name)) as f:
+        check(f.read() == written[name], f"cases/{name} differs from what make_cases.py "
+              "writes (run it)")
+variants = sorted(n for n in mc.cases() if mc.is_variant(n))
+check(len(variants) > 50 and not any(mc.is_variant(n) for n in written),
+      f"{len(variants)} variants, none of them committed")
+elsewhere = os.path.join(work, "output", "cases")
+for name in variants:
+    with open(mc.write(name, elsewhere)) as f:
+        files = re.findall(r"file = '([^']+)'", f.read())
+    walls = [os.path.join(elsewhere, p) for p in files if p.endswith(".stl")]
+    check(walls and all(os.path.samefile(p, os.path.join(ROOT, "cases", mc.folder(name),
+                                                         os.path.basename(p)))
+                        for p in walls), f"{name} written elsewhere: its walls {walls}")
+    prepared = [os.path.normpath(os.path.join(elsewhere, p)) for p in files
+                if p.endswith("final.csv")]
+    check(all(p.startswith(os.path.join(ROOT, mc.OUT, "prepare_")) for p in prepared),
+          f"{name} written elsewhere: its particle files {prepared}")
+for name in (n for n in variants if "_seed" in n):
+    base = re.sub(r"_seed\d+", "", name)
+    a, b = (mc.cases()[n].splitlines() for n in (name, base))
+    keys = {re.sub(r"^&(\w+).*", r"\1", x) for x, y in zip(a, b) if x != y}
+    check(len(a) == len(b) and keys <= {"insert", "output", "particle_file"}
+          and all(re.sub(r"_seed\d+|seed = \d+", "", x) == re.sub(r"seed = \d+", "", y)
+                  for x, y in zip(a, b)),
+          f"{name} differs from {base} in more than its seed, outputs and particle file")
 
 
 def run(name, text, ranks=1):
-    path = os.path.join(cases, name + ".nml")
+    path = os.path.join(work, "cases", mc.folder(name), name + ".nml")
     with open(path, "w") as f:
         f.write(text)
     cmd = [dem, path]
@@ -172,9 +200,9 @@ check(z.min() - 0.01 > mc.FLOOR - 0.002, f"impact: the impactor stays above the 
                                          f"(lowest {z.min() - 0.01 - mc.FLOOR:.4f} m above)")
 
 # 4. analysis
-plot = os.path.join(ROOT, "scripts", "plot-benchmarks")
-# the figures of another output folder go into that folder, not doc/
-docs = os.path.join(ROOT, "doc")
+plot = os.path.join(ROOT, "scripts", "post", "plot-benchmarks")
+# the figures of another output folder go into that folder, not doc/figures/
+docs = os.path.join(ROOT, "doc", "figures")
 def stamps():
     return {f: os.stat(os.path.join(docs, f)).st_mtime_ns for f in os.listdir(docs)}
 
@@ -186,7 +214,7 @@ check(r.returncode == 0, f"plot-benchmarks: exit {r.returncode}: {r.stderr.strip
 for png in ("silo", "silo_histogram", "silo_section", "drum"):
     check(os.path.exists(os.path.join(work, mc.OUT, f"benchmark_{png}.png")),
           f"benchmark_{png}.png beside the outputs")
-check(stamps() == before, "plot-benchmarks on another output folder left doc/ as it was")
+check(stamps() == before, "plot-benchmarks on another output folder left doc/figures/ as it was")
 pb = SourceFileLoader("plot_benchmarks", plot).load_module()
 t = np.linspace(0.0, 1.0, 101)
 line = np.zeros(101, dtype=[("time", float), ("silo_M1", float)])

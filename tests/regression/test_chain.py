@@ -1,5 +1,5 @@
-"""Long runs as chains of short ones: scripts/run-chain and the SLURM template
-scripts/dem-slurm.sbatch. A chain is only useful if continuing from a checkpoint changes
+"""Long runs as chains of short ones: scripts/jobs/run-chain and the SLURM template
+scripts/jobs/dem-slurm.sbatch. A chain is only useful if continuing from a checkpoint changes
 nothing, so every chain here is compared with one uninterrupted run of the same case.
 
 The case: 200 soft spheres falling into a box onto an STL floor that moves up and then turns
@@ -9,7 +9,7 @@ The case: 200 soft spheres falling into a box onto an STL floor that moves up an
    &run wall_time_limit = S + 0.25 + C / 8 (0.25 s: dem's reserve for the end of the
    program), so that each run does about an eighth of the steps whatever the machine's
    speed (more runs when the machine is busy).
-2. scripts/run-chain on that copy: at least three runs, all but the last exiting with 75
+2. scripts/jobs/run-chain on that copy: at least three runs, all but the last exiting with 75
    and each leaving a newer checkpoint, the last exiting with 0; one line per run; then
    the final checkpoint's /particles datasets, final.csv, series.csv and every snapshot
    are identical, bit for bit, to the reference's.
@@ -51,8 +51,8 @@ from regression_util import ROOT, check, finish, run_dem
 dem, work = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
-run_chain = os.path.join(ROOT, "scripts", "run-chain")
-template = os.path.join(ROOT, "scripts", "dem-slurm.sbatch")
+run_chain = os.path.join(ROOT, "scripts", "jobs", "run-chain")
+template = os.path.join(ROOT, "scripts", "jobs", "dem-slurm.sbatch")
 DT, T_END = 2.0e-5, 0.6
 N_END = round(T_END / DT)
 

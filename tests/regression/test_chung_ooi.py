@@ -1,5 +1,5 @@
 """Chung & Ooi verification tests 1-4 (cases/verification) against Hertz theory and the
-Coulomb limits, computed in scripts/chung_ooi.py independently of the solver.
+Coulomb limits, computed in scripts/post/chung_ooi.py independently of the solver.
 usage: test_chung_ooi.py DEM WORKDIR"""
 import os
 import sys

@@ -1,4 +1,4 @@
-"""The input reference doc/input.md lists exactly the namelist groups and keys that
+"""The input reference doc/user/input.md lists exactly the namelist groups and keys that
 io/dem_input.f90 declares (its `namelist /group/ ...` statements and its `input_groups`
 table, which gives the accepted keys in error messages).
 usage: test_input_doc.py DEM WORKDIR   (neither is used)"""
@@ -8,7 +8,7 @@ import re
 from regression_util import ROOT, check, finish
 
 source = open(os.path.join(ROOT, "io", "dem_input.f90")).read()
-doc = open(os.path.join(ROOT, "doc", "input.md")).read()
+doc = open(os.path.join(ROOT, "doc", "user", "input.md")).read()
 
 # namelist statements (with continuation lines)
 declared = {}
@@ -24,10 +24,10 @@ for group, keys in declared.items():
     check(table.get(group, "").split() == keys,
           f"&{group}: input_groups lists {table.get(group)}, the namelist {keys}")
 
-# doc/input.md: a section per group with a table row per key
+# doc/user/input.md: a section per group with a table row per key
 sections = dict(re.findall(r"^## &(\w+)[^\n]*\n(.*?)(?=^## |\Z)", doc, re.S | re.M))
 check(set(sections) == set(declared), f"doc sections {sorted(sections)} vs {sorted(declared)}")
 for group, keys in declared.items():
     documented = re.findall(r"^\| `(\w+)` \|", sections.get(group, ""), re.M)
-    check(documented == keys, f"&{group}: doc/input.md lists {documented}, the source {keys}")
+    check(documented == keys, f"&{group}: doc/user/input.md lists {documented}, the source {keys}")
 finish()

@@ -3,11 +3,11 @@ LIGGGHTS 3.8.0's own results, committed as references (LIGGGHTS is not needed to
 
 - the small bed of cases/liggghts_bed (294 spheres and a steel sphere thrown in, 2.5 ms):
   every particle's final position and velocity against reference.csv, made by
-  `scripts/liggghts/bed-reference tests/regression/cases/liggghts_bed`;
+  `scripts/bench/liggghts/bed-reference tests/regression/cases/liggghts_bed`;
 - the Chung & Ooi tests 1-4 (cases/verification, the variant added): peak overlap and force
   and duration (tests 1-2), restitution (test 3), tangential restitution, spin and rebound
   angle (test 4) against reference/liggghts_chung_ooi.csv, made by
-  `scripts/liggghts/chung-ooi-liggghts OUT --summary tests/regression/reference/liggghts_chung_ooi.csv`,
+  `scripts/bench/liggghts/chung-ooi-liggghts OUT --summary tests/regression/reference/liggghts_chung_ooi.csv`,
   to 1e-6 relative (issue 29).
 
 The default law is run on the same inputs too: it must differ from LIGGGHTS by far more than

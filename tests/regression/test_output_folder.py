@@ -17,7 +17,7 @@ run to its end. Then, each judged from the files in the folder (listed and hashe
    refused, as 1.
 5. `checkpoints/latest` emptied, then `dem --resume`: exit 2, the message names latest and
    says it is empty, nothing written; `latest` naming a file that is not there: the same,
-   naming that file. With no `latest` at all, --resume starts from t = 0 (doc/running.md).
+   naming that file. With no `latest` at all, --resume starts from t = 0 (doc/user/running.md).
 usage: test_output_folder.py DEM WORKDIR"""
 import hashlib
 import os

@@ -1,4 +1,4 @@
-"""The same answer on any number of MPI ranks (doc/parallel.md): a case run on 1, 2, 3 (and
+"""The same answer on any number of MPI ranks (doc/user/parallel.md): a case run on 1, 2, 3 (and
 4) ranks gives bit-identical results: final.csv, series.csv (energies summed in id order,
 contact counts), probes.csv, snapshots (with forces and contact counts), and the
 checkpoints' particles and contact history, for
@@ -40,7 +40,7 @@ import numpy as np
 from regression_util import ROOT, check, finish
 import checkpoint_util as cu
 
-sys.path.insert(0, os.path.join(ROOT, "cases", "benchmark"))
+sys.path.insert(0, os.path.join(ROOT, "cases"))
 import make_cases as mc     # noqa: E402
 
 dem, work, mpiexec = sys.argv[1], os.path.abspath(sys.argv[2]), sys.argv[3]
@@ -126,8 +126,8 @@ check(s["contacts_pp"][-1] > 10 and s["contacts_pw"][-1] > 10,
 
 # 2. silo discharge (reduced: 400 spheres, stiffness x 1e-3)
 SCALE = 1e-3
-shutil.copytree(os.path.join(ROOT, "cases", "benchmark", "geometry"),
-                os.path.join(work, "geometry"))
+for folder, walls in (("silo", "silo_small.stl"), ("impact", "impact_box.stl")):
+    shutil.copy(os.path.join(ROOT, "cases", folder, walls), work)
 prep = mc.prepare_silo("M1", "small", n=400, scale=SCALE, t_end=0.4)
 prep = prep.replace(f"'{mc.OUT}/prepare_silo_M1_small_400'", f"'{work}/prepare_silo'")
 with open(os.path.join(work, "prepare_silo.nml"), "w") as f:

@@ -21,7 +21,7 @@
    soft silos' step, 50 us, it stays at rest (its spheres' rms spin rate
    sqrt(2 K_rot / (N I)) ends below its start and below 1 rad/s); at 100 us, which dem's
    bound for one contact (about 104 us here) admits, the same bed rattles: its spheres spin
-   up to more than 10 rad/s within 5 ms and stay so (doc/benchmarks.md, the soft silos'
+   up to more than 10 rad/s within 5 ms and stay so (doc/results/benchmarks.md, the soft silos'
    step). The second run shows that the first check can fail. dem warns of it: 100 us is
    above the step for loaded packings (0.6 of the bound) that dem prints, 50 us below it.
 4. A size ratio of 20: 3000 spheres of radius 0.25 mm settling on a plane while 6 of 5 mm
