@@ -1,5 +1,5 @@
 # Compiler flags per build type, in one place: gfortran, and NVIDIA's nvfortran (NVHPC: not
-# tested here, see doc/gpu.md).
+# tested here, see doc/user/gpu.md).
 #   Release: -O3 (gfortran: add -march=native -ffp-contract=off with DEM_NATIVE=ON; fused
 #            multiply-adds would make results depend on the number of MPI ranks,
 #            doc/theory.md section 13; nvfortran: -Mnofma for the same reason)

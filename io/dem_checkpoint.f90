@@ -1,5 +1,5 @@
 !> Snapshots and checkpoints: HDF5 files of the state of a run at one step (layout in
-!> doc/output.md). A snapshot holds the particles and the walls in their pose; a checkpoint
+!> doc/user/output.md). A snapshot holds the particles and the walls in their pose; a checkpoint
 !> holds, in addition, everything else a run needs to continue bit for bit (contact
 !> history, run bookkeeping) and what identifies its case, so that a restart of another
 !> case is refused. A checkpoint is also a snapshot, and both can seed a new case as

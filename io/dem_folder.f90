@@ -1,4 +1,4 @@
-!> An output folder belongs to one run (doc/running.md): a fresh run writes its case text to
+!> An output folder belongs to one run (doc/user/running.md): a fresh run writes its case text to
 !> input.nml there first. A folder that holds the outputs of a run of another case (its
 !> input.nml differs, or it has outputs and no input.nml) is refused unless `overwrite`; a
 !> folder of the same case, or one overwritten, is cleared of the old run's outputs first,

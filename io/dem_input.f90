@@ -1,6 +1,6 @@
 !> Reads a case from a namelist file and validates it. Every error names the file, the line
 !> of the group, the group and the key. The keys, their defaults, units and ranges are
-!> documented here, where they are declared, and in doc/input.md.
+!> documented here, where they are declared, and in doc/user/input.md.
 module dem_input
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
@@ -26,7 +26,7 @@ module dem_input
     real(wp), parameter :: unset = huge(1.0_wp)
     integer, parameter :: name_len = 32
 
-    !> The groups a case file may hold, and the keys of each (doc/input.md).
+    !> The groups a case file may hold, and the keys of each (doc/user/input.md).
     character(len=*), parameter :: input_groups(12) = [character(len=200) :: &
         'run: dt t_end integrator gravity expected_speed skin allow_unstable ' // &
         'stop_kinetic_energy max_speed max_energy wall_time_limit progress_interval ' // &
@@ -52,7 +52,7 @@ contains
 
     !> Read and validate the case in `path`; collective over the ranks of `comm`. Each rank
     !> keeps a share of the particles: of each source, every P-th one from its rank on (P
-    !> ranks; doc/parallel.md). A case that inserts particles holds them all until they are
+    !> ranks; doc/user/parallel.md). A case that inserts particles holds them all until they are
     !> placed (a sphere is placed clear of all the others), then its share. That the ids are
     !> unique and no two particles overlap is checked where the particles are spread by place
     !> (solver_prepare). On error `c` is incomplete and must not be run.
@@ -948,7 +948,7 @@ contains
     end subroutine read_outlets
 
     !> &probe (repeated): counts, centres of mass, a tracked particle, velocity histograms
-    !> (dem_probes; doc/output.md).
+    !> (dem_probes; doc/user/output.md).
     subroutine read_probes(nf, c, comm, err)
         type(nml_file_t), intent(in) :: nf
         type(case_t), intent(inout) :: c

@@ -327,8 +327,8 @@ contains
                             return
                         else if (stat == num_infinite .or. abs(x) > xmax) then
                             call set_error(err, dem_err_input, here() // 'vertex coordinate ' // &
-                                "'" // excerpt(r%buf(ts:te)) // "' is not finite (NaN, Inf or out of " // &
-                                'range once scaled)')
+                                "'" // excerpt(r%buf(ts:te)) // "' is not finite (NaN, Inf " // &
+                                'or out of range once scaled)')
                             return
                         end if
                         tri(k, nv) = x * scale

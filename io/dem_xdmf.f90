@@ -1,4 +1,4 @@
-!> The XDMF index of the snapshots (doc/output.md): one XML file that ParaView opens
+!> The XDMF index of the snapshots (doc/user/output.md): one XML file that ParaView opens
 !> directly, a time series whose every step holds the particles (points carrying radius,
 !> velocity and the other fields, to be drawn with a sphere glyph scaled by radius) and the
 !> walls (a triangle surface), read from the snapshot files. It is rewritten whole after

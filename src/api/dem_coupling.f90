@@ -1,4 +1,4 @@
-!> The interface a CFD code drives the DEM through (doc/coupling.md), in the style of MFiX's
+!> The interface a CFD code drives the DEM through (doc/user/coupling.md), in the style of MFiX's
 !> DES coupling: initialise from a case file on the caller's communicator, advance by the
 !> fluid's time step in uniform sub-steps that end exactly at t + dt, read the owned
 !> particles, set a force and torque or a drag coefficient and fluid velocity per particle,
@@ -6,7 +6,7 @@
 !> coupling_t (from C an opaque pointer), that holds one coupled run: a process can hold
 !> several, independent of each other. Every entry point is collective on the handle's
 !> communicator, returns a status (0: success, else a dem_err_* code) and a message rather
-!> than stopping the program, and has a bind(C) twin (src/dem_coupling.h). SI units;
+!> than stopping the program, and has a bind(C) twin (src/api/dem_coupling.h). SI units;
 !> gravity is the case's (&run gravity), applied by the DEM; buoyancy and drag come only
 !> through this interface.
 module dem_coupling
@@ -486,7 +486,7 @@ contains
         message = err%message
     end subroutine report
 
-    ! --- the C interface (src/dem_coupling.h): the same calls on an opaque pointer to a
+    ! --- the C interface (src/api/dem_coupling.h): the same calls on an opaque pointer to a
     ! coupling_t that dem_coupling_init allocates and dem_coupling_finalize frees; a null
     ! handle acts as one that holds no run ---
 

@@ -1,4 +1,4 @@
-/* The C interface of dem's CFD coupling (src/dem_coupling.f90, doc/coupling.md).
+/* The C interface of dem's CFD coupling (src/api/dem_coupling.f90, doc/user/coupling.md).
  *
  * A coupled run is an opaque handle, dem_coupling *, that dem_coupling_init sets up and
  * dem_coupling_finalize frees; every other call takes it first. A process can hold several

@@ -121,8 +121,8 @@ contains
             '', &
             'Outputs go to the directory set by &output dir (default output/<case name>):', &
             'series.csv, final.csv, snapshots/*.h5 with snapshots.xmf (ParaView),', &
-            'checkpoints/*.h5 and, with &output trace_id, contact.csv (doc/output.md).', &
-            'The namelist groups and keys are described in doc/input.md.', &
+            'checkpoints/*.h5 and, with &output trace_id, contact.csv (doc/user/output.md).', &
+            'The namelist groups and keys are described in doc/user/input.md.', &
             '', &
             'Exit status: 0 done; 2 bad input; 3 the run failed (instability); 4 a file could', &
             'not be written; 75 stopped early (wall-time limit, SIGTERM or SIGUSR1) after', &
@@ -135,7 +135,7 @@ contains
         type(time_scales_t) :: ts
         real(wp) :: mem
         call case_time_scales(c, ts)
-        ! peak resident sizes measured (doc/running.md): 31 MiB for a sphere on a plane, plus
+        ! peak resident sizes measured (doc/user/running.md): 31 MiB for a sphere on a plane, plus
         ! about 2900 bytes per particle (a bed of 25 000) and 790 per triangle (planes of
         ! 0.5 and 2 million), a checkpoint built in memory included
         mem = 31.0_wp + (2900.0_wp * c%n_particles + 790.0_wp * c%mesh%n_tri) / 2.0_wp**20

@@ -1,6 +1,6 @@
 !> Per-particle storage that follows a rank's share of the particles: the capacity policy
 !> (grow to 5/4 of the need when it is short, shrink to that when the store is more than
-!> 3/2 of the need; doc/parallel.md), the reallocation of arrays whose last index is the
+!> 3/2 of the need; doc/user/parallel.md), the reallocation of arrays whose last index is the
 !> particle, keeping the first rows, their reordering, and the packing of some particles'
 !> columns into a buffer for another rank and back (kernels, on the device when the arrays
 !> are there, otherwise on the host's copies).

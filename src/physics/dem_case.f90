@@ -94,7 +94,7 @@ contains
     end function case_particle_materials
 
     !> Free the case's particles (the count stays): once the solver has taken its share of
-    !> them, a rank needs no more than that share (doc/parallel.md).
+    !> them, a rank needs no more than that share (doc/user/parallel.md).
     subroutine case_release_particles(c)
         type(case_t), intent(inout) :: c
         deallocate(c%gid, c%mat, c%radius, c%x, c%v, c%w)

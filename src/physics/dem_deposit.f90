@@ -1,5 +1,5 @@
 !> Deposition of the particles onto a fluid code's cells, a Cartesian grid or a list of cell
-!> centres (doc/coupling.md; doc/theory.md, section 14): per cell, the solids volume, the
+!> centres (doc/user/coupling.md; doc/theory.md, section 14): per cell, the solids volume, the
 !> particle momentum, and the drag sums (beta, beta v) a semi-implicit fluid solver needs. On
 !> a grid, each particle's weights over the cells are separable (a product of one weight per
 !> axis), renormalised to sum to one over the cells of the grid, so that the deposits

@@ -1,6 +1,6 @@
 !> Lists and migration: the particles re-sorted in space and the neighbour lists rebuilt when
 !> they are stale (doc/theory.md, section 9), after the particles have gone to the ranks of
-!> their blocks, repartitioned when the load is out of balance (doc/parallel.md); between
+!> their blocks, repartitioned when the load is out of balance (doc/user/parallel.md); between
 !> rebuilds, the ghosts refreshed (the halo). The particles that outlets took out are
 !> removed at a rebuild.
 module dem_rebuild

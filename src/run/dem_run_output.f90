@@ -1,4 +1,4 @@
-!> The outputs of a run as it goes (doc/output.md): the rows of series.csv and probes.csv,
+!> The outputs of a run as it goes (doc/user/output.md): the rows of series.csv and probes.csv,
 !> the histograms, the traced particle's contact.csv, snapshots with their XDMF index, and
 !> checkpoints with checkpoints/latest. Sums over the ranks are in fixed point; rank 0
 !> writes the text files, every rank its part of the HDF5 files.

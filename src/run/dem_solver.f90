@@ -1,6 +1,6 @@
 !> The run: set up from a case (or a checkpoint, dem_frames), started, advanced step by
 !> step (dem_step) until t_end, a settled state or a stop, and finished with the final
-!> state (doc/theory.md, section 5; doc/output.md). The public procedures of the run layer.
+!> state (doc/theory.md, section 5; doc/user/output.md). The public procedures of the run layer.
 module dem_solver
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input

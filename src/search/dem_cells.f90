@@ -2,7 +2,7 @@
 !> items by cell, and the prefix sum it needs. The cell counts are taken with atomics, and
 !> each cell's items are then put in increasing order, so the result is the same whatever
 !> order the threads ran in (the one of a sequential, stable counting sort). Every array
-!> passed in must be on the device (doc/gpu.md).
+!> passed in must be on the device (doc/user/gpu.md).
 module dem_cells
     use dem_kinds, only: wp, ip
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host

@@ -1,4 +1,4 @@
-!> Domain decomposition of an MPI run (doc/parallel.md; doc/theory.md, section 13). Space is
+!> Domain decomposition of an MPI run (doc/user/parallel.md; doc/theory.md, section 13). Space is
 !> cut into cubic blocks over the case's bounding box (the outer layers of blocks reach to
 !> infinity); METIS assigns the blocks to ranks, weighted by the particles and wall contacts
 !> in them and by the particles near each face they share. A rank owns the particles whose

@@ -18,7 +18,7 @@ module dem_particles
     integer, parameter :: n_pack_real = 19  !< reals: radius, mass, 1/mass, 1/inertia, x, v, w,
                                             !< force, torque (and ext, when allocated)
 
-    ! rows of particles_t%ext: what a coupled fluid code sets and gets (doc/coupling.md)
+    ! rows of particles_t%ext: what a coupled fluid code sets and gets (doc/user/coupling.md)
     integer, parameter :: ext_force = 1      !< 1:3 external force [N]
     integer, parameter :: ext_torque = 4     !< 4:6 external torque [N m]
     integer, parameter :: ext_beta = 7       !< drag coefficient beta [kg/s]

@@ -1,5 +1,5 @@
 /* A toy one-dimensional fluid solver coupled two-way to dem through the C interface: a
- * settling suspension (doc/coupling.md walks through it). Run on 1 and 2 ranks.
+ * settling suspension (doc/user/coupling.md walks through it). Run on 1 and 2 ranks.
  *
  * 400 glass spheres (R = 0.5 mm) spread through a closed 10 x 10 mm column of viscous fluid
  * (mu = 0.1 Pa s, rho_f = 1000 kg/m^3) settle. The fluid lives on 8 cells along z. At each
