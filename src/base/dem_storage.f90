@@ -9,7 +9,7 @@ module dem_storage
     implicit none
     private
     public :: storage_capacity, storage_resize, permute_real, permute_int, permute_i8, &
-              gather_real, scatter_real, gather_ids, scatter_ids
+              gather_real, scatter_real, gather_int, scatter_int, gather_i8, scatter_i8
 
     !> storage_resize(a, n_keep, capacity): a reallocated with `capacity` entries along its
     !> last dimension; entries 1..n_keep keep their values, the others are zero.
@@ -194,32 +194,54 @@ contains
         end do
     end subroutine scatter_real
 
-    !> buf(:, k) = global id and material of particle idx(k), k = 1..n.
-    subroutine gather_ids(capacity, n, idx, gid, mat, buf)
-        integer(ip), intent(in) :: capacity, n
+    !> buf(row0 + 1, k) = a(idx(k)), k = 1..n: an integer field into a row of a buffer of
+    !> 64-bit integers (on the device if a, idx and buf are there, as gather_real).
+    subroutine gather_int(capacity, n, idx, a, buf_rows, row0, buf)
+        integer(ip), intent(in) :: capacity, n, buf_rows, row0
         integer(ip), intent(in) :: idx(n)
-        integer(i8), intent(in) :: gid(capacity)
-        integer(ip), intent(in) :: mat(capacity)
-        integer(i8), intent(inout) :: buf(2, n)
+        integer(ip), intent(in) :: a(capacity)
+        integer(i8), intent(inout) :: buf(buf_rows, n)
         integer(ip) :: k
-        !$acc parallel loop gang vector copyin(idx, gid, mat) copy(buf)
+        !$acc parallel loop gang vector copyin(idx, a) copy(buf)
         do k = 1, n
-            buf(1, k) = gid(idx(k))
-            buf(2, k) = mat(idx(k))
+            buf(row0 + 1, k) = a(idx(k))
         end do
-    end subroutine gather_ids
+    end subroutine gather_int
 
-    !> gather_ids' inverse, into particles first, first + 1, ...
-    subroutine scatter_ids(capacity, n, first, buf, gid, mat)
-        integer(ip), intent(in) :: capacity, n, first
-        integer(i8), intent(in) :: buf(2, n)
-        integer(i8), intent(inout) :: gid(capacity)
-        integer(ip), intent(inout) :: mat(capacity)
+    !> gather_int for global ids.
+    subroutine gather_i8(capacity, n, idx, a, buf_rows, row0, buf)
+        integer(ip), intent(in) :: capacity, n, buf_rows, row0
+        integer(ip), intent(in) :: idx(n)
+        integer(i8), intent(in) :: a(capacity)
+        integer(i8), intent(inout) :: buf(buf_rows, n)
         integer(ip) :: k
-        !$acc parallel loop gang vector copyin(buf) copy(gid, mat)
+        !$acc parallel loop gang vector copyin(idx, a) copy(buf)
         do k = 1, n
-            gid(first + k - 1) = buf(1, k)
-            mat(first + k - 1) = int(buf(2, k), ip)
+            buf(row0 + 1, k) = a(idx(k))
         end do
-    end subroutine scatter_ids
+    end subroutine gather_i8
+
+    !> gather_int's inverse, into consecutive places first, first + 1, ...
+    subroutine scatter_int(capacity, n, first, buf_rows, row0, buf, a)
+        integer(ip), intent(in) :: capacity, n, first, buf_rows, row0
+        integer(i8), intent(in) :: buf(buf_rows, n)
+        integer(ip), intent(inout) :: a(capacity)
+        integer(ip) :: k
+        !$acc parallel loop gang vector copyin(buf) copy(a)
+        do k = 1, n
+            a(first + k - 1) = int(buf(row0 + 1, k), ip)
+        end do
+    end subroutine scatter_int
+
+    !> gather_i8's inverse, into consecutive places first, first + 1, ...
+    subroutine scatter_i8(capacity, n, first, buf_rows, row0, buf, a)
+        integer(ip), intent(in) :: capacity, n, first, buf_rows, row0
+        integer(i8), intent(in) :: buf(buf_rows, n)
+        integer(i8), intent(inout) :: a(capacity)
+        integer(ip) :: k
+        !$acc parallel loop gang vector copyin(buf) copy(a)
+        do k = 1, n
+            a(first + k - 1) = buf(row0 + 1, k)
+        end do
+    end subroutine scatter_i8
 end module dem_storage

@@ -3,7 +3,7 @@
 module dem_comm
     use mpi_f08, only: MPI_Comm, MPI_COMM_WORLD, MPI_Init, MPI_Initialized, MPI_Finalize, &
                        MPI_Finalized, MPI_Comm_dup, MPI_Comm_free, MPI_Comm_rank, &
-                       MPI_Comm_size, MPI_Abort, MPI_Exscan, MPI_Allreduce, MPI_Barrier, &
+                       MPI_Comm_size, MPI_Exscan, MPI_Allreduce, MPI_Barrier, &
                        MPI_Reduce_scatter_block, MPI_Gather, MPI_Gatherv, MPI_Bcast, &
                        MPI_Comm_split_type, MPI_COMM_TYPE_SHARED, MPI_Request, MPI_Status, &
                        MPI_Isend, MPI_Irecv, MPI_Recv, MPI_Waitall, MPI_STATUSES_IGNORE, &
@@ -51,7 +51,6 @@ module dem_comm
         integer :: size = 1
         logical :: owns_mpi = .false.   !< this module called MPI_Init
     contains
-        procedure :: abort => comm_abort
         procedure :: handle => comm_handle
     end type comm_t
 
@@ -310,11 +309,4 @@ contains
     integer function comm_info_null() result(h)
         h = MPI_INFO_NULL%MPI_VAL
     end function comm_info_null
-
-    !> Stop every rank with an exit code.
-    subroutine comm_abort(self, code)
-        class(comm_t), intent(in) :: self
-        integer, intent(in) :: code
-        call MPI_Abort(self%comm, code)
-    end subroutine comm_abort
 end module dem_comm

@@ -16,7 +16,8 @@ module dem_domain
     use dem_metis, only: metis_partition
     use dem_neighbors, only: fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
-                             n_pack_int, particles_pack_reals, particles_reserve_on_device
+                             particles_pack_ints, particles_pack_reals, &
+                             particles_reserve_on_device
     use dem_contact_store, only: contact_store_t, store_walls_pack, store_walls_unpack, &
                                  store_walls_permute, n_wall_pack_real, n_pair_history, &
                                  store_walls_reserve_on_device
@@ -254,7 +255,7 @@ contains
         call acc_data(hpos, acc_create)
         nreal = particles_pack_reals(p)
         rows = nreal + n_wall_pack_real + 1
-        allocate(ibuf(n_pack_int, n_send), rbuf(rows, n_send))
+        allocate(ibuf(particles_pack_ints(p), n_send), rbuf(rows, n_send))
         call acc_data(ibuf, acc_create)
         call acc_data(rbuf, acc_create)
         call particles_pack(p, n_send, item, ibuf, rbuf)
@@ -276,7 +277,7 @@ contains
         hrecv_counts = comm_counts(comm, hcounts)
         nr = sum(recv_counts)
         n_in = sum(hrecv_counts)
-        allocate(irecv(n_pack_int, nr), rrecv(rows, nr), precv(1, n_in), &
+        allocate(irecv(particles_pack_ints(p), nr), rrecv(rows, nr), precv(1, n_in), &
                  xrecv(n_pair_history, n_in))
         call comm_exchange(comm, ibuf, counts, irecv, recv_counts)
         call comm_exchange(comm, rbuf, counts, rrecv, recv_counts)
@@ -515,7 +516,7 @@ contains
         call acc_data(d%send, acc_create)
         call gather_items(m, from, by_rank, d%send)
         call acc_data(d%send, acc_to_host)
-        allocate(ibuf(n_pack_int, m), rbuf(particles_pack_reals(p), m))
+        allocate(ibuf(particles_pack_ints(p), m), rbuf(particles_pack_reals(p), m))
         call acc_data(ibuf, acc_create)
         call acc_data(rbuf, acc_create)
         call particles_pack(p, m, d%send, ibuf, rbuf)
@@ -523,7 +524,7 @@ contains
         call acc_data(rbuf, acc_to_host)
         d%recv_counts = comm_counts(comm, d%send_counts)
         nr = sum(d%recv_counts)
-        allocate(irecv(n_pack_int, nr), rrecv(particles_pack_reals(p), nr))
+        allocate(irecv(particles_pack_ints(p), nr), rrecv(particles_pack_reals(p), nr))
         call comm_exchange(comm, ibuf, d%send_counts, irecv, d%recv_counts)
         call comm_exchange(comm, rbuf, d%send_counts, rrecv, d%recv_counts)
         d%bytes = d%bytes + 8 * (size(ibuf) + size(rbuf))

@@ -3,20 +3,16 @@
 module dem_particles
     use dem_kinds, only: wp, ip, i8
     use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int, &
-                           permute_i8, gather_real, scatter_real, gather_ids, scatter_ids
+                           permute_i8, gather_real, scatter_real, gather_int, scatter_int, &
+                           gather_i8, scatter_i8
     use dem_acc, only: acc_data, acc_enter, acc_exit, acc_to_host
     implicit none
     private
     public :: particles_t, particles_init, particles_add, particles_permute, order_by_id, &
               particles_reserve, particles_reserve_on_device, particles_data, index_of_id, &
-              particles_find, particles_park, &
-              particles_pack, particles_unpack, particles_pack_reals, particles_external, &
-              n_pack_int, sphere_mass, sphere_inv_inertia, ext_force, ext_torque, ext_beta, &
-              ext_fluid_v, ext_impulse, n_ext
-
-    integer, parameter :: n_pack_int = 2    !< integers per packed particle: gid, material
-    integer, parameter :: n_pack_real = 19  !< reals: radius, mass, 1/mass, 1/inertia, x, v, w,
-                                            !< force, torque (and ext, when allocated)
+              particles_find, particles_park, particles_pack, particles_unpack, &
+              particles_pack_ints, particles_pack_reals, particles_external, sphere_mass, &
+              sphere_inv_inertia, ext_force, ext_torque, ext_beta, ext_fluid_v, ext_impulse, n_ext
 
     ! rows of particles_t%ext: what a coupled fluid code sets and gets (doc/user/coupling.md)
     integer, parameter :: ext_force = 1      !< 1:3 external force [N]
@@ -46,18 +42,112 @@ module dem_particles
                                                   !< a run of its own
     end type particles_t
 
+    !> What particles_fields does to the fields of the store: an extension of this type per
+    !> operation (allocation and reserve, device data, permutation, packing), with a
+    !> procedure for each kind of field: global ids, integers, reals, vectors (rows, n).
+    type, abstract :: field_visitor_t
+    contains
+        procedure(ids_visit), deferred :: ids
+        procedure(ints_visit), deferred :: ints
+        procedure(reals_visit), deferred :: reals
+        procedure(vectors_visit), deferred :: vectors
+    end type field_visitor_t
+
+    abstract interface
+        subroutine ids_visit(self, a)
+            import :: field_visitor_t, i8
+            class(field_visitor_t), intent(inout) :: self
+            integer(i8), allocatable, intent(inout) :: a(:)
+        end subroutine ids_visit
+        subroutine ints_visit(self, a)
+            import :: field_visitor_t, ip
+            class(field_visitor_t), intent(inout) :: self
+            integer(ip), allocatable, intent(inout) :: a(:)
+        end subroutine ints_visit
+        subroutine reals_visit(self, a)
+            import :: field_visitor_t, wp
+            class(field_visitor_t), intent(inout) :: self
+            real(wp), allocatable, intent(inout) :: a(:)
+        end subroutine reals_visit
+        subroutine vectors_visit(self, a)
+            import :: field_visitor_t, wp
+            class(field_visitor_t), intent(inout) :: self
+            real(wp), allocatable, intent(inout) :: a(:, :)
+        end subroutine vectors_visit
+    end interface
+
+    !> Allocation (a field not yet allocated, zero) or reserve: `capacity` places, the
+    !> first n kept.
+    type, extends(field_visitor_t) :: resizer_t
+        integer(ip) :: n = 0, capacity = 0
+    contains
+        procedure :: ids => resize_ids, ints => resize_ints, reals => resize_reals, &
+                     vectors => resize_vectors
+    end type resizer_t
+
+    !> One operation of dem_acc.
+    type, extends(field_visitor_t) :: device_t
+        integer :: op = 0
+    contains
+        procedure :: ids => device_ids, ints => device_ints, reals => device_reals, &
+                     vectors => device_vectors
+    end type device_t
+
+    !> The permutation of particles_permute.
+    type, extends(field_visitor_t) :: permuter_t
+        integer(ip) :: n = 0, capacity = 0
+        integer(ip), pointer, contiguous :: order(:) => null()
+    contains
+        procedure :: ids => permute_ids, ints => permute_ints, reals => permute_reals, &
+                     vectors => permute_vectors
+    end type permuter_t
+
+    !> Packing for another rank (mode pack: the particles idx(1:n) into the buffers) and back
+    !> (mode unpack: n particles from the buffers to places first, first + 1, ...), or the
+    !> rows a particle takes (mode count); irow, rrow: the rows of the buffers filled so far.
+    type, extends(field_visitor_t) :: packer_t
+        integer :: mode = 0
+        integer(ip) :: n = 0, capacity = 0, first = 0, irow = 0, rrow = 0
+        integer(ip), pointer, contiguous :: idx(:) => null()
+        integer(i8), pointer, contiguous :: ibuf(:, :) => null()
+        real(wp), pointer, contiguous :: rbuf(:, :) => null()
+    contains
+        procedure :: ids => pack_ids, ints => pack_ints, reals => pack_reals, &
+                     vectors => pack_vectors
+    end type packer_t
+    integer, parameter :: mode_count = 0, mode_pack = 1, mode_unpack = 2
+
 contains
 
-    !> Allocate room for `capacity` particles; the store starts empty.
+    !> The one description of a particle's fields: every operation on the whole store
+    !> (allocation, reserve, device data, permutation, packing for another rank and back)
+    !> visits the fields here, in this order, which is also the order of their rows in the
+    !> packed buffers. A new per-particle quantity is a component of particles_t and a line
+    !> here (and, when a restart needs it, a field of the frames: dem_frames, dem_checkpoint).
+    subroutine particles_fields(p, visit)
+        type(particles_t), intent(inout) :: p
+        class(field_visitor_t), intent(inout) :: visit
+        call visit%ids(p%gid)
+        call visit%ints(p%mat)
+        call visit%reals(p%radius)
+        call visit%reals(p%mass)
+        call visit%reals(p%inv_mass)
+        call visit%reals(p%inv_inertia)
+        call visit%vectors(p%x)
+        call visit%vectors(p%v)
+        call visit%vectors(p%w)
+        call visit%vectors(p%f)
+        call visit%vectors(p%t)
+        if (allocated(p%ext)) call visit%vectors(p%ext)
+    end subroutine particles_fields
+
+    !> Allocate room for `capacity` particles, every field zero; the store starts empty.
     subroutine particles_init(p, capacity)
         type(particles_t), intent(out) :: p  !! the store
         integer(ip), intent(in) :: capacity   !! number of particles it can hold
-        allocate(p%gid(capacity), p%mat(capacity), p%radius(capacity), p%mass(capacity), &
-                 p%inv_mass(capacity), p%inv_inertia(capacity))
-        allocate(p%x(3, capacity), p%v(3, capacity), p%w(3, capacity), p%f(3, capacity), &
-                 p%t(3, capacity))
-        p%f = 0.0_wp
-        p%t = 0.0_wp
+        type(resizer_t) :: alloc
+        alloc = resizer_t(n=0, capacity=capacity)
+        call particles_fields(p, alloc)
     end subroutine particles_init
 
     !> Room for `need` particles, owned and ghosts (those stored keep their places): the
@@ -65,22 +155,12 @@ contains
     subroutine particles_reserve(p, need)
         type(particles_t), intent(inout) :: p
         integer(ip), intent(in) :: need
-        integer(ip) :: capacity, n
+        type(resizer_t) :: resize
+        integer(ip) :: capacity
         capacity = storage_capacity(size(p%gid, kind=ip), need)
         if (capacity == size(p%gid)) return
-        n = p%n_own + p%n_ghost
-        call storage_resize(p%gid, n, capacity)
-        call storage_resize(p%mat, n, capacity)
-        call storage_resize(p%radius, n, capacity)
-        call storage_resize(p%mass, n, capacity)
-        call storage_resize(p%inv_mass, n, capacity)
-        call storage_resize(p%inv_inertia, n, capacity)
-        call storage_resize(p%x, n, capacity)
-        call storage_resize(p%v, n, capacity)
-        call storage_resize(p%w, n, capacity)
-        call storage_resize(p%f, n, capacity)
-        call storage_resize(p%t, n, capacity)
-        if (allocated(p%ext)) call storage_resize(p%ext, n, capacity)
+        resize = resizer_t(n=p%n_own + p%n_ghost, capacity=capacity)
+        call particles_fields(p, resize)
     end subroutine particles_reserve
 
     !> particles_reserve for a store that is on the device: when it must grow or shrink, its
@@ -99,18 +179,9 @@ contains
     subroutine particles_data(p, op)
         type(particles_t), intent(inout) :: p
         integer, intent(in) :: op
-        call acc_data(p%gid, op)
-        call acc_data(p%mat, op)
-        call acc_data(p%radius, op)
-        call acc_data(p%mass, op)
-        call acc_data(p%inv_mass, op)
-        call acc_data(p%inv_inertia, op)
-        call acc_data(p%x, op)
-        call acc_data(p%v, op)
-        call acc_data(p%w, op)
-        if (allocated(p%ext)) call acc_data(p%ext, op)
-        call acc_data(p%f, op)
-        call acc_data(p%t, op)
+        type(device_t) :: device
+        device = device_t(op=op)
+        call particles_fields(p, device)
     end subroutine particles_data
 
     !> Append an owned sphere (there are no ghosts while particles are added).
@@ -153,23 +224,14 @@ contains
     !> device when the arrays are there (storage's permute kernels).
     subroutine particles_permute(p, order)
         type(particles_t), intent(inout) :: p
-        integer(ip), intent(in) :: order(:)   !! distinct indices in 1..n_own
-        integer(ip) :: n, cap
-        n = size(order)
-        cap = size(p%gid)
-        p%n_own = n
-        call permute_i8(cap, n, order, p%gid)
-        call permute_int(1, cap, n, order, p%mat)
-        call permute_real(1, cap, n, order, p%radius)
-        call permute_real(1, cap, n, order, p%mass)
-        call permute_real(1, cap, n, order, p%inv_mass)
-        call permute_real(1, cap, n, order, p%inv_inertia)
-        call permute_real(3, cap, n, order, p%x)
-        call permute_real(3, cap, n, order, p%v)
-        call permute_real(3, cap, n, order, p%w)
-        call permute_real(3, cap, n, order, p%f)
-        call permute_real(3, cap, n, order, p%t)
-        if (allocated(p%ext)) call permute_real(n_ext, cap, n, order, p%ext)
+        integer(ip), intent(in), target, contiguous :: order(:)   !! distinct indices in
+                                                                    !! 1..n_own
+        type(permuter_t) :: permute
+        permute%n = size(order, kind=ip)
+        permute%capacity = size(p%gid, kind=ip)
+        permute%order => order
+        p%n_own = permute%n
+        call particles_fields(p, permute)
     end subroutine particles_permute
 
     !> Take the particles flagged out of the dynamics until they are removed (at the next
@@ -218,61 +280,195 @@ contains
         p%ext = 0.0_wp
     end subroutine particles_external
 
-    !> Reals per particle that particles_pack writes.
-    pure integer function particles_pack_reals(p) result(n)
-        type(particles_t), intent(in) :: p
-        n = n_pack_real
-        if (allocated(p%ext)) n = n + n_ext
+    !> Integers per particle that particles_pack writes (one per integer field).
+    integer function particles_pack_ints(p) result(n)
+        type(particles_t), intent(inout) :: p
+        type(packer_t) :: count
+        count%mode = mode_count
+        call particles_fields(p, count)
+        n = count%irow
+    end function particles_pack_ints
+
+    !> Reals per particle that particles_pack writes (the rows of the real fields).
+    integer function particles_pack_reals(p) result(n)
+        type(particles_t), intent(inout) :: p
+        type(packer_t) :: count
+        count%mode = mode_count
+        call particles_fields(p, count)
+        n = count%rrow
     end function particles_pack_reals
 
-    !> Every field of the particles idx(1:n), packed for another rank: n_pack_int integers
-    !> (ibuf) and particles_pack_reals reals (the first rows of rbuf) per particle, in the
-    !> order of idx (storage's gather kernels: on the device when the arrays are there).
+    !> Every field of the particles idx(1:n), packed for another rank: particles_pack_ints
+    !> integers (ibuf) and particles_pack_reals reals (the first rows of rbuf) per particle,
+    !> in the order of idx (storage's gather kernels: on the device when the arrays are
+    !> there).
     subroutine particles_pack(p, n, idx, ibuf, rbuf)
-        type(particles_t), intent(in) :: p
+        type(particles_t), intent(inout) :: p
         integer(ip), intent(in) :: n
-        integer(ip), intent(in) :: idx(n)
-        integer(i8), intent(inout) :: ibuf(:, :)   !! (n_pack_int, n)
-        real(wp), intent(inout) :: rbuf(:, :)      !! (>= particles_pack_reals(p), n)
-        integer(ip) :: cap, rows
-        cap = size(p%gid)
-        rows = size(rbuf, 1)
-        call gather_ids(cap, n, idx, p%gid, p%mat, ibuf)
-        call gather_real(1, cap, n, idx, p%radius, rows, 0, rbuf)
-        call gather_real(1, cap, n, idx, p%mass, rows, 1, rbuf)
-        call gather_real(1, cap, n, idx, p%inv_mass, rows, 2, rbuf)
-        call gather_real(1, cap, n, idx, p%inv_inertia, rows, 3, rbuf)
-        call gather_real(3, cap, n, idx, p%x, rows, 4, rbuf)
-        call gather_real(3, cap, n, idx, p%v, rows, 7, rbuf)
-        call gather_real(3, cap, n, idx, p%w, rows, 10, rbuf)
-        call gather_real(3, cap, n, idx, p%f, rows, 13, rbuf)
-        call gather_real(3, cap, n, idx, p%t, rows, 16, rbuf)
-        if (allocated(p%ext)) call gather_real(n_ext, cap, n, idx, p%ext, rows, n_pack_real, &
-                                               rbuf)
+        integer(ip), intent(in), target, contiguous :: idx(:)           !! (n)
+        integer(i8), intent(inout), target, contiguous :: ibuf(:, :)    !! (pack_ints, n)
+        real(wp), intent(inout), target, contiguous :: rbuf(:, :)       !! (>= pack_reals, n)
+        type(packer_t) :: pack
+        pack%mode = mode_pack
+        pack%n = n
+        pack%capacity = size(p%gid, kind=ip)
+        pack%idx => idx
+        pack%ibuf => ibuf
+        pack%rbuf => rbuf
+        call particles_fields(p, pack)
     end subroutine particles_pack
 
     !> Store n packed particles at first, first+1, ... (particles_pack's inverse).
     subroutine particles_unpack(p, first, n, ibuf, rbuf)
         type(particles_t), intent(inout) :: p
         integer(ip), intent(in) :: first, n
-        integer(i8), intent(in) :: ibuf(:, :)
-        real(wp), intent(in) :: rbuf(:, :)
-        integer(ip) :: cap, rows
-        cap = size(p%gid)
-        rows = size(rbuf, 1)
-        call scatter_ids(cap, n, first, ibuf, p%gid, p%mat)
-        call scatter_real(1, cap, n, first, rows, 0, rbuf, p%radius)
-        call scatter_real(1, cap, n, first, rows, 1, rbuf, p%mass)
-        call scatter_real(1, cap, n, first, rows, 2, rbuf, p%inv_mass)
-        call scatter_real(1, cap, n, first, rows, 3, rbuf, p%inv_inertia)
-        call scatter_real(3, cap, n, first, rows, 4, rbuf, p%x)
-        call scatter_real(3, cap, n, first, rows, 7, rbuf, p%v)
-        call scatter_real(3, cap, n, first, rows, 10, rbuf, p%w)
-        call scatter_real(3, cap, n, first, rows, 13, rbuf, p%f)
-        call scatter_real(3, cap, n, first, rows, 16, rbuf, p%t)
-        if (allocated(p%ext)) call scatter_real(n_ext, cap, n, first, rows, n_pack_real, rbuf, &
-                                                p%ext)
+        integer(i8), intent(in), target, contiguous :: ibuf(:, :)
+        real(wp), intent(in), target, contiguous :: rbuf(:, :)
+        type(packer_t) :: unpack
+        unpack%mode = mode_unpack
+        unpack%n = n
+        unpack%first = first
+        unpack%capacity = size(p%gid, kind=ip)
+        unpack%ibuf => ibuf
+        unpack%rbuf => rbuf
+        call particles_fields(p, unpack)
     end subroutine particles_unpack
+
+    subroutine resize_ids(self, a)
+        class(resizer_t), intent(inout) :: self
+        integer(i8), allocatable, intent(inout) :: a(:)
+        if (.not. allocated(a)) allocate(a(0))
+        call storage_resize(a, self%n, self%capacity)
+    end subroutine resize_ids
+
+    subroutine resize_ints(self, a)
+        class(resizer_t), intent(inout) :: self
+        integer(ip), allocatable, intent(inout) :: a(:)
+        if (.not. allocated(a)) allocate(a(0))
+        call storage_resize(a, self%n, self%capacity)
+    end subroutine resize_ints
+
+    subroutine resize_reals(self, a)
+        class(resizer_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:)
+        if (.not. allocated(a)) allocate(a(0))
+        call storage_resize(a, self%n, self%capacity)
+    end subroutine resize_reals
+
+    !> (A vector field not yet allocated is a 3-vector; the coupling's block is allocated
+    !> by particles_external.)
+    subroutine resize_vectors(self, a)
+        class(resizer_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:, :)
+        if (.not. allocated(a)) allocate(a(3, 0))
+        call storage_resize(a, self%n, self%capacity)
+    end subroutine resize_vectors
+
+    subroutine device_ids(self, a)
+        class(device_t), intent(inout) :: self
+        integer(i8), allocatable, intent(inout) :: a(:)
+        call acc_data(a, self%op)
+    end subroutine device_ids
+
+    subroutine device_ints(self, a)
+        class(device_t), intent(inout) :: self
+        integer(ip), allocatable, intent(inout) :: a(:)
+        call acc_data(a, self%op)
+    end subroutine device_ints
+
+    subroutine device_reals(self, a)
+        class(device_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:)
+        call acc_data(a, self%op)
+    end subroutine device_reals
+
+    subroutine device_vectors(self, a)
+        class(device_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:, :)
+        call acc_data(a, self%op)
+    end subroutine device_vectors
+
+    subroutine permute_ids(self, a)
+        class(permuter_t), intent(inout) :: self
+        integer(i8), allocatable, intent(inout) :: a(:)
+        call permute_i8(self%capacity, self%n, self%order, a)
+    end subroutine permute_ids
+
+    subroutine permute_ints(self, a)
+        class(permuter_t), intent(inout) :: self
+        integer(ip), allocatable, intent(inout) :: a(:)
+        call permute_int(1, self%capacity, self%n, self%order, a)
+    end subroutine permute_ints
+
+    subroutine permute_reals(self, a)
+        class(permuter_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:)
+        call permute_real(1, self%capacity, self%n, self%order, a)
+    end subroutine permute_reals
+
+    subroutine permute_vectors(self, a)
+        class(permuter_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:, :)
+        call permute_real(size(a, 1, kind=ip), self%capacity, self%n, self%order, a)
+    end subroutine permute_vectors
+
+    subroutine pack_ids(self, a)
+        class(packer_t), intent(inout) :: self
+        integer(i8), allocatable, intent(inout) :: a(:)
+        select case (self%mode)
+        case (mode_pack)
+            call gather_i8(self%capacity, self%n, self%idx, a, size(self%ibuf, 1, kind=ip), &
+                           self%irow, self%ibuf)
+        case (mode_unpack)
+            call scatter_i8(self%capacity, self%n, self%first, size(self%ibuf, 1, kind=ip), &
+                            self%irow, self%ibuf, a)
+        end select
+        self%irow = self%irow + 1
+    end subroutine pack_ids
+
+    subroutine pack_ints(self, a)
+        class(packer_t), intent(inout) :: self
+        integer(ip), allocatable, intent(inout) :: a(:)
+        select case (self%mode)
+        case (mode_pack)
+            call gather_int(self%capacity, self%n, self%idx, a, size(self%ibuf, 1, kind=ip), &
+                            self%irow, self%ibuf)
+        case (mode_unpack)
+            call scatter_int(self%capacity, self%n, self%first, size(self%ibuf, 1, kind=ip), &
+                             self%irow, self%ibuf, a)
+        end select
+        self%irow = self%irow + 1
+    end subroutine pack_ints
+
+    subroutine pack_reals(self, a)
+        class(packer_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:)
+        select case (self%mode)
+        case (mode_pack)
+            call gather_real(1, self%capacity, self%n, self%idx, a, &
+                             size(self%rbuf, 1, kind=ip), self%rrow, self%rbuf)
+        case (mode_unpack)
+            call scatter_real(1, self%capacity, self%n, self%first, &
+                              size(self%rbuf, 1, kind=ip), self%rrow, self%rbuf, a)
+        end select
+        self%rrow = self%rrow + 1
+    end subroutine pack_reals
+
+    subroutine pack_vectors(self, a)
+        class(packer_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:, :)
+        integer(ip) :: rows
+        rows = size(a, 1, kind=ip)
+        select case (self%mode)
+        case (mode_pack)
+            call gather_real(rows, self%capacity, self%n, self%idx, a, &
+                             size(self%rbuf, 1, kind=ip), self%rrow, self%rbuf)
+        case (mode_unpack)
+            call scatter_real(rows, self%capacity, self%n, self%first, &
+                              size(self%rbuf, 1, kind=ip), self%rrow, self%rbuf, a)
+        end select
+        self%rrow = self%rrow + rows
+    end subroutine pack_vectors
 
     !> The index i with gid(i) = id, by binary search through `order` (indices of gid in
     !> increasing order of id, as order_by_id gives them); 0 when no entry has that id.
