@@ -1,27 +1,27 @@
 !> Reads a case from a namelist file and validates it. Every error names the file, the line
 !> of the group, the group and the key. The keys, their defaults, units and ranges are
-!> documented here, where they are declared, and in doc/user/input.md.
+!> documented here, where they are declared, and in doc/user/input.md. What needs the
+!> particles of every rank (placing the &insert groups, the defaults and checks drawn from
+!> the particles, the ids the case names) is dem_setup's, after the reading.
 module dem_input
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_namelist_scan, only: nml_file_t, nml_block_t, nml_scan, nml_items, nml_location
-    use dem_case, only: case_t, time_scales_t, case_time_scales, case_summarize, &
-                        case_speed_bound, case_energy_speed
-    use dem_comm, only: comm_t, comm_any
+    use dem_case, only: case_t, insert_t, id_check_t, case_append_particles
+    use dem_comm, only: comm_t
     use dem_materials, only: contact_options_t
     use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion
     use dem_stl, only: stl_read
     use dem_particle_file, only: read_particle_file
-    use dem_insert, only: region_t, region_box, region_cylinder, region_mesh, insert_random
-    use dem_random, only: rng_t, rng_seed
+    use dem_insert, only: region_t, region_box, region_cylinder, region_mesh
     use dem_outlets, only: outlet_t, outlet_plane, outlet_box
     use dem_probes, only: probe_t, probe_count, probe_center_of_mass, probe_track, &
                           probe_histogram
     use dem_integrate, only: integrator_euler, integrator_verlet
     implicit none
     private
-    public :: read_case
+    public :: read_case_file
 
     real(wp), parameter :: unset = huge(1.0_wp)
     integer, parameter :: name_len = 32
@@ -50,13 +50,13 @@ module dem_input
 
 contains
 
-    !> Read and validate the case in `path`; collective over the ranks of `comm`. Each rank
-    !> keeps a share of the particles: of each source, every P-th one from its rank on (P
-    !> ranks; doc/user/parallel.md). A case that inserts particles holds them all until they are
-    !> placed (a sphere is placed clear of all the others), then its share. That the ids are
-    !> unique and no two particles overlap is checked where the particles are spread by place
-    !> (solver_prepare). On error `c` is incomplete and must not be run.
-    subroutine read_case(path, c, err, comm)
+    !> Read and validate the case in `path` (every rank reads it; a particle file's checks are
+    !> collective over `comm`). Each rank keeps a share of the particles: of each source,
+    !> every P-th one from its rank on (P ranks; doc/user/parallel.md). A case that inserts
+    !> particles keeps them all, for dem_setup to place the &insert groups clear of them. That
+    !> the ids are unique and no two particles overlap is checked where the particles are
+    !> spread by place (solver_prepare). On error `c` is incomplete and must not be run.
+    subroutine read_case_file(path, c, err, comm)
         character(len=*), intent(in) :: path
         type(case_t), intent(out) :: c
         type(error_t), intent(inout) :: err
@@ -98,8 +98,7 @@ contains
         if (err%failed()) return
         call read_inserts(nf, c, err)
         if (err%failed()) return
-        if (share(2) /= comm%size) call keep_share(c, comm%rank, comm%size)
-        if (c%n_particles == 0) then
+        if (c%n_particles == 0 .and. size(c%inserts) == 0) then
             call fail(nf%path // ': no particles (give &particle, &particle_file or &insert)')
             return
         end if
@@ -107,27 +106,25 @@ contains
         if (err%failed()) return
         call read_meshes(nf, c, err)
         if (err%failed()) return
-        call read_run(nf, c, comm, err)
+        call read_run(nf, c, err)
         if (err%failed()) return
-        call check_pairs_used(nf, c, err)
-        if (err%failed()) return
+        allocate(c%id_checks(0))
         call read_output(nf, c, comm, err)
         if (err%failed()) return
         call read_outlets(nf, c, err)
         if (err%failed()) return
-        call read_probes(nf, c, comm, err)
+        call read_probes(nf, c, err)
     contains
         subroutine fail(msg)
             character(len=*), intent(in) :: msg
             call set_error(err, dem_err_input, msg)
         end subroutine fail
-    end subroutine read_case
+    end subroutine read_case_file
 
     !> &run: time stepping and global physics.
-    subroutine read_run(nf, c, comm, err)
+    subroutine read_run(nf, c, err)
         type(nml_file_t), intent(in) :: nf
         type(case_t), intent(inout) :: c
-        type(comm_t), intent(in) :: comm
         type(error_t), intent(inout) :: err
         real(wp) :: dt              ! time step [s], > 0, required
         real(wp) :: t_end           ! end time [s], > 0, required
@@ -164,9 +161,7 @@ contains
         integer :: k_item, ios
         character(len=512) :: msg
         character(len=:), allocatable :: text
-        type(time_scales_t) :: ts
         character(len=:), allocatable :: at
-        character(len=32) :: s1, s2
 
         dt = unset
         t_end = unset
@@ -206,13 +201,14 @@ contains
         end select
         if (.not. check_vector(at, gravity, 'gravity', .false., err)) return
         c%gravity = gravity
-        call case_summarize(c, comm)            ! (collective: every rank is here)
+        c%run_at = at
         if (.not. in_range(expected_speed, 0.0_wp, unset, .true., .false.)) then
             call set_error(err, dem_err_input, at // ": key 'expected_speed': must be >= 0 [m/s]")
             return
         end if
-        if (skin == unset) skin = 0.4_wp * minval(c%summary%rmin)
-        if (.not. check_positive(at, skin, 'skin', '[m]', err)) return
+        if (skin /= unset) then                 ! (else dem_setup: 0.4 of the smallest radius)
+            if (.not. check_positive(at, skin, 'skin', '[m]', err)) return
+        end if
         c%dt = dt
         c%t_end = t_end
         c%expected_speed = expected_speed
@@ -224,9 +220,10 @@ contains
             return
         end if
         c%stop_kinetic_energy = stop_kinetic_energy
-        if (max_speed /= unset) then
+        if (max_speed /= unset) then            ! (else dem_setup: case_speed_bound)
             if (.not. check_positive(at, max_speed, 'max_speed', '[m/s]', err)) return
         end if
+        c%max_speed = max_speed
         if (max_energy /= unset) then
             if (.not. check_positive(at, max_energy, 'max_energy', '[J]', err)) return
             c%max_energy = max_energy
@@ -248,19 +245,6 @@ contains
         end if
         c%imbalance_limit = imbalance_limit
         c%gpu_aware_mpi = gpu_aware_mpi
-
-        call case_time_scales(c, ts)
-        if (max_speed == unset) max_speed = case_speed_bound(c, ts)
-        c%max_speed = max_speed
-        c%energy_speed = case_energy_speed(c, ts)
-        if (dt > ts%bound .and. .not. allow_unstable) then
-            write(s1, '(es10.3)') dt
-            write(s2, '(es10.3)') ts%bound
-            call set_error(err, dem_err_input, at // ": key 'dt': " // trim(adjustl(s1)) // &
-                ' s exceeds the stability bound ' // trim(adjustl(s2)) // ' s, ' // &
-                ts%bound_name // ' (dem --check prints the time scales; ' // &
-                'allow_unstable = .true. runs anyway)')
-        end if
     end subroutine read_run
 
     !> &output: where and how often results are written.
@@ -318,13 +302,8 @@ contains
                                'one MPI rank')
                 return
             end if
-            if (trace_id /= 0) then              ! (the same on every rank)
-                if (.not. comm_any(comm, any(c%gid(1:c%n_held) == trace_id))) then
-                    call set_error(err, dem_err_input, at // ": key 'trace_id': no particle " // &
-                                   'has this id')
-                    return
-                end if
-            end if
+            if (trace_id /= 0) c%id_checks = [c%id_checks, id_check_t(trace_id, at // &
+                ": key 'trace_id': no particle has this id")]
             if (.not. in_range(snapshot_interval, 0.0_wp, unset, .true., .false.)) then
                 call set_error(err, dem_err_input, at // ": key 'snapshot_interval': must " // &
                                'be >= 0 [s]')
@@ -723,11 +702,12 @@ contains
                 err%message = at // ": key 'file': " // err%message
                 return
             end if
-            call append_particles(c, gid, mat, radius, x, v, w, n_rows)
+            call case_append_particles(c, gid, mat, radius, x, v, w, n_rows)
         end do
     end subroutine read_particle_files
 
-    !> &insert (repeated): n spheres at random, non-overlapping, in a box or a cylinder.
+    !> &insert (repeated): n spheres at random, non-overlapping, in a box, a cylinder or a
+    !> closed surface; placed by dem_setup once the case is read.
     subroutine read_inserts(nf, c, err)
         type(nml_file_t), intent(in) :: nf
         type(case_t), intent(inout) :: c
@@ -748,15 +728,12 @@ contains
         namelist /insert/ n, material, radius_min, radius_max, region, box_min, box_max, &
             cylinder_base, cylinder_radius, cylinder_height, mesh_file, mesh_scale, velocity, seed
         type(nml_block_t) :: b
-        integer :: k_item, ios, k, im, placed
+        integer :: k_item, ios, k, im
         character(len=512) :: msg
-        character(len=24) :: s1, s2
         character(len=:), allocatable :: text, at
         type(region_t) :: reg
-        type(rng_t) :: rng
-        real(wp), allocatable :: x(:, :), r(:)
-        integer(i8) :: next_id
 
+        allocate(c%inserts(0))
         do k = 1, count_blocks(nf, 'insert')
             n = 0
             material = ''
@@ -794,6 +771,7 @@ contains
                 return
             end if
             if (.not. check_vector(at, velocity, 'velocity', .false., err)) return
+            reg = region_t()
             select case (region)
             case ('box')
                 reg%kind = region_box
@@ -837,62 +815,10 @@ contains
                                "' is not known (accepted: box, cylinder, mesh)")
                 return
             end select
-            rng = rng_seed(seed)
-            allocate(x(3, n), r(n))
-            call insert_random(rng, reg, n, radius_min, radius_max, c%x(:, 1:c%n_held), &
-                               c%radius(1:c%n_held), 10000, x, r, placed)
-            c%rng_state = rng%state
-            if (placed < n) then
-                write(s1, '(i0)') placed
-                write(s2, '(i0)') n
-                call set_error(err, dem_err_input, at // ": key 'n': only " // trim(s1) // &
-                    ' of ' // trim(s2) // ' spheres found room in the region (random ' // &
-                    'insertion fills at most about a third of a volume): enlarge the region')
-                return
-            end if
-            next_id = 1
-            if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
-            call append_particles(c, [(next_id + k_item, k_item = 0, n - 1)], &
-                                  spread(im, 1, n), r, x, spread(velocity, 2, n), &
-                                  spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n), n)
-            deallocate(x, r)
+            c%inserts = [c%inserts, insert_t(n, im, radius_min, radius_max, reg, velocity, &
+                                             seed, at)]
         end do
     end subroutine read_inserts
-
-    !> Append particles to the case's: those held here, of n_rows of all ranks.
-    subroutine append_particles(c, gid, mat, radius, x, v, w, n_rows)
-        type(case_t), intent(inout) :: c
-        integer(i8), intent(in) :: gid(:)
-        integer(ip), intent(in) :: mat(:)
-        real(wp), intent(in) :: radius(:), x(:, :), v(:, :), w(:, :)
-        integer(ip), intent(in) :: n_rows
-        integer(ip) :: n
-        n = c%n_held
-        c%gid = [c%gid(1:n), gid]
-        c%mat = [c%mat(1:n), mat]
-        c%radius = [c%radius(1:n), radius]
-        c%x = reshape([c%x(:, 1:n), x], [3, n + size(gid)])
-        c%v = reshape([c%v(:, 1:n), v], [3, n + size(gid)])
-        c%w = reshape([c%w(:, 1:n), w], [3, n + size(gid)])
-        c%n_held = n + size(gid)
-        c%n_particles = c%n_particles + n_rows
-    end subroutine append_particles
-
-    !> Keep of all the case's particles (held here) every ranks-th from rank + 1 on.
-    subroutine keep_share(c, rank, ranks)
-        type(case_t), intent(inout) :: c
-        integer, intent(in) :: rank, ranks
-        integer(ip), allocatable :: kept(:)
-        integer(ip) :: i
-        kept = [(i, i = rank + 1, c%n_held, ranks)]
-        c%gid = c%gid(kept)
-        c%mat = c%mat(kept)
-        c%radius = c%radius(kept)
-        c%x = c%x(:, kept)
-        c%v = c%v(:, kept)
-        c%w = c%w(:, kept)
-        c%n_held = size(kept)
-    end subroutine keep_share
 
     !> &outlet (repeated): particles whose centre enters the region are removed and counted.
     subroutine read_outlets(nf, c, err)
@@ -949,10 +875,9 @@ contains
 
     !> &probe (repeated): counts, centres of mass, a tracked particle, velocity histograms
     !> (dem_probes; doc/user/output.md).
-    subroutine read_probes(nf, c, comm, err)
+    subroutine read_probes(nf, c, err)
         type(nml_file_t), intent(in) :: nf
         type(case_t), intent(inout) :: c
-        type(comm_t), intent(in) :: comm
         type(error_t), intent(inout) :: err
         character(len=name_len) :: name    ! column prefix in probes.csv, required, unique
         character(len=name_len) :: kind    ! 'count' | 'center_of_mass' | 'track' | 'histogram'
@@ -1028,10 +953,8 @@ contains
                 p%kind = probe_center_of_mass
             case ('track')
                 p%kind = probe_track
-                if (.not. comm_any(comm, any(c%gid(1:c%n_held) == id))) then
-                    call fail("key 'id': no particle has this id")
-                    return
-                end if
+                c%id_checks = [c%id_checks, id_check_t(id, at // ": key 'id': no particle " // &
+                               'has this id')]
                 p%id = id
             case ('histogram')
                 p%kind = probe_histogram
@@ -1195,32 +1118,6 @@ contains
                                  [rotation_start, rotation_end])
         end do
     end subroutine read_meshes
-
-    !> Every pair of materials that can touch must have a &pair group.
-    subroutine check_pairs_used(nf, c, err)
-        type(nml_file_t), intent(in) :: nf
-        type(case_t), intent(in) :: c
-        type(error_t), intent(inout) :: err
-        logical :: used(c%mats%n), wall(c%mats%n)
-        integer :: a, b
-        used = .false.
-        wall = .false.
-        used = c%summary%rmin < huge(1.0_wp)
-        if (c%mesh%n_tri > 0) wall(c%mesh%mat(1:c%mesh%n_tri)) = .true.
-        do a = 1, c%mats%n
-            if (.not. used(a)) cycle
-            do b = 1, c%mats%n
-                if (.not. (used(b) .or. wall(b))) cycle
-                if (c%mats%pair_defined(a, b)) cycle
-                call set_error(err, dem_err_input, nf%path // ': &pair: no pair is defined ' // &
-                    "for materials '" // trim(c%mats%name(a)) // "' and '" // &
-                    trim(c%mats%name(b)) // "', which can touch (add &pair materials = '" // &
-                    trim(c%mats%name(a)) // "', '" // trim(c%mats%name(b)) // &
-                    "', restitution = ..., friction = ... /)")
-                return
-            end do
-        end do
-    end subroutine check_pairs_used
 
     !> Number of `key = value` items in a group.
     integer function block_item_count(b) result(n)

@@ -7,7 +7,7 @@ module dem
     use dem_error, only: error_t, dem_err_input, dem_err_runtime, dem_err_io
     use dem_case, only: case_t, time_scales_t, case_time_scales, case_release_particles, &
                         case_energy_bound
-    use dem_input, only: read_case
+    use dem_setup, only: read_case
     use dem_solver, only: solver_t, solver_init, solver_prepare, solver_restore, solver_run, &
                           solver_particles, solver_particle_steps, solver_parallel_stats, &
                           stop_end, stop_settled, stop_wall_time, stop_signal

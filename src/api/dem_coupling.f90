@@ -17,7 +17,7 @@ module dem_coupling
     use dem_comm, only: comm_t, comm_from_handle, comm_free, comm_counts, comm_exchange, comm_sum
     use dem_domain, only: sorted_by_rank
     use dem_case, only: case_t, case_release_particles
-    use dem_input, only: read_case
+    use dem_setup, only: read_case
     use dem_solver, only: solver_t, solver_init, solver_start, solver_advance, solver_finish, &
                           solver_time, solver_retime, stop_end
     use dem_particles, only: particles_external, order_by_id, index_of_id, ext_force, &

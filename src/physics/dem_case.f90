@@ -6,13 +6,15 @@ module dem_case
     use dem_mesh, only: mesh_t, mesh_speed_bound
     use dem_outlets, only: outlet_t
     use dem_probes, only: probe_t
+    use dem_insert, only: region_t
     use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt, &
                             tangential_critical_dt, squeeze_critical_dt
     use dem_comm, only: comm_t, comm_sum, comm_max
     implicit none
     private
-    public :: case_t, time_scales_t, case_time_scales, case_summarize, case_particle_materials, &
-              case_speed_bound, case_energy_speed, case_energy_bound, case_release_particles
+    public :: case_t, time_scales_t, insert_t, id_check_t, case_time_scales, case_summarize, &
+              case_particle_materials, case_speed_bound, case_energy_speed, case_energy_bound, &
+              case_release_particles, case_append_particles
 
     !> What the time scales and the checks need of the particles of all ranks
     !> (case_summarize).
@@ -25,6 +27,25 @@ module dem_case
         real(wp) :: high = 0.0_wp
     end type summary_t
 
+    !> An &insert group as read: n spheres to be placed at random in a region, clear of the
+    !> particles given before them (dem_setup places them once the case is read).
+    type :: insert_t
+        integer(ip) :: n = 0
+        integer(ip) :: mat = 0                        !< material index
+        real(wp) :: radius_min = 0.0_wp, radius_max = 0.0_wp   !< [m]
+        type(region_t) :: region
+        real(wp) :: velocity(3) = 0.0_wp              !< [m/s]
+        integer(i8) :: seed = 1
+        character(len=:), allocatable :: at           !< the group's place in the file
+    end type insert_t
+
+    !> A particle id the case names (a traced particle, a tracked one), to be found among
+    !> the particles of every rank once they are placed; `message` if it is not there.
+    type :: id_check_t
+        integer(i8) :: id = 0
+        character(len=:), allocatable :: message
+    end type id_check_t
+
     !> Everything a run needs to start.
     type :: case_t
         character(len=:), allocatable :: source       !< the namelist file
@@ -35,10 +56,12 @@ module dem_case
         integer(ip) :: integrator = 1                 !< dem_integrate's integrator_*
         real(wp) :: gravity(3) = 0.0_wp               !< [m/s^2]
         real(wp) :: expected_speed = 0.0_wp           !< largest impact speed expected [m/s]
-        real(wp) :: skin = 0.0_wp                     !< neighbour-list skin [m]
+        real(wp) :: skin = huge(1.0_wp)               !< neighbour-list skin [m], huge: not
+                                                      !< given (0.4 of the smallest radius)
         logical :: allow_unstable = .false.           !< run even above the stability bound
         real(wp) :: stop_kinetic_energy = 0.0_wp      !< stop once the kinetic energy is below [J]
-        real(wp) :: max_speed = huge(1.0_wp)          !< instability guard [m/s]
+        real(wp) :: max_speed = huge(1.0_wp)          !< instability guard [m/s], huge: not
+                                                      !< given (case_speed_bound)
         real(wp) :: max_energy = 0.0_wp               !< energy guard [J], 0: case_energy_bound
         real(wp) :: energy_speed = 0.0_wp             !< its speed (case_energy_speed) [m/s]
         real(wp) :: wall_time_limit = 0.0_wp          !< checkpoint and stop before [s], 0: none
@@ -65,6 +88,9 @@ module dem_case
         type(outlet_t), allocatable :: outlets(:)
         type(probe_t), allocatable :: probes(:)
         type(summary_t) :: summary                    !< of the particles of all ranks
+        type(insert_t), allocatable :: inserts(:)     !< placed after the reading
+        type(id_check_t), allocatable :: id_checks(:) !< ids the case names
+        character(len=:), allocatable :: run_at       !< the &run group's place in the file
     end type case_t
 
     !> The share of the one-contact bound above which deep, loaded resting beds were seen to
@@ -284,4 +310,23 @@ contains
                 merge(sqrt(5.0_wp) * zeta, 0.0_wp, c%opts%tangential_damping)))
         end subroutine squeeze
     end subroutine case_time_scales
+
+    !> Append particles to the case's: those held here, of n_rows of all ranks.
+    subroutine case_append_particles(c, gid, mat, radius, x, v, w, n_rows)
+        type(case_t), intent(inout) :: c
+        integer(i8), intent(in) :: gid(:)
+        integer(ip), intent(in) :: mat(:)
+        real(wp), intent(in) :: radius(:), x(:, :), v(:, :), w(:, :)
+        integer(ip), intent(in) :: n_rows
+        integer(ip) :: n
+        n = c%n_held
+        c%gid = [c%gid(1:n), gid]
+        c%mat = [c%mat(1:n), mat]
+        c%radius = [c%radius(1:n), radius]
+        c%x = reshape([c%x(:, 1:n), x], [3, n + size(gid)])
+        c%v = reshape([c%v(:, 1:n), v], [3, n + size(gid)])
+        c%w = reshape([c%w(:, 1:n), w], [3, n + size(gid)])
+        c%n_held = n + size(gid)
+        c%n_particles = c%n_particles + n_rows
+    end subroutine case_append_particles
 end module dem_case

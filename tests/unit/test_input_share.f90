@@ -12,7 +12,7 @@ program test_input_share
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_init, comm_free, comm_barrier, comm_gather, comm_sum
     use dem_case, only: case_t
-    use dem_input, only: read_case
+    use dem_setup, only: read_case
     use dem_error, only: error_t
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none

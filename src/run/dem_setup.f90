@@ -1,0 +1,151 @@
+!> A case set up from its file: read and validated (dem_input), then what needs the
+!> particles of every rank: the &insert groups placed (doc/theory.md, section 10), each rank's
+!> share kept, the summary of the particles and what is drawn from it (the skin, the speed
+!> guard, the energy guard's speed, the stability bound on dt, the material pairs that can
+!> touch), and the ids that outputs and probes name found. Collective over the ranks.
+module dem_setup
+    use dem_kinds, only: wp, ip, i8
+    use dem_error, only: error_t, set_error, dem_err_input
+    use dem_comm, only: comm_t, comm_any
+    use dem_case, only: case_t, time_scales_t, case_time_scales, case_summarize, &
+                        case_speed_bound, case_energy_speed, case_append_particles
+    use dem_insert, only: insert_random
+    use dem_random, only: rng_t, rng_seed
+    use dem_input, only: read_case_file
+    use dem_text, only: itoa
+    implicit none
+    private
+    public :: read_case
+
+contains
+
+    !> Read the case in `path` and set it up on the ranks of `comm` (collective); on error `c`
+    !> is incomplete and must not be run, and every rank has the same error.
+    subroutine read_case(path, c, err, comm)
+        character(len=*), intent(in) :: path
+        type(case_t), intent(out) :: c
+        type(error_t), intent(inout) :: err
+        type(comm_t), intent(in) :: comm
+        call read_case_file(path, c, err, comm)
+        if (err%failed()) return
+        call place_inserts(c, err)              ! (every rank holds all particles then)
+        if (err%failed()) return
+        if (size(c%inserts) > 0) call keep_share(c, comm%rank, comm%size)
+        call case_summarize(c, comm)
+        call drawn_from_particles(c, err)
+        if (err%failed()) return
+        call check_pairs_used(c, err)
+        if (err%failed()) return
+        call check_ids(c, comm, err)
+    end subroutine read_case
+
+    !> Each &insert group's spheres at random in its region, clear of all the particles
+    !> before them, with ids after the largest so far; the case's random generator is left
+    !> as the last group's.
+    subroutine place_inserts(c, err)
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        type(rng_t) :: rng
+        real(wp), allocatable :: x(:, :), r(:)
+        integer(i8) :: next_id
+        integer(ip) :: k, i, n, placed
+        do k = 1, size(c%inserts)
+            associate (g => c%inserts(k))
+                n = g%n
+                rng = rng_seed(g%seed)
+                allocate(x(3, n), r(n))
+                call insert_random(rng, g%region, n, g%radius_min, g%radius_max, &
+                                   c%x(:, 1:c%n_held), c%radius(1:c%n_held), 10000, x, r, placed)
+                c%rng_state = rng%state
+                if (placed < n) then
+                    call set_error(err, dem_err_input, g%at // ": key 'n': only " // &
+                        itoa(placed) // ' of ' // itoa(n) // ' spheres found room in the ' // &
+                        'region (random insertion fills at most about a third of a volume): ' // &
+                        'enlarge the region')
+                    return
+                end if
+                next_id = 1
+                if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
+                call case_append_particles(c, [(next_id + i, i = 0, n - 1)], spread(g%mat, 1, n), &
+                                           r, x, spread(g%velocity, 2, n), &
+                                           spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n), n)
+                deallocate(x, r)
+            end associate
+        end do
+    end subroutine place_inserts
+
+    !> Keep of all the case's particles (held here) every ranks-th from rank + 1 on.
+    subroutine keep_share(c, rank, ranks)
+        type(case_t), intent(inout) :: c
+        integer, intent(in) :: rank, ranks
+        integer(ip), allocatable :: kept(:)
+        integer(ip) :: i
+        kept = [(i, i = rank + 1, c%n_held, ranks)]
+        c%gid = c%gid(kept)
+        c%mat = c%mat(kept)
+        c%radius = c%radius(kept)
+        c%x = c%x(:, kept)
+        c%v = c%v(:, kept)
+        c%w = c%w(:, kept)
+        c%n_held = size(kept)
+    end subroutine keep_share
+
+    !> The &run values drawn from the particles when the file does not give them (the skin,
+    !> 0.4 of the smallest radius; the speed guard, case_speed_bound), the energy guard's
+    !> speed, and dt against the stability bound (unless allow_unstable).
+    subroutine drawn_from_particles(c, err)
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        type(time_scales_t) :: ts
+        character(len=32) :: s1, s2
+        if (c%skin == huge(1.0_wp)) c%skin = 0.4_wp * minval(c%summary%rmin)
+        call case_time_scales(c, ts)
+        if (c%max_speed == huge(1.0_wp)) c%max_speed = case_speed_bound(c, ts)
+        c%energy_speed = case_energy_speed(c, ts)
+        if (c%dt > ts%bound .and. .not. c%allow_unstable) then
+            write(s1, '(es10.3)') c%dt
+            write(s2, '(es10.3)') ts%bound
+            call set_error(err, dem_err_input, c%run_at // ": key 'dt': " // &
+                trim(adjustl(s1)) // ' s exceeds the stability bound ' // trim(adjustl(s2)) // &
+                ' s, ' // ts%bound_name // ' (dem --check prints the time scales; ' // &
+                'allow_unstable = .true. runs anyway)')
+        end if
+    end subroutine drawn_from_particles
+
+    !> Every pair of materials that can touch must have a &pair group.
+    subroutine check_pairs_used(c, err)
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        logical :: used(c%mats%n), wall(c%mats%n)
+        integer :: a, b
+        wall = .false.
+        used = c%summary%rmin < huge(1.0_wp)
+        if (c%mesh%n_tri > 0) wall(c%mesh%mat(1:c%mesh%n_tri)) = .true.
+        do a = 1, c%mats%n
+            if (.not. used(a)) cycle
+            do b = 1, c%mats%n
+                if (.not. (used(b) .or. wall(b))) cycle
+                if (c%mats%pair_defined(a, b)) cycle
+                call set_error(err, dem_err_input, c%source // ': &pair: no pair is defined ' &
+                    // "for materials '" // trim(c%mats%name(a)) // "' and '" // &
+                    trim(c%mats%name(b)) // "', which can touch (add &pair materials = '" // &
+                    trim(c%mats%name(a)) // "', '" // trim(c%mats%name(b)) // &
+                    "', restitution = ..., friction = ... /)")
+                return
+            end do
+        end do
+    end subroutine check_pairs_used
+
+    !> Each id the case names is a particle of some rank.
+    subroutine check_ids(c, comm, err)
+        type(case_t), intent(in) :: c
+        type(comm_t), intent(in) :: comm
+        type(error_t), intent(inout) :: err
+        integer :: k
+        do k = 1, size(c%id_checks)
+            if (comm_any(comm, any(c%gid(1:c%n_held) == c%id_checks(k)%id))) cycle
+            call set_error(err, dem_err_input, c%id_checks(k)%message)
+            return
+        end do
+    end subroutine check_ids
+end module dem_setup
