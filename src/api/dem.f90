@@ -10,7 +10,8 @@ module dem
     use dem_setup, only: read_case
     use dem_solver, only: solver_t, solver_init, solver_prepare, solver_restore, solver_run, &
                           solver_particles, solver_particle_steps, solver_parallel_stats, &
-                          stop_end, stop_settled, stop_wall_time, stop_signal
+                          stop_end, stop_settled, stop_wall_time, stop_signal, stop_emptied, &
+                          solver_time
     use dem_checkpoint, only: frame_t, checkpoint_read, checkpoint_file, checkpoint_latest
     use dem_timers, only: n_phases, phase_names, timer_seconds, wall_seconds
     implicit none
@@ -21,7 +22,7 @@ module dem
               solver_t, solver_init, solver_prepare, &
               solver_restore, solver_run, solver_particles, solver_particle_steps, &
               solver_parallel_stats, &
-              checkpoint_file, stop_end, stop_settled, &
+              checkpoint_file, stop_end, stop_settled, stop_emptied, solver_time, &
               stop_wall_time, stop_signal, frame_t, checkpoint_read, checkpoint_latest, &
               n_phases, phase_names, timer_seconds, wall_seconds
 end module dem

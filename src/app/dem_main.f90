@@ -5,7 +5,8 @@ program dem_main
                    case_release_particles, case_energy_bound, read_case, solver_t, solver_init, &
                    solver_prepare, &
                    solver_restore, &
-                   solver_run, stop_wall_time, stop_signal, frame_t, checkpoint_read, &
+                   solver_run, stop_wall_time, stop_signal, stop_settled, stop_emptied, &
+                   solver_time, frame_t, checkpoint_read, &
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
                    solver_particles, solver_particle_steps, solver_parallel_stats, i8
     use dem_comm, only: comm_t, comm_init, comm_free, comm_max
@@ -95,10 +96,30 @@ program dem_main
         if (comm%rank == 0) write(output_unit, '(a)') 'dem: ' // s%stop_message
         call finish(exit_continue)
     end if
-    if (comm%rank == 0) write(output_unit, '(a)') 'dem: done; outputs in ' // c%output_dir
+    if (comm%rank == 0) write(output_unit, '(a)') 'dem: done: ' // why_done() // &
+        '; outputs in ' // c%output_dir
     call finish(0)
 
 contains
+
+    !> Why a run that ended without error or stop ended: the line's middle.
+    function why_done() result(why)
+        character(len=:), allocatable :: why
+        character(len=12) :: t, e, limit
+        write(t, '(es12.5)') solver_time(s, c)
+        write(e, '(es12.5)') s%settled_energy
+        write(limit, '(es12.5)') c%stop_kinetic_energy
+        select case (s%stopped)
+        case (stop_settled)
+            why = 'settled at t = ' // trim(adjustl(t)) // ' s (kinetic energy ' // &
+                  trim(adjustl(e)) // ' J, below stop_kinetic_energy = ' // &
+                  trim(adjustl(limit)) // ' J)'
+        case (stop_emptied)
+            why = 'the outlets took the last particle out at t = ' // trim(adjustl(t)) // ' s'
+        case default
+            why = 'reached t_end = ' // trim(adjustl(t)) // ' s'
+        end select
+    end function why_done
 
     function argument(k) result(a)
         integer, intent(in) :: k
@@ -124,9 +145,11 @@ contains
             'checkpoints/*.h5 and, with &output trace_id, contact.csv (doc/user/output.md).', &
             'The namelist groups and keys are described in doc/user/input.md.', &
             '', &
-            'Exit status: 0 done; 2 bad input; 3 the run failed (instability); 4 a file could', &
-            'not be written; 75 stopped early (wall-time limit, SIGTERM or SIGUSR1) after', &
-            'writing a checkpoint: continue with dem --resume.'
+            'The last line says why the run ended: t_end reached, settled (&run', &
+            'stop_kinetic_energy), the outlets took the last particle out, or the stop below.', &
+            'Exit status: 0 done (any of these three); 2 bad input; 3 the run failed', &
+            '(instability); 4 a file could not be written; 75 stopped early (wall-time limit,', &
+            'SIGTERM or SIGUSR1) after writing a checkpoint: continue with dem --resume.'
     end subroutine print_help
 
     !> The derived quantities of a case (dem --check, and the start of every run).

@@ -14,7 +14,7 @@ module dem_case
     private
     public :: case_t, time_scales_t, insert_t, id_check_t, case_time_scales, case_summarize, &
               case_particle_materials, case_speed_bound, case_energy_speed, case_energy_bound, &
-              case_release_particles, case_append_particles
+              case_release_particles, case_append_particles, case_settle_time
 
     !> What the time scales and the checks need of the particles of all ranks
     !> (case_summarize).
@@ -165,6 +165,15 @@ contains
             sm%mass = mass(1)
         end associate
     end subroutine case_summarize
+
+    !> The time from which a run may stop as settled (stop_kinetic_energy): that of a free
+    !> fall across the scene, sqrt(2 h / |g|) = fall_speed / |g|, so that particles given at
+    !> rest have had the time to move; 0 without gravity [s] (doc/theory.md, section 10).
+    real(wp) function case_settle_time(c) result(t)
+        type(case_t), intent(in) :: c
+        t = 0.0_wp
+        if (norm2(c%gravity) > 0.0_wp) t = fall_speed(c) / norm2(c%gravity)
+    end function case_settle_time
 
     !> Speed of a free fall across the scene, sqrt(2 |g| h), with h the extent of the
     !> particles and walls along gravity [m/s].

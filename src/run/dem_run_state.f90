@@ -22,13 +22,14 @@ module dem_run_state
     private
     public :: solver_t, run_t, time_of, failed_anywhere, summed, device_data, particle_data, &
               wall_motion_data, release_gone, &
-              stop_end, stop_settled, stop_wall_time, stop_signal
+              stop_end, stop_settled, stop_wall_time, stop_signal, stop_emptied
 
     ! why solver_run returned without an error
     integer, parameter :: stop_end = 0        !< t_end reached
     integer, parameter :: stop_settled = 1    !< the kinetic energy fell below the threshold
     integer, parameter :: stop_wall_time = 2  !< the wall-time limit is near (checkpoint written)
     integer, parameter :: stop_signal = 3     !< SIGTERM or SIGUSR1 (checkpoint written)
+    integer, parameter :: stop_emptied = 4    !< the outlets took the last particle out
 
     !> The bookkeeping of a run between solver_start and solver_finish.
     type :: run_t
@@ -42,6 +43,8 @@ module dem_run_state
         real(wp) :: started = 0.0_wp           !< wall-clock start of the program [s]
         real(wp) :: next_progress = 0.0_wp     !< wall-clock time of the next progress line [s]
         real(wp) :: last = 0.0_wp              !< wall-clock time of the last step's end [s]
+        integer(i8) :: n0 = 0                  !< particles of all ranks at the start
+        integer(i8) :: removed0 = 0            !< particles removed by outlets before it
         logical, allocatable :: probed(:)      !< the materials the probes report (those the
                                                !< case's particles are made of)
     end type run_t
@@ -60,6 +63,8 @@ module dem_run_state
         integer(i8) :: removed = 0     !< particles removed by outlets
         integer(i8), allocatable :: removed_ids(:)  !< their ids on this rank, when allocated
         logical :: settled = .false.   !< the kinetic energy fell below stop_kinetic_energy
+        real(wp) :: settled_energy = 0.0_wp  !< the kinetic energy then [J]
+        logical :: emptied = .false.   !< the outlets took every particle out
         integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
         integer(i8) :: particle_steps = 0  !< this rank's particles in each of them, summed
         integer(ip) :: particles_most = 0  !< the most particles this rank held in them

@@ -20,7 +20,7 @@ module dem_solver
     use dem_acc, only: acc_enter, acc_exit, acc_select_device
     use dem_timers, only: timers_t, timer_start, wall_seconds
     use dem_run_state, only: solver_t, time_of, failed_anywhere, summed, device_data, &
-                             stop_end, stop_settled, stop_wall_time, stop_signal
+                             stop_end, stop_settled, stop_wall_time, stop_signal, stop_emptied
     use dem_rebuild, only: rebuild, settle_outlets, start_domain
     use dem_frames, only: capture, solver_restore => frame_restore
     use dem_run_output, only: write_trace, write_snapshot, write_xdmf
@@ -31,7 +31,7 @@ module dem_solver
     public :: solver_t, solver_init, solver_prepare, solver_restore, solver_run, solver_start, &
               solver_advance, solver_finish, solver_time, solver_retime, solver_particles, &
               solver_particle_steps, solver_parallel_stats, &
-              stop_end, stop_settled, stop_wall_time, stop_signal
+              stop_end, stop_settled, stop_wall_time, stop_signal, stop_emptied
 
 contains
 
@@ -132,6 +132,8 @@ contains
             s%particles_most = s%p%n_own
             s%dom%bytes = 0
             s%timers = timers_t()
+            r%n0 = solver_particles(s)
+            r%removed0 = s%removed
             r%next_progress = wall_seconds() + c%progress_interval
             r%last = wall_seconds()
         end associate
@@ -255,7 +257,7 @@ contains
         type(error_t), intent(inout) :: err
         call timer_start(s%timers)
         do while (s%step < min(until, s%run%n_end) .and. .not. (err%failed() .or. s%settled &
-                  .or. s%stopped /= stop_end))
+                  .or. s%emptied .or. s%stopped /= stop_end))
             call time_step(s, c, err)
         end do
         if (.not. err%failed()) call settle_outlets(s, err)  ! the state as it is, for the caller
@@ -270,7 +272,8 @@ contains
         type(frame_t) :: fr
         logical :: bad
         if (s%settled .and. s%stopped == stop_end) s%stopped = stop_settled
-        if (.not. err%failed() .and. (s%stopped == stop_end .or. s%stopped == stop_settled)) then
+        if (s%emptied .and. s%stopped == stop_end) s%stopped = stop_emptied
+        if (.not. err%failed() .and. any(s%stopped == [stop_end, stop_settled, stop_emptied])) then
             call capture(s, c, s%run%out, fr)
             call output_final(c%output_dir, s%comm, fr%gid, c%mats%name(fr%mat), fr%radius, fr%x, &
                               fr%v, fr%w, err)

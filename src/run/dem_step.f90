@@ -198,6 +198,7 @@ contains
             if (n_fresh(1) == 0) return
             s%removed = s%removed + n_fresh(1)
             s%parked = s%parked + n_fresh(1)
+            s%emptied = s%removed - s%run%removed0 >= s%run%n0
             if (allocated(s%removed_ids)) then    ! (a coupled run: their ids, on the host)
                 call acc_data(s%fresh, acc_to_host)
                 call acc_data(p%gid, acc_to_host)
@@ -236,13 +237,13 @@ contains
         real(wp) :: step_seconds
         logical :: row, snap, written, show
         associate (r => s%run)
-            row = due(r%every) .or. s%step == r%n_end
+            row = due(r%every) .or. s%step == r%n_end .or. s%emptied
             snap = due(r%every_snap) .or. (r%every_snap > 0 .and. s%step == r%n_end)
             if (row) then
                 call write_row(s, c, err)            ! (it tells whether the run has settled)
                 if (failed_anywhere(s, err)) return
             end if
-            written = due(r%every_ckpt) .or. s%step == r%n_end .or. s%settled
+            written = due(r%every_ckpt) .or. s%step == r%n_end .or. s%settled .or. s%emptied
             if (snap) then
                 call write_snapshot(s, c, err)
                 if (failed_anywhere(s, err)) return

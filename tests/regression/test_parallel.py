@@ -6,7 +6,8 @@ checkpoints' particles and contact history, for
 1. a settling bed with contacts and a moving, spinning STL floor (the box case of the
    checkpoint tests), on 1, 2, 3 and 4 ranks;
 2. a short discharge of the reduced small silo (particles removed by the outlet: count plus
-   removed conserved in every row, and equal to the one-rank run's);
+   removed conserved in every row, and equal to the one-rank run's; the run stops when the
+   outlet takes the last particle out, at the same step on every rank count);
 3. the impact case at reduced size (a steel sphere into a settled bed), and on 2 ranks with
    the halo handed to MPI by device address (gpu_aware_mpi);
 4. a checkpoint written on 3 ranks, restarted on 2: the same final state as the
@@ -133,7 +134,7 @@ prep = prep.replace(f"'{mc.OUT}/prepare_silo_M1_small_400'", f"'{work}/prepare_s
 with open(os.path.join(work, "prepare_silo.nml"), "w") as f:
     f.write(prep)
 run(os.path.join(work, "prepare_silo.nml"), 2)
-silo = mc.silo("M1", "small", n=400, scale=SCALE, t_end=0.3, interval=0.02, histogram_time=0.2,
+silo = mc.silo("M1", "small", n=400, scale=SCALE, t_end=0.3, interval=0.02, histogram_time=0.1,
                snapshots=0.0)
 silo = silo.replace(f"'{mc.OUT}/silo_M1_small_400'", "'@OUT@'").replace(
     f"{mc.FROM_HERE}/prepare_silo_M1_small_400/final.csv", f"{work}/prepare_silo/final.csv")
@@ -146,6 +147,8 @@ outs = compare("silo", [1, 2, 3], ("final.csv", "series.csv", "probes.csv",
 s = np.genfromtxt(os.path.join(outs[1], "series.csv"), delimiter=",", names=True)
 check(np.all(s["particles"] + s["removed"] == 400) and s["removed"][-1] > 20,
       f"silo: particles + removed = 400 in every row, {s['removed'][-1]:.0f} removed")
+check(s["particles"][-1] > 0 or s["time"][-1] < 0.3,
+      "silo: a run whose outlet takes the last particle out stops then, before t_end")
 
 # 3. impact, reduced
 prep = mc.prepare_impact(1500, scale=SCALE, t_end=0.15).replace(
