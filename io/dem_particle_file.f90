@@ -52,7 +52,7 @@ contains
         n_rows = 0
         if (input_file_problem(path) /= '') then
             call set_error(err, dem_err_input, path // ': the particle file ' // &
-                           input_file_problem(path))
+                           input_file_problem(path) // made_by(path))
             return
         end if
         if (is_hdf5(path)) then
@@ -240,4 +240,29 @@ contains
             a = b + 1
         end do
     end subroutine split
+    !> For a missing file that is a run's final state (final.csv): what makes it. The
+    !> benchmark cases' preparations write output/benchmark/prepare_<case>[_<stage>]/, which
+    !> scripts/bench/prepare-benchmark <case> runs; any other run's, its case.
+    function made_by(path) result(hint)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: hint, folder, name
+        integer :: slash, n
+        hint = ''
+        slash = index(path, '/', back=.true.)
+        if (path(slash + 1:) /= 'final.csv' .or. input_file_problem(path) /= 'does not exist') &
+            return
+        folder = path(:max(slash - 1, 0))
+        name = folder(index(folder, '/', back=.true.) + 1:)
+        hint = '; it is the final state of a run: run first the case whose &output dir is ' // &
+               folder
+        if (index(name, 'prepare_') /= 1 .or. index(folder, 'output/benchmark/') == 0) return
+        name = name(9:)
+        n = len(name)
+        if (n > 2) then                          ! a stage of a preparation in two: _1, _2
+            if (name(n - 1:n - 1) == '_' .and. verify(name(n:n), '0123456789') == 0) &
+                name = name(:n - 2)
+        end if
+        hint = hint // ' (scripts/bench/prepare-benchmark ' // name // ' runs it; ' // &
+               'cases/README.md)'
+    end function made_by
 end module dem_particle_file

@@ -195,6 +195,15 @@ for name, text, what in (("particles_dev_zero", GOOD + "&particle_file file = '/
                           "/dev/zero: the STL file is empty or not a regular file")):
     bad(name, text, None, None, what)
 
+# a missing final state of a run says what makes it (issue 33): the benchmark preparations'
+# by the script that runs them, any other by the case whose output folder it is in
+for name, folder, what in (("missing_prepared", "output/benchmark/prepare_drum_2",
+                            "(scripts/bench/prepare-benchmark drum runs it"),
+                           ("missing_final", "output/settle",
+                            "run first the case whose &output dir is ")):
+    bad(name, GOOD + f"&particle_file file = '{folder}/final.csv' /\n", "particle_file",
+        "file", what)
+
 # a UTF-8 byte-order mark (as some editors write) at the start of a case file or a particle
 # file is not part of its first line (issue 30, item 9: "header has no column 'id'"); a
 # garbage token of 5 MB in an STL file is quoted in its error by its first characters only
