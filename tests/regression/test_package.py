@@ -26,8 +26,17 @@ def step(what, cmd, cwd=work):
 
 step("install", ["cmake", "--install", build, "--prefix", prefix])
 for f in ("lib/cmake/dem/demConfig.cmake", "include/dem/dem_coupling.mod",
-          "include/dem/dem_coupling.h"):
+          "include/dem/dem_coupling.h", "share/doc/dem/README.md", "share/doc/dem/theory.md",
+          "share/doc/dem/user/input.md", "share/dem/cases/silo/README.md"):
     check(os.path.exists(os.path.join(prefix, f)), f"installed {f}")
+# relocatable: the exported targets name imported targets (found again by demConfig.cmake
+# where the package is used), not absolute paths of this machine's libraries
+for f in os.listdir(os.path.join(prefix, "lib", "cmake", "dem")):
+    if f.startswith("demTargets"):
+        with open(os.path.join(prefix, "lib", "cmake", "dem", f)) as g:
+            text = g.read()
+        check("/usr/" not in text and ROOT not in text and build not in text,
+              f"{f} holds no absolute path of the build machine")
 cache = open(os.path.join(build, "CMakeCache.txt")).read().splitlines()
 setting = {k.split(":")[0]: v for k, _, v in (line.partition("=") for line in cache) if ":" in k}
 consumer = os.path.join(work, "consumer")
