@@ -3,9 +3,10 @@ the particles have had the time to move.
 
 1. The trap of issue 33: 400 spheres inserted at rest in a box 5-10 cm above a floor, with
    stop_kinetic_energy, t_end = 0.03 s and a row of series.csv every step. The first rows
-   are nearly at rest, below the threshold; a run that stopped there would be wrong. Settling is judged from the time of
-   a free fall across the scene, sqrt(2 h / g) (h = 10 cm, the walls' extent along gravity,
-   from the floor to the side walls' top: 0.143 s), so the run goes on to t_end and says "reached t_end"; series.csv ends at 0.03 s.
+   are nearly at rest, below the threshold; a run that stopped there would be wrong.
+   Settling is judged from the time of a free fall across the scene, sqrt(2 h / g) (h =
+   10 cm, the walls' extent along gravity, from the floor to the side walls' top: 0.143 s),
+   so the run goes on to t_end and says "reached t_end"; series.csv ends at 0.03 s.
 2. The same case to t_end = 2 s: the spheres fall (the kinetic energy rises far above the
    threshold), settle, and the run stops at an output row after 0.143 s and before 2 s,
    saying "settled at t = T s (kinetic energy E J ...)" with T and E those of series.csv's
@@ -31,7 +32,8 @@ shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
 
 G, DT, THRESHOLD = 9.81, 5.0e-5, 1.0e-6
-MATERIALS = """&material name = 'soft', density = 2500.0, youngs_modulus = 1.0e7, poisson_ratio = 0.2 /
+MATERIALS = """\
+&material name = 'soft', density = 2500.0, youngs_modulus = 1.0e7, poisson_ratio = 0.2 /
 &material name = 'wall', rigid = .true. /
 &pair materials = 'soft', 'soft', restitution = 0.3, friction = 0.3 /
 &pair materials = 'soft', 'wall', restitution = 0.3, friction = 0.3 /
