@@ -20,24 +20,38 @@ module dem_setup
 contains
 
     !> Read the case in `path` and set it up on the ranks of `comm` (collective); on error `c`
-    !> is incomplete and must not be run, and every rank has the same error.
+    !> is incomplete and must not be run, and every rank has the same error, which names
+    !> the page that describes the group it names.
     subroutine read_case(path, c, err, comm)
         character(len=*), intent(in) :: path
         type(case_t), intent(out) :: c
         type(error_t), intent(inout) :: err
         type(comm_t), intent(in) :: comm
         call read_case_file(path, c, err, comm)
-        if (err%failed()) return
-        call place_inserts(c, err)              ! (every rank holds all particles then)
-        if (err%failed()) return
-        if (size(c%inserts) > 0) call keep_share(c, comm%rank, comm%size)
-        call case_summarize(c, comm)
-        call drawn_from_particles(c, err)
-        if (err%failed()) return
-        call check_pairs_used(c, err)
-        if (err%failed()) return
-        call check_ids(c, comm, err)
+        if (.not. err%failed()) call place_inserts(c, err)  ! (every rank holds all particles)
+        if (.not. err%failed()) then
+            if (size(c%inserts) > 0) call keep_share(c, comm%rank, comm%size)
+            call case_summarize(c, comm)
+            call drawn_from_particles(c, err)
+        end if
+        if (.not. err%failed()) call check_pairs_used(c, err)
+        if (.not. err%failed()) call check_ids(c, comm, err)
+        call where_to_read(err)
     end subroutine read_case
+
+    !> An input error that names a namelist group says where its keys are described.
+    subroutine where_to_read(err)
+        type(error_t), intent(inout) :: err
+        integer :: amp, n
+        if (err%code /= dem_err_input) return
+        amp = index(err%message, '&')
+        if (amp == 0) return
+        n = verify(err%message(amp + 1:), 'abcdefghijklmnopqrstuvwxyz_') - 1
+        if (n < 0) n = len(err%message) - amp
+        if (n == 0) return
+        err%message = err%message // ' (doc/user/input.md, &' // &
+                      err%message(amp + 1:amp + n) // ')'
+    end subroutine where_to_read
 
     !> Each &insert group's spheres at random in its region, clear of all the particles
     !> before them, with ids after the largest so far; the case's random generator is left

@@ -1,5 +1,6 @@
-"""Bad input gets a clear error that names the file, the namelist group and the key, exit
-code 2, and leaves no output behind. Also the command line: --version, --help, --check.
+"""Bad input gets a clear error that names the file, the namelist group and the key (and
+where the group's keys are described: doc/user/input.md, &group), exit code 2, and leaves
+no output behind. Also the command line: --version, --help, --check.
 usage: test_input_errors.py DEM WORKDIR"""
 import os
 import re
@@ -43,6 +44,8 @@ def bad(name, text, group, key, extra=""):
         check(path in msg, f"{name}: message does not name the file: {msg.strip()}")
         if group:
             check("&" + group in msg, f"{name}: message does not name &{group}: {msg.strip()}")
+            check(f"(doc/user/input.md, &{group})" in msg,
+                  f"{name}: message does not say where &{group} is described: {msg.strip()}")
         if key:
             check(f"'{key}'" in msg, f"{name}: message does not name key '{key}': {msg.strip()}")
         if extra:
