@@ -210,6 +210,7 @@ contains
         !$acc reduction(max:t1, t2, t3, t4, t5, t6)
         do i = 1, n
             do k = 1, max_wall_contacts
+                if (wtri(k, i) == 0) exit                 ! (the slots in use come first)
                 call load_terms(k, i, n, n_tri, wall, a, wtri, twall, wload, term)
                 t1 = max(t1, abs(term(1)))
                 t2 = max(t2, abs(term(2)))
@@ -250,6 +251,7 @@ contains
         !$acc reduction(+:h1, h2, h3, h4, h5, h6, l1, l2, l3, l4, l5, l6)
         do i = 1, n
             do k = 1, max_wall_contacts
+                if (wtri(k, i) == 0) exit                 ! (the slots in use come first)
                 call load_terms(k, i, n, n_tri, wall, a, wtri, twall, wload, term)
                 do q = 1, 6
                     call fixed_split(term(q), scale(q), scale2, kw(q), rw(q))
