@@ -30,7 +30,7 @@ module dem_input
     integer, parameter :: max_table = 1000   !< points of a wall's velocity table
 
     !> The groups a case file may hold, and the keys of each (doc/user/input.md).
-    character(len=*), parameter :: input_groups(12) = [character(len=200) :: &
+    character(len=*), parameter :: input_groups(12) = [character(len=400) :: &
         'run: dt t_end integrator gravity expected_speed skin allow_unstable ' // &
         'stop_kinetic_energy max_speed max_energy wall_time_limit progress_interval ' // &
         'imbalance_limit gpu_aware_mpi', &

@@ -135,6 +135,8 @@ bad("load_unknown_wall", NAMED + "&probe name = 'w', kind = 'wall_load', wall = 
 bad("load_no_wall", sub("&wall_plane material = 'steel', point = 0, 0, 0, normal = 0, 0, 1, "
                         "half_width = 0.1 /\n", "&probe name = 'w', kind = 'wall_load' /\n"),
     "probe", "kind", "needs a wall")
+bad("wall_mesh_unknown_key", GOOD + MESH + "wiggle = 1 /\n", "wall_mesh", "wiggle",
+    "angular_velocity_table_time angular_velocity_table name)")
 bad("load_zero_axis", GOOD + "&probe name = 'w', kind = 'wall_load', axis = 0, 0, 0 /\n",
     "probe", "axis", "non-zero")
 bad("load_nan_point", GOOD + "&probe name = 'w', kind = 'wall_load', axis_point = 0, NaN, 0 /\n",
