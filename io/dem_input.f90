@@ -11,13 +11,15 @@ module dem_input
     use dem_case, only: case_t, insert_t, id_check_t, case_append_particles
     use dem_comm, only: comm_t
     use dem_materials, only: contact_options_t
-    use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion
+    use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion, mesh_set_oscillation, &
+                        mesh_set_tables
     use dem_stl, only: stl_read
+    use dem_text, only: itoa
     use dem_particle_file, only: read_particle_file
     use dem_insert, only: region_t, region_box, region_cylinder, region_mesh
     use dem_outlets, only: outlet_t, outlet_plane, outlet_box
     use dem_probes, only: probe_t, probe_count, probe_center_of_mass, probe_track, &
-                          probe_histogram
+                          probe_histogram, probe_wall_load
     use dem_integrate, only: integrator_euler, integrator_verlet
     implicit none
     private
@@ -25,9 +27,10 @@ module dem_input
 
     real(wp), parameter :: unset = huge(1.0_wp)
     integer, parameter :: name_len = 32
+    integer, parameter :: max_table = 1000   !< points of a wall's velocity table
 
     !> The groups a case file may hold, and the keys of each (doc/user/input.md).
-    character(len=*), parameter :: input_groups(12) = [character(len=200) :: &
+    character(len=*), parameter :: input_groups(12) = [character(len=400) :: &
         'run: dt t_end integrator gravity expected_speed skin allow_unstable ' // &
         'stop_kinetic_energy max_speed max_energy wall_time_limit progress_interval ' // &
         'imbalance_limit gpu_aware_mpi', &
@@ -42,10 +45,14 @@ module dem_input
         'insert: n material radius_min radius_max region box_min box_max cylinder_base ' // &
         'cylinder_radius cylinder_height mesh_file mesh_scale velocity seed', &
         'outlet: region point normal box_min box_max', &
-        'probe: name kind region box_min box_max id time bins v_min v_max axis_point', &
-        'wall_plane: material point normal half_width divisions', &
+        'probe: name kind region box_min box_max id time bins v_min v_max axis_point wall ' // &
+        'axis', &
+        'wall_plane: material point normal half_width divisions name', &
         'wall_mesh: file scale material velocity velocity_start velocity_end rotation_axis ' // &
-        'rotation_point angular_velocity rotation_start rotation_end']
+        'rotation_point angular_velocity rotation_start rotation_end oscillation_amplitude ' // &
+        'oscillation_frequency oscillation_phase oscillation_start oscillation_end ' // &
+        'velocity_table_time velocity_table angular_velocity_table_time ' // &
+        'angular_velocity_table name']
 
 
 contains
@@ -888,10 +895,13 @@ contains
         real(wp) :: time                   ! histogram: when [s], >= 0, required
         integer :: bins                    ! histogram: bins over [v_min, v_max), default 20
         real(wp) :: v_min, v_max           ! histogram: range [m/s], required
-        real(wp) :: axis_point(3)          ! histogram: a point of the vertical axis [m],
-                                           ! default 0, 0, 0
+        real(wp) :: axis_point(3)          ! histogram: a point of the vertical axis [m];
+                                           ! wall load: the point of the torque; default 0
+        character(len=name_len) :: wall    ! wall load: the wall's name, default all walls
+        real(wp) :: axis(3)                ! wall load: direction of the torque's axis,
+                                           ! non-zero, default 0, 0, 1
         namelist /probe/ name, kind, region, box_min, box_max, id, time, bins, v_min, v_max, &
-            axis_point
+            axis_point, wall, axis
         type(nml_block_t) :: b
         integer :: k_item, ios, k
         character(len=512) :: msg
@@ -911,6 +921,8 @@ contains
             v_min = unset
             v_max = unset
             axis_point = 0.0_wp
+            wall = ''
+            axis = [0.0_wp, 0.0_wp, 1.0_wp]
             b = nf%blocks(block_index(nf, 'probe', k))
             do k_item = 0, block_item_count(b)
                 text = block_text(b, k_item)
@@ -977,9 +989,27 @@ contains
                 p%v_min = v_min
                 p%v_max = v_max
                 p%axis = axis_point
+            case ('wall_load')
+                p%kind = probe_wall_load
+                if (c%mesh%n_wall == 0) then
+                    call fail("key 'kind': 'wall_load' needs a wall (&wall_plane, &wall_mesh)")
+                    return
+                end if
+                if (len_trim(wall) > 0) then
+                    p%wall = findloc(c%mesh%name, wall, 1)
+                    if (p%wall == 0) then
+                        call fail("key 'wall': '" // trim(wall) // "' is not the name of a wall")
+                        return
+                    end if
+                end if
+                if (.not. check_vector(at, axis_point, 'axis_point', .false., err)) return
+                if (.not. check_vector(at, axis, 'axis', .false., err)) return
+                if (.not. check_direction(at, axis, 'axis', err)) return
+                p%axis = axis_point
+                p%direction = axis
             case default
                 call fail("key 'kind': '" // trim(kind) // "' is not known (accepted: count, " // &
-                          'center_of_mass, track, histogram)')
+                          'center_of_mass, track, histogram, wall_load)')
                 return
             end select
             c%probes(k) = p
@@ -1001,7 +1031,8 @@ contains
         real(wp) :: normal(3)      ! side the wall faces, non-zero, required
         real(wp) :: half_width     ! half the side of the square [m], > 0, required
         integer :: divisions       ! squares along a side (2 triangles each), >= 1, default 1
-        namelist /wall_plane/ material, point, normal, half_width, divisions
+        character(len=name_len) :: name  ! the wall's name (for probes), unique, default none
+        namelist /wall_plane/ material, point, normal, half_width, divisions, name
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
@@ -1015,6 +1046,7 @@ contains
             normal = unset
             half_width = unset
             divisions = 1
+            name = ''
             b = nf%blocks(block_index(nf, 'wall_plane', k))
             do k_item = 0, block_item_count(b)
                 text = block_text(b, k_item)
@@ -1033,7 +1065,9 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'divisions': must be >= 1")
                 return
             end if
+            if (.not. wall_name_free(c, at, name, err)) return
             call mesh_add_plane(c%mesh, point, normal, half_width, divisions, im)
+            c%mesh%name(c%mesh%n_wall) = name
         end do
     end subroutine read_walls
 
@@ -1053,13 +1087,30 @@ contains
         real(wp) :: angular_velocity     ! about the axis, right-handed [rad/s], default 0
         real(wp) :: rotation_start       ! when the rotation starts [s], default 0
         real(wp) :: rotation_end         ! when it ends [s], default never
+        real(wp) :: oscillation_amplitude(3)  ! amplitude vector of a sinusoidal oscillation of
+                                              ! the position [m], default 0 (none)
+        real(wp) :: oscillation_frequency     ! its frequency [Hz], > 0 with an amplitude
+        real(wp) :: oscillation_phase         ! its phase [rad], default 0
+        real(wp) :: oscillation_start         ! when it starts [s], default 0
+        real(wp) :: oscillation_end           ! when it ends [s], default never
+        real(wp) :: velocity_table_time(max_table)  ! times of a piecewise-linear translation
+                                                    ! velocity [s], increasing, default none
+        real(wp) :: velocity_table(3, max_table)    ! its velocities [m/s], 3 per time
+        real(wp) :: angular_velocity_table_time(max_table)  ! times of a piecewise-linear
+                                                            ! angular velocity [s], increasing
+        real(wp) :: angular_velocity_table(max_table)  ! its values about rotation_axis [rad/s]
+        character(len=name_len) :: name   ! the wall's name (for probes), unique, default none
         namelist /wall_mesh/ file, scale, material, velocity, velocity_start, velocity_end, &
-            rotation_axis, rotation_point, angular_velocity, rotation_start, rotation_end
+            rotation_axis, rotation_point, angular_velocity, rotation_start, rotation_end, &
+            oscillation_amplitude, oscillation_frequency, oscillation_phase, oscillation_start, &
+            oscillation_end, velocity_table_time, velocity_table, angular_velocity_table_time, &
+            angular_velocity_table, name
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
         character(len=:), allocatable :: text, at
-        real(wp), allocatable :: vert(:, :, :)
+        real(wp), allocatable :: vert(:, :, :), lin_time(:), lin_value(:, :), rot_time(:), &
+                                 rot_value(:, :)
         integer :: k, im
 
         do k = 1, count_blocks(nf, 'wall_mesh')
@@ -1074,6 +1125,16 @@ contains
             angular_velocity = 0.0_wp
             rotation_start = 0.0_wp
             rotation_end = huge(1.0_wp)
+            oscillation_amplitude = 0.0_wp
+            oscillation_frequency = 0.0_wp
+            oscillation_phase = 0.0_wp
+            oscillation_start = 0.0_wp
+            oscillation_end = huge(1.0_wp)
+            velocity_table_time = unset
+            velocity_table = unset
+            angular_velocity_table_time = unset
+            angular_velocity_table = unset
+            name = ''
             b = nf%blocks(block_index(nf, 'wall_mesh', k))
             do k_item = 0, block_item_count(b)
                 text = block_text(b, k_item)
@@ -1107,6 +1168,30 @@ contains
                                'than rotation_start')
                 return
             end if
+            if (.not. check_vector(at, oscillation_amplitude, 'oscillation_amplitude', .false., &
+                                   err)) return
+            if (.not. in_range(oscillation_frequency, 0.0_wp, unset, &
+                               all(oscillation_amplitude == 0.0_wp), .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'oscillation_frequency': " // &
+                               'must be finite, > 0 with an oscillation_amplitude [Hz]')
+                return
+            end if
+            if (.not. in_range(oscillation_phase, -unset, unset, .false., .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'oscillation_phase': must be " // &
+                               'finite [rad]')
+                return
+            end if
+            if (.not. (oscillation_end > oscillation_start)) then
+                call set_error(err, dem_err_input, at // ": key 'oscillation_end': must be " // &
+                               'later than oscillation_start')
+                return
+            end if
+            if (.not. read_table(at, velocity_table_time, velocity_table, 'velocity_table', &
+                                 lin_time, lin_value, err)) return
+            if (.not. read_table(at, angular_velocity_table_time, &
+                                 reshape(angular_velocity_table, [1, max_table]), &
+                                 'angular_velocity_table', rot_time, rot_value, err)) return
+            if (.not. wall_name_free(c, at, name, err)) return
             call stl_read(relative_to(nf%path, trim(file)), scale, vert, err)
             if (err%failed()) then
                 err%message = at // ": key 'file': " // err%message
@@ -1116,8 +1201,61 @@ contains
             call mesh_set_motion(c%mesh, c%mesh%n_wall, velocity, [velocity_start, velocity_end], &
                                  rotation_axis, rotation_point, angular_velocity, &
                                  [rotation_start, rotation_end])
+            call mesh_set_oscillation(c%mesh, c%mesh%n_wall, oscillation_amplitude, &
+                                      oscillation_frequency, oscillation_phase, &
+                                      [oscillation_start, oscillation_end])
+            call mesh_set_tables(c%mesh, c%mesh%n_wall, lin_time, lin_value, rot_time, &
+                                 rot_value(1, :))
+            c%mesh%name(c%mesh%n_wall) = name
         end do
     end subroutine read_meshes
+
+    !> A wall's name, unless it names another wall too (an error then).
+    logical function wall_name_free(c, at, name, err) result(ok)
+        type(case_t), intent(in) :: c
+        character(len=*), intent(in) :: at, name
+        type(error_t), intent(inout) :: err
+        ok = .true.
+        if (len_trim(name) == 0 .or. c%mesh%n_wall == 0) return
+        ok = .not. any(c%mesh%name == name)
+        if (.not. ok) call set_error(err, dem_err_input, at // ": key 'name': '" // trim(name) &
+                                     // "' names another wall too")
+    end function wall_name_free
+
+    !> A velocity table of a wall (keys `key`_time, `key`): the times given (unset after
+    !> them), at least two, finite and increasing, and as many values per time as `values`
+    !> has rows, all finite; none given: an empty table.
+    logical function read_table(at, times, values, key, t_out, v_out, err) result(ok)
+        character(len=*), intent(in) :: at, key
+        real(wp), intent(in) :: times(:), values(:, :)
+        real(wp), allocatable, intent(out) :: t_out(:), v_out(:, :)
+        type(error_t), intent(inout) :: err
+        integer :: n, n_values
+        ok = .false.
+        n = count(times /= unset)
+        n_values = count(values /= unset)
+        if (n == 0 .and. n_values > 0) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "_time': required " // &
+                           'with ' // key)
+        else if (n == 1 .or. any(times(n + 1:) /= unset)) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "_time': at least " // &
+                           'two times, one after another')
+        else if (.not. all(ieee_is_finite(times(1:n)))) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "_time': must be finite")
+        else if (any(times(2:n) <= times(1:n - 1))) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "_time': must increase")
+        else if (n_values /= n * size(values, 1) .or. any(values(:, n + 1:) /= unset)) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': " // &
+                           itoa(size(values, 1)) // ' value(s) per time of ' // key // &
+                           '_time are required')
+        else if (.not. all(ieee_is_finite(values(:, 1:n)))) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': must be finite")
+        else
+            ok = .true.
+            t_out = times(1:n)
+            v_out = values(:, 1:n)
+        end if
+    end function read_table
 
     !> Number of `key = value` items in a group.
     integer function block_item_count(b) result(n)

@@ -173,11 +173,13 @@ contains
 
     !> Add the wall contact forces and torques to every owned particle. `overflow` counts
     !> particles with more separate contacts than the history store holds. The levers of the
-    !> rotation are R - shift_v d and R - shift_t d, as in pp_forces.
+    !> rotation are R - shift_v d and R - shift_t d, as in pp_forces. With `record` (a step
+    !> whose wall loads a probe reports), each contact's force on the particle and its
+    !> contact point go to wload, beside its slot of wtri.
     subroutine pw_forces(n_own, n_row, row, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, &
                          mat, wstart, wlist, vert, tmat, twall, wall_v, wall_w, wall_c, kn, sn, &
                          st, cn, ct, mu, clamp_normal, keep_length, shift_v, shift_t, dt, wtri, &
-                         wxi, f, t, overflow)
+                         wxi, record, n_load, wload, f, t, overflow)
         integer(ip), intent(in) :: n_own, n_cand, n_tri, n_wall, nm
         integer(ip), intent(in) :: n_row, row(:)   !! the particles near walls or with wall
                                                    !! history (dem_neighbors)
@@ -198,6 +200,9 @@ contains
         real(wp), intent(in) :: dt                                    !! [s]
         integer(ip), intent(inout) :: wtri(max_wall_contacts, n_own)
         real(wp), intent(inout) :: wxi(n_wall_history, max_wall_contacts, n_own)  !! [m]
+        logical, intent(in) :: record
+        integer(ip), intent(in) :: n_load                             !! n_own when recording
+        real(wp), intent(inout) :: wload(6, max_wall_contacts, n_load) !! [N], [m]
         real(wp), intent(inout) :: f(3, n_own), t(3, n_own)           !! [N], [N m]
         integer(ip), intent(out) :: overflow
         integer(ip) :: i, k, c, nc, ns, a, b, tri, feat(max_wall_candidates), kr, wl
@@ -277,6 +282,10 @@ contains
                 ns = ns + 1
                 new_tri(ns) = tri
                 new_xi(:, ns) = xik
+                if (record) then
+                    wload(1:3, ns, i) = ft - fn * nrm
+                    wload(4:6, ns, i) = q(:, c)
+                end if
                 fi = fi - fn * nrm + ft
                 lever = r - shift_t * (r - dist)
                 ti(1) = ti(1) + lever * (nrm(2) * ft(3) - nrm(3) * ft(2))

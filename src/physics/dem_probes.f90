@@ -4,9 +4,11 @@
 !> (center_of_mass), or the state of one particle (track). A histogram probe counts, once,
 !> at the first output time at or after its time, the particles in its region by their
 !> velocity components about a vertical axis: radial, angular (about the axis) and vertical.
+!> A wall-load probe gives the force of the particles on a wall (or on all walls) and its
+!> torque about a point, from the wall contacts of a force evaluation.
 !> Each rank looks at its own particles; counts are summed over the ranks, and centres of
-!> mass in fixed point (dem_fixed_sum), so that the values do not depend on where the
-!> particles are stored. Reductions on the device, at output times; collective.
+!> mass and loads in fixed point (dem_fixed_sum), so that the values do not depend on where
+!> the particles are stored. Reductions on the device, at output times; collective.
 module dem_probes
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use dem_kinds, only: wp, ip, i8
@@ -14,16 +16,19 @@ module dem_probes
     use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_total, fixed_split, &
                              fixed_sum_add_words
     use dem_particles, only: particles_find
+    use dem_contact_store, only: max_wall_contacts
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host
     implicit none
     private
     public :: probe_t, probe_count, probe_center_of_mass, probe_track, probe_histogram, &
-              probe_header, probe_values, probe_histogram_counts
+              probe_wall_load, probe_header, probe_values, probe_histogram_counts, &
+              probe_load_values
 
     integer(ip), parameter :: probe_count = 1           !< particles per material in a region
     integer(ip), parameter :: probe_center_of_mass = 2  !< centre of mass per material
     integer(ip), parameter :: probe_track = 3           !< position and velocities of a particle
     integer(ip), parameter :: probe_histogram = 4       !< velocity histograms at a time
+    integer(ip), parameter :: probe_wall_load = 5       !< force and torque on walls
 
     !> One probe; its region is the box [lo, hi] (the whole space by default).
     type :: probe_t
@@ -34,7 +39,10 @@ module dem_probes
         real(wp) :: time = 0.0_wp               !< histogram: when [s]
         integer(ip) :: bins = 20                !< histogram: bins over [v_min, v_max)
         real(wp) :: v_min = -1.0_wp, v_max = 1.0_wp  !< [m/s]
-        real(wp) :: axis(3) = 0.0_wp            !< histogram: a point of the vertical axis [m]
+        real(wp) :: axis(3) = 0.0_wp            !< histogram: a point of the vertical axis;
+                                                !< wall load: the point of the torque [m]
+        real(wp) :: direction(3) = [0.0_wp, 0.0_wp, 1.0_wp]  !< wall load: unit axis
+        integer(ip) :: wall = 0                 !< wall load: the wall (0: all)
     end type probe_t
 
 contains
@@ -50,6 +58,8 @@ contains
         character(len=*), parameter :: xyz(3) = ['x', 'y', 'z']
         character(len=*), parameter :: state(9) = [character(len=2) :: 'x', 'y', 'z', 'vx', &
                                                     'vy', 'vz', 'wx', 'wy', 'wz']
+        character(len=*), parameter :: load(7) = [character(len=11) :: 'fx', 'fy', 'fz', &
+                                                  'tx', 'ty', 'tz', 'torque_axis']
         header = ''
         select case (p%kind)
         case (probe_count)
@@ -66,6 +76,10 @@ contains
         case (probe_track)
             do k = 1, size(state)
                 header = header // ',' // trim(p%name) // '_' // trim(state(k))
+            end do
+        case (probe_wall_load)
+            do k = 1, size(load)
+                header = header // ',' // trim(p%name) // '_' // trim(load(k))
             end do
         end select
     end function probe_header
@@ -131,6 +145,134 @@ contains
             allocate(values(0))
         end select
     end function probe_values
+
+    !> A wall-load probe's values from the wall contacts of the n owned particles of every
+    !> rank at a force evaluation (collective): the force of the particles on the probe's
+    !> wall, F = -sum F_c, its torque about the point a, T = sum (q - a) x (-F_c), and T
+    !> along the probe's axis, over the contacts c (slots of wtri, triangles of wall twall)
+    !> with force F_c on the particle at the contact point q (wload). Summed in fixed point:
+    !> the bounds of the terms first, then their words, on the device.
+    function probe_load_values(comm, p, n, n_tri, wtri, twall, wload) result(values)
+        type(comm_t), intent(in) :: comm
+        type(probe_t), intent(in) :: p
+        integer(ip), intent(in) :: n, n_tri
+        integer(ip), intent(in) :: wtri(max_wall_contacts, n), twall(n_tri)
+        real(wp), intent(in) :: wload(6, max_wall_contacts, n)   !! [N], [m]
+        real(wp) :: values(7), sums(6, 1)
+        integer(i8) :: hi(6), lo(6)
+        type(fixed_sum_t) :: fixed
+        call fixed_sum_start(fixed, comm, load_bound(n, n_tri, p%wall, p%axis, wtri, twall, &
+                                                     wload), int(n) * max_wall_contacts, 1)
+        call load_words(n, n_tri, p%wall, p%axis, wtri, twall, wload, fixed%scale, &
+                        fixed%scale2, hi, lo)
+        call fixed_sum_add_words(fixed, hi, lo, 1)
+        call fixed_sum_total(fixed, comm, sums)
+        values = [sums(:, 1), dot_product(sums(4:6, 1), p%direction)]
+    end function probe_load_values
+
+    !> The load terms of contact slot k of particle i on wall `wall` (0: any): the force on
+    !> the wall, -F_c, and its torque about a, (q - a) x (-F_c); zero for another wall or an
+    !> empty slot.
+    pure subroutine load_terms(k, i, n, n_tri, wall, a, wtri, twall, wload, term)
+        !$acc routine seq
+        integer(ip), intent(in) :: k, i, n, n_tri, wall
+        real(wp), intent(in) :: a(3)
+        integer(ip), intent(in) :: wtri(max_wall_contacts, n), twall(n_tri)
+        real(wp), intent(in) :: wload(6, max_wall_contacts, n)
+        real(wp), intent(out) :: term(6)
+        real(wp) :: r(3)
+        term = 0.0_wp
+        if (wtri(k, i) == 0) return
+        if (wall /= 0 .and. twall(wtri(k, i)) /= wall) return
+        term(1:3) = -wload(1:3, k, i)
+        r = wload(4:6, k, i) - a
+        term(4) = r(2) * term(3) - r(3) * term(2)
+        term(5) = r(3) * term(1) - r(1) * term(3)
+        term(6) = r(1) * term(2) - r(2) * term(1)
+    end subroutine load_terms
+
+    !> The largest size of each component of the load terms (load_terms); maxima on the
+    !> device.
+    function load_bound(n, n_tri, wall, a, wtri, twall, wload) result(top)
+        integer(ip), intent(in) :: n, n_tri, wall
+        real(wp), intent(in) :: a(3)
+        integer(ip), intent(in) :: wtri(max_wall_contacts, n), twall(n_tri)
+        real(wp), intent(in) :: wload(6, max_wall_contacts, n)
+        real(wp) :: top(6), term(6), t1, t2, t3, t4, t5, t6
+        integer(ip) :: i, k
+        t1 = 0.0_wp
+        t2 = 0.0_wp
+        t3 = 0.0_wp
+        t4 = 0.0_wp
+        t5 = 0.0_wp
+        t6 = 0.0_wp
+        !$acc parallel loop gang vector default(present) copyin(a) private(term, k) &
+        !$acc reduction(max:t1, t2, t3, t4, t5, t6)
+        do i = 1, n
+            do k = 1, max_wall_contacts
+                if (wtri(k, i) == 0) exit                 ! (the slots in use come first)
+                call load_terms(k, i, n, n_tri, wall, a, wtri, twall, wload, term)
+                t1 = max(t1, abs(term(1)))
+                t2 = max(t2, abs(term(2)))
+                t3 = max(t3, abs(term(3)))
+                t4 = max(t4, abs(term(4)))
+                t5 = max(t5, abs(term(5)))
+                t6 = max(t6, abs(term(6)))
+            end do
+        end do
+        top = [t1, t2, t3, t4, t5, t6]
+    end function load_bound
+
+    !> The fixed-point words (fixed_split) of the load terms (load_terms), summed: integer
+    !> sums on the device, exact in any order.
+    subroutine load_words(n, n_tri, wall, a, wtri, twall, wload, scale, scale2, hi_sum, lo_sum)
+        integer(ip), intent(in) :: n, n_tri, wall
+        real(wp), intent(in) :: a(3), scale(6), scale2
+        integer(ip), intent(in) :: wtri(max_wall_contacts, n), twall(n_tri)
+        real(wp), intent(in) :: wload(6, max_wall_contacts, n)
+        integer(i8), intent(out) :: hi_sum(6), lo_sum(6)
+        real(wp) :: term(6)
+        integer(i8) :: h1, h2, h3, h4, h5, h6, l1, l2, l3, l4, l5, l6, kw(6), rw(6)
+        integer(ip) :: i, k, q
+        h1 = 0
+        h2 = 0
+        h3 = 0
+        h4 = 0
+        h5 = 0
+        h6 = 0
+        l1 = 0
+        l2 = 0
+        l3 = 0
+        l4 = 0
+        l5 = 0
+        l6 = 0
+        !$acc parallel loop gang vector default(present) copyin(a, scale) &
+        !$acc private(term, k, q, kw, rw) &
+        !$acc reduction(+:h1, h2, h3, h4, h5, h6, l1, l2, l3, l4, l5, l6)
+        do i = 1, n
+            do k = 1, max_wall_contacts
+                if (wtri(k, i) == 0) exit                 ! (the slots in use come first)
+                call load_terms(k, i, n, n_tri, wall, a, wtri, twall, wload, term)
+                do q = 1, 6
+                    call fixed_split(term(q), scale(q), scale2, kw(q), rw(q))
+                end do
+                h1 = h1 + kw(1)
+                h2 = h2 + kw(2)
+                h3 = h3 + kw(3)
+                h4 = h4 + kw(4)
+                h5 = h5 + kw(5)
+                h6 = h6 + kw(6)
+                l1 = l1 + rw(1)
+                l2 = l2 + rw(2)
+                l3 = l3 + rw(3)
+                l4 = l4 + rw(4)
+                l5 = l5 + rw(5)
+                l6 = l6 + rw(6)
+            end do
+        end do
+        hi_sum = [h1, h2, h3, h4, h5, h6]
+        lo_sum = [l1, l2, l3, l4, l5, l6]
+    end subroutine load_words
 
     !> True when the point c lies in the box [lo, hi].
     pure logical function in_box(c, lo, hi) result(inside)

@@ -14,7 +14,7 @@ module dem_run_output
     use dem_diagnostics, only: energies, count_pp_sides, first_nonfinite, contact_trace
     use dem_output, only: output_t, output_series, output_contact, output_sizes, &
                           output_probes, output_histogram
-    use dem_probes, only: probe_values, probe_histogram_counts, probe_histogram
+    use dem_probes, only: probe_values, probe_histogram_counts, probe_histogram, probe_wall_load
     use dem_checkpoint, only: frame_t, frame_write, checkpoint_file
     use dem_xdmf, only: xdmf_write, snapshot_file
     use dem_files, only: make_directory, file_remove, file_rename
@@ -95,8 +95,12 @@ contains
         values = [real(wp) ::]
         associate (p => s%p, n => s%p%n_own)
             do k = 1, size(c%probes)
-                values = [values, probe_values(s%comm, c%probes(k), s%run%probed, n, p%gid, &
-                                               p%mat, p%mass, p%x, p%v, p%w)]
+                if (c%probes(k)%kind == probe_wall_load) then      ! (from the wall contacts)
+                    values = [values, s%wall_loads(:, k)]
+                else
+                    values = [values, probe_values(s%comm, c%probes(k), s%run%probed, n, &
+                                                   p%gid, p%mat, p%mass, p%x, p%v, p%w)]
+                end if
                 if (c%probes(k)%kind /= probe_histogram .or. &
                     .not. histogram_due(c%probes(k)%time)) cycle
                 counts = probe_histogram_counts(s%comm, c%probes(k), n, p%x, p%v)

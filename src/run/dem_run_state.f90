@@ -86,6 +86,13 @@ module dem_run_state
         type(time_scales_t) :: scales     !< of the case's particles (an unstable run's message)
         real(wp) :: accel_bound = 1.0_wp  !< m accel_bound bounds a particle's force, for the
                                           !< contact sums' fixed point [m/s^2]
+        logical :: load_probes = .false.  !< the case has wall-load probes
+        logical :: loads_due = .false.    !< the next force evaluation gives their values
+        real(wp), allocatable :: wall_loads(:, :)  !< (7, probe): the wall-load probes' values
+                                                   !< from the last evaluation that gave them
+        real(wp), allocatable :: wload(:, :, :)  !< at that evaluation, per wall contact slot
+                                                 !< of an owned particle: the force on it and
+                                                 !< the contact point (6, slot, particle)
         logical, allocatable :: gone(:)  !< outlet flags of the owned particles, on the device
         logical, allocatable :: fresh(:) !< those flagged at the last step
         type(frame_t) :: good          !< the last state that passed the instability guard
@@ -148,6 +155,7 @@ contains
         type(solver_t), intent(inout) :: s
         integer, intent(in) :: op
         call particle_data(s, op)
+        call acc_data(s%wload, op)
         call acc_data(s%pc%kn, op)
         call acc_data(s%pc%sn, op)
         call acc_data(s%pc%st, op)

@@ -9,11 +9,11 @@ module dem_solver
     use dem_particles, only: particles_init, particles_add, order_by_id
     use dem_domain, only: domain_imbalance, sorted_by_rank
     use dem_materials, only: pair_constants_build
-    use dem_contact_store, only: store_init
+    use dem_contact_store, only: store_init, max_wall_contacts
     use dem_integrate, only: integrator_verlet
     use dem_diagnostics, only: deep_overlap_id, deep_wall_id
     use dem_output, only: output_open, output_final, output_close
-    use dem_probes, only: probe_header
+    use dem_probes, only: probe_header, probe_wall_load
     use dem_checkpoint, only: frame_t
     use dem_folder, only: folder_claim
     use dem_text, only: itoa
@@ -56,6 +56,10 @@ contains
         call pair_constants_build(c%mats, c%opts, s%pc)
         s%mesh = c%mesh
         call store_init(s%cs, n_mine)
+        s%load_probes = any(c%probes%kind == probe_wall_load)
+        allocate(s%wall_loads(7, size(c%probes)), s%wload(6, max_wall_contacts, 1))
+        s%wall_loads = 0.0_wp
+        s%wload = 0.0_wp
         s%nb%skin = c%skin
         s%imbalance_limit = c%imbalance_limit
         s%sort_cell = 2.0_wp * minval(c%summary%rmin) + c%skin
@@ -119,6 +123,7 @@ contains
             if (failed_anywhere(s, err)) return
             if (.not. s%restarted) then
                 if (c%integrator == integrator_verlet) then
+                    s%loads_due = s%load_probes
                     call forces(s, c, time_of(s, c, s%step), err)
                     bad = .false.
                     call write_trace(s, c, r%out, time_of(s, c, s%step), err, bad)

@@ -23,7 +23,9 @@ module dem_step
     use dem_run_control, only: run_control, progress, energy_guard, unstable
     use dem_timers, only: timer_stop, phase_neighbors, phase_contacts_pp, phase_contacts_pw, &
                           phase_integrate, phase_output, wall_seconds
-    use dem_acc, only: acc_data, acc_enter, acc_create, acc_to_host, acc_to_device
+    use dem_acc, only: acc_data, acc_enter, acc_create, acc_exit, acc_to_host, acc_to_device
+    use dem_probes, only: probe_wall_load, probe_load_values
+    use dem_contact_store, only: max_wall_contacts
     implicit none
     private
     public :: time_step, forces, write_row
@@ -41,6 +43,7 @@ contains
         logical :: verlet, bad
         verlet = c%integrator == integrator_verlet
         bad = .false.
+        s%loads_due = s%load_probes .and. row_due(s, s%step + 1)    ! (wall-load probes)
         if (verlet) call verlet_first_half(s, c)               ! v(t + dt/2), x(t + dt)
         call forces(s, c, time_of(s, c, merge(s%step + 1, s%step, verlet)), err)
         if (.not. err%failed()) call integrate(s, c, verlet, err, bad)     ! and the trace
@@ -143,19 +146,36 @@ contains
         end associate
     end subroutine particle_contacts
 
-    !> The particle-wall contacts of the lists' candidate triangles.
+    !> The particle-wall contacts of the lists' candidate triangles; at a step whose row
+    !> reports wall loads, the wall-load probes' values from them too (collective then).
     subroutine wall_contacts(s, c, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
-        integer(ip) :: overflow
+        integer(ip) :: overflow, n_load
+        integer :: k
+        if (s%loads_due .and. size(s%wload, 3) < s%p%n_own) then   ! room for every particle
+            call acc_data(s%wload, acc_exit)
+            deallocate(s%wload)
+            allocate(s%wload(6, max_wall_contacts, size(s%p%x, 2)))
+            call acc_data(s%wload, acc_create)
+        end if
+        n_load = merge(s%p%n_own, 1_ip, s%loads_due)
         associate (p => s%p, nb => s%nb, pc => s%pc, o => s%pc%opts, m => s%mesh, &
                    n => s%p%n_own)
             call pw_forces(n, nb%n_wrow, nb%wrow, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, &
                            p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%wstart, nb%wlist, m%vert, &
                            m%mat, m%wall, m%wall_v, m%wall_w, m%wall_c, pc%kn, pc%sn, pc%st, &
                            pc%cn, pc%ct, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, &
-                           o%shift_t, c%dt, s%cs%wall_tri, s%cs%wall_xi, p%f, p%t, overflow)
+                           o%shift_t, c%dt, s%cs%wall_tri, s%cs%wall_xi, s%loads_due, n_load, &
+                           s%wload, p%f, p%t, overflow)
+            if (s%loads_due) then
+                do k = 1, size(c%probes)
+                    if (c%probes(k)%kind /= probe_wall_load) cycle
+                    s%wall_loads(:, k) = probe_load_values(s%comm, c%probes(k), n, m%n_tri, &
+                                                           s%cs%wall_tri, m%wall, s%wload)
+                end do
+            end if
         end associate
         if (overflow > 0) call set_error(err, dem_err_runtime, 'a particle has more separate ' &
             // 'wall contacts than the contact store holds; walls overlap or cross there')
@@ -199,6 +219,7 @@ contains
             s%removed = s%removed + n_fresh(1)
             s%parked = s%parked + n_fresh(1)
             s%emptied = s%removed - s%run%removed0 >= s%run%n0
+            if (s%emptied) s%wall_loads = 0.0_wp     ! (its last row: no particle, no load)
             if (allocated(s%removed_ids)) then    ! (a coupled run: their ids, on the host)
                 call acc_data(s%fresh, acc_to_host)
                 call acc_data(p%gid, acc_to_host)
@@ -237,7 +258,7 @@ contains
         real(wp) :: step_seconds
         logical :: row, snap, written, show
         associate (r => s%run)
-            row = due(r%every) .or. s%step == r%n_end .or. s%emptied
+            row = row_due(s, s%step) .or. s%emptied
             snap = due(r%every_snap) .or. (r%every_snap > 0 .and. s%step == r%n_end)
             if (row) then
                 call write_row(s, c, err)            ! (it tells whether the run has settled)
@@ -280,4 +301,13 @@ contains
             if (k > 0) due = mod(s%step - s%run%out0, k) == 0
         end function due
     end subroutine outputs_and_control
+
+    !> Whether a row of series.csv and probes.csv is written after step `step`: every
+    !> output interval, and at the run's last step.
+    pure logical function row_due(s, step) result(due)
+        type(solver_t), intent(in) :: s
+        integer(i8), intent(in) :: step
+        due = step == s%run%n_end
+        if (s%run%every > 0) due = due .or. mod(step - s%run%out0, s%run%every) == 0
+    end function row_due
 end module dem_step

@@ -1,21 +1,32 @@
-!> Triangle walls: storage, rigid motion, the closest point of a triangle to a point (face,
-!> edge or vertex), and the flat rectangular wall made of triangles (doc/theory.md,
-!> section 4).
+!> Triangle walls: storage, rigid motion (constant velocities, a sinusoidal oscillation,
+!> piecewise-linear velocity tables), the closest point of a triangle to a point (face, edge
+!> or vertex), and the flat rectangular wall made of triangles (doc/theory.md, section 4).
 module dem_mesh
     use dem_kinds, only: wp, ip
     use dem_vector, only: cross
     implicit none
     private
-    public :: mesh_t, mesh_append, mesh_add_plane, mesh_set_motion, mesh_move, &
-              mesh_speed_bound, closest_point_triangle, feature_face, feature_edge, feature_vertex
+    public :: mesh_t, table_t, mesh_append, mesh_add_plane, mesh_set_motion, &
+              mesh_set_oscillation, mesh_set_tables, mesh_move, mesh_speed_bound, &
+              closest_point_triangle, feature_face, feature_edge, feature_vertex
 
     integer(ip), parameter :: feature_face = 0    !< closest point inside the triangle
     integer(ip), parameter :: feature_edge = 1    !< closest point on an edge
     integer(ip), parameter :: feature_vertex = 2  !< closest point is a vertex
+    real(wp), parameter :: two_pi = 2.0_wp * acos(-1.0_wp)
+
+    !> A piecewise-linear function of time through (time(k), value(:, k)), zero outside
+    !> [time(1), time(n)) (no points: zero everywhere).
+    type :: table_t
+        real(wp), allocatable :: time(:)       !< increasing [s]
+        real(wp), allocatable :: value(:, :)   !< (component, point)
+    end type table_t
 
     !> All wall triangles of a case in one set of arrays; `wall` says which wall each is from.
-    !> A wall moves rigidly: a translation at constant velocity between two times, and a
-    !> rotation at constant angular velocity about a fixed axis between two times.
+    !> A wall moves rigidly: a translation that is the sum of a constant velocity between two
+    !> times, a sinusoidal oscillation between two times and a velocity table, and a rotation
+    !> about a fixed axis at a constant angular velocity between two times plus an angular
+    !> velocity table.
     type :: mesh_t
         integer(ip) :: n_tri = 0
         integer(ip) :: n_wall = 0
@@ -32,6 +43,13 @@ module dem_mesh
         real(wp), allocatable :: pivot(:, :)    !< a point of the axis at t = 0 (3, wall) [m]
         real(wp), allocatable :: omega(:)       !< angular velocity about axis [rad/s]
         real(wp), allocatable :: rot_t(:, :)    !< its start and end times (2, wall) [s]
+        real(wp), allocatable :: osc_a(:, :)    !< oscillation amplitude (3, wall) [m]
+        real(wp), allocatable :: osc_f(:)       !< its frequency [Hz]
+        real(wp), allocatable :: osc_phase(:)   !< its phase [rad]
+        real(wp), allocatable :: osc_t(:, :)    !< its start and end times (2, wall) [s]
+        type(table_t), allocatable :: lin_tab(:)  !< translation velocity table [m/s]
+        type(table_t), allocatable :: rot_tab(:)  !< angular velocity table about axis [rad/s]
+        character(len=32), allocatable :: name(:) !< the wall's name ('' unnamed)
         real(wp), allocatable :: wall_v(:, :)   !< translation velocity now (3, wall) [m/s]
         real(wp), allocatable :: wall_w(:, :)   !< angular velocity vector now (3, wall) [rad/s]
         real(wp), allocatable :: wall_c(:, :)   !< a point of the axis now (3, wall) [m]
@@ -63,11 +81,19 @@ contains
         call grow_col(m%axis, [0.0_wp, 0.0_wp, 1.0_wp])
         call grow_col(m%pivot, [0.0_wp, 0.0_wp, 0.0_wp])
         call grow_col(m%rot_t, [0.0_wp, 0.0_wp])
+        call grow_col(m%osc_a, [0.0_wp, 0.0_wp, 0.0_wp])
+        call grow_col(m%osc_t, [0.0_wp, 0.0_wp])
         call grow_col(m%wall_v, [0.0_wp, 0.0_wp, 0.0_wp])
         call grow_col(m%wall_w, [0.0_wp, 0.0_wp, 0.0_wp])
         call grow_col(m%wall_c, [0.0_wp, 0.0_wp, 0.0_wp])
-        if (w == 1) allocate(m%omega(0))
+        if (w == 1) allocate(m%omega(0), m%osc_f(0), m%osc_phase(0), m%lin_tab(0), &
+                             m%rot_tab(0), m%name(0))
         m%omega = [m%omega, 0.0_wp]
+        m%osc_f = [m%osc_f, 0.0_wp]
+        m%osc_phase = [m%osc_phase, 0.0_wp]
+        m%lin_tab = [m%lin_tab, no_table(3)]
+        m%rot_tab = [m%rot_tab, no_table(1)]
+        m%name = [character(len=32) :: m%name, '']
         m%n_tri = n + k
         m%n_wall = w
     contains
@@ -110,19 +136,96 @@ contains
         m%pivot(:, w) = pivot
         m%omega(w) = omega
         m%rot_t(:, w) = rot_t
-        m%moving = m%moving .or. any(velocity /= 0.0_wp) .or. omega /= 0.0_wp
+        m%moving = m%moving .or. wall_moves(m, w)
         call mesh_move(m, 0.0_wp)
     end subroutine mesh_set_motion
 
+    !> Add to wall w's translation a sinusoidal oscillation d = A (sin(2 pi f tau + phase)
+    !> - sin(phase)), tau = min(max(t, t0), t1) - t0, so that the wall is at its given pose
+    !> until t0 (LIGGGHTS' move/mesh wiggle with a phase).
+    subroutine mesh_set_oscillation(m, w, amplitude, frequency, phase, osc_t)
+        type(mesh_t), intent(inout) :: m
+        integer(ip), intent(in) :: w
+        real(wp), intent(in) :: amplitude(3)  !! [m]
+        real(wp), intent(in) :: frequency     !! [Hz]
+        real(wp), intent(in) :: phase         !! [rad]
+        real(wp), intent(in) :: osc_t(2)      !! start, end [s]
+        m%osc_a(:, w) = amplitude
+        m%osc_f(w) = frequency
+        m%osc_phase(w) = phase
+        m%osc_t(:, w) = osc_t
+        m%moving = m%moving .or. wall_moves(m, w)
+        call mesh_move(m, 0.0_wp)
+    end subroutine mesh_set_oscillation
+
+    !> Add to wall w's motion piecewise-linear tables of its translation velocity
+    !> (lin_time(k), lin_value(:, k)) and of its angular velocity about the axis of its
+    !> rotation (rot_time(k), rot_value(k)); each is zero outside its times (an empty table:
+    !> none). The position and the angle are their integrals from the first time.
+    subroutine mesh_set_tables(m, w, lin_time, lin_value, rot_time, rot_value)
+        type(mesh_t), intent(inout) :: m
+        integer(ip), intent(in) :: w
+        real(wp), intent(in) :: lin_time(:), lin_value(:, :)  !! [s], (3, point) [m/s]
+        real(wp), intent(in) :: rot_time(:), rot_value(:)     !! [s], [rad/s]
+        m%lin_tab(w) = table_t(lin_time, lin_value)
+        m%rot_tab(w) = table_t(rot_time, reshape(rot_value, [1, size(rot_value)]))
+        m%moving = m%moving .or. wall_moves(m, w)
+        call mesh_move(m, 0.0_wp)
+    end subroutine mesh_set_tables
+
+    !> A table of n-component values with no points.
+    pure function no_table(n) result(tab)
+        integer, intent(in) :: n
+        type(table_t) :: tab
+        allocate(tab%time(0), tab%value(n, 0))
+    end function no_table
+
+    !> Whether wall w has a motion.
+    pure logical function wall_moves(m, w) result(moves)
+        type(mesh_t), intent(in) :: m
+        integer(ip), intent(in) :: w
+        moves = any(m%lin_v(:, w) /= 0.0_wp) .or. m%omega(w) /= 0.0_wp .or. &
+                any(m%osc_a(:, w) /= 0.0_wp) .or. size(m%lin_tab(w)%time) > 0 .or. &
+                size(m%rot_tab(w)%time) > 0
+    end function wall_moves
+
+    !> A table's value at t, and its integral from its first time to t: the trapezoids of
+    !> the whole intervals before t, and the part of the one that holds t.
+    pure subroutine table_at(tab, t, value, integral)
+        type(table_t), intent(in) :: tab
+        real(wp), intent(in) :: t                  !! [s]
+        real(wp), intent(out) :: value(:), integral(:)
+        real(wp) :: h, tau
+        integer :: k
+        value = 0.0_wp
+        integral = 0.0_wp
+        do k = 1, size(tab%time) - 1
+            if (t < tab%time(k)) return
+            h = tab%time(k + 1) - tab%time(k)
+            if (t >= tab%time(k + 1)) then
+                integral = integral + 0.5_wp * h * (tab%value(:, k) + tab%value(:, k + 1))
+            else
+                tau = t - tab%time(k)
+                value = tab%value(:, k) + (tab%value(:, k + 1) - tab%value(:, k)) * (tau / h)
+                integral = integral + tau * tab%value(:, k) &
+                           + (tab%value(:, k + 1) - tab%value(:, k)) * (0.5_wp * tau**2 / h)
+                return
+            end if
+        end do
+    end subroutine table_at
+
     !> Put every moving wall in its pose at `time`, and set its velocities at that time:
-    !> x = pivot + R(theta) (x0 - pivot) + d, with theta = omega (min(max(t, t0), t1) - t0)
-    !> (Rodrigues' formula) and d = v (min(max(t, t0), t1) - t0). The poses are set on the
-    !> host; the vertices are placed where they are: on the device during a run of an
+    !> x = pivot + R(theta) (x0 - pivot) + d (Rodrigues' formula for R), with
+    !> theta = omega (min(max(t, t0), t1) - t0) plus the integral of the angular velocity
+    !> table, and d = v (min(max(t, t0), t1) - t0) plus the oscillation plus the integral of
+    !> the velocity table; the velocities are the derivatives of these. The poses are set on
+    !> the host; the vertices are placed where they are: on the device during a run of an
     !> OpenACC build, on the host otherwise.
     subroutine mesh_move(m, time)
         type(mesh_t), intent(inout) :: m
         real(wp), intent(in) :: time   !! [s]
-        real(wp) :: theta, d(3, m%n_wall), k(3), r(3, 3, m%n_wall), kx(3, 3), e(3, 3)
+        real(wp) :: theta, spin, d(3, m%n_wall), k(3), r(3, 3, m%n_wall), kx(3, 3), e(3, 3)
+        real(wp) :: arg, tab_v(3), tab_d(3), tab_w(1), tab_theta(1)
         logical :: moves(m%n_wall)
         integer(ip) :: w
         e = 0.0_wp
@@ -130,10 +233,18 @@ contains
         e(2, 2) = 1.0_wp
         e(3, 3) = 1.0_wp
         do w = 1, m%n_wall
-            moves(w) = any(m%lin_v(:, w) /= 0.0_wp) .or. m%omega(w) /= 0.0_wp
+            moves(w) = wall_moves(m, w)
             d(:, w) = m%lin_v(:, w) * (min(max(time, m%lin_t(1, w)), m%lin_t(2, w)) &
                                        - m%lin_t(1, w))
+            arg = two_pi * m%osc_f(w) * (min(max(time, m%osc_t(1, w)), m%osc_t(2, w)) &
+                                         - m%osc_t(1, w)) + m%osc_phase(w)
+            if (any(m%osc_a(:, w) /= 0.0_wp)) &      ! (only then: a zero added keeps no -0)
+                d(:, w) = d(:, w) + m%osc_a(:, w) * (sin(arg) - sin(m%osc_phase(w)))
+            call table_at(m%lin_tab(w), time, tab_v, tab_d)
+            if (size(m%lin_tab(w)%time) > 0) d(:, w) = d(:, w) + tab_d
             theta = m%omega(w) * (min(max(time, m%rot_t(1, w)), m%rot_t(2, w)) - m%rot_t(1, w))
+            call table_at(m%rot_tab(w), time, tab_w, tab_theta)
+            if (size(m%rot_tab(w)%time) > 0) theta = theta + tab_theta(1)
             k = m%axis(:, w)
             kx = reshape([0.0_wp, k(3), -k(2), -k(3), 0.0_wp, k(1), k(2), -k(1), 0.0_wp], [3, 3])
             r(:, :, w) = cos(theta) * e + sin(theta) * kx &
@@ -142,8 +253,13 @@ contains
             m%wall_c(:, w) = m%pivot(:, w) + d(:, w)
             m%wall_v(:, w) = 0.0_wp
             if (time >= m%lin_t(1, w) .and. time < m%lin_t(2, w)) m%wall_v(:, w) = m%lin_v(:, w)
-            m%wall_w(:, w) = 0.0_wp
-            if (time >= m%rot_t(1, w) .and. time < m%rot_t(2, w)) m%wall_w(:, w) = m%omega(w) * k
+            if (time >= m%osc_t(1, w) .and. time < m%osc_t(2, w)) m%wall_v(:, w) = &
+                m%wall_v(:, w) + two_pi * m%osc_f(w) * cos(arg) * m%osc_a(:, w)
+            if (size(m%lin_tab(w)%time) > 0) m%wall_v(:, w) = m%wall_v(:, w) + tab_v
+            spin = 0.0_wp
+            if (time >= m%rot_t(1, w) .and. time < m%rot_t(2, w)) spin = m%omega(w)
+            if (size(m%rot_tab(w)%time) > 0) spin = spin + tab_w(1)
+            m%wall_w(:, w) = spin * k
         end do
         call place_triangles(m%n_tri, m%n_wall, m%wall, moves, m%pivot, r, d, m%ref, m%vert)
     end subroutine mesh_move
@@ -175,17 +291,22 @@ contains
         end do
     end subroutine place_triangles
 
-    !> The fastest surface speed of any wall's motion [m/s]: its translation speed plus its
-    !> angular speed times the distance of its farthest corner from its axis (which the
-    !> translation carries and the rotation keeps).
+    !> A bound of the fastest surface speed of any wall's motion [m/s]: its translation speed
+    !> plus its angular speed times the distance of its farthest corner from its axis (which
+    !> the translation carries and the rotation keeps), each the sum of the largest speeds of
+    !> the motions that make it up.
     pure real(wp) function mesh_speed_bound(m) result(speed)
         type(mesh_t), intent(in) :: m
-        real(wp) :: r(3), reach
+        real(wp) :: r(3), reach, lin, spin
         integer(ip) :: w, i, k
         speed = 0.0_wp
         do w = 1, m%n_wall
+            lin = norm2(m%lin_v(:, w)) + two_pi * abs(m%osc_f(w)) * norm2(m%osc_a(:, w))
+            if (size(m%lin_tab(w)%time) > 0) lin = lin + maxval(norm2(m%lin_tab(w)%value, 1))
+            spin = abs(m%omega(w))
+            if (size(m%rot_tab(w)%time) > 0) spin = spin + maxval(abs(m%rot_tab(w)%value))
             reach = 0.0_wp
-            if (m%omega(w) /= 0.0_wp) then
+            if (spin /= 0.0_wp) then
                 do i = m%first(w), m%last(w)
                     do k = 1, 3
                         r = m%ref(:, k, i) - m%pivot(:, w)
@@ -194,7 +315,7 @@ contains
                     end do
                 end do
             end if
-            speed = max(speed, norm2(m%lin_v(:, w)) + abs(m%omega(w)) * reach)
+            speed = max(speed, lin + spin * reach)
         end do
     end function mesh_speed_bound
 

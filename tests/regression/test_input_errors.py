@@ -124,6 +124,52 @@ bad("dt_unstable", sub("dt = 1e-7", "dt = 1e-4"), "run", "dt", "stability bound"
 bad("bad_integrator", sub("t_end = 1e-5,", "t_end = 1e-5, integrator = 'rk4',"), "run",
     "integrator")
 bad("zero_normal", sub("normal = 0, 0, 1", "normal = 0, 0, 0"), "wall_plane", "normal")
+# wall names, wall-load probes, wall oscillation and velocity tables (issue 32)
+square_stl = os.path.join(work, "square.stl")
+with open(square_stl, "w") as f:
+    f.write("solid w\n facet normal 0 0 1\n  outer loop\n   vertex -1 -1 -1\n   vertex 1 -1 -1\n"
+            "   vertex 1 1 -1\n  endloop\n endfacet\nendsolid w\n")
+MESH = f"&wall_mesh material = 'steel', file = '{square_stl}', "
+NAMED = sub("half_width = 0.1 /", "half_width = 0.1, name = 'floor' /")
+bad("duplicate_wall_name", NAMED + MESH + "name = 'floor' /\n", "wall_mesh", "name",
+    "names another wall")
+bad("load_unknown_wall", NAMED + "&probe name = 'w', kind = 'wall_load', wall = 'roof' /\n",
+    "probe", "wall", "'roof'")
+bad("load_no_wall", sub("&wall_plane material = 'steel', point = 0, 0, 0, normal = 0, 0, 1, "
+                        "half_width = 0.1 /\n", "&probe name = 'w', kind = 'wall_load' /\n"),
+    "probe", "kind", "needs a wall")
+bad("wall_mesh_unknown_key", GOOD + MESH + "wiggle = 1 /\n", "wall_mesh", "wiggle",
+    "angular_velocity_table_time angular_velocity_table name)")
+bad("load_zero_axis", GOOD + "&probe name = 'w', kind = 'wall_load', axis = 0, 0, 0 /\n",
+    "probe", "axis", "non-zero")
+bad("load_nan_point", GOOD + "&probe name = 'w', kind = 'wall_load', axis_point = 0, NaN, 0 /\n",
+    "probe", "axis_point", "finite")
+for name, keys, key, words in (
+        ("oscillation_no_frequency", "oscillation_amplitude = 0, 0, 1e-3",
+         "oscillation_frequency", "> 0"),
+        ("oscillation_negative_frequency", "oscillation_frequency = -5",
+         "oscillation_frequency", "finite"),
+        ("oscillation_nan_amplitude", "oscillation_amplitude = 0, NaN, 1e-3, "
+         "oscillation_frequency = 5", "oscillation_amplitude", "finite"),
+        ("oscillation_nan_phase", "oscillation_amplitude = 0, 0, 1e-3, "
+         "oscillation_frequency = 5, oscillation_phase = NaN", "oscillation_phase", "finite"),
+        ("oscillation_ends_first", "oscillation_start = 1, oscillation_end = 0.5",
+         "oscillation_end", "later"),
+        ("table_one_time", "velocity_table_time = 0, velocity_table = 0, 0, 1",
+         "velocity_table_time", "two times"),
+        ("table_not_increasing", "velocity_table_time = 0, 0.2, 0.1, "
+         "velocity_table = 0, 0, 1, 0, 0, 1, 0, 0, 1", "velocity_table_time", "increase"),
+        ("table_short", "velocity_table_time = 0, 0.1, velocity_table = 0, 0, 1, 0, 0",
+         "velocity_table", "3 value(s) per time"),
+        ("table_no_times", "velocity_table = 0, 0, 1, 0, 0, 1", "velocity_table_time",
+         "required"),
+        ("table_nan_value", "velocity_table_time = 0, 0.1, velocity_table = 0, 0, 1, 0, NaN, 1",
+         "velocity_table", "finite"),
+        ("angular_table_short", "angular_velocity_table_time = 0, 0.1, 0.2, "
+         "angular_velocity_table = 1, 2", "angular_velocity_table", "1 value(s) per time"),
+        ("angular_table_long", "angular_velocity_table_time = 0, 0.1, "
+         "angular_velocity_table = 1, 2, 3", "angular_velocity_table", "1 value(s) per time")):
+    bad(name, GOOD + MESH + keys + " /\n", "wall_mesh", key, words)
 bad("unknown_variant", GOOD + "&contact_model variant = 'lammps' /\n", "contact_model",
     "variant", "accepted: dem, liggghts, mercurydpm, yade")
 bad("unknown_lever", GOOD + "&contact_model variant = 'liggghts', lever_torque = 'rim' /\n",

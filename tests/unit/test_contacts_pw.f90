@@ -170,7 +170,8 @@ contains
         type(mesh_t), intent(in) :: mm
         integer(ip), intent(inout) :: stri(max_wall_contacts, 1)
         real(wp), intent(inout) :: sxi(3, max_wall_contacts, 1), fo(3, 1), to(3, 1)
-        real(wp) :: st(2, 2)
+        real(wp) :: st(2, 2), load(6, max_wall_contacts, 1)
+        integer :: k
         wlist = [(i, i = 1, mm%n_tri)]
         st = 8.0_wp * 0.4e10_wp
         fo = 0.0_wp
@@ -180,7 +181,16 @@ contains
                        [1_ip], [1_ip, mm%n_tri + 1], wlist, mm%vert, mm%mat, mm%wall, &
                        mm%wall_v, mm%wall_w, mm%wall_c, kn, &
                        2.0_wp * estar + zero, st, zero, zero, mu, .false., .true., 0.0_wp, &
-                       0.0_wp, 1.0e-3_wp, stri, sxi, fo, to, overflow)
+                       0.0_wp, 1.0e-3_wp, stri, sxi, .true., 1_ip, load, fo, to, overflow)
         call assert_true(overflow == 0, 'no overflow')
+        ! the recorded contact forces add up to the wall force on the sphere, and each
+        ! contact point is on the sphere's surface side, within its radius of the centre
+        call assert_close(norm2(sum(load(1:3, :, 1), 2, mask=spread(stri(:, 1) > 0, 1, 3)) &
+                                - fo(:, 1)), 0.0_wp, 0.0_wp, 'recorded forces', &
+                          1e-12_wp * max(norm2(fo(:, 1)), 1e-30_wp))
+        do k = 1, max_wall_contacts
+            if (stri(k, 1) > 0) call assert_true(norm2(load(4:6, k, 1) - x(:, 1)) < r, &
+                                                 'recorded contact point')
+        end do
     end subroutine step
 end program test_contacts_pw

@@ -1,9 +1,12 @@
 !> Closest point on a triangle against brute-force sampling of the triangle, its feature
 !> classification, the flat wall made of triangles (area, orientation), and rigid wall
-!> motion (poses against the closed form, wall velocity against finite differences).
+!> motion (poses against the closed form, wall velocity against finite differences), and the
+!> oscillation and velocity tables (pose and velocity against their closed forms, across the
+!> tables' breakpoints).
 program test_mesh
     use dem_kinds, only: wp, ip
     use dem_mesh, only: mesh_t, mesh_add_plane, mesh_set_motion, mesh_move, &
+                        mesh_set_oscillation, mesh_set_tables, mesh_speed_bound, &
                         closest_point_triangle, feature_face, feature_edge, feature_vertex
     use dem_vector, only: cross
     use dem_assert, only: assert_true, assert_close, assert_finish
@@ -11,9 +14,13 @@ program test_mesh
     real(wp) :: a(3), b(3), c(3), p(3), q(3), s, t, best, d, n(3), area
     integer(ip) :: feature, trial, i, j, k
     integer, parameter :: ns = 400
-    type(mesh_t) :: m, mv
+    type(mesh_t) :: m, mv, mo
     real(wp) :: p0(3), p1(3), dv(3), tt, hfd, vel(3), c0, s0
     real(wp), parameter :: times(4) = [0.05_wp, 0.3_wp, 0.5_wp, 0.9_wp]
+    real(wp), parameter :: pi = acos(-1.0_wp)
+    real(wp), parameter :: t_osc(8) = [0.05_wp, 0.2_wp, 0.3_wp, 0.4_wp, 0.55_wp, 0.75_wp, &
+                                       0.8_wp, 0.9_wp]
+    real(wp) :: amp(3), x0(3), lin_v(3), lin_d(3), spin, theta, tau, rz(3, 3)
 
     a = [0.1_wp, -0.2_wp, 0.05_wp]
     b = [1.2_wp, 0.1_wp, -0.3_wp]
@@ -91,6 +98,59 @@ program test_mesh
         call mesh_move(mv, tt)
         vel = mv%wall_v(:, 1) + cross(mv%wall_w(:, 1), mv%vert(:, 2, 2) - mv%wall_c(:, 1))
         call assert_close(norm2(vel - dv), 0.0_wp, 0.0_wp, 'wall velocity', 1e-8_wp)
+    end do
+
+    ! an oscillation A (sin(2 pi f tau + phi) - sin phi), f = 5 Hz, phi = 0.3, from 0.1 to 0.7;
+    ! a velocity table (0.2, 0), (0.4, (1, 0, 0)), (0.8, (0, 0.5, 0)); an angular velocity
+    ! table about z through the origin (0, 0), (0.5, 2 rad/s): omega = 4 t, theta = 2 t^2
+    ! until 0.5, then 0 and 0.5. The closed forms are integrated here by hand.
+    amp = [0.0_wp, 1.0e-3_wp, 2.0e-3_wp]
+    call mesh_add_plane(mo, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.5_wp, 1_ip, 1_ip)
+    call mesh_set_motion(mo, 1_ip, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, huge(1.0_wp)], &
+                         [0.0_wp, 0.0_wp, 1.0_wp], [0.0_wp, 0.0_wp, 0.0_wp], 0.0_wp, &
+                         [0.0_wp, huge(1.0_wp)])
+    call assert_true(.not. mo%moving, 'no motion yet')
+    call mesh_set_oscillation(mo, 1_ip, amp, 5.0_wp, 0.3_wp, [0.1_wp, 0.7_wp])
+    call mesh_set_tables(mo, 1_ip, [0.2_wp, 0.4_wp, 0.8_wp], reshape([0.0_wp, 0.0_wp, 0.0_wp, &
+                         1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp, 0.5_wp, 0.0_wp], [3, 3]), &
+                         [0.0_wp, 0.5_wp], [0.0_wp, 2.0_wp])
+    call assert_true(mo%moving, 'an oscillating wall moves')
+    call assert_close(mesh_speed_bound(mo), 10.0_wp * pi * norm2(amp) + 1.0_wp &
+                      + 2.0_wp * 0.5_wp * sqrt(2.0_wp), 1e-14_wp, 'speed bound')
+    x0 = mo%ref(:, 1, 1)
+    do k = 1, size(t_osc)
+        tt = t_osc(k)
+        tau = min(max(tt, 0.1_wp), 0.7_wp) - 0.1_wp
+        lin_d = amp * (sin(10.0_wp * pi * tau + 0.3_wp) - sin(0.3_wp))
+        lin_v = 0.0_wp
+        if (tt < 0.7_wp .and. tt >= 0.1_wp) lin_v = amp * 10.0_wp * pi * cos(10.0_wp * pi * tau &
+                                                                             + 0.3_wp)
+        if (tt >= 0.2_wp .and. tt < 0.4_wp) then
+            lin_v = lin_v + [(tt - 0.2_wp) / 0.2_wp, 0.0_wp, 0.0_wp]
+            lin_d = lin_d + [(tt - 0.2_wp)**2 / 0.4_wp, 0.0_wp, 0.0_wp]
+        else if (tt >= 0.4_wp .and. tt < 0.8_wp) then
+            lin_v = lin_v + [1.0_wp - (tt - 0.4_wp) / 0.4_wp, 0.5_wp * (tt - 0.4_wp) / 0.4_wp, &
+                             0.0_wp]
+            lin_d = lin_d + [0.1_wp + (tt - 0.4_wp) - (tt - 0.4_wp)**2 / 0.8_wp, &
+                             0.5_wp * (tt - 0.4_wp)**2 / 0.8_wp, 0.0_wp]
+        else if (tt >= 0.8_wp) then
+            lin_d = lin_d + [0.3_wp, 0.1_wp, 0.0_wp]
+        end if
+        spin = merge(4.0_wp * tt, 0.0_wp, tt < 0.5_wp)
+        theta = merge(2.0_wp * tt**2, 0.5_wp, tt < 0.5_wp)
+        rz = reshape([cos(theta), sin(theta), 0.0_wp, -sin(theta), cos(theta), 0.0_wp, &
+                      0.0_wp, 0.0_wp, 1.0_wp], [3, 3])
+        call mesh_move(mo, tt)
+        call assert_close(norm2(mo%vert(:, 1, 1) - (matmul(rz, x0) + lin_d)), 0.0_wp, 0.0_wp, &
+                          'oscillation and tables: pose', 1e-14_wp)
+        call assert_close(norm2(mo%wall_v(:, 1) - lin_v), 0.0_wp, 0.0_wp, &
+                          'oscillation and tables: velocity', 1e-13_wp)
+        call assert_close(norm2(mo%wall_w(:, 1) - [0.0_wp, 0.0_wp, spin]), 0.0_wp, 0.0_wp, &
+                          'angular velocity table', 1e-14_wp)
+        vel = mo%wall_v(:, 1) + cross(mo%wall_w(:, 1), mo%vert(:, 1, 1) - mo%wall_c(:, 1))
+        call assert_close(norm2(vel - (lin_v + cross([0.0_wp, 0.0_wp, spin], &
+                                                     matmul(rz, x0)))), 0.0_wp, 0.0_wp, &
+                          'oscillation and tables: velocity of a corner', 1e-13_wp)
     end do
     call assert_finish()
 end program test_mesh
