@@ -6,7 +6,7 @@ module dem_case
     use dem_mesh, only: mesh_t, mesh_speed_bound
     use dem_outlets, only: outlet_t
     use dem_probes, only: probe_t
-    use dem_insert, only: region_t
+    use dem_insert, only: region_t, size_dist_t
     use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt, &
                             tangential_critical_dt, squeeze_critical_dt
     use dem_comm, only: comm_t, comm_sum, comm_max
@@ -32,7 +32,7 @@ module dem_case
     type :: insert_t
         integer(ip) :: n = 0
         integer(ip) :: mat = 0                        !< material index
-        real(wp) :: radius_min = 0.0_wp, radius_max = 0.0_wp   !< [m]
+        type(size_dist_t) :: size                     !< of the radii
         type(region_t) :: region
         real(wp) :: velocity(3) = 0.0_wp              !< [m/s]
         integer(i8) :: seed = 1

@@ -54,7 +54,7 @@ contains
                 n = g%n
                 rng = rng_seed(g%seed)
                 allocate(x(3, n), r(n))
-                call insert_random(rng, g%region, n, g%radius_min, g%radius_max, &
+                call insert_random(rng, g%region, n, g%size, &
                                    c%x(:, 1:c%n_held), c%radius(1:c%n_held), 10000, x, r, placed)
                 c%rng_state = rng%state
                 if (placed < n) then
