@@ -43,7 +43,8 @@ module dem_input
         'particle_file: file', &
         'insert: n material radius_distribution radius_min radius_max radius_mean radius_sd ' // &
         'radii fractions fraction_by region box_min box_max cylinder_base ' // &
-        'cylinder_radius cylinder_height mesh_file mesh_scale velocity seed', &
+        'cylinder_radius cylinder_height mesh_file mesh_scale velocity seed start end ' // &
+        'duration rate mass_rate insert_every', &
         'outlet: region point normal box_min box_max', &
         'probe: name kind region box_min box_max id time bins v_min v_max axis_point', &
         'wall_plane: material point normal half_width divisions', &
@@ -738,9 +739,18 @@ contains
         real(wp) :: mesh_scale           ! metres per STL unit, > 0, default 1
         real(wp) :: velocity(3)          ! initial velocity [m/s], default 0
         integer(i8) :: seed              ! of the random positions and radii, default 1
+        real(wp) :: rate                 ! inflow: particles per second, > 0
+        real(wp) :: mass_rate            ! inflow: kilograms per second, > 0 (or rate)
+        real(wp) :: start                ! inflow: from [s], >= 0, default 0
+        real(wp) :: end                  ! inflow: until [s], > start, default never
+        real(wp) :: duration             ! inflow: or for [s], > 0
+        integer(i8) :: insert_every      ! inflow: steps between insertions, >= 1, default
+                                         ! the time to move a diameter (dem_setup)
         namelist /insert/ n, material, radius_distribution, radius_min, radius_max, &
             radius_mean, radius_sd, radii, fractions, fraction_by, region, box_min, box_max, &
-            cylinder_base, cylinder_radius, cylinder_height, mesh_file, mesh_scale, velocity, seed
+            cylinder_base, cylinder_radius, cylinder_height, mesh_file, mesh_scale, velocity, &
+            seed, start, end, duration, rate, mass_rate, insert_every
+        type(insert_t) :: g
         type(nml_block_t) :: b
         integer :: k_item, ios, k, im
         character(len=512) :: msg
@@ -770,6 +780,12 @@ contains
             mesh_scale = 1.0_wp
             velocity = 0.0_wp
             seed = 1
+            rate = unset
+            mass_rate = unset
+            start = unset
+            end = unset
+            duration = unset
+            insert_every = 0
             b = nf%blocks(block_index(nf, 'insert', k))
             do k_item = 0, block_item_count(b)
                 text = block_text(b, k_item)
@@ -778,7 +794,9 @@ contains
             end do
             if (err%failed()) return
             at = nml_location(nf, b)
-            if (n < 1) then
+            g = insert_t()
+            if (.not. inflow_of(g)) return
+            if (n < 1 .and. .not. (g%inflow .and. n == 0)) then
                 call set_error(err, dem_err_input, at // ": key 'n': must be >= 1")
                 return
             end if
@@ -831,9 +849,75 @@ contains
                                "' is not known (accepted: box, cylinder, mesh)")
                 return
             end select
-            c%inserts = [c%inserts, insert_t(n, im, dist, reg, velocity, seed, at)]
+            g%n = n
+            g%mat = im
+            g%size = dist
+            g%region = reg
+            g%velocity = velocity
+            g%seed = seed
+            g%at = at
+            c%inserts = [c%inserts, g]
         end do
     contains
+        !> The inflow keys into gi (an inflow group: rate or mass_rate given); false with err
+        !> set when one is out of range, or given without a rate.
+        logical function inflow_of(gi) result(ok)
+            type(insert_t), intent(inout) :: gi
+            ok = .false.
+            gi%inflow = rate /= unset .or. mass_rate /= unset
+            if (.not. gi%inflow) then
+                if (any([start, end, duration] /= unset) .or. insert_every /= 0) then
+                    call set_error(err, dem_err_input, at // ": key '" // &
+                        trim(merge('start       ', merge('end         ', &
+                        merge('duration    ', 'insert_every', duration /= unset), &
+                        end /= unset), start /= unset)) // "': inflow keys need 'rate' or " // &
+                        "'mass_rate'")
+                    return
+                end if
+                ok = .true.
+                return
+            end if
+            if (rate /= unset .and. mass_rate /= unset) then
+                call set_error(err, dem_err_input, at // ": key 'mass_rate': give 'rate' or " // &
+                               "'mass_rate', not both")
+                return
+            end if
+            if (rate /= unset) then
+                if (.not. check_positive(at, rate, 'rate', '[1/s]', err)) return
+                gi%rate = rate
+            else
+                if (.not. check_positive(at, mass_rate, 'mass_rate', '[kg/s]', err)) return
+                gi%mass_rate = mass_rate
+            end if
+            if (start == unset) start = 0.0_wp
+            if (.not. in_range(start, 0.0_wp, unset, .true., .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'start': must be >= 0 [s]")
+                return
+            end if
+            if (end /= unset .and. duration /= unset) then
+                call set_error(err, dem_err_input, at // ": key 'duration': give 'end' or " // &
+                               "'duration', not both")
+                return
+            end if
+            if (duration /= unset) then
+                if (.not. check_positive(at, duration, 'duration', '[s]', err)) return
+                end = start + duration
+            end if
+            if (end /= unset .and. .not. in_range(end, start, unset, .false., .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'end': must be > start [s]")
+                return
+            end if
+            if (insert_every < 0) then
+                call set_error(err, dem_err_input, at // ": key 'insert_every': must be >= 1 " // &
+                               '[steps]')
+                return
+            end if
+            gi%start = start
+            gi%end = end                     ! unset (huge): until the end of the run
+            gi%every = insert_every          ! 0: dem_setup's default
+            ok = .true.
+        end function inflow_of
+
         !> The distribution of the radii from the keys given for it (doc/user/input.md);
         !> false with err set when a key is missing, out of range or not used by it.
         logical function size_of(d) result(ok)

@@ -37,6 +37,13 @@ module dem_case
         real(wp) :: velocity(3) = 0.0_wp              !< [m/s]
         integer(i8) :: seed = 1
         character(len=:), allocatable :: at           !< the group's place in the file
+        ! inflow (a rate given): inserted during the run from start to end, every `every`
+        ! steps, up to rate (start .. t) particles, or mass_rate (start .. t) kilograms
+        logical :: inflow = .false.
+        real(wp) :: start = 0.0_wp, end = 0.0_wp      !< the window [s]
+        real(wp) :: rate = 0.0_wp                     !< [1/s], 0: by mass
+        real(wp) :: mass_rate = 0.0_wp                !< [kg/s]
+        integer(i8) :: every = 0                      !< steps between insertions
     end type insert_t
 
     !> A particle id the case names (a traced particle, a tracked one), to be found among
@@ -51,6 +58,9 @@ module dem_case
         character(len=:), allocatable :: source       !< the namelist file
         character(len=:), allocatable :: input_text   !< its contents
         integer(i8) :: rng_state = 0                  !< the random generator after insertion
+                                                      !< (the inflow's, when there is inflow)
+        integer(i8) :: next_id = 1                    !< the id of the next inserted particle
+        logical :: inflow = .false.                   !< some &insert group inserts in the run
         real(wp) :: dt = 0.0_wp                       !< time step [s]
         real(wp) :: t_end = 0.0_wp                    !< end time [s]
         integer(ip) :: integrator = 1                 !< dem_integrate's integrator_*
@@ -152,6 +162,13 @@ contains
                 sm%speed = max(sm%speed, norm2(c%v(:, i)))
                 sm%low = min(sm%low, dot_product(e, c%x(:, i)))
                 sm%high = max(sm%high, dot_product(e, c%x(:, i)))
+            end do
+            do i = 1, size(c%inserts)         ! the inflow's particles, to come
+                if (.not. c%inserts(i)%inflow) cycle
+                a = c%inserts(i)%mat
+                sm%rmin(a) = min(sm%rmin(a), c%inserts(i)%size%r_min)
+                sm%rmax(a) = max(sm%rmax(a), c%inserts(i)%size%r_max)
+                sm%speed = max(sm%speed, norm2(c%inserts(i)%velocity))
             end do
             big = [-sm%rmin, sm%rmax, sm%speed, -sm%low, sm%high]
             call comm_max(comm, big)

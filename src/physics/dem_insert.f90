@@ -134,8 +134,10 @@ contains
 
     !> Insert n spheres with radii drawn from `dist` into region reg, clear of the m
     !> spheres (x_old, r_old) already present. `placed` < n when a sphere found no room in
-    !> max_tries attempts (the region is too full).
-    subroutine insert_random(rng, reg, n, dist, x_old, r_old, max_tries, x, r, placed)
+    !> max_tries attempts (the region is too full), or, with mass_goal, once the spheres
+    !> placed weigh at least mass_goal (a sphere of radius r weighs mass_factor r^3).
+    subroutine insert_random(rng, reg, n, dist, x_old, r_old, max_tries, x, r, placed, &
+                             mass_factor, mass_goal)
         type(rng_t), intent(inout) :: rng
         type(region_t), intent(in) :: reg
         integer(ip), intent(in) :: n
@@ -144,7 +146,9 @@ contains
         integer(ip), intent(in) :: max_tries
         real(wp), intent(out) :: x(3, n), r(n)    !! [m]
         integer(ip), intent(out) :: placed
-        real(wp) :: lo(3), hi(3), h, p(3), big, rlo(3), rhi(3)
+        real(wp), intent(in), optional :: mass_factor   !! [kg/m^3]
+        real(wp), intent(in), optional :: mass_goal     !! [kg]
+        real(wp) :: lo(3), hi(3), h, p(3), big, rlo(3), rhi(3), mass
         integer(ip), allocatable :: head(:), next(:)
         real(wp), allocatable :: xs(:, :), rs(:)
         integer(ip) :: dims(3), k, tries, m, total
@@ -181,6 +185,7 @@ contains
             call add(x_old(:, k), r_old(k))
         end do
         placed = 0
+        mass = 0.0_wp
         do k = 1, n
             r(k) = size_draw(rng, dist)
             free = .false.
@@ -194,6 +199,10 @@ contains
             x(:, k) = p
             call add(p, r(k))
             placed = k
+            if (present(mass_goal)) then
+                mass = mass + mass_factor * r(k)**3
+                if (mass >= mass_goal) return
+            end if
         end do
     contains
         function candidate(rk) result(q)

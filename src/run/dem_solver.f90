@@ -64,6 +64,12 @@ contains
         s%accel_bound = case_speed_bound(c, s%scales) / c%dt
         s%step = 0
         s%rng_state = c%rng_state
+        s%next_id = c%next_id
+        if (c%inflow) then
+            allocate(s%inflow_count(size(c%inserts)), s%inflow_mass(size(c%inserts)))
+            s%inflow_count = 0
+            s%inflow_mass = 0.0_wp
+        end if
         allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0), s%stale(0))
     end subroutine solver_init
 

@@ -2,7 +2,8 @@
 !> does, each line a step and a call into the module named for it (integration:
 !> dem_integrate; walls: dem_mesh; lists, migration and the halo: dem_rebuild; body forces:
 !> dem_forces; particle and wall contacts: dem_contacts_pp, dem_contacts_pw; the guard and
-!> run control: dem_run_control; outlets: dem_outlets; outputs: dem_run_output).
+!> run control: dem_run_control; outlets: dem_outlets; inflow: dem_inflow; outputs:
+!> dem_run_output).
 module dem_step
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
@@ -10,6 +11,7 @@ module dem_step
     use dem_case, only: case_t
     use dem_run_state, only: solver_t, time_of, failed_anywhere, wall_motion_data, stop_end
     use dem_rebuild, only: lists_refresh, settle_outlets
+    use dem_inflow, only: insert_inflow
     use dem_forces, only: body_forces, external_forces
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: pw_forces
@@ -55,7 +57,9 @@ contains
         call timer_stop(s%timers, phase_integrate)
         call count_step(s)
         if (size(c%outlets) > 0) call remove_outlet_particles(s, c)      ! outlets
+        if (c%inflow) call insert_inflow(s, c, err)                      ! inflow
         call timer_stop(s%timers, phase_neighbors)
+        if (err%failed()) return
         call outputs_and_control(s, c, err)                   ! probes, outputs, run control
     end subroutine time_step
 
