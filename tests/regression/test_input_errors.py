@@ -155,7 +155,17 @@ for name, keys, key, extra in (
         ("discrete_count", DISCRETE + "fractions = 1", "fractions", "each radius"),
         ("discrete_sum", DISCRETE + "fractions = 0.3, 0.3", "fractions", "sum to 1"),
         ("discrete_by", DISCRETE + "fractions = 0.5, 0.5, fraction_by = 'volume'",
-         "fraction_by", "volume")):
+         "fraction_by", "volume"),
+        ("inflow_both", "radius_min = 1e-3, rate = 10, mass_rate = 0.1", "mass_rate",
+         "not both"),
+        ("inflow_rate", "radius_min = 1e-3, rate = 0", "rate", "> 0"),
+        ("inflow_no_rate", "radius_min = 1e-3, start = 0.1", "start", "'rate'"),
+        ("inflow_end", "radius_min = 1e-3, rate = 10, start = 0.2, end = 0.1", "end",
+         "> start"),
+        ("inflow_end_duration", "radius_min = 1e-3, rate = 10, end = 0.2, duration = 0.1",
+         "duration", "not both"),
+        ("inflow_every", "radius_min = 1e-3, rate = 10, insert_every = -5", "insert_every",
+         ">= 1")):
     bad(name, GOOD + INS + keys + " /\n", "insert", key, extra)
 bad("bad_integrator", sub("t_end = 1e-5,", "t_end = 1e-5, integrator = 'rk4',"), "run",
     "integrator")
