@@ -136,8 +136,9 @@ contains
         deallocate(c%gid, c%mat, c%radius, c%x, c%v, c%w)
     end subroutine case_release_particles
 
-    !> The summary of the particles that the ranks hold, over all ranks (collective; after
-    !> the materials and gravity are set).
+    !> The summary of the particles that the ranks hold, over all ranks, with the radii and
+    !> speed of the inflow's particles to come (collective; after the materials and gravity
+    !> are set).
     subroutine case_summarize(c, comm)
         type(case_t), intent(inout) :: c
         type(comm_t), intent(in) :: comm

@@ -38,9 +38,11 @@ contains
         t = time_of(s, c, s%step)
         do k = 1, size(c%inserts)
             associate (g => c%inserts(k))
-                due(k) = g%inflow .and. mod(s%step, g%every) == 0 .and. t >= g%start .and. &
+                due(k) = .false.
+                if (.not. g%inflow) cycle
+                due(k) = mod(s%step, g%every) == 0 .and. t >= g%start .and. &
                          t - real(g%every, wp) * c%dt < g%end
-                if (due(k) .and. g%n > 0) due(k) = s%inflow_count(k) < g%n
+                if (g%n > 0) due(k) = due(k) .and. s%inflow_count(k) < g%n
             end associate
         end do
         if (.not. any(due)) return
