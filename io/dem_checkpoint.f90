@@ -19,7 +19,7 @@ module dem_checkpoint
     use dem_text, only: itoa, step_file
     use dem_files, only: file_rename
     use dem_h5, only: h5_file_t, h5_create, h5_open, h5_close, h5_group, h5_write, h5_read, &
-                      h5_dims, h5_text_length
+                      h5_dims, h5_text_length, h5_exists
     implicit none
     private
     public :: frame_t, frame_write, frame_spread, checkpoint_read, &
@@ -57,6 +57,10 @@ module dem_checkpoint
         real(wp), allocatable :: snap_time(:)     !< [s]
         integer(i8), allocatable :: snap_n(:)     !< their particle counts
         integer(i8), allocatable :: ckpt_step(:)  !< the checkpoints kept so far
+        ! inflow (allocated only in a run with inflow)
+        integer(i8) :: next_id = 0                !< the id of the next inserted particle
+        integer(i8), allocatable :: inflow_count(:)  !< inserted by each &insert group
+        real(wp), allocatable :: inflow_mass(:)      !< their mass [kg]
     end type frame_t
 
     interface
@@ -312,6 +316,11 @@ contains
             call h5_write(h_, '/state/snapshot_time', fr%snap_time, err)
             call h5_write(h_, '/state/snapshot_particles', fr%snap_n, err)
             call h5_write(h_, '/state/checkpoint_step', fr%ckpt_step, err)
+            if (allocated(fr%inflow_count)) then
+                call h5_write(h_, '/state/next_id', fr%next_id, err)
+                call h5_write(h_, '/state/inflow_count', fr%inflow_count, err)
+                call h5_write(h_, '/state/inflow_mass', fr%inflow_mass, err)
+            end if
             call h5_write(h_, '/state/wall_contact_triangle', fr%wall_tri, err, &
                           distributed=.true.)
             call h5_write(h_, '/state/wall_contact_history', fr%wall_xi, err, &
@@ -515,9 +524,9 @@ contains
             call h5_close(h, err)
             return
         end if
-        if (dims(1) > c%n_particles) call differs('particle count: ' // itoa(dims(1)) // &
-                                                  ' now there, at most ' // &
-                                                  itoa(int(c%n_particles, i8)) // ' here')
+        if (dims(1) > c%n_particles .and. .not. c%inflow) &   ! (inflow adds particles)
+            call differs('particle count: ' // itoa(dims(1)) // ' now there, at most ' // &
+                         itoa(int(c%n_particles, i8)) // ' here')
         if (err%failed()) then
             call h5_close(h, err)
             return
@@ -561,6 +570,12 @@ contains
         if (.not. err%failed()) then
             allocate(fr%snap_time(dims(1)))
             call h5_read(h, '/state/snapshot_time', fr%snap_time, err)
+        end if
+        if (.not. err%failed() .and. h5_exists(h, '/state/inflow_count')) then
+            call h5_read(h, '/state/next_id', fr%next_id, err)
+            call read_i8_list('/state/inflow_count', fr%inflow_count)
+            allocate(fr%inflow_mass(size(fr%inflow_count)))
+            call h5_read(h, '/state/inflow_mass', fr%inflow_mass, err)
         end if
         prev = ids_before(fr%gid, fr%n)
         if (.not. err%failed()) then

@@ -6,7 +6,7 @@ module dem_case
     use dem_mesh, only: mesh_t, mesh_speed_bound
     use dem_outlets, only: outlet_t
     use dem_probes, only: probe_t
-    use dem_insert, only: region_t
+    use dem_insert, only: region_t, size_dist_t, region_bounds
     use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt, &
                             tangential_critical_dt, squeeze_critical_dt
     use dem_comm, only: comm_t, comm_sum, comm_max
@@ -32,11 +32,18 @@ module dem_case
     type :: insert_t
         integer(ip) :: n = 0
         integer(ip) :: mat = 0                        !< material index
-        real(wp) :: radius_min = 0.0_wp, radius_max = 0.0_wp   !< [m]
+        type(size_dist_t) :: size                     !< of the radii
         type(region_t) :: region
         real(wp) :: velocity(3) = 0.0_wp              !< [m/s]
         integer(i8) :: seed = 1
         character(len=:), allocatable :: at           !< the group's place in the file
+        ! inflow (a rate given): inserted during the run from start to end, every `every`
+        ! steps, up to rate (start .. t) particles, or mass_rate (start .. t) kilograms
+        logical :: inflow = .false.
+        real(wp) :: start = 0.0_wp, end = 0.0_wp      !< the window [s]
+        real(wp) :: rate = 0.0_wp                     !< [1/s], 0: by mass
+        real(wp) :: mass_rate = 0.0_wp                !< [kg/s]
+        integer(i8) :: every = 0                      !< steps between insertions
     end type insert_t
 
     !> A particle id the case names (a traced particle, a tracked one), to be found among
@@ -51,6 +58,9 @@ module dem_case
         character(len=:), allocatable :: source       !< the namelist file
         character(len=:), allocatable :: input_text   !< its contents
         integer(i8) :: rng_state = 0                  !< the random generator after insertion
+                                                      !< (the inflow's, when there is inflow)
+        integer(i8) :: next_id = 1                    !< the id of the next inserted particle
+        logical :: inflow = .false.                   !< some &insert group inserts in the run
         real(wp) :: dt = 0.0_wp                       !< time step [s]
         real(wp) :: t_end = 0.0_wp                    !< end time [s]
         integer(ip) :: integrator = 1                 !< dem_integrate's integrator_*
@@ -126,14 +136,16 @@ contains
         deallocate(c%gid, c%mat, c%radius, c%x, c%v, c%w)
     end subroutine case_release_particles
 
-    !> The summary of the particles that the ranks hold, over all ranks (collective; after
-    !> the materials and gravity are set).
+    !> The summary of the particles that the ranks hold, over all ranks, with the radii and
+    !> speed of the inflow's particles to come (collective; after the materials and gravity
+    !> are set).
     subroutine case_summarize(c, comm)
         type(case_t), intent(inout) :: c
         type(comm_t), intent(in) :: comm
         real(wp), parameter :: pi = acos(-1.0_wp)
-        real(wp) :: e(3), g, big(2 * c%mats%n + 3), mass(1)
+        real(wp) :: e(3), g, big(2 * c%mats%n + 3), mass(1), lo(3), hi(3), corner(3)
         integer(ip) :: i, a
+        integer :: k
         associate (sm => c%summary)
             sm%rmin = spread(huge(1.0_wp), 1, c%mats%n)
             sm%rmax = spread(0.0_wp, 1, c%mats%n)
@@ -153,6 +165,19 @@ contains
                 sm%low = min(sm%low, dot_product(e, c%x(:, i)))
                 sm%high = max(sm%high, dot_product(e, c%x(:, i)))
             end do
+            do i = 1, size(c%inserts)         ! the inflow's particles, to come
+                if (.not. c%inserts(i)%inflow) cycle
+                a = c%inserts(i)%mat
+                sm%rmin(a) = min(sm%rmin(a), c%inserts(i)%size%r_min)
+                sm%rmax(a) = max(sm%rmax(a), c%inserts(i)%size%r_max)
+                sm%speed = max(sm%speed, norm2(c%inserts(i)%velocity))
+                call region_bounds(c%inserts(i)%region, lo, hi)
+                do k = 0, 7                   ! (the corners of the region's box)
+                    corner = merge(hi, lo, [btest(k, 0), btest(k, 1), btest(k, 2)])
+                    sm%low = min(sm%low, dot_product(e, corner))
+                    sm%high = max(sm%high, dot_product(e, corner))
+                end do
+            end do
             big = [-sm%rmin, sm%rmax, sm%speed, -sm%low, sm%high]
             call comm_max(comm, big)
             sm%rmin = -big(1:c%mats%n)
@@ -168,11 +193,21 @@ contains
 
     !> The time from which a run may stop as settled (stop_kinetic_energy): that of a free
     !> fall across the scene, sqrt(2 h / |g|) = fall_speed / |g|, so that particles given at
-    !> rest have had the time to move; 0 without gravity [s] (doc/theory.md, section 10).
+    !> rest have had the time to move; 0 without gravity; with an inflow, counted from its
+    !> last insertion (at most an insertion interval after the end of each group) [s]
+    !> (doc/theory.md, section 10).
     real(wp) function case_settle_time(c) result(t)
         type(case_t), intent(in) :: c
-        t = 0.0_wp
-        if (norm2(c%gravity) > 0.0_wp) t = fall_speed(c) / norm2(c%gravity)
+        real(wp) :: t_fall
+        integer :: k
+        t_fall = 0.0_wp
+        if (norm2(c%gravity) > 0.0_wp) t_fall = fall_speed(c) / norm2(c%gravity)
+        t = t_fall
+        do k = 1, size(c%inserts)
+            associate (g => c%inserts(k))
+                if (g%inflow) t = max(t, g%end + real(g%every, wp) * c%dt + t_fall)
+            end associate
+        end do
     end function case_settle_time
 
     !> Speed of a free fall across the scene, sqrt(2 |g| h), with h the extent of the
@@ -183,7 +218,7 @@ contains
         integer(ip) :: i, k
         g = norm2(c%gravity)
         v = 0.0_wp
-        if (g == 0.0_wp .or. c%n_particles == 0) return
+        if (g == 0.0_wp .or. c%summary%low > c%summary%high) return
         e = c%gravity / g
         lo = c%summary%low
         hi = c%summary%high

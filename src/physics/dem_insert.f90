@@ -1,6 +1,7 @@
 !> Insertion of non-overlapping spheres at random in a region (random sequential addition):
 !> each new sphere takes random positions until one overlaps no sphere already there
-!> (doc/theory.md, section 10). Reproducible from the generator's seed.
+!> (doc/theory.md, section 10). Radii from a size distribution (size_dist_t): uniform,
+!> truncated normal or lognormal, or discrete. Reproducible from the generator's seed.
 module dem_insert
     use dem_kinds, only: wp, ip
     use dem_random, only: rng_t, rng_uniform
@@ -8,11 +9,27 @@ module dem_insert
     use dem_vector, only: cross
     implicit none
     private
-    public :: region_t, region_box, region_cylinder, region_mesh, insert_random
+    public :: region_t, region_box, region_cylinder, region_mesh, region_bounds, insert_random
+    public :: size_dist_t, size_uniform, size_normal, size_lognormal, size_discrete, &
+              size_dist_uniform, size_dist_normal, size_dist_discrete, size_window, size_draw
 
     integer(ip), parameter :: region_box = 1       !< axis-aligned box lo..hi
     integer(ip), parameter :: region_cylinder = 2  !< vertical cylinder from a base centre
     integer(ip), parameter :: region_mesh = 3      !< inside a closed triangle mesh
+
+    integer(ip), parameter :: size_uniform = 1     !< uniform in [r_min, r_max]
+    integer(ip), parameter :: size_normal = 2      !< normal, truncated to [r_min, r_max]
+    integer(ip), parameter :: size_lognormal = 3   !< lognormal, truncated to [r_min, r_max]
+    integer(ip), parameter :: size_discrete = 4    !< given radii with number fractions
+
+    !> A distribution of radii (doc/theory.md, section 10).
+    type :: size_dist_t
+        integer(ip) :: kind = size_uniform
+        real(wp) :: r_min = 0.0_wp, r_max = 0.0_wp  !< the range of the radii [m]
+        real(wp) :: mu = 0.0_wp, sigma = 0.0_wp     !< normal: of r [m]; lognormal: of ln(r/1 m)
+        real(wp), allocatable :: radii(:)           !< discrete: the radii [m]
+        real(wp), allocatable :: cum(:)             !< discrete: cumulative number fractions
+    end type size_dist_t
 
     !> Where spheres are inserted: entirely inside it.
     type :: region_t
@@ -26,19 +43,129 @@ module dem_insert
 
 contains
 
-    !> Insert n spheres with radii uniform in [r_min, r_max] into region g, clear of the m
+    !> The box around a region.
+    pure subroutine region_bounds(region, lo, hi)
+        type(region_t), intent(in) :: region
+        real(wp), intent(out) :: lo(3), hi(3)
+        select case (region%kind)
+        case (region_mesh)
+            lo = minval(minval(region%vert, dim=2), dim=2)
+            hi = maxval(maxval(region%vert, dim=2), dim=2)
+        case (region_cylinder)
+            lo = region%base - [region%radius, region%radius, 0.0_wp]
+            hi = region%base + [region%radius, region%radius, region%height]
+        case default
+            lo = region%lo
+            hi = region%hi
+        end select
+    end subroutine region_bounds
+
+    !> Radii uniform in [r_min, r_max].
+    pure function size_dist_uniform(r_min, r_max) result(d)
+        real(wp), intent(in) :: r_min, r_max       !! [m]
+        type(size_dist_t) :: d
+        d%kind = size_uniform
+        d%r_min = r_min
+        d%r_max = r_max
+    end function size_dist_uniform
+
+    !> Radii of mean `mean` and standard deviation `sd` (normal, or lognormal: kind), truncated
+    !> to [r_min, r_max]; the lognormal's ln r has variance ln(1 + sd^2/mean^2) and mean
+    !> ln(mean) - that / 2.
+    pure function size_dist_normal(kind, mean, sd, r_min, r_max) result(d)
+        integer(ip), intent(in) :: kind
+        real(wp), intent(in) :: mean, sd, r_min, r_max     !! [m]
+        type(size_dist_t) :: d
+        real(wp) :: s2
+        d%kind = kind
+        d%r_min = r_min
+        d%r_max = r_max
+        if (kind == size_normal) then
+            d%mu = mean
+            d%sigma = sd
+        else
+            s2 = log(1.0_wp + (sd / mean)**2)
+            d%mu = log(mean) - 0.5_wp * s2
+            d%sigma = sqrt(s2)
+        end if
+    end function size_dist_normal
+
+    !> The given radii, with `fractions` of the number of spheres, or of their mass when
+    !> by_mass (all of one density: number fractions f_i / r_i^3, normalised).
+    pure function size_dist_discrete(radii, fractions, by_mass) result(d)
+        real(wp), intent(in) :: radii(:), fractions(:)     !! [m], [-]
+        logical, intent(in) :: by_mass
+        type(size_dist_t) :: d
+        real(wp) :: w(size(radii))
+        integer(ip) :: i
+        d%kind = size_discrete
+        d%radii = radii
+        d%r_min = minval(radii)
+        d%r_max = maxval(radii)
+        w = fractions
+        if (by_mass) w = fractions / radii**3
+        d%cum = [(sum(w(1:i)), i = 1, size(w))] / sum(w)
+        d%cum(size(w)) = 1.0_wp
+    end function size_dist_discrete
+
+    !> The probability that the untruncated normal or lognormal falls in [r_min, r_max]
+    !> (1 for the others).
+    pure real(wp) function size_window(d) result(p)
+        type(size_dist_t), intent(in) :: d
+        p = 1.0_wp
+        if (d%kind == size_normal) then
+            p = phi((d%r_max - d%mu) / d%sigma) - phi((d%r_min - d%mu) / d%sigma)
+        else if (d%kind == size_lognormal) then
+            p = phi((log(d%r_max) - d%mu) / d%sigma) - phi((log(d%r_min) - d%mu) / d%sigma)
+        end if
+    contains
+        pure real(wp) function phi(z)
+            real(wp), intent(in) :: z
+            phi = 0.5_wp * erfc(-z / sqrt(2.0_wp))
+        end function phi
+    end function size_window
+
+    !> A radius drawn from d: uniform, one number; normal and lognormal by rejection of
+    !> Box-Muller deviates outside [r_min, r_max], two numbers per deviate; discrete, one.
+    real(wp) function size_draw(rng, d) result(r)
+        type(rng_t), intent(inout) :: rng
+        type(size_dist_t), intent(in) :: d
+        real(wp), parameter :: two_pi = 2.0_wp * acos(-1.0_wp)
+        real(wp) :: u, z
+        select case (d%kind)
+        case (size_uniform)
+            r = d%r_min + (d%r_max - d%r_min) * rng_uniform(rng)
+        case (size_discrete)
+            u = rng_uniform(rng)
+            r = d%radii(findloc(u < d%cum, .true., dim=1))
+        case default
+            do
+                u = rng_uniform(rng)
+                z = sqrt(-2.0_wp * log(1.0_wp - u)) * cos(two_pi * rng_uniform(rng))
+                r = d%mu + d%sigma * z
+                if (d%kind == size_lognormal) r = exp(r)
+                if (r >= d%r_min .and. r <= d%r_max) exit
+            end do
+        end select
+    end function size_draw
+
+    !> Insert n spheres with radii drawn from `dist` into region reg, clear of the m
     !> spheres (x_old, r_old) already present. `placed` < n when a sphere found no room in
-    !> max_tries attempts (the region is too full).
-    subroutine insert_random(rng, reg, n, r_min, r_max, x_old, r_old, max_tries, x, r, placed)
+    !> max_tries attempts (the region is too full), or, with mass_goal, once the spheres
+    !> placed weigh at least mass_goal (a sphere of radius r weighs mass_factor r^3).
+    subroutine insert_random(rng, reg, n, dist, x_old, r_old, max_tries, x, r, placed, &
+                             mass_factor, mass_goal)
         type(rng_t), intent(inout) :: rng
         type(region_t), intent(in) :: reg
         integer(ip), intent(in) :: n
-        real(wp), intent(in) :: r_min, r_max       !! [m]
+        type(size_dist_t), intent(in) :: dist
         real(wp), intent(in) :: x_old(:, :), r_old(:)
         integer(ip), intent(in) :: max_tries
         real(wp), intent(out) :: x(3, n), r(n)    !! [m]
         integer(ip), intent(out) :: placed
-        real(wp) :: lo(3), hi(3), h, p(3), big, rlo(3), rhi(3)
+        real(wp), intent(in), optional :: mass_factor   !! [kg/m^3]
+        real(wp), intent(in), optional :: mass_goal     !! [kg]
+        real(wp) :: lo(3), hi(3), h, p(3), big, rlo(3), rhi(3), mass
         integer(ip), allocatable :: head(:), next(:)
         real(wp), allocatable :: xs(:, :), rs(:)
         integer(ip) :: dims(3), k, tries, m, total
@@ -56,8 +183,8 @@ contains
         end if
         rlo = lo                       ! the region's box
         rhi = hi
-        big = r_max
-        if (size(r_old) > 0) big = max(r_max, maxval(r_old))
+        big = dist%r_max
+        if (size(r_old) > 0) big = max(dist%r_max, maxval(r_old))
         h = 2.0_wp * big
         lo = lo - h
         hi = hi + h
@@ -75,8 +202,9 @@ contains
             call add(x_old(:, k), r_old(k))
         end do
         placed = 0
+        mass = 0.0_wp
         do k = 1, n
-            r(k) = r_min + (r_max - r_min) * rng_uniform(rng)
+            r(k) = size_draw(rng, dist)
             free = .false.
             do tries = 1, max_tries
                 p = candidate(r(k))
@@ -88,6 +216,10 @@ contains
             x(:, k) = p
             call add(p, r(k))
             placed = k
+            if (present(mass_goal)) then
+                mass = mass + mass_factor * r(k)**3
+                if (mass >= mass_goal) return
+            end if
         end do
     contains
         function candidate(rk) result(q)

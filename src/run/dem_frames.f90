@@ -56,6 +56,13 @@ contains
         s%removed = fr%removed
         s%settled = fr%settled
         s%rng_state = fr%rng_state
+        if (allocated(fr%inflow_count) .and. allocated(s%inflow_count)) then
+            if (size(fr%inflow_count) == size(s%inflow_count)) then
+                s%next_id = fr%next_id
+                s%inflow_count = fr%inflow_count
+                s%inflow_mass = fr%inflow_mass
+            end if
+        end if
         s%snap_step = fr%snap_step
         s%snap_time = fr%snap_time
         s%snap_n = fr%snap_n
@@ -105,6 +112,11 @@ contains
         fr%removed = s%removed
         fr%settled = s%settled
         fr%rng_state = s%rng_state
+        if (allocated(s%inflow_count)) then
+            fr%next_id = s%next_id
+            fr%inflow_count = s%inflow_count
+            fr%inflow_mass = s%inflow_mass
+        end if
         if (s%comm%rank == 0) then
             bytes = output_sizes(out)
             fr%series_bytes = bytes(1)

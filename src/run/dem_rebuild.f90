@@ -8,20 +8,31 @@ module dem_rebuild
     use dem_error, only: error_t, set_error, dem_err_runtime
     use dem_comm, only: comm_any, comm_max, comm_sum
     use dem_case, only: case_t
-    use dem_run_state, only: solver_t, release_gone
-    use dem_particles, only: particles_permute, particles_find
+    use dem_run_state, only: solver_t, release_gone, particle_data
+    use dem_particles, only: particles_permute, particles_find, particles_add, &
+                             particles_reserve_on_device
     use dem_domain, only: domain_init, domain_data, domain_balance, domain_imbalance, &
                           domain_migrate, domain_ghosts, domain_update
     use dem_neighbors, only: neighbors_build, neighbors_stale, neighbors_spatial_order, &
                              neighbors_row_history, neighbors_set_rows
-    use dem_contact_store, only: store_walls_permute, store_pairs_forget_parted
+    use dem_contact_store, only: store_walls_permute, store_pairs_forget_parted, &
+                                 store_walls_reserve_on_device
     use dem_cells, only: fill_range, kept_indices
     use dem_contacts_pp, only: pp_scales
     use dem_diagnostics, only: momentum_sums
-    use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit
+    use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host, acc_to_device
     implicit none
     private
-    public :: lists_refresh, rebuild, settle_outlets, start_domain
+    public :: lists_refresh, rebuild, settle_outlets, start_domain, new_particles_t
+
+    !> Particles that join the run at a rebuild (inserted), owned by the rank that adds them
+    !> until the rebuild's migration.
+    type :: new_particles_t
+        integer(i8), allocatable :: gid(:)
+        integer(ip), allocatable :: mat(:)
+        real(wp), allocatable :: radius(:), density(:)    !< [m], [kg/m^3]
+        real(wp), allocatable :: x(:, :), v(:, :)         !< [m], [m/s]
+    end type new_particles_t
 
 contains
 
@@ -87,16 +98,19 @@ contains
     !> the re-sort. All of it runs on the device; the host sees counts and the buffers MPI
     !> sends (and the stores when they must grow or shrink for a rank's share). Collective;
     !> a failed partition or migration sets err on every rank.
-    subroutine rebuild(s, outlets, err)
+    subroutine rebuild(s, outlets, err, added)
         type(solver_t), intent(inout) :: s
         logical, intent(in) :: outlets           !! remove the parked particles
         type(error_t), intent(inout) :: err      !! a failed partition or migration
+        type(new_particles_t), intent(in), optional :: added  !! particles that join (none
+                                                 !! parked: not with outlets)
         integer(ip), allocatable :: order(:), kept(:)
         integer(ip) :: m
         ! a list build during the run ends the history of the parted pairs that keep it
         ! (reset_pair_history false, doc/theory.md section 3); not the first build of a run
         if (.not. s%pc%opts%reset_pair_history .and. s%lists_on_device) &
             call store_pairs_forget_parted(s%cs, s%nb%n_pairs)
+        if (present(added)) call add_particles(s, added)
         if (s%comm%size > 1) then
             if (s%lists_on_device) call domain_data(s%dom, acc_exit)
             call distribute(s, outlets, err)
@@ -124,6 +138,42 @@ contains
         if (allocated(s%gone)) call release_gone(s)   ! made anew for the new order
         s%parked = 0
     end subroutine rebuild
+
+    !> Append `a` to the owned particles, at rest of forces and without contact history:
+    !> the ghosts are dropped (the rebuild makes them anew) and the lists' pair history
+    !> becomes rows (neighbors_row_history), empty ones for the new particles, for the
+    !> rebuild to carry as after a migration. The store goes through the host.
+    subroutine add_particles(s, a)
+        type(solver_t), intent(inout) :: s
+        type(new_particles_t), intent(in) :: a
+        integer(ip), allocatable :: hstart(:), rows(:)
+        integer(i8), allocatable :: hpartner(:)
+        real(wp), allocatable :: hxi(:, :)
+        integer(ip) :: n_old, n, k
+        n_old = s%p%n_own
+        n = n_old + size(a%gid, kind=ip)
+        call neighbors_row_history(s%nb, s%cs, n_old, hstart, hpartner, hxi)
+        call acc_data(hstart, acc_to_host)
+        rows = [hstart, spread(hstart(n_old + 1), 1, n - n_old)]
+        call acc_data(hstart, acc_exit)
+        call move_alloc(rows, hstart)
+        call acc_data(hstart, acc_enter)
+        call neighbors_set_rows(s%nb, s%cs, hstart, hpartner, hxi)
+        call particle_data(s, acc_to_host)
+        s%p%n_ghost = 0
+        call particles_reserve_on_device(s%p, n)
+        call store_walls_reserve_on_device(s%cs, n_old, n)
+        do k = 1, size(a%gid)
+            call particles_add(s%p, a%gid(k), a%mat(k), a%radius(k), a%density(k), a%x(:, k), &
+                               a%v(:, k), [0.0_wp, 0.0_wp, 0.0_wp])
+        end do
+        s%p%f(:, n_old + 1:n) = 0.0_wp
+        s%p%t(:, n_old + 1:n) = 0.0_wp
+        if (allocated(s%p%ext)) s%p%ext(:, n_old + 1:n) = 0.0_wp
+        s%cs%wall_tri(:, n_old + 1:n) = 0
+        s%cs%wall_xi(:, :, n_old + 1:n) = 0.0_wp
+        call particle_data(s, acc_to_device)
+    end subroutine add_particles
 
     !> kept(1:m): the owned particles that stay in the run, in order; with `outlets`, those
     !> the outlet flags do not mark. On the device (kept is created there).

@@ -45,6 +45,7 @@ module dem_run_state
         real(wp) :: last = 0.0_wp              !< wall-clock time of the last step's end [s]
         integer(i8) :: n0 = 0                  !< particles of all ranks at the start
         integer(i8) :: removed0 = 0            !< particles removed by outlets before it
+        integer(i8) :: inserted0 = 0           !< particles the inflow inserted before it
         logical, allocatable :: probed(:)      !< the materials the probes report (those the
                                                !< case's particles are made of)
     end type run_t
@@ -77,6 +78,9 @@ module dem_run_state
         real(wp) :: time0 = 0.0_wp     !< time of step step0; time = time0 + (step - step0) dt
         integer(i8) :: step0 = 0
         integer(i8) :: rng_state = 0   !< the case's random generator
+        integer(i8) :: next_id = 1     !< the id of the next inserted particle (all ranks)
+        integer(i8), allocatable :: inflow_count(:)  !< particles each &insert group inserted
+        real(wp), allocatable :: inflow_mass(:)      !< and their mass [kg] (all ranks)
         logical :: restarted = .false. !< the state comes from a checkpoint
         integer :: device = -1         !< OpenACC device of this rank (-1: the host)
         type(run_t) :: run             !< between solver_start and solver_finish

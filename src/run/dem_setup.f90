@@ -7,7 +7,7 @@ module dem_setup
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_comm, only: comm_t, comm_any
-    use dem_case, only: case_t, time_scales_t, case_time_scales, case_summarize, &
+    use dem_case, only: case_t, insert_t, time_scales_t, case_time_scales, case_summarize, &
                         case_speed_bound, case_energy_speed, case_append_particles
     use dem_insert, only: insert_random
     use dem_random, only: rng_t, rng_seed
@@ -65,10 +65,11 @@ contains
         integer(ip) :: k, i, n, placed
         do k = 1, size(c%inserts)
             associate (g => c%inserts(k))
+                if (g%inflow) cycle                 ! during the run (dem_inflow)
                 n = g%n
                 rng = rng_seed(g%seed)
                 allocate(x(3, n), r(n))
-                call insert_random(rng, g%region, n, g%radius_min, g%radius_max, &
+                call insert_random(rng, g%region, n, g%size, &
                                    c%x(:, 1:c%n_held), c%radius(1:c%n_held), 10000, x, r, placed)
                 c%rng_state = rng%state
                 if (placed < n) then
@@ -86,6 +87,37 @@ contains
                 deallocate(x, r)
             end associate
         end do
+        c%next_id = 1
+        if (c%n_held > 0) c%next_id = maxval(c%gid(1:c%n_held)) + 1
+        do k = 1, size(c%inserts)
+            if (.not. c%inserts(k)%inflow) cycle
+            if (c%inserts(k)%every == 0) c%inserts(k)%every = default_every(c%inserts(k))
+        end do
+        k = findloc(c%inserts%inflow, .true., dim=1)
+        c%inflow = k > 0
+        if (k > 0) then                          ! the inflow's generator
+            rng = rng_seed(c%inserts(k)%seed)
+            c%rng_state = rng%state
+        end if
+    contains
+        !> The steps in which a sphere of the group moves one largest diameter d from its
+        !> velocity v0 and gravity g: (sqrt(v0^2 + 2 g d) - v0) / g, or d / v0 without
+        !> gravity, 1000 steps when it does not move; at least 1.
+        integer(i8) function default_every(g) result(every)
+            type(insert_t), intent(in) :: g
+            real(wp) :: d, v0, ga, t
+            d = 2.0_wp * g%size%r_max
+            v0 = norm2(g%velocity)
+            ga = norm2(c%gravity)
+            if (ga > 0.0_wp) then
+                t = (sqrt(v0**2 + 2.0_wp * ga * d) - v0) / ga
+            else if (v0 > 0.0_wp) then
+                t = d / v0
+            else
+                t = 1000.0_wp * c%dt
+            end if
+            every = max(1_i8, nint(t / c%dt, i8))
+        end function default_every
     end subroutine place_inserts
 
     !> Keep of all the case's particles (held here) every ranks-th from rank + 1 on.

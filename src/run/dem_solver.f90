@@ -68,6 +68,12 @@ contains
         s%accel_bound = case_speed_bound(c, s%scales) / c%dt
         s%step = 0
         s%rng_state = c%rng_state
+        s%next_id = c%next_id
+        if (c%inflow) then
+            allocate(s%inflow_count(size(c%inserts)), s%inflow_mass(size(c%inserts)))
+            s%inflow_count = 0
+            s%inflow_mass = 0.0_wp
+        end if
         allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0), s%stale(0))
     end subroutine solver_init
 
@@ -139,6 +145,7 @@ contains
             s%timers = timers_t()
             r%n0 = solver_particles(s)
             r%removed0 = s%removed
+            if (allocated(s%inflow_count)) r%inserted0 = sum(s%inflow_count)
             r%next_progress = wall_seconds() + c%progress_interval
             r%last = wall_seconds()
         end associate

@@ -2,7 +2,8 @@
 !> does, each line a step and a call into the module named for it (integration:
 !> dem_integrate; walls: dem_mesh; lists, migration and the halo: dem_rebuild; body forces:
 !> dem_forces; particle and wall contacts: dem_contacts_pp, dem_contacts_pw; the guard and
-!> run control: dem_run_control; outlets: dem_outlets; outputs: dem_run_output).
+!> run control: dem_run_control; outlets: dem_outlets; inflow: dem_inflow; outputs:
+!> dem_run_output).
 module dem_step
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
@@ -10,6 +11,7 @@ module dem_step
     use dem_case, only: case_t
     use dem_run_state, only: solver_t, time_of, failed_anywhere, wall_motion_data, stop_end
     use dem_rebuild, only: lists_refresh, settle_outlets
+    use dem_inflow, only: insert_inflow, inflow_to_come
     use dem_forces, only: body_forces, external_forces
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: pw_forces
@@ -58,7 +60,9 @@ contains
         call timer_stop(s%timers, phase_integrate)
         call count_step(s)
         if (size(c%outlets) > 0) call remove_outlet_particles(s, c)      ! outlets
+        if (c%inflow) call insert_inflow(s, c, err)                      ! inflow
         call timer_stop(s%timers, phase_neighbors)
+        if (err%failed()) return
         call outputs_and_control(s, c, err)                   ! probes, outputs, run control
     end subroutine time_step
 
@@ -218,7 +222,8 @@ contains
             if (n_fresh(1) == 0) return
             s%removed = s%removed + n_fresh(1)
             s%parked = s%parked + n_fresh(1)
-            s%emptied = s%removed - s%run%removed0 >= s%run%n0
+            s%emptied = s%removed - s%run%removed0 >= s%run%n0 + inserted(s)
+            if (s%emptied .and. c%inflow) s%emptied = .not. inflow_to_come(s, c)
             if (s%emptied) s%wall_loads = 0.0_wp     ! (its last row: no particle, no load)
             if (allocated(s%removed_ids)) then    ! (a coupled run: their ids, on the host)
                 call acc_data(s%fresh, acc_to_host)
@@ -301,6 +306,13 @@ contains
             if (k > 0) due = mod(s%step - s%run%out0, k) == 0
         end function due
     end subroutine outputs_and_control
+
+    !> The particles the inflow inserted since the start of this run (all ranks).
+    pure integer(i8) function inserted(s) result(n)
+        type(solver_t), intent(in) :: s
+        n = 0
+        if (allocated(s%inflow_count)) n = sum(s%inflow_count) - s%run%inserted0
+    end function inserted
 
     !> Whether a row of series.csv and probes.csv is written after step `step`: every
     !> output interval, and at the run's last step.

@@ -121,6 +121,55 @@ bad("nan_gravity", sub("gravity = 0, 0, 0", "gravity = 0, 0, NaN"), "run", "grav
 bad("unknown_material", sub("&particle material = 'glass'", "&particle material = 'gold'"),
     "particle", "material")
 bad("dt_unstable", sub("dt = 1e-7", "dt = 1e-4"), "run", "dt", "stability bound")
+# &insert radius distributions
+INS = ("&insert n = 5, material = 'glass', box_min = -0.05, -0.05, 0.03, "
+       "box_max = 0.05, 0.05, 0.08, ")
+for name, keys in (("lognormal", "radius_distribution = 'lognormal', radius_mean = 2e-3, "
+                    "radius_sd = 5e-4, radius_min = 1e-3, radius_max = 4e-3"),
+                   ("discrete", "radius_distribution = 'discrete', radii = 1e-3, 2e-3, "
+                    "fractions = 0.4, 0.6, fraction_by = 'number'")):
+    path = os.path.join(work, f"good_{name}.nml")
+    with open(path, "w") as f:
+        f.write(GOOD + INS + keys + " /\n")
+    r, d = run(["--check", path], f"good_{name}_check")
+    check(r.returncode == 0, f"good {name} insert: --check failed: {r.stderr}")
+NORMAL = "radius_distribution = 'normal', radius_mean = 2e-3, radius_sd = 5e-4, "
+DISCRETE = "radius_distribution = 'discrete', radii = 1e-3, 2e-3, "
+for name, keys, key, extra in (
+        ("size_unknown", "radius_distribution = 'gamma', radius_min = 1e-3",
+         "radius_distribution", "gamma"),
+        ("normal_no_mean", "radius_distribution = 'normal', radius_sd = 5e-4, "
+         "radius_min = 1e-3, radius_max = 3e-3", "radius_mean", "required"),
+        ("normal_no_max", NORMAL + "radius_min = 1e-3", "radius_max", "required"),
+        ("normal_zero_sd", "radius_distribution = 'normal', radius_mean = 2e-3, radius_sd = 0, "
+         "radius_min = 1e-3, radius_max = 3e-3", "radius_sd", "> 0"),
+        ("normal_window", NORMAL + "radius_min = 1e-2, radius_max = 2e-2", "radius_sd",
+         "less than 0.001"),
+        ("uniform_radii", "radius_min = 1e-3, radii = 1e-3", "radii", "not used"),
+        ("uniform_mean", "radius_min = 1e-3, radius_mean = 1e-3", "radius_mean", "not used"),
+        ("uniform_fraction_by", "radius_min = 1e-3, fraction_by = 'mass'", "fraction_by",
+         "not used"),
+        ("discrete_min", DISCRETE + "fractions = 0.5, 0.5, radius_min = 1e-3", "radius_min",
+         "not used"),
+        ("discrete_no_radii", "radius_distribution = 'discrete', fractions = 1", "radii",
+         "required"),
+        ("discrete_negative", "radius_distribution = 'discrete', radii = 1e-3, -2e-3, "
+         "fractions = 0.5, 0.5", "radii", "> 0"),
+        ("discrete_count", DISCRETE + "fractions = 1", "fractions", "each radius"),
+        ("discrete_sum", DISCRETE + "fractions = 0.3, 0.3", "fractions", "sum to 1"),
+        ("discrete_by", DISCRETE + "fractions = 0.5, 0.5, fraction_by = 'volume'",
+         "fraction_by", "volume"),
+        ("inflow_both", "radius_min = 1e-3, rate = 10, mass_rate = 0.1", "mass_rate",
+         "not both"),
+        ("inflow_rate", "radius_min = 1e-3, rate = 0", "rate", "> 0"),
+        ("inflow_no_rate", "radius_min = 1e-3, start = 0.1", "start", "'rate'"),
+        ("inflow_end", "radius_min = 1e-3, rate = 10, start = 0.2, end = 0.1", "end",
+         "> start"),
+        ("inflow_end_duration", "radius_min = 1e-3, rate = 10, end = 0.2, duration = 0.1",
+         "duration", "not both"),
+        ("inflow_every", "radius_min = 1e-3, rate = 10, insert_every = -5", "insert_every",
+         ">= 1")):
+    bad(name, GOOD + INS + keys + " /\n", "insert", key, extra)
 bad("bad_integrator", sub("t_end = 1e-5,", "t_end = 1e-5, integrator = 'rk4',"), "run",
     "integrator")
 bad("zero_normal", sub("normal = 0, 0, 1", "normal = 0, 0, 0"), "wall_plane", "normal")

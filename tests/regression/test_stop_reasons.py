@@ -16,6 +16,17 @@ the particles have had the time to move.
    t = T s", with T within one step of the time a free fall takes to bring the lowest
    sphere's centre to the plane, sqrt(2 d / g), and series.csv's last row holds 0
    particles and 10 removed; exit status 0.
+4. An inflow of 200 spheres/s from t = 0 to 0.2 s (40 spheres) at rest 5-7 cm above such an
+   outlet: the first sphere leaves (a fall of 5 cm: 0.101 s) long before the inflow ends,
+   and the run must go on (the outlets have not taken the last particle while more are to
+   come); it stops when the last one leaves: at least a fall of 5 cm after the inflow's end,
+   at most a fall of 7 cm after its last insertion (within an insertion interval of the end:
+   by default the time of a fall of one diameter from rest), with 40 inserted and 40 removed.
+5. Settling with an inflow: the box of case 1, empty, and 100 spheres poured in from
+   t = 0.2 s to 0.25 s (the box is "at rest" until then), with stop_kinetic_energy = 1e-5 J
+   (a layer of spheres without rolling resistance rolls long below 1e-6 J): the run
+   may not stop as settled before the last insertion and a fall across the scene (0.143 s)
+   after it; it settles before t_end = 2 s with the 100 spheres in the box.
 usage: test_stop_reasons.py DEM WORKDIR"""
 import math
 import os
@@ -118,4 +129,45 @@ if m:
           f"takes {t_fall:.6f} s")
     check(s[-1, 2] == 0 and s[-1, 3] == 10 and abs(s[-1, 0] - t) < 1e-9,
           f"series.csv's last row: 0 particles, 10 removed, at that time: {s[-1, :4]}")
+
+# 4. an inflow through an outlet: not emptied while spheres are to come
+path = case("inflow", f"""&run dt = {DT}, t_end = 1.0, expected_speed = 1.5 /
+&output dir = 'output/inflow', interval = 0.001 /
+{MATERIALS}&insert material = 'soft', radius_min = 0.002, region = 'box', rate = 200, start = 0,
+    end = 0.2, box_min = -0.02, -0.02, 0.05, box_max = 0.02, 0.02, 0.07, seed = 5 /
+&outlet region = 'plane', point = 0, 0, 0, normal = 0, 0, -1 /
+""")
+rc, out, err = run_dem(dem, path, work)
+s = series("inflow")
+line = last_line(out)
+m = re.search(r"dem: done: the outlets took the last particle out at t = (\S+) s", line)
+check(rc == 0 and m is not None, f"inflow drained: exit 0 and the last line says so: {rc}, "
+      f"{line!r}, {err[-300:]!r}")
+if m:
+    t = float(m.group(1))
+    t_first = math.sqrt(2.0 * 0.05 / G)
+    t_every = math.sqrt(2.0 * 0.004 / G)
+    t_last = 0.2 + t_every + math.sqrt(2.0 * 0.07 / G)
+    check(s[:, 3].max() > 0 and s[s[:, 3] > 0, 0].min() < 0.2,
+          f"a sphere left before the inflow ended (a fall of 5 cm takes {t_first:.4f} s)")
+    check(0.2 + t_first <= t <= t_last + 2 * DT, f"the last sphere left at {t} s: a fall of "
+          f"5 cm after the inflow's end and before {t_last:.4f} s")
+    check(s[-1, 2] == 0 and s[-1, 3] == 40, f"series.csv's last row: 0 particles, 40 removed: "
+          f"{s[-1, :4]}")
+# 5. settling with an inflow: not before its last insertion and a fall after it
+path = case("inflow_settle", f"""&run dt = {DT}, t_end = 2.0, stop_kinetic_energy = 1e-5 /
+&output dir = 'output/inflow_settle', interval = 0.01 /
+{MATERIALS}&insert material = 'soft', radius_min = 0.002, region = 'box', rate = 2000,
+    start = 0.2, end = 0.25, box_min = -0.045, -0.045, 0.05, box_max = 0.045, 0.045, 0.1,
+    seed = 7 /
+{BOX}""")
+rc, out, err = run_dem(dem, path, work)
+s = series("inflow_settle")
+line = last_line(out)
+m = re.search(r"dem: done: settled at t = (\S+) s", line)
+check(rc == 0 and m is not None, f"inflow settled: the last line says so: {rc}, {line!r}")
+if m:
+    t = float(m.group(1))
+    check(0.25 + t_settle <= t < 2.0 and s[-1, 2] == 100,
+          f"settled at {t} s (not before {0.25 + t_settle:.4f} s) with 100 spheres: {s[-1, :4]}")
 finish()

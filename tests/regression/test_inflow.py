@@ -1,0 +1,108 @@
+"""Inflow (&insert with a rate, doc/user/input.md; doc/theory.md section 10):
+
+1. a mass rate of a discrete mixture by mass into an empty box above a floor: the mass
+   inserted is mass_rate (end - start) to within one particle's mass (the goal of each
+   insertion is met by the sphere that reaches it), ids 1, 2, ... in order; the same
+   final.csv and series.csv on 1 and 2 ranks (the placement does not depend on how the
+   particles are spread);
+2. a particle rate of a lognormal, into a box above particles placed before the run: floor(rate
+   duration) particles, ids after the largest given, radii in [radius_min, radius_max], none
+   before `start` (series.csv);
+3. a checkpoint written on 1 rank during the inflow, continued on 2 ranks: the same final.csv
+   and series.csv as the uninterrupted run.
+usage: test_inflow.py DEM WORKDIR MPIEXEC"""
+import csv
+import math
+import os
+import shutil
+import subprocess
+import sys
+
+from regression_util import check, finish
+
+dem, work, mpiexec = sys.argv[1], os.path.abspath(sys.argv[2]), sys.argv[3]
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+
+HEAD = """&run dt = 1e-5, t_end = 0.08, gravity = 0, 0, -9.81 /
+&output dir = '{out}', interval = 0.005{extra} /
+&material name = 'glass', density = 2500.0, youngs_modulus = 5e7, poisson_ratio = 0.25 /
+&material name = 'steel', density = 7800.0, youngs_modulus = 2e11, poisson_ratio = 0.3 /
+&pair materials = 'glass', 'glass', restitution = 0.5, friction = 0.3 /
+&pair materials = 'glass', 'steel', restitution = 0.5, friction = 0.3 /
+&wall_plane material = 'steel', point = 0, 0, 0, normal = 0, 0, 1, half_width = 0.06 /
+"""
+MASS = """&insert material = 'glass', radius_distribution = 'discrete', radii = 1e-3, 1.5e-3,
+        fractions = 0.3, 0.7, box_min = -0.03, -0.03, 0.02, box_max = 0.03, 0.03, 0.04,
+        velocity = 0, 0, -0.5, mass_rate = 0.05, start = 0.01, end = 0.05 /
+"""
+RATE = """&insert n = 50, material = 'glass', radius_min = 1e-3, radius_max = 1.5e-3,
+        box_min = -0.03, -0.03, 0.002, box_max = 0.03, 0.03, 0.01 /
+&insert material = 'glass', radius_distribution = 'lognormal', radius_mean = 1.2e-3,
+        radius_sd = 2e-4, radius_min = 8e-4, radius_max = 1.6e-3, seed = 5,
+        box_min = -0.03, -0.03, 0.03, box_max = 0.03, 0.03, 0.04, rate = 2000,
+        start = 0.02, duration = 0.0201, insert_every = 100 /
+"""
+
+
+def run(name, text, ranks=1, args=()):
+    path = os.path.join(work, name + ".nml")
+    with open(path, "w") as f:
+        f.write(text)
+    cmd = [dem, *args, path]
+    if ranks > 1:
+        cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(ranks)] + cmd
+    r = subprocess.run(cmd, cwd=work, capture_output=True, text=True, timeout=600)
+    check(r.returncode == 0, f"{name} on {ranks} ranks: exit {r.returncode}: {r.stderr[-2000:]}")
+
+
+def final(out):
+    with open(os.path.join(work, out, "final.csv")) as f:
+        return list(csv.DictReader(f))
+
+
+def same(a, b, what):
+    for name in ("final.csv", "series.csv"):
+        with open(os.path.join(work, a, name), "rb") as f, \
+                open(os.path.join(work, b, name), "rb") as g:
+            check(f.read() == g.read(), f"{what}: {name} differs ({a}, {b})")
+
+
+def mass(rows):
+    return sum(4 / 3 * math.pi * float(r["radius"]) ** 3 * 2500.0 for r in rows)
+
+
+# 1. mass rate, 1 and 2 ranks
+run("mass1", HEAD.format(out="mass1", extra="") + MASS)
+run("mass2", HEAD.format(out="mass2", extra="") + MASS, ranks=2)
+rows = final("mass1")
+target = 0.05 * (0.05 - 0.01)
+largest = 4 / 3 * math.pi * 1.5e-3 ** 3 * 2500.0
+check(0 <= mass(rows) - target < largest,
+      f"mass inserted {mass(rows):.6g} kg, expected {target:.6g} kg within {largest:.3g} kg")
+check(sorted(int(r["id"]) for r in rows) == list(range(1, len(rows) + 1)),
+      "inflow ids are 1 .. N")
+same("mass1", "mass2", "1 and 2 ranks")
+
+# 2. particle rate after particles placed before the run
+run("rate", HEAD.format(out="rate", extra="") + RATE)
+rows = final("rate")
+new = [r for r in rows if int(r["id"]) > 50]
+check(len(rows) == 50 + 40, f"{len(rows)} particles, expected 50 + floor(2000 * 0.0201) = 90")
+check(sorted(int(r["id"]) for r in new) == list(range(51, 91)), "inflow ids follow 50")
+check(all(8e-4 <= float(r["radius"]) <= 1.6e-3 for r in new), "inflow radii in the window")
+with open(os.path.join(work, "rate", "series.csv")) as f:
+    series = list(csv.DictReader(f))
+check(all(int(s["particles"]) == 50 for s in series if float(s["time"]) < 0.02 - 1e-9),
+      "no inflow before start")
+
+# 3. restart during the inflow, on 2 ranks
+ckpt = ", checkpoint_interval = 0.02, checkpoint_keep = 10"
+run("whole", HEAD.format(out="whole", extra=ckpt) + MASS)
+shutil.copytree(os.path.join(work, "whole"), os.path.join(work, "cont"))
+os.remove(os.path.join(work, "cont", "final.csv"))
+text = HEAD.format(out="cont", extra=ckpt) + MASS
+run("cont", text, ranks=2,
+    args=("--restart", os.path.join(work, "cont", "checkpoints", "checkpoint_000000002000.h5")))
+same("whole", "cont", "restart during the inflow")
+finish()
