@@ -7,6 +7,8 @@
 #   gfortran, both: -ffpe-summary=invalid,zero,overflow: a run reports on stop only the
 #            floating-point flags that mean trouble, not the underflows of tiny forces
 #            (or of the MPI library), which are harmless
+#   gfortran, both: -fno-semantic-interposition: the code is position-independent (it also
+#            makes libdem.so), and calls between procedures of a file stay inlined
 #   DEM_OPENACC=ON: gfortran -fopenacc, with nvptx offload when gcc-offload-nvptx is
 #                   installed; nvfortran -acc -gpu=${DEM_GPU_ARCH},nofma -Minfo=accel
 set(DEM_GPU_ARCH "cc80" CACHE STRING "nvfortran: the GPUs' compute capability (cc70, cc80, cc90)")
@@ -20,7 +22,7 @@ if(CMAKE_Fortran_COMPILER_ID STREQUAL "NVHPC")
   endif()
 else()
   set(DEM_FORTRAN_FLAGS_COMMON -ffree-line-length-none -std=f2018 -fimplicit-none
-      -ffpe-summary=invalid,zero,overflow)
+      -ffpe-summary=invalid,zero,overflow -fno-semantic-interposition)
   set(DEM_FORTRAN_FLAGS_RELEASE -O3)
   set(DEM_FORTRAN_FLAGS_DEBUG -O0 -g -fcheck=all -ffpe-trap=invalid,zero,overflow -Wall
       -Wno-maybe-uninitialized -fbacktrace)
