@@ -35,10 +35,14 @@ def step(what, cmd, extra_env=None, expect=0):
     return out
 
 
+# a copy of python/: pip builds in the folder it is given (build/, dem.egg-info)
+source = os.path.join(work, "python")
+shutil.copytree(os.path.join(ROOT, "python"), source,
+                ignore=shutil.ignore_patterns("build", "*.egg-info", "__pycache__"))
 step("make the virtual environment",
      [sys.executable, "-m", "venv", "--system-site-packages", venv])
 out = step("pip install ./python", [python, "-m", "pip", "install", "--no-build-isolation",
-                                    "--no-deps", "--no-index", os.path.join(ROOT, "python")])
+                                    "--no-deps", "--no-index", source])
 check("Successfully installed dem" in out, f"pip says it installed dem: {out[-500:]}")
 out = step("import the installed package", [python, "-c", "import dem; print(dem.__file__)"])
 check(out.strip().startswith(venv), f"the installed copy is imported: {out.strip()}")
