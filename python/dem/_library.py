@@ -11,13 +11,12 @@ import ctypes
 import ctypes.util
 import os
 import sys
-import weakref
 
 import numpy as np
 
 _lib = None            # the loaded library (one per process)
 _lib_path = None
-_live_runs = weakref.WeakSet()  # the runs to close before MPI is finalised at exit
+_live_runs = {}         # the open runs by serial: closed at exit, before MPI is finalised
 _exit_registered = False
 
 _double_p = ctypes.POINTER(ctypes.c_double)
@@ -161,8 +160,14 @@ def comm_handle(lib, comm):
 
 
 def track(run):
-    """Remember a live run, to close it at exit before MPI is finalised."""
-    _live_runs.add(run)
+    """Remember an open run, to close it at exit before MPI is finalised (it is kept alive
+    until then, or until it is closed)."""
+    _live_runs[run._serial] = run
+
+
+def untrack(run):
+    """Forget a closed run."""
+    _live_runs.pop(run._serial, None)
 
 
 def _register_exit():
@@ -180,7 +185,8 @@ def _at_exit():
     mpi = sys.modules.get("mpi4py.MPI")
     if mpi is not None and mpi.Is_finalized():
         return
-    for run in sorted(list(_live_runs), key=lambda r: r._serial):
+    for serial in sorted(_live_runs):
+        run = _live_runs[serial]
         try:
             run.close()
         except Exception as e:                             # report, go on closing
@@ -198,8 +204,10 @@ def view(address, shape, dtype):
     """A read-only NumPy array over `shape` items at `address`, without a copy (an empty
     array for a null address or no items)."""
     if not address or int(np.prod(shape)) == 0:
-        return np.zeros(shape, dtype=dtype)
-    ctype = np.ctypeslib.as_ctypes_type(np.dtype(dtype))
-    array = np.ctypeslib.as_array(ctypes.cast(address, ctypes.POINTER(ctype)), shape=shape)
+        array = np.zeros(shape, dtype=dtype)
+    else:
+        ctype = np.ctypeslib.as_ctypes_type(np.dtype(dtype))
+        array = np.ctypeslib.as_array(ctypes.cast(address, ctypes.POINTER(ctype)),
+                                      shape=shape)
     array.flags.writeable = False
     return array

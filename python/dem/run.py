@@ -103,6 +103,7 @@ class Run:
         message = ctypes.create_string_buffer(_MESSAGE_LEN)
         status = self._lib.dem_coupling_finalize(ctypes.byref(self._handle), message,
                                                  _MESSAGE_LEN)
+        _library.untrack(self)                 # (the handle is freed, also on a failure)
         _check(status, message)
 
     def _live(self):

@@ -91,3 +91,18 @@ def test_errors_name_the_cause(work):
     assert run.closed
     with pytest.raises(dem.DemError):
         run.advance(1e-3)
+
+
+def test_open_run_closed_at_exit(work):
+    """A script that never closes its run: the run is closed at the interpreter's exit
+    (final.csv written), before MPI is finalised (exit status 0)."""
+    import os
+    import subprocess
+    import sys
+    case = cloud(work)
+    package = os.path.dirname(os.path.dirname(dem.__file__))
+    script = f"import dem\nrun = dem.Run({case!r})\nrun.advance(1e-3)\n"
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                       env=dict(os.environ, PYTHONPATH=package), timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert os.path.exists(os.path.join(work, "out", "final.csv"))
