@@ -7,8 +7,10 @@
 #   gfortran, both: -ffpe-summary=invalid,zero,overflow: a run reports on stop only the
 #            floating-point flags that mean trouble, not the underflows of tiny forces
 #            (or of the MPI library), which are harmless
-#   gfortran, both: -fno-semantic-interposition: the code is position-independent (it also
-#            makes libdem.so), and calls between procedures of a file stay inlined
+#   gfortran, both, without DEM_OPENACC: -fno-semantic-interposition: the code is
+#            position-independent (it also makes libdem.so), and calls between procedures
+#            of a file stay inlined as without -fPIC (not with OpenACC: the local aliases it
+#            makes are refused by the nvptx offload compiler)
 #   DEM_OPENACC=ON: gfortran -fopenacc, with nvptx offload when gcc-offload-nvptx is
 #                   installed; nvfortran -acc -gpu=${DEM_GPU_ARCH},nofma -Minfo=accel
 set(DEM_GPU_ARCH "cc80" CACHE STRING "nvfortran: the GPUs' compute capability (cc70, cc80, cc90)")
@@ -22,12 +24,15 @@ if(CMAKE_Fortran_COMPILER_ID STREQUAL "NVHPC")
   endif()
 else()
   set(DEM_FORTRAN_FLAGS_COMMON -ffree-line-length-none -std=f2018 -fimplicit-none
-      -ffpe-summary=invalid,zero,overflow -fno-semantic-interposition)
+      -ffpe-summary=invalid,zero,overflow)
   set(DEM_FORTRAN_FLAGS_RELEASE -O3)
   set(DEM_FORTRAN_FLAGS_DEBUG -O0 -g -fcheck=all -ffpe-trap=invalid,zero,overflow -Wall
       -Wno-maybe-uninitialized -fbacktrace)
   if(DEM_NATIVE)
     list(APPEND DEM_FORTRAN_FLAGS_RELEASE -march=native -ffp-contract=off)
+  endif()
+  if(NOT DEM_OPENACC)
+    list(APPEND DEM_FORTRAN_FLAGS_COMMON -fno-semantic-interposition)
   endif()
   if(DEM_OPENACC)
     list(APPEND DEM_OPENACC_FLAGS -fopenacc)
