@@ -52,3 +52,22 @@ def test_terminal_velocity(work):
         # the distance fallen: the continuous solution to the scheme's O(h / tau)
         z = -v_t * (t - tau * (1.0 - math.exp(-t / tau)))
         assert abs(p.x[0, 2] - z) < 0.02 * abs(z)
+
+
+def test_two_runs_at_once(work):
+    """Two handles in one process, advanced in turn: the one with drag settles at the
+    terminal velocity, the other, without, falls freely (v = -g t, exact for a constant
+    acceleration); neither sees the other's forces."""
+    volume = 4.0 / 3.0 * math.pi * R**3
+    beta = 6.0 * math.pi * MU * R
+    v_t = 2.0 * (RHO_P - RHO_F) * G * R**2 / (9.0 * MU)
+    with dem.Run(settling_case(f"{work}/a")) as fluid, \
+            dem.Run(settling_case(f"{work}/b")) as vacuum:
+        fluid.set_drag(beta, [0.0, 0.0, 0.0])
+        fluid.set_force([0.0, 0.0, RHO_F * volume * G])
+        for _ in range(100):
+            fluid.advance(1e-4)
+            vacuum.advance(1e-4)
+        assert abs(fluid.particles().v[0, 2] + v_t) < 1e-4 * v_t
+        assert abs(vacuum.particles().v[0, 2] + G * vacuum.time) < 1e-12
+        assert np.all(vacuum.impulse() == 0.0)
