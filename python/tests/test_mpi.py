@@ -99,3 +99,19 @@ def test_stokes_on_the_owner(shared):
         vz = [p[2] for p in run.particles().v]
         vz = WORLD.allreduce(vz)
     assert abs(vz[0] + v_t) < 1e-4 * v_t
+
+
+def test_sweep_on_all_ranks(shared):
+    """dem.sweep on every rank: rank 0 writes the cases, every rank runs them; the sphere's
+    rolling speed is 5/7 v0 for each friction, on whichever rank owns it."""
+    from test_sweep import V0, sliding
+    case = sliding(shared) if WORLD.rank == 0 else None
+    case = WORLD.bcast(case, root=0)
+
+    def measure(run):
+        return WORLD.allreduce([p[0] for p in run.particles().v])
+
+    results = dem.sweep(case, "pair.friction", [0.2, 0.4], measure,
+                        work_dir=os.path.join(shared, "sweep"), until=0.05, comm=WORLD)
+    for mu, v in results:
+        assert len(v) == 1 and abs(v[0] - 5.0 / 7.0 * V0) < 0.01 * V0, (mu, v)
