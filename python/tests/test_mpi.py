@@ -2,7 +2,7 @@
 pytest test_mpi.py): a run on all ranks gives the same particles as the same case run on
 rank 0 alone (COMM_SELF), bit for bit, and the same deposit; forces set by id from rank 0
 reach the owners; the Stokes settling reaches the terminal velocity on whichever rank owns
-the sphere. On one rank the same checks hold trivially."""
+the sphere; a friction sweep runs on all ranks. On one rank the same checks hold trivially."""
 import math
 import os
 
