@@ -1,0 +1,161 @@
+"""The GPU bundle (scripts/install/gpu-bundle, doc/user/gpu.md) is self-contained: packed from
+this OpenACC build without the beds, it runs a short case (the settling box with a moving STL
+floor, a snapshot and a checkpoint: particle and wall contacts, parallel HDF5) on 1 and 2 ranks
+with nothing from the environment but what its own env.sh sets (env -i), on the host fallback,
+and writes the same files, byte for byte, as the plain build (REFERENCE_DEM, with the system's
+mpiexec on 2 ranks). Every shared object the runs load (the dynamic loader's LD_DEBUG=libs log
+of mpirun and of every rank) comes from the bundle, but the C library's, and libgomp's nvptx
+plugin is among them. The bundle's size without beds is under 60 MiB.
+
+With --chroot DIR (scripts/dev/check-gpu-bundle), the bundle's runs are made inside that root
+(a minimal Debian: debootstrap --variant=minbase, none of the bundle's libraries installed),
+with /proc, /sys and /dev bound into it.
+
+usage: test_gpu_bundle.py DEM WORKDIR REFERENCE_DEM MPIEXEC [--chroot DIR]"""
+import filecmp
+import glob
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+
+from regression_util import ROOT, check, finish
+import checkpoint_util as cu
+
+dem, work, reference, mpiexec = sys.argv[1:5]
+chroot = sys.argv[sys.argv.index("--chroot") + 1] if "--chroot" in sys.argv else None
+work = os.path.abspath(work)
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+GLIBC = re.compile(r"^(ld-linux[-a-z0-9_]*\.so\.\d+|libc\.so\.6|libm\.so\.6|libmvec\.so\.1|"
+                   r"libpthread\.so\.0|libdl\.so\.2|librt\.so\.1|libresolv\.so\.2|"
+                   r"libutil\.so\.1|libnss_\w+\.so\.\d+)$")
+
+# 1. the bundle, without beds
+t0 = time.time()
+top = work
+if chroot:                       # the bundle and the cases inside the root, same paths there
+    top = os.path.join(chroot, "gpu-bundle-check")
+    shutil.rmtree(top, ignore_errors=True)
+    os.makedirs(top)
+bundle = os.path.join(top, "bundle")
+r = subprocess.run([os.path.join(ROOT, "scripts", "install", "gpu-bundle"), "--exe", dem,
+                    "--out", bundle, "--no-beds"], capture_output=True, text=True)
+print(r.stdout, r.stderr)
+check(r.returncode == 0, f"gpu-bundle failed: {r.stderr[-2000:]}")
+size = sum(os.path.getsize(p) for p in glob.glob(bundle + "/**", recursive=True)
+           if os.path.isfile(p) and not os.path.islink(p))
+print(f"bundle: {size / 2**20:.1f} MiB without beds, packed in {time.time() - t0:.1f} s")
+check(size < 60 * 2**20, f"the bundle is {size / 2**20:.1f} MiB, not under 60")
+
+
+def inside(path):
+    """A path of this machine as the bundle's runs see it."""
+    return "/" + os.path.relpath(path, chroot) if chroot else path
+
+
+# 2. the case: the settling box, short, with a snapshot and a checkpoint
+def case(folder):
+    os.makedirs(folder)
+    path = os.path.join(folder, "box.nml")
+    cu.write_box_case(path, os.path.join(folder, "output"), t_end=0.02, n=200, interval=0.002,
+                      output=", snapshot_interval = 0.01, checkpoint_interval = 0.01")
+    with open(path) as f:                     # the output folder relative to the run's folder
+        text = f.read().replace(os.path.join(folder, "output"), "output")
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def run(cmd, cwd, env=None):
+    r = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=300, env=env)
+    check(r.returncode == 0, f"{' '.join(cmd)} in {cwd}: exit {r.returncode}: "
+                             f"{(r.stdout + r.stderr)[-3000:]}")
+    return r
+
+
+def bundle_run(ranks, folder):
+    """The bundle's dem on `ranks` ranks in `folder`, the environment emptied (env -i), the
+    loader's log of every process in folder/ld.*."""
+    exe = [inside(os.path.join(bundle, "bin", "dem")), "box.nml"]
+    if ranks > 1:
+        exe = [inside(os.path.join(bundle, "bin", "mpirun")), "-np", str(ranks)] + exe
+    env = ["env", "-i", "PATH=/usr/bin:/bin", "LD_DEBUG=libs",
+           f"LD_DEBUG_OUTPUT={inside(folder)}/ld"]
+    if chroot:
+        cmd = ["chroot", chroot, "/bin/sh", "-c",
+               f"cd {inside(folder)} && exec " + " ".join(env + exe)]
+        return run(cmd, "/")
+    return run(env + exe, folder)
+
+
+def loaded(folder):
+    """The shared objects the loader initialised for the bundle's programs (dem, orterun,
+    orted; not the shell and the tools of the wrappers bin/dem and bin/mpirun), from its
+    LD_DEBUG logs in folder: a log holds the images a process went through (exec), each
+    from its 'initialize program:' line."""
+    objects, programs = set(), set()
+    for log in glob.glob(os.path.join(folder, "ld.*")):
+        with open(log, errors="replace") as f:
+            text = f.read()
+        for image in re.split(r"\n\s*\d+:\s+initialize program: ", text)[1:]:
+            program = os.path.basename(image.split("\n", 1)[0].strip())
+            if program in ("dem", "orterun", "orted", "mpirun"):
+                programs.add(program)
+                objects |= set(re.findall(r"calling init: (\S+)", image))
+        os.remove(log)
+    return objects, programs
+
+
+def outputs(top_dir):
+    return sorted(os.path.relpath(os.path.join(d, f), top_dir)
+                  for d, _, names in os.walk(top_dir) for f in names)
+
+
+mounts = []
+if chroot:
+    for m in ("proc", "sys", "dev", "dev/shm"):
+        target = os.path.join(chroot, m)
+        os.makedirs(target, exist_ok=True)
+        if subprocess.run(["mount", "--bind", "/" + m, target]).returncode == 0:
+            mounts.append(target)
+try:
+    for ranks in (1, 2):
+        ref = case(os.path.join(work, f"plain_{ranks}"))
+        cmd = [reference, "box.nml"] if ranks == 1 else \
+            [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", "2", reference, "box.nml"]
+        run(cmd, os.path.dirname(ref))
+        folder = os.path.dirname(case(os.path.join(top, f"bundle_{ranks}")))
+        t1 = time.time()
+        r = bundle_run(ranks, folder)
+        print(f"bundle on {ranks} rank(s): {time.time() - t1:.1f} s")
+        objects, programs = loaded(folder)
+        check("dem" in programs and ("orted" in programs or "orterun" in programs),
+              f"{ranks} rank(s): the loader's logs name the programs {sorted(programs)}")
+        root_in = inside(bundle) + "/"
+        foreign = sorted(o for o in objects if not o.startswith(root_in)
+                         and not GLIBC.match(os.path.basename(o)))
+        check(not foreign, f"{ranks} rank(s): loaded from outside the bundle: {foreign}")
+        check(any(o.endswith("libgomp-plugin-nvptx.so.1") for o in objects),
+              f"{ranks} rank(s): libgomp's nvptx plugin was not loaded")
+        check(any("openmpi3/mca_" in o for o in objects),
+              f"{ranks} rank(s): no Open MPI component was loaded")
+        print(f"{ranks} rank(s): {len(objects)} shared objects loaded, "
+              f"{len(objects) - len(foreign)} of them the bundle's or the C library's")
+        a, b = os.path.join(os.path.dirname(ref), "output"), os.path.join(folder, "output")
+        names = outputs(a)
+        check(names == outputs(b), f"{ranks} rank(s): other files: {names} / {outputs(b)}")
+        check("final.csv" in names and any(n.startswith("checkpoints/") for n in names),
+              f"{ranks} rank(s): outputs {names}")
+        for name in names:
+            if os.path.exists(os.path.join(b, name)):
+                check(filecmp.cmp(os.path.join(a, name), os.path.join(b, name), shallow=False),
+                      f"{ranks} rank(s): {name} differs between the bundle and {reference}")
+        print(f"{ranks} rank(s): {len(names)} files, byte for byte the plain build's")
+finally:
+    for target in reversed(mounts):
+        subprocess.run(["umount", target])
+print(f"test_gpu_bundle: {time.time() - t0:.1f} s in all")
+finish()
