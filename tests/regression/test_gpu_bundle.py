@@ -25,6 +25,7 @@ from regression_util import ROOT, check, finish
 import checkpoint_util as cu
 
 dem, work, reference, mpiexec = sys.argv[1:5]
+dem, reference = os.path.abspath(dem), os.path.abspath(reference)
 chroot = sys.argv[sys.argv.index("--chroot") + 1] if "--chroot" in sys.argv else None
 work = os.path.abspath(work)
 shutil.rmtree(work, ignore_errors=True)
@@ -149,11 +150,12 @@ try:
         check(names == outputs(b), f"{ranks} rank(s): other files: {names} / {outputs(b)}")
         check("final.csv" in names and any(n.startswith("checkpoints/") for n in names),
               f"{ranks} rank(s): outputs {names}")
-        for name in names:
-            if os.path.exists(os.path.join(b, name)):
-                check(filecmp.cmp(os.path.join(a, name), os.path.join(b, name), shallow=False),
-                      f"{ranks} rank(s): {name} differs between the bundle and {reference}")
-        print(f"{ranks} rank(s): {len(names)} files, byte for byte the plain build's")
+        same = [name for name in names if os.path.exists(os.path.join(b, name))
+                and filecmp.cmp(os.path.join(a, name), os.path.join(b, name), shallow=False)]
+        check(same == names, f"{ranks} rank(s): {sorted(set(names) - set(same))} differ "
+                             f"between the bundle and {reference}")
+        print(f"{ranks} rank(s): {len(same)} of {len(names)} files byte for byte the plain "
+              f"build's")
 finally:
     for target in reversed(mounts):
         subprocess.run(["umount", target])
