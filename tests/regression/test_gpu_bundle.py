@@ -34,6 +34,13 @@ GLIBC = re.compile(r"^(ld-linux[-a-z0-9_]*\.so\.\d+|libc\.so\.6|libm\.so\.6|libm
                    r"libpthread\.so\.0|libdl\.so\.2|librt\.so\.1|libresolv\.so\.2|"
                    r"libutil\.so\.1|libnss_\w+\.so\.\d+)$")
 
+# the bundle is of a build with nvptx offload (gcc-offload-nvptx, which install-deps installs)
+mkoffload = subprocess.run(["gfortran", "-print-prog-name=accel/nvptx-none/mkoffload"],
+                           capture_output=True, text=True).stdout.strip()
+if not os.path.exists(mkoffload):
+    print("test_gpu_bundle: skipped: gcc-offload-nvptx is not installed (no nvptx offload)")
+    sys.exit(0)
+
 # 1. the bundle, without beds
 t0 = time.time()
 top = work
