@@ -5,7 +5,9 @@ with nothing from the environment but what its own env.sh sets (env -i), on the 
 and writes the same files, byte for byte, as the plain build (REFERENCE_DEM, with the system's
 mpiexec on 2 ranks). Every shared object the runs load (the dynamic loader's LD_DEBUG=libs log
 of mpirun and of every rank) comes from the bundle, but the C library's, and libgomp's nvptx
-plugin is among them. The bundle's size without beds is under 60 MiB.
+plugin is among them. The bundle's size without beds is under 60 MiB. Then the bundle's
+gpu-check runs dry (--host, a bed of 300 spheres, 10 steps, on 1 and 2 ranks) and finds the
+trajectories equal to its host reference's.
 
 With --chroot DIR (scripts/dev/check-gpu-bundle), the bundle's runs are made inside that root
 (a minimal Debian: debootstrap --variant=minbase, none of the bundle's libraries installed),
@@ -166,5 +168,41 @@ try:
 finally:
     for target in reversed(mounts):
         subprocess.run(["umount", target])
+
+# 3. gpu-check's dry run (--host: everything on the host fallback) on a small bed of 300
+# spheres on a lattice in the impact box, made an HDF5 particle file by the bundle's dem (its
+# snapshot at t = 0), as gpu-bundle makes the beds: every run ends, and each trajectory is
+# the reference's, byte for byte
+if not chroot:
+    beds = os.path.join(work, "beds")
+    os.makedirs(beds)
+    with open(os.path.join(beds, "lattice.csv"), "w") as f:
+        f.write("id,material,radius,x,y,z\n")
+        for k in range(300):
+            layer, j = divmod(k, 20 * 10)
+            f.write(f"{k + 1},M1,0.001,{-0.0205 + 0.0021 * (j // 10)!r},"
+                    f"{-0.0095 + 0.0021 * (j % 10)!r},{-0.08914 + 0.0021 * layer!r}\n")
+    with open(os.path.join(beds, "bed.nml"), "w") as f:
+        f.write("&run dt = 5e-07, t_end = 5e-07 /\n"
+                "&output dir = 'out', interval = 1, snapshot_interval = 1 /\n"
+                "&material name = 'M1', density = 2500.0, youngs_modulus = 1e+09, "
+                "poisson_ratio = 0.2 /\n&pair materials = 'M1', 'M1', restitution = 0.5, "
+                "friction = 0.3 /\n&particle_file file = 'lattice.csv' /\n")
+    run([os.path.join(bundle, "bin", "dem"), "bed.nml"], beds)
+    shutil.copy(os.path.join(beds, "out", "snapshots", "snapshot_000000000000.h5"),
+                os.path.join(beds, "bed_300.h5"))
+    t1 = time.time()
+    out = os.path.join(work, "gpu-check")
+    r = subprocess.run([sys.executable, os.path.join(bundle, "gpu-check"), "--host",
+                        "--sizes", "300", "--steps", "10", "--beds", beds, "--out", out],
+                       capture_output=True, text=True, timeout=300)
+    print(r.stdout[-3000:], r.stderr[-2000:])
+    check(r.returncode == 0, f"gpu-check --host: exit {r.returncode}")
+    rows = open(os.path.join(out, "results.csv")).read() if r.returncode == 0 else ""
+    check(rows.count("final.csv identical; probes.csv identical") == 2,
+          f"gpu-check --host: the runs on 1 and 2 ranks are not the reference's: {rows}")
+    check(all(os.path.exists(os.path.join(out, f)) for f in ("gpu-check.log", "runs.tar.gz")),
+          "gpu-check --host: its log and runs.tar.gz")
+    print(f"gpu-check --host: {time.time() - t1:.1f} s")
 print(f"test_gpu_bundle: {time.time() - t0:.1f} s in all")
 finish()
