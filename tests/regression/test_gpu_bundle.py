@@ -52,7 +52,7 @@ if chroot:                       # the bundle and the cases inside the root, sam
     os.makedirs(top)
 bundle = os.path.join(top, "bundle")
 r = subprocess.run([os.path.join(ROOT, "scripts", "install", "gpu-bundle"), "--exe", dem,
-                    "--out", bundle, "--no-beds"], capture_output=True, text=True)
+                    "--exe-sm80", "", "--out", bundle, "--no-beds"], capture_output=True, text=True)
 print(r.stdout, r.stderr)
 check(r.returncode == 0, f"gpu-bundle failed: {r.stderr[-2000:]}")
 size = sum(os.path.getsize(p) for p in glob.glob(bundle + "/**", recursive=True)
