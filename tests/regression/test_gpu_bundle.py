@@ -7,7 +7,8 @@ mpiexec on 2 ranks). Every shared object the runs load (the dynamic loader's LD_
 of mpirun and of every rank) comes from the bundle, but the C library's, and libgomp's nvptx
 plugin is among them. The bundle's size without beds is under 60 MiB. Then the bundle's
 gpu-check runs dry (--host, a bed of 300 spheres, 10 steps, on 1 and 2 ranks) and finds the
-trajectories equal to its host reference's.
+trajectories equal to its host reference's, and no traffic between host and device per step
+on one rank (acc_data's counts), the halo's on two.
 
 With --chroot DIR (scripts/dev/check-gpu-bundle), the bundle's runs are made inside that root
 (a minimal Debian: debootstrap --variant=minbase, none of the bundle's libraries installed),
@@ -203,6 +204,16 @@ if not chroot:
           f"gpu-check --host: the runs on 1 and 2 ranks are not the reference's: {rows}")
     check(all(os.path.exists(os.path.join(out, f)) for f in ("gpu-check.log", "runs.tar.gz")),
           "gpu-check --host: its log and runs.tar.gz")
+    # on one rank a step moves nothing between host and device (acc_data's counts, the same
+    # on the host fallback as on a GPU: doc/user/gpu.md); on two, the halo through the host
+    import csv
+    table = {row["run"]: row for row in csv.DictReader(open(os.path.join(out, "results.csv")))} \
+        if r.returncode == 0 else {}
+    one, two = table.get("host_300_1rank", {}), table.get("host_300_2rank", {})
+    check(one.get("h2d_bytes_per_step") == "0" and one.get("d2h_bytes_per_step") == "0",
+          f"gpu-check --host: traffic per step on one rank: {one}")
+    check(int(two.get("h2d_bytes_per_step") or 0) > 0,
+          f"gpu-check --host: no halo traffic per step on two ranks: {two}")
     print(f"gpu-check --host: {time.time() - t1:.1f} s")
 print(f"test_gpu_bundle: {time.time() - t0:.1f} s in all")
 finish()
