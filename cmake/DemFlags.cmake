@@ -35,7 +35,9 @@ else()
     list(APPEND DEM_FORTRAN_FLAGS_COMMON -fno-semantic-interposition)
   endif()
   if(DEM_OPENACC)
-    list(APPEND DEM_OPENACC_FLAGS -fopenacc)
+    # -ffp-contract=off: no fused multiply-adds in the offloaded code either (the nvptx
+    # back end has them, and GCC contracts by default), so that a GPU gives the host's bits
+    list(APPEND DEM_OPENACC_FLAGS -fopenacc -ffp-contract=off)
     execute_process(COMMAND ${CMAKE_Fortran_COMPILER} -print-prog-name=accel/nvptx-none/mkoffload
                     OUTPUT_VARIABLE _mkoffload OUTPUT_STRIP_TRAILING_WHITESPACE)
     if(EXISTS "${_mkoffload}")
