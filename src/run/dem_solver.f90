@@ -9,7 +9,7 @@ module dem_solver
     use dem_particles, only: particles_init, particles_add, order_by_id
     use dem_domain, only: domain_imbalance, sorted_by_rank
     use dem_materials, only: pair_constants_build
-    use dem_contact_store, only: store_init, max_wall_contacts
+    use dem_contact_store, only: store_init, max_wall_contacts, store_history_widths
     use dem_integrate, only: integrator_verlet
     use dem_diagnostics, only: deep_overlap_id, deep_wall_id
     use dem_output, only: output_open, output_final, output_close
@@ -55,6 +55,7 @@ contains
         s%trace_id = c%trace_id
         call pair_constants_build(c%mats, c%opts, s%pc)
         s%mesh = c%mesh
+        call store_history_widths(s%pc%rolling_spring)
         call store_init(s%cs, n_mine)
         s%load_probes = any(c%probes%kind == probe_wall_load)
         allocate(s%wall_loads(7, size(c%probes)), s%wload(6, max_wall_contacts, 1))

@@ -3,8 +3,9 @@
 !> every particle's wall contacts, in slots per particle keyed by triangle. This module gives
 !> the contact kernels their arrays and moves the history across list rebuilds (carried by
 !> partner id), between ranks (packed rows) and into and out of checkpoints (pairs by id).
-!> Every array of history has n_pair_history or n_wall_history reals per contact: a new
-!> per-contact quantity (a rolling spring, say) is a larger constant here and its kernel.
+!> Every array of history has n_pair_history or n_wall_history reals per contact: the
+!> tangential displacement (3), followed, in a case with a rolling spring (EPSD2), by the
+!> spring's torque (3 more); store_history_widths sets them once per case.
 module dem_contact_store
     use dem_kinds, only: wp, ip, i8
     use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int
@@ -18,13 +19,16 @@ module dem_contact_store
               store_init, store_walls_reserve, store_walls_reserve_on_device, store_walls_restore, &
               store_walls_permute, store_walls_pack, store_walls_unpack, store_unique_pairs, &
               carry_history, touching_from_history, history_counts, history_fill, &
-              side_history, sort_history_row
+              side_history, sort_history_row, store_history_widths, max_pair_history
 
-    integer, parameter :: n_pair_history = 3     !< reals per particle pair: xi [m]
-    integer, parameter :: n_wall_history = 3     !< reals per wall contact: xi [m]
+    integer, parameter :: max_pair_history = 6   !< the most reals per contact
+    !> reals per particle pair: xi [m], then the rolling spring's torque [N m] with EPSD2
+    integer, protected :: n_pair_history = 3
+    integer, protected :: n_wall_history = 3     !< reals per wall contact: the same
     integer(ip), parameter :: max_wall_contacts = 8     !< wall contact slots per particle
     !> reals per packed particle (the triangles travel as reals: exact below 2^53)
-    integer, parameter :: n_wall_pack_real = (1 + n_wall_history) * max_wall_contacts
+    integer, protected :: n_wall_pack_real = 4 * max_wall_contacts
+    !$acc declare copyin(n_pair_history, n_wall_history)
 
     type :: contact_store_t
         !> history of each pair p of the lists (of their first particle's side), and whether
@@ -37,6 +41,17 @@ module dem_contact_store
     end type contact_store_t
 
 contains
+
+    !> The reals of history per contact for a case: 3 (the tangential displacement), or 6
+    !> with a rolling spring (its torque after the displacement). Set before the store is
+    !> made (store_init) and the same on every rank.
+    subroutine store_history_widths(rolling_spring)
+        logical, intent(in) :: rolling_spring
+        n_pair_history = merge(max_pair_history, 3, rolling_spring)
+        n_wall_history = n_pair_history
+        n_wall_pack_real = (1 + n_wall_history) * max_wall_contacts
+        !$acc update device(n_pair_history, n_wall_history)
+    end subroutine store_history_widths
 
     !> No history for n_pairs new pairs (on the device, not set: the caller fills xi).
     subroutine store_pairs_new(cs, n_pairs)
