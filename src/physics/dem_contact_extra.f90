@@ -1,4 +1,4 @@
-!> The laws a case may add to the Hertz-Mindlin contact (doc/theory.md, section 14): rolling
+!> The laws a case may add to the Hertz-Mindlin contact (doc/theory.md, section 15): rolling
 !> resistance, by a constant directional torque (CDT) or an elastic-plastic spring (EPSD2),
 !> and the simplified JKR cohesion (sJKR), as LIGGGHTS names them. The contact kernels call
 !> them only in a case whose material pairs use them. Pure and free of I/O, so that host

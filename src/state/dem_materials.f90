@@ -1,6 +1,6 @@
 !> Materials, the per-pair table (restitution, friction, rolling resistance, cohesion) and the
 !> constants the contact kernel needs, precomputed per material pair (doc/theory.md, sections
-!> 1, 2 and 14).
+!> 1, 2 and 15).
 module dem_materials
     use dem_kinds, only: wp, ip
     implicit none
@@ -8,7 +8,7 @@ module dem_materials
     public :: materials_t, pair_constants_t, contact_options_t, effective_moduli, &
               damping_ratio, pair_constants_build, rolling_none, rolling_cdt, rolling_epsd2
 
-    !> rolling resistance models of a material pair (doc/theory.md, section 14)
+    !> rolling resistance models of a material pair (doc/theory.md, section 15)
     integer(ip), parameter :: rolling_none = 0    !< no rolling resistance
     integer(ip), parameter :: rolling_cdt = 1     !< constant directional torque
     integer(ip), parameter :: rolling_epsd2 = 2   !< elastic-plastic spring (EPSD2)
@@ -55,7 +55,7 @@ module dem_materials
         real(wp), allocatable :: ct(:, :)     !< cn, or 0 without tangential damping [-]
         real(wp), allocatable :: mu(:, :)     !< sliding friction [-]
         type(contact_options_t) :: opts       !< the variant's switches, for the kernels
-        !> rolling resistance and cohesion (doc/theory.md, section 14): whether any pair has
+        !> rolling resistance and cohesion (doc/theory.md, section 15): whether any pair has
         !> them (the kernels take their extra path only then), and per pair the model, the
         !> coefficient mu_r [-] and the cohesion energy density k [J/m^3]
         logical :: rolling = .false.          !< some pair resists rolling

@@ -1,4 +1,4 @@
-"""Rolling resistance and cohesion in whole runs (doc/theory.md, section 14).
+"""Rolling resistance and cohesion in whole runs (doc/theory.md, section 15).
 
 1. A sphere rolling on a rigid plane (v0 = 0.1 m/s, w0 = v0 / R) with the constant
    directional torque (CDT) of rolling_friction mu_r: it decelerates at a = 5/7 mu_r g

@@ -1,4 +1,4 @@
-!> Rolling resistance and sJKR cohesion (dem_contact_extra, doc/theory.md section 14):
+!> Rolling resistance and sJKR cohesion (dem_contact_extra, doc/theory.md section 15):
 !> 1. sJKR through the particle kernel: two spheres at rest pressed together (equal radii and
 !>    unequal) feel the Hertz force less k pi a^2, a the radius of the circle in which their
 !>    surfaces cross (from the geometry of two intersecting spheres), at several overlaps;
