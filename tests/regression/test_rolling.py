@@ -8,7 +8,7 @@
    the deceleration is the same (not more: the limit holds) and so is the distance, to the
    spring's small elastic roll-back; it then stays at rest, held by the spring.
 3. A restart in the middle of an EPSD2 roll (the rolling spring in the checkpoint's wall
-   history) ends bit for bit where the straight run ends; and the box bed of the checkpoint
+   history, after the slots' tangential springs) ends bit for bit where the straight run ends; and the box bed of the checkpoint
    tests with EPSD2 rolling resistance and sJKR cohesion between the particles and with the
    walls (pair and wall springs, cohesive forces) gives the same final state and checkpoint
    on 1 and 2 ranks, and restarted mid-run.
@@ -93,7 +93,8 @@ run(roll_case("split", "epsd2", N * DT, CK))
 ckpt = os.path.join(work, "out_split", "checkpoints", f"checkpoint_{N:012d}.h5")
 with h5py.File(ckpt) as f:
     h = f["state/wall_contact_history"][()]
-    check(h.shape[-1] == 6 and np.any(h[..., 3:] != 0),
+    # (particle, column, 3): the 8 slots' displacements, then their rolling springs
+    check(h.shape[1] == 16 and np.any(h[:, 8:, :] != 0),
           f"the checkpoint holds the rolling spring ({h.shape})")
 roll_case("split", "epsd2", 2 * N * DT, CK)
 run("--restart", ckpt, "split.nml")
