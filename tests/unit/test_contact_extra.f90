@@ -14,7 +14,7 @@ program test_contact_extra
     use dem_contact_extra, only: rolling_torque, sjkr_area_pair
     use dem_contacts_pp, only: pp_forces, pp_scales
     use dem_contacts_pw, only: pw_forces
-    use dem_contact_store, only: max_wall_contacts, store_history_widths, n_pair_history
+    use dem_contact_store, only: max_wall_contacts, store_history_widths
     use dem_materials, only: rolling_none, rolling_cdt, rolling_epsd2
     use dem_mesh, only: mesh_t, mesh_add_plane
     use dem_assert, only: assert_true, assert_close, assert_finish
@@ -24,7 +24,7 @@ program test_contact_extra
     real(wp) :: kn(1, 1), sn(1, 1), st(1, 1), zero(1, 1), mu(1, 1), kc(1, 1), mur(1, 1)
     integer(ip) :: none(1, 1), model(1, 1)
     real(wp) :: x(3, 2), v(3, 2), w(3, 2), r(2), m(2), f(3, 2), t(3, 2), scale(2)
-    real(wp) :: rstar, d, dist, a2, hertz, xi6(6, 1), mr(3), tr(3), kr, lim, fn_el, expect
+    real(wp) :: rstar, d, dist, a2, hertz, xi3(3, 1), xi6(6, 1), mr(3), tr(3), kr, lim, fn_el, expect
     integer(ip) :: pair(2, 1), k, ri, s
     integer(i8) :: acc(6, 2)
     logical :: touching(1)
@@ -58,12 +58,11 @@ program test_contact_extra
             hertz = 4.0_wp / 3.0_wp * estar * sqrt(rstar) * d**1.5_wp
             f = 0.0_wp
             t = 0.0_wp
-            xi6 = 0.0_wp
+            xi3 = 0.0_wp
             touching = .false.
             call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
                            kn, sn, st, zero, zero, mu, .false., .true., 0.0_wp, 0.0_wp, &
-                           .true., .true., none, zero, kc, dt, xi6(1:n_pair_history, :), &
-                           touching, acc, f, t)
+                           .true., .true., none, zero, kc, dt, xi3, touching, acc, f, t)
             call assert_close(-f(1, 1), hertz - kcoh * pi * a2, 1.0e-9_wp, &
                               'sJKR pair: Hertz less k pi a^2')
             call assert_close(f(1, 2), -f(1, 1), 1.0e-12_wp, 'sJKR pair: opposite forces')
