@@ -49,7 +49,8 @@ contains
 
     !> The history per contact for a case: 3 reals (the tangential displacement), or 6 with
     !> a rolling spring (its torque after the displacement; for walls, in a second set of
-    !> columns). Set before the store is made (store_init) and the same on every rank.
+    !> columns). Set before the store is made (store_init), the same on every rank, and again
+    !> whenever a run of the process is entered (dem_solver), as each run has its own.
     subroutine store_history_widths(rolling_spring)
         logical, intent(in) :: rolling_spring
         n_pair_history = merge(max_pair_history, 3, rolling_spring)
