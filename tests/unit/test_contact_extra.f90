@@ -4,7 +4,8 @@
 !>    surfaces cross (from the geometry of two intersecting spheres), at several overlaps;
 !>    through the wall kernel, a sphere on a plane: Hertz less k pi (R^2 - d^2).
 !> 2. CDT: the torque is mu_r R* F_el against the tangential relative rotation, whatever its
-!>    size; a rotation about the normal (torsion) gives none.
+!>    size; a rotation about the normal (torsion) gives none; in the particle kernel, the two
+!>    particles get opposite torques.
 !> 3. EPSD2: under a steady relative rotation w, the spring torque grows as k_r w t,
 !>    k_r = k_t R*^2, until it reaches mu_r R* |F_n|, and stays there; the particle kernel
 !>    gives the two particles opposite torques and keeps the spring in rows 4-6 of the
@@ -96,6 +97,27 @@ program test_contact_extra
     call rolling_torque(rolling_cdt, 0.1_wp, rstar, kn(1, 1), st(1, 1), d, fn_el, &
                         [1.0_wp, 0.0_wp, 0.0_wp], [7.0_wp, 0.0_wp, 0.0_wp], dt, mr, tr)
     call assert_true(all(tr == 0.0_wp), 'CDT: no torque against torsion')
+
+    ! CDT in the particle kernel: sphere 1 turns about y against sphere 2 (x apart)
+    r = 1.0e-3_wp
+    m = 2500.0_wp * 4.0_wp / 3.0_wp * pi * r**3
+    call pp_scales(2_ip, m, 1.0e6_wp, scale)
+    x(:, 1) = 0.0_wp
+    x(:, 2) = [2.0e-3_wp - d, 0.0_wp, 0.0_wp]
+    w(:, 1) = [0.0_wp, 2.0_wp, 0.0_wp]
+    model = rolling_cdt
+    mur = 0.1_wp
+    f = 0.0_wp
+    t = 0.0_wp
+    xi3 = 0.0_wp
+    touching = .false.
+    call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, kn, sn, &
+                   st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, .true., .true., &
+                   model, mur, zero, dt, xi3, touching, acc, f, t)
+    call assert_close(t(2, 1), -0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: on the turning one')
+    call assert_close(t(2, 2), 0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: the opposite')
+    call assert_true(all(t([1, 3], :) == 0.0_wp), 'CDT pair: about y only')
+    w = 0.0_wp
 
     ! 3. EPSD2 in the particle kernel: sphere 1 turns at w about y against sphere 2
     call store_history_widths(.true.)
