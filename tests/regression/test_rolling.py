@@ -8,10 +8,11 @@
    the deceleration is the same (not more: the limit holds) and so is the distance, to the
    spring's small elastic roll-back; it then stays at rest, held by the spring.
 3. A restart in the middle of an EPSD2 roll (the rolling spring in the checkpoint's wall
-   history, after the slots' tangential springs) ends bit for bit where the straight run ends; and the box bed of the checkpoint
-   tests with EPSD2 rolling resistance and sJKR cohesion between the particles and with the
-   walls (pair and wall springs, cohesive forces) gives the same final state and checkpoint
-   on 1 and 2 ranks, and restarted mid-run.
+   history, after the slots' tangential springs) ends bit for bit where the straight run
+   ends; and the box bed of the checkpoint tests with EPSD2 rolling resistance and sJKR
+   cohesion between the particles and with the walls (pair and wall springs, cohesive
+   forces) gives the same final state and checkpoint on 1 and 2 ranks, and restarted
+   mid-run.
 usage: test_rolling.py DEM WORKDIR MPIEXEC"""
 import os
 import shutil

@@ -25,7 +25,8 @@ program test_contact_extra
     real(wp) :: kn(1, 1), sn(1, 1), st(1, 1), zero(1, 1), mu(1, 1), kc(1, 1), mur(1, 1)
     integer(ip) :: none(1, 1), model(1, 1)
     real(wp) :: x(3, 2), v(3, 2), w(3, 2), r(2), m(2), f(3, 2), t(3, 2), scale(2)
-    real(wp) :: rstar, d, dist, a2, hertz, xi3(3, 1), xi6(6, 1), mr(3), tr(3), kr, lim, fn_el, expect
+    real(wp) :: rstar, d, dist, a2, hertz, xi3(3, 1), xi6(6, 1), mr(3), tr(3), kr, lim, fn_el, &
+                expect
     integer(ip) :: pair(2, 1), k, ri, s
     integer(i8) :: acc(6, 2)
     logical :: touching(1)
