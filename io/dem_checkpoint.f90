@@ -15,7 +15,7 @@ module dem_checkpoint
     use dem_case, only: case_t
     use dem_mesh, only: mesh_t, mesh_move
     use dem_contact_store, only: max_wall_contacts, n_pair_history, n_wall_history, &
-                                 store_unique_pairs
+                                 n_wall_columns, store_unique_pairs
     use dem_text, only: itoa, step_file
     use dem_files, only: file_rename
     use dem_h5, only: h5_file_t, h5_create, h5_open, h5_close, h5_group, h5_write, h5_read, &
@@ -40,7 +40,7 @@ module dem_checkpoint
         integer(ip), allocatable :: contacts(:)   !< contacts of each particle (snapshots)
         ! contact history
         integer(ip), allocatable :: wall_tri(:, :)    !< (slot, particle)
-        real(wp), allocatable :: wall_xi(:, :, :)     !< (n_wall_history, slot, particle)
+        real(wp), allocatable :: wall_xi(:, :, :)     !< (n_wall_history, column, particle)
         integer(i8), allocatable :: pair(:, :)        !< (lower id, higher id) per pair
         real(wp), allocatable :: pair_xi(:, :)        !< (n_pair_history, pair)
         ! run bookkeeping
@@ -112,9 +112,9 @@ contains
         fr%f = moved(fr%f)
         fr%t = moved(fr%t)
         fr%wall_tri = int(moved_int(fr%wall_tri), ip)
-        fr%wall_xi = reshape(moved(reshape(fr%wall_xi, [n_wall_history * max_wall_contacts, &
+        fr%wall_xi = reshape(moved(reshape(fr%wall_xi, [n_wall_history * n_wall_columns, &
                                                         size(fr%wall_xi, 3)])), &
-                             [n_wall_history, max_wall_contacts, n])
+                             [n_wall_history, n_wall_columns, n])
 
         call route_pairs(fr, comm, bound, both=.false.)   ! to the rank of the lower id
     contains
@@ -535,7 +535,7 @@ contains
         fr%n = int(n, ip)
         allocate(fr%gid(n), fr%mat(n), fr%radius(n), fr%x(3, n), fr%v(3, n), fr%w(3, n), &
                  fr%f(3, n), fr%t(3, n), fr%wall_tri(max_wall_contacts, n), &
-                 fr%wall_xi(n_wall_history, max_wall_contacts, n))
+                 fr%wall_xi(n_wall_history, n_wall_columns, n))
         call h5_read(h, '/particles/id', fr%gid, err, first)
         call h5_read(h, '/particles/material', fr%mat, err, first)
         call h5_read(h, '/particles/radius', fr%radius, err, first)

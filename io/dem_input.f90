@@ -10,7 +10,7 @@ module dem_input
     use dem_namelist_scan, only: nml_file_t, nml_block_t, nml_scan, nml_items, nml_location
     use dem_case, only: case_t, insert_t, id_check_t, case_append_particles
     use dem_comm, only: comm_t
-    use dem_materials, only: contact_options_t
+    use dem_materials, only: contact_options_t, rolling_cdt, rolling_epsd2
     use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion, mesh_set_oscillation, &
                         mesh_set_tables
     use dem_stl, only: stl_read
@@ -41,7 +41,8 @@ module dem_input
         'contact_model: variant tangential_stiffness_factor tangential_damping clamp_normal ' // &
         'tangential_history lever_velocity lever_torque reset_pair_history', &
         'material: name density youngs_modulus poisson_ratio rigid', &
-        'pair: materials restitution friction', &
+        'pair: materials restitution friction rolling_friction rolling_model ' // &
+        'cohesion_energy_density', &
         'particle: id material radius position velocity angular_velocity', &
         'particle_file: file', &
         'insert: n material radius_distribution radius_min radius_max radius_mean radius_sd ' // &
@@ -494,9 +495,13 @@ contains
             m%n = n
             allocate(m%name(n), m%density(n), m%youngs(n), m%poisson(n), m%rigid(n))
             allocate(m%restitution(n, n), m%friction(n, n), m%pair_defined(n, n))
+            allocate(m%rolling_model(n, n), m%rolling_friction(n, n), m%cohesion(n, n))
             m%restitution = 0.0_wp
             m%friction = 0.0_wp
             m%pair_defined = .false.
+            m%rolling_model = rolling_cdt
+            m%rolling_friction = 0.0_wp
+            m%cohesion = 0.0_wp
             do k = 1, n
                 name = ''
                 density = unset
@@ -554,7 +559,12 @@ contains
         character(len=name_len) :: materials(2)  ! the two material names, required
         real(wp) :: restitution  ! coefficient of restitution, in (0, 1], required
         real(wp) :: friction     ! sliding friction coefficient, >= 0, required
-        namelist /pair/ materials, restitution, friction
+        real(wp) :: rolling_friction  ! rolling friction coefficient mu_r, >= 0 (default 0:
+                                      ! no rolling resistance)
+        character(len=name_len) :: rolling_model  ! 'cdt' (default) | 'epsd2'
+        real(wp) :: cohesion_energy_density  ! sJKR cohesion k, >= 0 [J/m^3] (default 0)
+        namelist /pair/ materials, restitution, friction, rolling_friction, rolling_model, &
+                        cohesion_energy_density
         type(nml_block_t) :: b
         integer :: k_item, ios
         character(len=512) :: msg
@@ -566,6 +576,9 @@ contains
             materials = ''
             restitution = unset
             friction = unset
+            rolling_friction = 0.0_wp
+            rolling_model = 'cdt'
+            cohesion_energy_density = 0.0_wp
             b = nf%blocks(block_index(nf, 'pair', k))
             do k_item = 0, block_item_count(b)
                 text = block_text(b, k_item)
@@ -604,6 +617,27 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'friction': must be >= 0")
                 return
             end if
+            if (.not. in_range(rolling_friction, 0.0_wp, unset, .true., .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'rolling_friction': must be >= 0")
+                return
+            end if
+            if (rolling_model /= 'cdt' .and. rolling_model /= 'epsd2') then
+                call set_error(err, dem_err_input, at // ": key 'rolling_model': must be " // &
+                               "'cdt' or 'epsd2' (got '" // trim(rolling_model) // "')")
+                return
+            end if
+            if (.not. in_range(cohesion_energy_density, 0.0_wp, unset, .true., .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'cohesion_energy_density': " // &
+                               'must be >= 0')
+                return
+            end if
+            c%mats%rolling_model(ia, ib) = merge(rolling_epsd2, rolling_cdt, &
+                                                 rolling_model == 'epsd2')
+            c%mats%rolling_model(ib, ia) = c%mats%rolling_model(ia, ib)
+            c%mats%rolling_friction(ia, ib) = rolling_friction
+            c%mats%rolling_friction(ib, ia) = rolling_friction
+            c%mats%cohesion(ia, ib) = cohesion_energy_density
+            c%mats%cohesion(ib, ia) = cohesion_energy_density
             c%mats%restitution(ia, ib) = restitution
             c%mats%restitution(ib, ia) = restitution
             c%mats%friction(ia, ib) = friction

@@ -14,6 +14,7 @@ program dem_main
     use dem_signals, only: signals_install
     use dem_folder, only: folder_conflict
     use dem_integrate, only: integrator_verlet
+    use dem_materials, only: rolling_epsd2
     implicit none
     type(comm_t) :: comm
     type(case_t) :: c
@@ -179,6 +180,14 @@ contains
         write(output_unit, '(a)') '  contact law          Hertz-Mindlin, variant ' // &
             trim(c%opts%variant) // ' (&contact_model), ' // &
             trim(merge('velocity Verlet ', 'symplectic Euler', c%integrator == integrator_verlet))
+        if (allocated(c%mats%rolling_friction)) then     ! (only in a case that has them)
+            if (any(c%mats%rolling_friction > 0.0_wp .and. c%mats%pair_defined)) &
+                write(output_unit, '(a)') '  rolling resistance   ' // trim(rolling_models(c)) &
+                // ' (&pair rolling_friction; doc/theory.md, section 15)'
+            if (any(c%mats%cohesion > 0.0_wp .and. c%mats%pair_defined)) &
+                write(output_unit, '(a)') '  cohesion             sJKR (&pair ' // &
+                'cohesion_energy_density; doc/theory.md, section 15)'
+        end if
         write(output_unit, '(a,es12.5,a,i0,a)') '  dt                   ', c%dt, ' s (', &
             ceiling(c%t_end / c%dt - 1.0e-9_wp), ' steps)'
         write(output_unit, '(a,f10.4)') '  dt / Rayleigh time   ', c%dt / ts%rayleigh
@@ -206,6 +215,20 @@ contains
                 'coming to rest); check series.csv''s kinetic_rotational, or lower dt'
         end if
     end subroutine print_check
+
+    !> The rolling resistance models the pairs of a case use ('cdt', 'epsd2' or both).
+    function rolling_models(c) result(names)
+        type(case_t), intent(in) :: c
+        character(len=:), allocatable :: names
+        logical :: used(2)
+        logical, allocatable :: rolls(:, :)
+        rolls = c%mats%rolling_friction > 0.0_wp .and. c%mats%pair_defined
+        used(1) = any(rolls .and. c%mats%rolling_model /= rolling_epsd2)
+        used(2) = any(rolls .and. c%mats%rolling_model == rolling_epsd2)
+        names = 'cdt, epsd2'
+        if (.not. used(2)) names = 'cdt'
+        if (.not. used(1)) names = 'epsd2'
+    end function rolling_models
 
     !> Steps, time per particle-step and time per phase of the run (rank 0's clocks). The
     !> particles are those of a step on the mean over the run (particle_steps over the steps:

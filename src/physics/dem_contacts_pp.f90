@@ -9,6 +9,9 @@
 module dem_contacts_pp
     use dem_kinds, only: wp, ip, i8
     use dem_contact_hm, only: hm_lanes, max_lanes
+    use dem_contact_extra, only: rolling_torque, sjkr_area_pair
+    use dem_materials, only: rolling_none, rolling_epsd2
+    use dem_contact_store, only: n_pair_history
     implicit none
     private
     public :: pp_forces, pp_scales, fixed_scale
@@ -44,10 +47,13 @@ contains
     !> relative velocity is R - shift_v d, in the torque R - shift_t d (0: the radius; 1/2:
     !> the contact point at mid-overlap, as LIGGGHTS). With `reset`, a pair's history is
     !> cleared when its contact ends; without, it is kept while the pair is listed (LIGGGHTS
-    !> 3.8.0) and continued by its next contact.
+    !> 3.8.0) and continued by its next contact. With `extra` (a case whose pairs resist
+    !> rolling or cohere), the rolling torque and the sJKR force (dem_contact_extra) of the
+    !> pair's model follow the contact law; the EPSD2 spring is xi(4:6, p).
     subroutine pp_forces(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
                          kn_ab, sn_ab, st_ab, cn_ab, ct_ab, mu_ab, clamp_normal, keep_length, &
-                         shift_v, shift_t, reset, dt, xi, touching, acc, f, t)
+                         shift_v, shift_t, reset, extra, rmodel_ab, mur_ab, kcoh_ab, dt, xi, &
+                         touching, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
         integer(ip), intent(in) :: nm             !! materials
@@ -61,8 +67,13 @@ contains
         logical, intent(in) :: clamp_normal, keep_length   !! (hm_lanes)
         real(wp), intent(in) :: shift_v, shift_t     !! levers R - shift d [-]
         logical, intent(in) :: reset                 !! the history cleared when a contact ends
+        logical, intent(in) :: extra                 !! some pair resists rolling or coheres
+        integer(ip), intent(in) :: rmodel_ab(nm, nm) !! rolling model (dem_materials)
+        real(wp), intent(in) :: mur_ab(nm, nm)       !! rolling friction [-]
+        real(wp), intent(in) :: kcoh_ab(nm, nm)      !! cohesion energy density [J/m^3]
         real(wp), intent(in) :: dt                   !! [s]
-        real(wp), intent(inout) :: xi(3, n_pairs)    !! tangential history of the first [m]
+        real(wp), intent(inout) :: xi(n_pair_history, n_pairs)  !! history of the first:
+                                                     !! xi [m], (EPSD2) spring [N m]
         logical, intent(inout) :: touching(n_pairs)  !! in contact (with `reset`, xi /= 0
                                                      !! only if so)
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
@@ -73,8 +84,8 @@ contains
         logical :: over
         integer(i8) :: kf(3), kc(3)
         real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, g, sv, &
-                    st_, ri, rj, mstar
-        logical :: shifted_v, shifted_t
+                    st_, ri, rj, mstar, wr(3), hr(3), tr(3)
+        logical :: shifted_v, shifted_t, extra_
         real(wp), dimension(tile + 1) :: e1, e2, e3, e4
         real(wp), dimension(tile) :: ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, &
                                      dtan, mu, x1, x2, x3, fn, f1, f2, f3
@@ -83,12 +94,13 @@ contains
         st_ = shift_t
         shifted_v = shift_v /= 0.0_wp
         shifted_t = shift_t /= 0.0_wp
+        extra_ = extra
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc) &
         !$acc private(over, side, a, b, mstar) &
         !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g, ri, rj) &
-        !$acc firstprivate(sv, st_, shifted_v, shifted_t) &
+        !$acc firstprivate(sv, st_, shifted_v, shifted_t, extra_) private(wr, hr, tr) &
         !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu) &
         !$acc private(x1, x2, x3, fn, f1, f2, f3)
         do p0 = 0, n_pairs - 1, tile
@@ -164,6 +176,37 @@ contains
             end if
             call hm_lanes(m, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu, &
                           clamp_normal, keep_length, dt, x1, x2, x3, fn, f1, f2, f3)
+            if (extra_) then        ! rolling resistance, cohesion: the torques into the sums
+                do l = 1, m         ! (over R, as n x F_t), the cohesion into fn
+                    p = lp(l)
+                    i = pair(1, p)
+                    j = pair(2, p)
+                    a = mat(i)
+                    b = mat(j)
+                    if (rmodel_ab(a, b) /= rolling_none) then
+                        hr = 0.0_wp
+                        if (rmodel_ab(a, b) == rolling_epsd2) hr = xi(4:6, p)
+                        wr = w(:, i) - w(:, j)
+                        call rolling_torque(rmodel_ab(a, b), mur_ab(a, b), rs(l), kn(l), st(l), &
+                                            ov(l), fn(l), [n1(l), n2(l), n3(l)], wr, dt, hr, tr)
+                        if (rmodel_ab(a, b) == rolling_epsd2) xi(4:6, p) = hr
+                        do c = 1, 3
+                            kc(c) = to_fixed(tr(c) / radius(i) * scale(i))
+                            !$acc atomic update
+                            acc(c + 3, i) = acc(c + 3, i) + kc(c)
+                        end do
+                        if (j <= n_own) then
+                            do c = 1, 3
+                                kc(c) = to_fixed(-tr(c) / radius(j) * scale(j))
+                                !$acc atomic update
+                                acc(c + 3, j) = acc(c + 3, j) + kc(c)
+                            end do
+                        end if
+                    end if
+                    if (kcoh_ab(a, b) > 0.0_wp) fn(l) = fn(l) - kcoh_ab(a, b) &
+                        * sjkr_area_pair(radius(i), radius(j), sqrt(e4(l)))
+                end do
+            end if
             ! the history back, and F and n x F_t into both particles' sums
             do l = 1, m
                 p = lp(l)

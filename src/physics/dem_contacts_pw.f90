@@ -6,8 +6,10 @@
 module dem_contacts_pw
     use dem_kinds, only: wp, ip
     use dem_contact_hm, only: hm_force
+    use dem_contact_extra, only: rolling_torque, sjkr_area_wall
+    use dem_materials, only: rolling_none
     use dem_mesh, only: closest_point_triangle, feature_face
-    use dem_contact_store, only: max_wall_contacts, n_wall_history
+    use dem_contact_store, only: max_wall_contacts, n_wall_columns
     implicit none
     private
     public :: pw_forces
@@ -175,11 +177,14 @@ contains
     !> particles with more separate contacts than the history store holds. The levers of the
     !> rotation are R - shift_v d and R - shift_t d, as in pp_forces. With `record` (a step
     !> whose wall loads a probe reports), each contact's force on the particle and its
-    !> contact point go to wload, beside its slot of wtri.
+    !> contact point go to wload, beside its slot of wtri. With `extra`, the rolling torque
+    !> and the sJKR force of the pair's model follow (as in pp_forces; R* = R, the wall's
+    !> rotation taken from the particle's); the EPSD2 spring of slot s is
+    !> wxi(:, max_wall_contacts + s).
     subroutine pw_forces(n_own, n_row, row, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, &
                          mat, wstart, wlist, vert, tmat, twall, wall_v, wall_w, wall_c, kn, sn, &
-                         st, cn, ct, mu, clamp_normal, keep_length, shift_v, shift_t, dt, wtri, &
-                         wxi, record, n_load, wload, f, t, overflow)
+                         st, cn, ct, mu, clamp_normal, keep_length, shift_v, shift_t, extra, &
+                         rmodel, mur, kcoh, dt, wtri, wxi, record, n_load, wload, f, t, overflow)
         integer(ip), intent(in) :: n_own, n_cand, n_tri, n_wall, nm
         integer(ip), intent(in) :: n_row, row(:)   !! the particles near walls or with wall
                                                    !! history (dem_neighbors)
@@ -197,9 +202,14 @@ contains
         real(wp), intent(in) :: cn(nm, nm), ct(nm, nm), mu(nm, nm)   !! [-]
         logical, intent(in) :: clamp_normal, keep_length              !! (hm_force)
         real(wp), intent(in) :: shift_v, shift_t                      !! [-]
+        logical, intent(in) :: extra              !! some pair resists rolling or coheres
+        integer(ip), intent(in) :: rmodel(nm, nm) !! rolling model (dem_materials)
+        real(wp), intent(in) :: mur(nm, nm)       !! rolling friction [-]
+        real(wp), intent(in) :: kcoh(nm, nm)      !! cohesion energy density [J/m^3]
         real(wp), intent(in) :: dt                                    !! [s]
         integer(ip), intent(inout) :: wtri(max_wall_contacts, n_own)
-        real(wp), intent(inout) :: wxi(n_wall_history, max_wall_contacts, n_own)  !! [m]
+        real(wp), intent(inout) :: wxi(3, n_wall_columns, n_own)   !! the slots' springs [m],
+                                                   !! then (EPSD2) their rolling springs [N m]
         logical, intent(in) :: record
         integer(ip), intent(in) :: n_load                             !! n_own when recording
         real(wp), intent(inout) :: wload(6, max_wall_contacts, n_load) !! [N], [m]
@@ -209,16 +219,17 @@ contains
         integer(ip) :: new_tri(max_wall_contacts), ctri(max_wall_candidates), fk
         integer(ip) :: slot(max_wall_candidates)
         real(wp) :: q(3, max_wall_candidates), qk(3)
-        real(wp) :: cv(3, 3, max_wall_candidates), new_xi(n_wall_history, max_wall_contacts)
-        real(wp) :: nrm(3), vrel(3), xik(n_wall_history), fn, ft(3), fi(3), ti(3), dist, r, tol, &
-                    ws(3), d(3), lever
-        logical :: keep(max_wall_candidates), many, over
+        real(wp) :: cv(3, 3, max_wall_candidates), new_xi(3, max_wall_contacts)
+        real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r, tol, &
+                    ws(3), d(3), lever, tr(3), xr(3), new_xr(3, max_wall_contacts)
+        logical :: keep(max_wall_candidates), many, over, spring
 
         overflow = 0
+        spring = n_wall_columns > max_wall_contacts   ! the slots' EPSD2 springs after theirs
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
         !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk) &
         !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, tol, keep, slot) &
-        !$acc private(many, over, i, wl, ws, d, lever)
+        !$acc private(many, over, i, wl, ws, d, lever, tr, xr, new_xr) firstprivate(spring)
         do kr = 1, n_row
             i = row(kr)
             r = radius(i)
@@ -278,7 +289,19 @@ contains
                 b = tmat(tri)
                 call hm_force(r - dist, nrm, vrel, r, mass(i), kn(a, b), sn(a, b), st(a, b), &
                               cn(a, b), ct(a, b), mu(a, b), clamp_normal, keep_length, dt, &
-                              xik(1:3), fn, ft)
+                              xik, fn, ft)
+                if (extra) then          ! rolling resistance, cohesion
+                    xr = 0.0_wp
+                    if (spring .and. slot(c) > 0) xr = wxi(:, max_wall_contacts + slot(c), i)
+                    if (rmodel(a, b) /= rolling_none) then
+                        call rolling_torque(rmodel(a, b), mur(a, b), r, kn(a, b), st(a, b), &
+                                            r - dist, fn, nrm, w(:, i) - wall_w(:, wl), dt, &
+                                            xr, tr)
+                        ti = ti + tr
+                    end if
+                    new_xr(:, ns + 1) = xr
+                    if (kcoh(a, b) > 0.0_wp) fn = fn - kcoh(a, b) * sjkr_area_wall(r, dist)
+                end if
                 ns = ns + 1
                 new_tri(ns) = tri
                 new_xi(:, ns) = xik
@@ -294,10 +317,12 @@ contains
             end do
             wtri(1:ns, i) = new_tri(1:ns)
             wxi(:, 1:ns, i) = new_xi(:, 1:ns)
+            if (spring) wxi(:, max_wall_contacts + 1:max_wall_contacts + ns, i) = new_xr(:, 1:ns)
             do c = ns + 1, max_wall_contacts       ! empty the slots no longer used
                 if (wtri(c, i) == 0) exit
                 wtri(c, i) = 0
                 wxi(:, c, i) = 0.0_wp
+                if (spring) wxi(:, max_wall_contacts + c, i) = 0.0_wp
             end do
             f(:, i) = f(:, i) + fi
             t(:, i) = t(:, i) + ti

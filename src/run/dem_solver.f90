@@ -9,7 +9,7 @@ module dem_solver
     use dem_particles, only: particles_init, particles_add, order_by_id
     use dem_domain, only: domain_imbalance, sorted_by_rank
     use dem_materials, only: pair_constants_build
-    use dem_contact_store, only: store_init, max_wall_contacts
+    use dem_contact_store, only: store_init, max_wall_contacts, store_history_widths
     use dem_integrate, only: integrator_verlet
     use dem_diagnostics, only: deep_overlap_id, deep_wall_id
     use dem_output, only: output_open, output_final, output_close
@@ -55,6 +55,10 @@ contains
         s%trace_id = c%trace_id
         call pair_constants_build(c%mats, c%opts, s%pc)
         s%mesh = c%mesh
+        ! the widths of the contact history (3 reals, 6 with EPSD2), process-wide: set again
+        ! at each entry into the run (solver_start, _advance, _finish), so that several runs
+        ! of one process (dem_coupling) each work with their own
+        call store_history_widths(s%pc%rolling_spring)
         call store_init(s%cs, n_mine)
         s%load_probes = any(c%probes%kind == probe_wall_load)
         allocate(s%wall_loads(7, size(c%probes)), s%wload(6, max_wall_contacts, 1))
@@ -102,6 +106,7 @@ contains
         character(len=:), allocatable :: columns
         integer :: k
         logical :: bad
+        call store_history_widths(s%pc%rolling_spring)     ! (this run's: see solver_init)
         associate (r => s%run)
             r%started = started
             call plan_run(s, c)
@@ -267,6 +272,7 @@ contains
         type(case_t), intent(in) :: c
         integer(i8), intent(in) :: until
         type(error_t), intent(inout) :: err
+        call store_history_widths(s%pc%rolling_spring)     ! (this run's: see solver_init)
         call timer_start(s%timers)
         do while (s%step < min(until, s%run%n_end) .and. .not. (err%failed() .or. s%settled &
                   .or. s%emptied .or. s%stopped /= stop_end))
@@ -283,6 +289,7 @@ contains
         type(error_t), intent(inout) :: err
         type(frame_t) :: fr
         logical :: bad
+        call store_history_widths(s%pc%rolling_spring)     ! (this run's: see solver_init)
         if (s%settled .and. s%stopped == stop_end) s%stopped = stop_settled
         if (s%emptied .and. s%stopped == stop_end) s%stopped = stop_emptied
         if (.not. err%failed() .and. any(s%stopped == [stop_end, stop_settled, stop_emptied])) then

@@ -146,7 +146,8 @@ contains
             call pp_forces(n, n + p%n_ghost, nb%n_pairs, c%mats%n, p%x, p%v, p%w, p%radius, &
                            p%mass, p%mat, nb%scale, nb%pair, pc%kn, pc%sn, pc%st, pc%cn, pc%ct, &
                            pc%mu, o%clamp_normal, o%keep_length, o%shift_v, o%shift_t, &
-                           o%reset_pair_history, c%dt, s%cs%xi, s%cs%touching, nb%acc, p%f, p%t)
+                           o%reset_pair_history, pc%rolling .or. pc%cohesion, pc%rmodel, &
+                           pc%mur, pc%kcoh, c%dt, s%cs%xi, s%cs%touching, nb%acc, p%f, p%t)
         end associate
     end subroutine particle_contacts
 
@@ -171,7 +172,8 @@ contains
                            p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%wstart, nb%wlist, m%vert, &
                            m%mat, m%wall, m%wall_v, m%wall_w, m%wall_c, pc%kn, pc%sn, pc%st, &
                            pc%cn, pc%ct, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, &
-                           o%shift_t, c%dt, s%cs%wall_tri, s%cs%wall_xi, s%loads_due, n_load, &
+                           o%shift_t, pc%rolling .or. pc%cohesion, pc%rmodel, pc%mur, pc%kcoh, &
+                           c%dt, s%cs%wall_tri, s%cs%wall_xi, s%loads_due, n_load, &
                            s%wload, p%f, p%t, overflow)
             if (s%loads_due) then
                 do k = 1, size(c%probes)

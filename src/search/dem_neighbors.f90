@@ -13,7 +13,8 @@ module dem_neighbors
                          sort_segment, gather_items, morton_bits, morton_number
     use dem_particles, only: index_of_id
     use dem_mesh, only: mesh_t, closest_point_triangle
-    use dem_contact_store, only: contact_store_t, n_pair_history, store_pairs_new, &
+    use dem_contact_store, only: contact_store_t, n_pair_history, max_pair_history, &
+                                 store_pairs_new, &
                                  store_pairs_take, carry_history, touching_from_history, &
                                  history_counts, history_fill, side_history, sort_history_row
     implicit none
@@ -876,25 +877,26 @@ contains
         integer(ip), intent(in) :: order(:)      !! the owned particles by increasing id
         integer(i8), allocatable, intent(out) :: pair(:, :)  !! (2, pairs)
         real(wp), allocatable, intent(out) :: xi(:, :)       !! (n_pair_history, pairs) [m]
-        integer(ip) :: a, i, k, m, pass
-        real(wp) :: h(n_pair_history)
+        integer(ip) :: a, i, k, m, pass, nh
+        real(wp) :: h(max_pair_history)
+        nh = n_pair_history
         do pass = 1, 2
             m = 0
             do a = 1, n_own
                 i = order(a)
                 do k = nb%start(i), nb%start(i + 1) - 1
                     call side_history(size(nb%pref, kind=ip), size(cs%xi, 2, kind=ip), k, &
-                                      nb%pref, cs%xi, h)
-                    if (all(h == 0.0_wp)) cycle
+                                      nb%pref, cs%xi, h(1:nh))
+                    if (all(h(1:nh) == 0.0_wp)) cycle
                     if (nb%partner(k) < gid(i) .and. nb%mirror(k) /= 0) cycle
                     m = m + 1
                     if (pass == 1) cycle
                     if (nb%partner(k) > gid(i)) then
                         pair(:, m) = [gid(i), nb%partner(k)]
-                        xi(:, m) = h
+                        xi(:, m) = h(1:nh)
                     else
                         pair(:, m) = [nb%partner(k), gid(i)]
-                        xi(:, m) = -h
+                        xi(:, m) = -h(1:nh)
                     end if
                 end do
             end do

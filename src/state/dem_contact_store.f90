@@ -3,8 +3,11 @@
 !> every particle's wall contacts, in slots per particle keyed by triangle. This module gives
 !> the contact kernels their arrays and moves the history across list rebuilds (carried by
 !> partner id), between ranks (packed rows) and into and out of checkpoints (pairs by id).
-!> Every array of history has n_pair_history or n_wall_history reals per contact: a new
-!> per-contact quantity (a rolling spring, say) is a larger constant here and its kernel.
+!> A pair's history has n_pair_history reals: the tangential displacement (3), followed, in
+!> a case with a rolling spring (EPSD2), by the spring's torque (3 more). A particle's wall
+!> history has n_wall_columns columns of 3 reals: the displacements of its max_wall_contacts
+!> slots, followed, with EPSD2, by their rolling springs (so that the wall kernel's columns
+!> keep their constant length). store_history_widths sets both once per case.
 module dem_contact_store
     use dem_kinds, only: wp, ip, i8
     use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int
@@ -18,13 +21,19 @@ module dem_contact_store
               store_init, store_walls_reserve, store_walls_reserve_on_device, store_walls_restore, &
               store_walls_permute, store_walls_pack, store_walls_unpack, store_unique_pairs, &
               carry_history, touching_from_history, history_counts, history_fill, &
-              side_history, sort_history_row
+              side_history, sort_history_row, store_history_widths, max_pair_history, &
+              n_wall_columns
 
-    integer, parameter :: n_pair_history = 3     !< reals per particle pair: xi [m]
-    integer, parameter :: n_wall_history = 3     !< reals per wall contact: xi [m]
+    integer, parameter :: max_pair_history = 6   !< the most reals per contact
+    !> reals per particle pair: xi [m], then the rolling spring's torque [N m] with EPSD2
+    integer, protected :: n_pair_history = 3
+    integer, parameter :: n_wall_history = 3     !< reals per column of wall history
     integer(ip), parameter :: max_wall_contacts = 8     !< wall contact slots per particle
+    !> columns of wall history per particle: max_wall_contacts, twice that with EPSD2
+    integer, protected :: n_wall_columns = max_wall_contacts
     !> reals per packed particle (the triangles travel as reals: exact below 2^53)
-    integer, parameter :: n_wall_pack_real = (1 + n_wall_history) * max_wall_contacts
+    integer, protected :: n_wall_pack_real = (1 + n_wall_history) * max_wall_contacts
+    !$acc declare copyin(n_pair_history)
 
     type :: contact_store_t
         !> history of each pair p of the lists (of their first particle's side), and whether
@@ -33,10 +42,22 @@ module dem_contact_store
         real(wp), allocatable :: xi(:, :)        !< (n_pair_history, pair)
         logical, allocatable :: touching(:)
         integer(ip), allocatable :: wall_tri(:, :)   !< (slot, particle); 0: a free slot
-        real(wp), allocatable :: wall_xi(:, :, :)    !< (n_wall_history, slot, particle)
+        real(wp), allocatable :: wall_xi(:, :, :)    !< (n_wall_history, column, particle)
     end type contact_store_t
 
 contains
+
+    !> The history per contact for a case: 3 reals (the tangential displacement), or 6 with
+    !> a rolling spring (its torque after the displacement; for walls, in a second set of
+    !> columns). Set before the store is made (store_init), the same on every rank, and again
+    !> whenever a run of the process is entered (dem_solver), as each run has its own.
+    subroutine store_history_widths(rolling_spring)
+        logical, intent(in) :: rolling_spring
+        n_pair_history = merge(max_pair_history, 3, rolling_spring)
+        n_wall_columns = merge(2, 1, rolling_spring) * max_wall_contacts
+        n_wall_pack_real = max_wall_contacts + n_wall_history * n_wall_columns
+        !$acc update device(n_pair_history)
+    end subroutine store_history_widths
 
     !> No history for n_pairs new pairs (on the device, not set: the caller fills xi).
     subroutine store_pairs_new(cs, n_pairs)
@@ -93,7 +114,7 @@ contains
         type(contact_store_t), intent(out) :: cs
         integer(ip), intent(in) :: capacity
         allocate(cs%wall_tri(max_wall_contacts, capacity), &
-                 cs%wall_xi(n_wall_history, max_wall_contacts, capacity))
+                 cs%wall_xi(n_wall_history, n_wall_columns, capacity))
         cs%wall_tri = 0
         cs%wall_xi = 0.0_wp
     end subroutine store_init
@@ -104,7 +125,7 @@ contains
         type(contact_store_t), intent(inout) :: cs
         integer(ip), intent(in) :: n
         integer(ip), intent(in) :: tri(max_wall_contacts, n)
-        real(wp), intent(in) :: xi(n_wall_history, max_wall_contacts, n)
+        real(wp), intent(in) :: xi(n_wall_history, n_wall_columns, n)
         call store_walls_reserve(cs, 0, n)
         cs%wall_tri = 0
         cs%wall_xi = 0.0_wp
@@ -147,7 +168,7 @@ contains
         integer(ip), intent(in) :: order(:)
         call permute_int(max_wall_contacts, size(cs%wall_tri, 2, kind=ip), &
                          size(order, kind=ip), order, cs%wall_tri)
-        call permute_real(n_wall_history * max_wall_contacts, size(cs%wall_tri, 2, kind=ip), &
+        call permute_real(n_wall_history * n_wall_columns, size(cs%wall_tri, 2, kind=ip), &
                           size(order, kind=ip), order, cs%wall_xi)
     end subroutine store_walls_permute
 
@@ -166,7 +187,7 @@ contains
     subroutine pack_walls(capacity, n, idx, tri, xi, rows, row0, rbuf)
         integer(ip), intent(in) :: capacity, n, rows, row0
         integer(ip), intent(in) :: idx(n), tri(max_wall_contacts, capacity)
-        real(wp), intent(in) :: xi(n_wall_history * max_wall_contacts, capacity)
+        real(wp), intent(in) :: xi(n_wall_history * n_wall_columns, capacity)
         real(wp), intent(inout) :: rbuf(rows, n)
         integer(ip) :: k, j
         !$acc parallel loop gang vector copyin(idx, tri, xi) copy(rbuf)
@@ -174,7 +195,7 @@ contains
             do j = 1, max_wall_contacts
                 rbuf(row0 + j, k) = real(tri(j, idx(k)), wp)
             end do
-            do j = 1, n_wall_history * max_wall_contacts
+            do j = 1, n_wall_history * n_wall_columns
                 rbuf(row0 + max_wall_contacts + j, k) = xi(j, idx(k))
             end do
         end do
@@ -194,14 +215,14 @@ contains
         integer(ip), intent(in) :: capacity, first, n, rows, row0
         real(wp), intent(in) :: rbuf(rows, n)
         integer(ip), intent(inout) :: tri(max_wall_contacts, capacity)
-        real(wp), intent(inout) :: xi(n_wall_history * max_wall_contacts, capacity)
+        real(wp), intent(inout) :: xi(n_wall_history * n_wall_columns, capacity)
         integer(ip) :: k, j
         !$acc parallel loop gang vector copyin(rbuf) copy(tri, xi)
         do k = 1, n
             do j = 1, max_wall_contacts
                 tri(j, first + k - 1) = nint(rbuf(row0 + j, k), ip)
             end do
-            do j = 1, n_wall_history * max_wall_contacts
+            do j = 1, n_wall_history * n_wall_columns
                 xi(j, first + k - 1) = rbuf(row0 + max_wall_contacts + j, k)
             end do
         end do
@@ -274,14 +295,15 @@ contains
         integer(ip), intent(in) :: start(n_own + 1), pref(n_entries)
         real(wp), intent(in) :: xi(n_pair_history, n_pairs)
         integer(ip), intent(inout) :: cnt(n_own)
-        integer(ip) :: i, k, m
-        real(wp) :: h(n_pair_history)
+        integer(ip) :: i, k, m, nh
+        real(wp) :: h(max_pair_history)          ! (of fixed size: private on a device)
+        nh = n_pair_history
         !$acc parallel loop gang vector default(present) private(k, m, h)
         do i = 1, n_own
             m = 0
             do k = start(i), start(i + 1) - 1
-                call side_history(n_entries, n_pairs, k, pref, xi, h)
-                if (any(h /= 0.0_wp)) m = m + 1
+                call side_history(n_entries, n_pairs, k, pref, xi, h(1:nh))
+                if (any(h(1:nh) /= 0.0_wp)) m = m + 1
             end do
             cnt(i) = m
         end do
@@ -296,16 +318,17 @@ contains
         real(wp), intent(in) :: xi(n_pair_history, n_pairs)
         integer(i8), intent(inout) :: hpartner(n_h)
         real(wp), intent(inout) :: hxi(n_pair_history, n_h)
-        integer(ip) :: i, k, m
-        real(wp) :: h(n_pair_history)
+        integer(ip) :: i, k, m, nh
+        real(wp) :: h(max_pair_history)          ! (of fixed size: private on a device)
+        nh = n_pair_history
         !$acc parallel loop gang vector default(present) private(k, m, h)
         do i = 1, n_own
             m = hstart(i)
             do k = start(i), start(i + 1) - 1
-                call side_history(n_entries, n_pairs, k, pref, xi, h)
-                if (all(h == 0.0_wp)) cycle
+                call side_history(n_entries, n_pairs, k, pref, xi, h(1:nh))
+                if (all(h(1:nh) == 0.0_wp)) cycle
                 hpartner(m) = partner(k)
-                hxi(:, m) = h
+                hxi(:, m) = h(1:nh)
                 m = m + 1
             end do
         end do
@@ -320,10 +343,12 @@ contains
         integer(ip), intent(in) :: pref(n_entries)
         real(wp), intent(in) :: xi(n_pair_history, n_pairs)
         real(wp), intent(out) :: h(n_pair_history)
-        if (pref(k) < 0) then
-            h = -xi(:, -pref(k))
+        if (pref(k) < 0) then          ! (the rows beyond 3 only in a case that has them)
+            h(1:3) = -xi(1:3, -pref(k))
+            if (n_pair_history > 3) h(4:) = -xi(4:, -pref(k))
         else
-            h = xi(:, pref(k))
+            h(1:3) = xi(1:3, pref(k))
+            if (n_pair_history > 3) h(4:) = xi(4:, pref(k))
         end if
     end subroutine side_history
 

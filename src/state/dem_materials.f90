@@ -1,11 +1,17 @@
-!> Materials, the per-pair table (restitution, friction) and the constants the contact kernel
-!> needs, precomputed per material pair (doc/theory.md, sections 1 and 2).
+!> Materials, the per-pair table (restitution, friction, rolling resistance, cohesion) and the
+!> constants the contact kernel needs, precomputed per material pair (doc/theory.md, sections
+!> 1, 2 and 15).
 module dem_materials
     use dem_kinds, only: wp, ip
     implicit none
     private
     public :: materials_t, pair_constants_t, contact_options_t, effective_moduli, &
-              damping_ratio, pair_constants_build
+              damping_ratio, pair_constants_build, rolling_none, rolling_cdt, rolling_epsd2
+
+    !> rolling resistance models of a material pair (doc/theory.md, section 15)
+    integer(ip), parameter :: rolling_none = 0    !< no rolling resistance
+    integer(ip), parameter :: rolling_cdt = 1     !< constant directional torque
+    integer(ip), parameter :: rolling_epsd2 = 2   !< elastic-plastic spring (EPSD2)
 
     !> Material properties; a rigid material has zero elastic compliance (Chung & Ooi walls).
     type :: materials_t
@@ -18,6 +24,11 @@ module dem_materials
         real(wp), allocatable :: restitution(:, :)  !< per pair, symmetric [-]
         real(wp), allocatable :: friction(:, :)     !< sliding friction per pair [-]
         logical, allocatable :: pair_defined(:, :)  !< the input named this pair
+        !> rolling resistance per pair: model (rolling_none, _cdt, _epsd2), coefficient [-];
+        !> sJKR cohesion energy density per pair [J/m^3] (unallocated: none anywhere)
+        integer(ip), allocatable :: rolling_model(:, :)
+        real(wp), allocatable :: rolling_friction(:, :)
+        real(wp), allocatable :: cohesion(:, :)
     end type materials_t
 
     !> Variants of the Hertz-Mindlin law used by other codes (doc/theory.md, section 3).
@@ -44,6 +55,15 @@ module dem_materials
         real(wp), allocatable :: ct(:, :)     !< cn, or 0 without tangential damping [-]
         real(wp), allocatable :: mu(:, :)     !< sliding friction [-]
         type(contact_options_t) :: opts       !< the variant's switches, for the kernels
+        !> rolling resistance and cohesion (doc/theory.md, section 15): whether any pair has
+        !> them (the kernels take their extra path only then), and per pair the model, the
+        !> coefficient mu_r [-] and the cohesion energy density k [J/m^3]
+        logical :: rolling = .false.          !< some pair resists rolling
+        logical :: rolling_spring = .false.   !< some pair's model has a spring (EPSD2)
+        logical :: cohesion = .false.         !< some pair is cohesive
+        integer(ip), allocatable :: rmodel(:, :)
+        real(wp), allocatable :: mur(:, :)
+        real(wp), allocatable :: kcoh(:, :)
     end type pair_constants_t
 
 contains
@@ -95,6 +115,10 @@ contains
         pc%cn = 0.0_wp
         pc%ct = 0.0_wp
         pc%mu = 0.0_wp
+        allocate(pc%rmodel(n, n), pc%mur(n, n), pc%kcoh(n, n))
+        pc%rmodel = rolling_none
+        pc%mur = 0.0_wp
+        pc%kcoh = 0.0_wp
         pc%opts = opts
         do b = 1, n
             do a = 1, n
@@ -108,7 +132,17 @@ contains
                               * damping_ratio(mats%restitution(a, b))
                 if (opts%tangential_damping) pc%ct(a, b) = pc%cn(a, b)
                 pc%mu(a, b) = mats%friction(a, b)
+                if (allocated(mats%rolling_model)) then
+                    if (mats%rolling_friction(a, b) > 0.0_wp) then
+                        pc%rmodel(a, b) = mats%rolling_model(a, b)
+                        pc%mur(a, b) = mats%rolling_friction(a, b)
+                    end if
+                end if
+                if (allocated(mats%cohesion)) pc%kcoh(a, b) = mats%cohesion(a, b)
             end do
         end do
+        pc%rolling = any(pc%rmodel /= rolling_none)
+        pc%rolling_spring = any(pc%rmodel == rolling_epsd2)
+        pc%cohesion = any(pc%kcoh > 0.0_wp)
     end subroutine pair_constants_build
 end module dem_materials

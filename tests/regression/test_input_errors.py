@@ -103,6 +103,18 @@ for e in ("0.0", "1.5", "-0.5"):
 bad("negative_friction", sub("'glass', 'glass', restitution = 0.5, friction = 0.3",
                              "'glass', 'glass', restitution = 0.5, friction = -0.1"),
     "pair", "friction")
+bad("negative_rolling_friction",
+    sub("'glass', 'glass', restitution = 0.5, friction = 0.3",
+        "'glass', 'glass', restitution = 0.5, friction = 0.3, rolling_friction = -0.1"),
+    "pair", "rolling_friction")
+bad("unknown_rolling_model",
+    sub("'glass', 'glass', restitution = 0.5, friction = 0.3",
+        "'glass', 'glass', restitution = 0.5, friction = 0.3, rolling_model = 'epsd9'"),
+    "pair", "rolling_model", "'epsd9'")
+bad("negative_cohesion",
+    sub("'glass', 'steel', restitution = 0.5, friction = 0.3",
+        "'glass', 'steel', restitution = 0.5, friction = 0.3, cohesion_energy_density = -1"),
+    "pair", "cohesion_energy_density")
 bad("undefined_pair", sub("&pair materials = 'glass', 'steel', restitution = 0.5, "
                           "friction = 0.3 /\n", ""), "pair", None, "'glass' and 'steel'")
 bad("nan_position", sub("position = 0, 0, 0.011", "position = 0, NaN, 0.011"), "particle",

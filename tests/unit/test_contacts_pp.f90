@@ -26,6 +26,7 @@ program test_contacts_pp
     integer(i8) :: gid(n)
     integer(ip) :: mat(n), i, order(n), trial, variant
     real(wp) :: shift
+    integer(ip) :: none(1, 1) = 0
     type(neighbors_t) :: nb
     type(contact_store_t) :: cs
     type(mesh_t) :: no_walls
@@ -69,8 +70,8 @@ program test_contacts_pp
             t = 0.0_wp
             call pp_forces(n, n, nb%n_pairs, 1_ip, x(:, order), v(:, order), w(:, order), &
                            r(order), m(order), mat, nb%scale, nb%pair, kn, sn, st, cn, cn, mu, &
-                           .false., .true., shift, shift, .true., dt, cs%xi, cs%touching, nb%acc, &
-                           f, t)
+                           .false., .true., shift, shift, .true., .false., none, cn, cn, dt, &
+                           cs%xi, cs%touching, nb%acc, f, t)
             back(order) = [(i, i = 1, n)]
             f = f(:, back)                     ! back in the order of the brute force
             t = t(:, back)

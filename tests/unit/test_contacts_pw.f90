@@ -25,7 +25,7 @@ program test_contacts_pw
     real(wp) :: wxi1(3, max_wall_contacts, 1), f1(3, 1), t1(3, 1), worst
     integer(ip), allocatable :: wlist(:)
     type(contact_store_t) :: wa, wb
-    real(wp) :: buf(2 + n_wall_pack_real, 3)
+    real(wp), allocatable :: buf(:, :)
 
     call mesh_add_plane(m, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], 0.05_wp, 10_ip, &
                         2_ip)
@@ -101,6 +101,7 @@ program test_contacts_pw
         wa%wall_tri(:, i) = [(100 * i + k, k = 1, max_wall_contacts)]
         call random_number(wa%wall_xi(:, :, i))
     end do
+    allocate(buf(2 + n_wall_pack_real, 3))
     buf = -1.0_wp
     call store_walls_pack(wa, 3_ip, [4_ip, 1_ip, 3_ip], 2_ip, buf)
     call assert_true(all(buf(1:2, :) == -1.0_wp), 'packing leaves the rows before it alone')
@@ -181,7 +182,8 @@ contains
                        [1_ip], [1_ip, mm%n_tri + 1], wlist, mm%vert, mm%mat, mm%wall, &
                        mm%wall_v, mm%wall_w, mm%wall_c, kn, &
                        2.0_wp * estar + zero, st, zero, zero, mu, .false., .true., 0.0_wp, &
-                       0.0_wp, 1.0e-3_wp, stri, sxi, .true., 1_ip, load, fo, to, overflow)
+                       0.0_wp, .false., reshape([0_ip, 0_ip, 0_ip, 0_ip], [2, 2]), zero, &
+                       zero, 1.0e-3_wp, stri, sxi, .true., 1_ip, load, fo, to, overflow)
         call assert_true(overflow == 0, 'no overflow')
         ! the recorded contact forces add up to the wall force on the sphere, and each
         ! contact point is on the sphere's surface side, within its radius of the centre

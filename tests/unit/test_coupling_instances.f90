@@ -1,6 +1,7 @@
 !> Two coupled runs in one process, each on its own coupling_t handle (run on 1 and 2 ranks):
 !> bed A (60 spheres of 1 mm falling onto a floor in a box, dt 2e-5 s) and bed B (40 spheres
-!> of 0.5 to 0.8 mm of another material onto a floor, dt 1.5e-5 s), each given a drag
+!> of 0.5 to 0.8 mm of another material onto a floor, dt 1.5e-5 s, with EPSD2 rolling
+!> resistance and sJKR cohesion: its contact history is wider than A's), each given a drag
 !> towards a fluid velocity that differs by particle and advanced by fluid steps of 1 ms.
 !> - A alone for 30 advances, then A and B in turn (A, B, A, B, ...) for 30 advances each:
 !>   A's positions and velocities after them equal those of A alone, bit for bit.
@@ -201,9 +202,10 @@ contains
             write(u, '(a)') "&material name = 'rubber', density = 1200.0, " // &
                             "youngs_modulus = 1e7, poisson_ratio = 0.45 /"
             write(u, '(a)') "&pair materials = 'sand', 'sand', restitution = 0.3, " // &
-                            "friction = 0.5 /"
+                            "friction = 0.5, rolling_friction = 0.2, rolling_model = " // &
+                            "'epsd2', cohesion_energy_density = 1e4 /"
             write(u, '(a)') "&pair materials = 'sand', 'rubber', restitution = 0.7, " // &
-                            "friction = 0.6 /"
+                            "friction = 0.6, rolling_friction = 0.1, rolling_model = 'epsd2' /"
             write(u, '(a)') "&insert n = 40, material = 'sand', radius_min = 5e-4, " // &
                             "radius_max = 8e-4, region = 'box', box_min = -0.004, -0.004, " // &
                             "0.001, box_max = 0.004, 0.004, 0.006, seed = 8 /"
