@@ -172,7 +172,8 @@ contains
         open(newunit=u, file=path, status='replace', action='write')
         if (bed == 'a') then
             write(u, '(a)') '&run dt = 2e-5, t_end = 1.0, gravity = 0, 0, -9.81 /'
-            write(u, '(a)') "&output dir = '" // out_dir // "', interval = 0.01 /"
+            write(u, '(a)') "&output dir = '" // out_dir // &
+                            "', interval = 0.01, overwrite = .true. /"
             write(u, '(a)') "&material name = 'glass', density = 2500.0, " // &
                             "youngs_modulus = 1e7, poisson_ratio = 0.25 /"
             write(u, '(a)') "&material name = 'steel', density = 7800.0, " // &
@@ -196,7 +197,8 @@ contains
                             "normal = 0, -1, 0, half_width = 0.05 /"
         else
             write(u, '(a)') '&run dt = 1.5e-5, t_end = 1.0, gravity = 0, 0, -9.81 /'
-            write(u, '(a)') "&output dir = '" // out_dir // "', interval = 0.01 /"
+            write(u, '(a)') "&output dir = '" // out_dir // &
+                            "', interval = 0.01, overwrite = .true. /"
             write(u, '(a)') "&material name = 'sand', density = 2650.0, " // &
                             "youngs_modulus = 5e6, poisson_ratio = 0.3 /"
             write(u, '(a)') "&material name = 'rubber', density = 1200.0, " // &
