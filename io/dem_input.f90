@@ -416,7 +416,7 @@ contains
                 "' is not known (accepted: dem, liggghts, mercurydpm, yade)")
             return
         end select
-        o%variant = variant
+        o%variant = variant(1:len(o%variant))   ! (one of the names above)
         call nml_items(b%text, starts, keys)
         if (given('tangential_stiffness_factor')) then
             if (.not. check_positive(at, tangential_stiffness_factor, &

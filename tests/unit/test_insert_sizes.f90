@@ -53,7 +53,8 @@ program test_insert_sizes
 
     ! the moments, with the truncation far out (it removes < 1e-9 of either distribution)
     block
-        real(wp) :: big(5 * n)
+        real(wp), allocatable :: big(:)
+        allocate(big(5 * n))
         d = size_dist_normal(size_normal, 1.5e-3_wp, 0.3e-3_wp, 1.0e-5_wp, 1.0_wp)
         call draw(d, 13_i8, big)
         call moments(big, mean, sd)
