@@ -2,25 +2,28 @@
 """A picture of a run: loads its snapshots.xmf, draws the particles as spheres of their
 radius coloured by their speed and the walls as a translucent surface, and writes a PNG.
 
-  xvfb-run -a pvpython scripts/post/paraview-snapshot.py output/pour     # ParaView
+  xvfb-run -a -s "-screen 0 1280x1024x24" pvpython scripts/post/paraview-snapshot.py output/pour
   .venv/bin/python scripts/post/paraview-snapshot.py output/pour         # VTK's Python wheel
 
 usage: paraview-snapshot.py RUN [--png FILE] [--time T] [--size W H] [--view V]
-                            [--walls surface|edges|none] [--title TEXT]
+                            [--walls surface|edges|none] [--title TEXT] [--backend B]
   RUN       a run's output folder (or its snapshots.xmf)
   --png     the picture (default RUN/snapshot.png)
-  --time    the snapshot at or just before this time [s] (default: the last)
+  --time    the snapshot nearest this time [s] (default: the last)
   --size    width and height in pixels (default 1000 750)
   --view    iso (default), front (looking along +y, z up), top (looking down), side (along -x)
   --walls   how the walls are drawn: a translucent surface (default), their edges, or not
   --title   a line of text at the top left (default: the time, the particle count and the
             particles' materials by name, from the index's material table)
+  --backend paraview, vtk or auto (default: ParaView where paraview.simple can be imported)
 
 Under pvpython or pvbatch it builds a ParaView pipeline (XDMFReader, ExtractBlock, a
 Calculator for the speed, a sphere Glyph scaled by `radius` with factor 2); under any other
 Python it uses VTK (vtkXdmfReader, vtkGlyph3D) with off-screen rendering (EGL or OSMesa, no
 X server needed). Both draw the same scene from the same camera. Debian's pvpython needs an X
-server: run it under `xvfb-run -a`. doc/user/output.md, section ParaView."""
+server: run it under `xvfb-run -a -s "-screen 0 1280x1024x24"` (with xvfb-run's default 8-bit
+screen it fails now and then), and so does the vtk module Debian's python3-paraview puts into
+the system's Python. doc/user/output.md, section ParaView."""
 import argparse
 import math
 import os
@@ -45,6 +48,7 @@ def parse():
     p.add_argument("--view", choices=sorted(DIRECTIONS), default="iso")
     p.add_argument("--walls", choices=["surface", "edges", "none"], default="surface")
     p.add_argument("--title")
+    p.add_argument("--backend", choices=["auto", "paraview", "vtk"], default="auto")
     a = p.parse_args()
     a.xmf = a.run if a.run.endswith(".xmf") else os.path.join(a.run, "snapshots.xmf")
     if not os.path.isfile(a.xmf):
@@ -72,8 +76,7 @@ def index(xmf):
 def pick(times, t):
     if t is None:
         return times[-1]
-    before = [s for s in times if s <= t * (1 + 1e-12)]
-    return before[-1] if before else times[0]
+    return min(times, key=lambda s: abs(s - t))
 
 
 def camera(bounds, view):
@@ -135,12 +138,19 @@ def with_paraview(a, t, names):
     if a.walls != "none":
         walls = pvs.ExtractBlock(Input=reader, Selectors=["//*[starts-with(name(), 'walls')]"])
         walls.UpdatePipeline(t)
-        w = pvs.Show(walls, view)
+        drawn = walls
+        if a.walls == "edges":              # the outlines and creases, not every triangle
+            # each triangle has corners of its own: merged first, so that shared edges are
+            # not boundaries
+            drawn = pvs.FeatureEdges(Input=pvs.Clean(Input=pvs.ExtractSurface(Input=walls)))
+            drawn.BoundaryEdges, drawn.FeatureEdges = 1, 1
+            drawn.NonManifoldEdges, drawn.ManifoldEdges = 0, 0
+            drawn.Coloring = 0
+        w = pvs.Show(drawn, view)
         w.ColorArrayName = ['POINTS', '']
-        w.AmbientColor = w.DiffuseColor = [0.55, 0.55, 0.6]
-        if a.walls == "edges":
-            w.SetRepresentationType("Wireframe")
-        else:
+        w.AmbientColor = w.DiffuseColor = [0.4, 0.4, 0.45]
+        if a.walls == "surface":
+            w.AmbientColor = w.DiffuseColor = [0.55, 0.55, 0.6]
             w.Opacity = 0.25
         wb = walls.GetDataInformation().GetBounds()
         if wb[0] <= wb[1]:
@@ -227,8 +237,10 @@ def with_vtk(a, t, names):
         surface = vtk.vtkDataSetSurfaceFilter()
         surface.SetInputData(walls)
         if a.walls == "edges":
+            clean = vtk.vtkCleanPolyData()          # shared corners merged
+            clean.SetInputConnection(surface.GetOutputPort())
             edges = vtk.vtkFeatureEdges()
-            edges.SetInputConnection(surface.GetOutputPort())
+            edges.SetInputConnection(clean.GetOutputPort())
             edges.BoundaryEdgesOn()
             edges.FeatureEdgesOn()
             edges.ManifoldEdgesOff()
@@ -282,9 +294,12 @@ def main():
     if not times:
         sys.exit(f"paraview-snapshot: {a.xmf} lists no snapshot")
     t = pick(times, a.time)
-    n = (with_paraview if pvs is not None else with_vtk)(a, t, names)
+    if a.backend == "paraview" and pvs is None:
+        sys.exit("paraview-snapshot: no paraview.simple here (run it with pvpython)")
+    paraview = pvs is not None and a.backend != "vtk"
+    n = (with_paraview if paraview else with_vtk)(a, t, names)
     print(f"paraview-snapshot: {a.png}: t = {t:g} s, {n} particles "
-          f"({'ParaView' if pvs is not None else 'VTK'})")
+          f"({'ParaView' if paraview else 'VTK'})")
 
 
 if __name__ == "__main__":
