@@ -45,8 +45,8 @@ def main():
     weight = n["mass"] * G
     print(f"particles at the end: {n['n']} (inflow: rate x duration = {n['expected']}), "
           f"removed {int(s['removed'][-1])}, in the box {int(p['box_beads'][-1])}")
-    print(f"force on the walls at the end: {p['walls_fz'][-1]:.5f} N (the beads' weight "
-          f"{weight:.5f} N), on the floor {p['floor_fz'][-1]:.5f} N")
+    print(f"load on the walls at the end (-fz of the beads on them): {-p['walls_fz'][-1]:.5f} N"
+          f" (the beads' weight {weight:.5f} N), on the floor {-p['floor_fz'][-1]:.5f} N")
     print(f"solid fraction 2 to 10 mm above the floor: {n['fraction']:.3f}; top of the heap "
           f"{n['top'] * 1e3:.1f} mm; kinetic energy at the end "
           f"{s['kinetic_translational'][-1]:.2e} J")
@@ -62,12 +62,12 @@ def main():
         ax[0].set_xlabel("time [s]")
         ax[0].set_ylabel("particles")
         ax[0].legend(fontsize=8)
-        ax[1].plot(p["time"], p["walls_fz"], label="on all walls (probe walls)")
-        ax[1].plot(p["time"], p["floor_fz"], label="on the floor (probe floor)")
+        ax[1].plot(p["time"], -p["walls_fz"], label="on all walls (probe walls, -fz)")
+        ax[1].plot(p["time"], -p["floor_fz"], label="on the floor (probe floor, -fz)")
         ax[1].plot(t, RHO * 4 / 3 * math.pi * 3.469e-9 * s["particles"] * G, ":",
-                   label="weight of the particles (mean radius cubed)")
+                   label="weight of the particles inserted (mean radius cubed)")
         ax[1].set_xlabel("time [s]")
-        ax[1].set_ylabel("vertical force of the beads [N]")
+        ax[1].set_ylabel("load of the beads on the walls [N]")
         ax[1].legend(fontsize=8)
         fig.suptitle("examples/pour: 3000 beads poured into a box 6 cm wide")
         fig.tight_layout()
