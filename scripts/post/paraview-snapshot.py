@@ -79,6 +79,25 @@ def pick(times, t):
     return min(times, key=lambda s: abs(s - t))
 
 
+def particle_materials(xmf, t):
+    """The material indices of the particles of the snapshot at time t, read from its HDF5
+    file (None without h5py)."""
+    try:
+        import h5py
+    except ImportError:
+        return None
+    root = ET.parse(xmf).getroot()
+    for grid in root.find("Domain").find("Grid").findall("Grid"):
+        if float(grid.find("Time").get("Value")) == t:
+            for item in grid.iter("DataItem"):
+                name, dataset = item.text.strip().split(":")
+                if dataset == "/particles/material":
+                    path = os.path.join(os.path.dirname(os.path.abspath(xmf)), name)
+                    with h5py.File(path) as f:
+                        return sorted(set(int(m) for m in f[dataset][()]))
+    return None
+
+
 def camera(bounds, view):
     """Focal point, position and view-up for the bounds (xmin, xmax, ...) seen from `view`."""
     c = [(bounds[2 * k] + bounds[2 * k + 1]) / 2 for k in range(3)]
@@ -125,8 +144,10 @@ def with_paraview(a, t, names):
     vmax, mats = 0.0, []
     if n:
         vmax = speed.PointData["speed"].GetRange()[1]
-        lo, hi = speed.PointData["material"].GetRange()
-        mats = list(range(int(lo), int(hi) + 1))
+        mats = particle_materials(a.xmf, t)
+        if mats is None:                     # no h5py: the indices in the range
+            lo, hi = speed.PointData["material"].GetRange()
+            mats = list(range(int(lo), int(hi) + 1))
     lut = pvs.GetColorTransferFunction("speed")
     lut.ApplyPreset("Turbo" if "Turbo" in pvs.GetLookupTableNames() else "Jet", True)
     lut.RescaleTransferFunction(0.0, max(vmax, 1e-6))
