@@ -1,6 +1,7 @@
 """The examples of examples/ (doc/user/examples.md), each run for a shorter time than its
-namelist says (t_end rewritten; everything else as the user runs it) and checked against what
-physics says, not against the solver's own earlier numbers:
+namelist says (t_end rewritten; everything else as the user runs it) after a `dem --check`
+without a warning, and checked against what physics says, not against the solver's own
+earlier numbers:
 
 pour     the inflow's count: the particles at each row follow floor(rate t) (at most one
          insertion behind), 3000 at the end, none removed, all of them inside the box
@@ -64,6 +65,11 @@ def case(name, t_end, out):
     path = os.path.join(work, f"{out}.nml")
     with open(path, "w") as f:
         f.write(text)
+    # what a user runs first: dem --check, without a warning (dt within every bound)
+    r = subprocess.run([dem, "--check", path], cwd=work, capture_output=True, text=True,
+                       timeout=600)
+    check(r.returncode == 0 and "warning" not in r.stdout + r.stderr,
+          f"{name}: dem --check passes without a warning: {r.stdout[-1500:]}{r.stderr}")
     return path
 
 
