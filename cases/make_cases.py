@@ -20,7 +20,8 @@ The committed cases (each folder's README.md says how to prepare and run them):
   drum/prepare_drum_1.nml, prepare_drum_2.nml  8 000 M2 of 4 mm settled in the drum, then
                                           30 000 M1 of 2 mm settled on top
   drum/drum.nml                           5 s at 2 rad/s about y, omega = (0, -2, 0) as in
-                                          MercuryDPM; probes: zone counts, centres of mass
+                                          MercuryDPM; probes: zone counts, centres of mass,
+                                          the torque on the walls (drive)
   drum/prepare_drum_slice_<1|2>.nml, drum_slice.nml  the same in a quarter of the drum's
                                           depth (0.015 m, 2 000 M2 and 7 500 M1), run here
   impact/prepare_impact_<N>.nml           N = 25 000, 50 000, 100 000 M1 of 2 mm settled in
@@ -236,7 +237,9 @@ def drum(scale=1.0, t_end=5.0, interval=0.1, drum="drum", smooth_ends=False, sof
     from the turning cylinder, of a steel without friction (a stand-in for a periodic depth:
     they hold the bed in y without dragging it round). `soft`: MercuryDPM's -soft variant,
     from the soft preparation, at its dt and output interval unless given (`dt`, `name`: a
-    run of another dt, for the check of its error); `seed`: from that preparation."""
+    run of another dt, for the check of its error); `seed`: from that preparation. The probe
+    `drive` is the torque of the particles on the walls about the axis: the power draw is
+    -omega times drive_torque_axis."""
     bed = drum_name(drum, soft, seed)
     walls, name = drum_walls(True, drum), name or bed
     if soft:
@@ -257,7 +260,8 @@ def drum(scale=1.0, t_end=5.0, interval=0.1, drum="drum", smooth_ends=False, sof
               f"box_max = {BIG}, {BIG}, {BIG} /\n"
             + f"&probe name = 'zone2', kind = 'count', region = 'box', "
               f"box_min = -{BIG}, -{BIG}, -{BIG}, box_max = 0, {BIG}, 0 /\n"
-            + "&probe name = 'com', kind = 'center_of_mass' /\n")
+            + "&probe name = 'com', kind = 'center_of_mass' /\n"
+            + "&probe name = 'drive', kind = 'wall_load', axis = 0, 1, 0, axis_point = 0, 0, 0 /\n")
 
 
 def impact_name(n, seed):

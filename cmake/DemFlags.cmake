@@ -7,6 +7,10 @@
 #   gfortran, both: -ffpe-summary=invalid,zero,overflow: a run reports on stop only the
 #            floating-point flags that mean trouble, not the underflows of tiny forces
 #            (or of the MPI library), which are harmless
+#   gfortran, both, without DEM_OPENACC: -fno-semantic-interposition: the code is
+#            position-independent (it also makes libdem.so), and calls between procedures
+#            of a file stay inlined as without -fPIC (not with OpenACC: the local aliases it
+#            makes are refused by the nvptx offload compiler)
 #   DEM_OPENACC=ON: gfortran -fopenacc, with nvptx offload when gcc-offload-nvptx is
 #                   installed; nvfortran -acc -gpu=${DEM_GPU_ARCH},nofma -Minfo=accel
 set(DEM_GPU_ARCH "cc80" CACHE STRING "nvfortran: the GPUs' compute capability (cc70, cc80, cc90)")
@@ -27,8 +31,13 @@ else()
   if(DEM_NATIVE)
     list(APPEND DEM_FORTRAN_FLAGS_RELEASE -march=native -ffp-contract=off)
   endif()
+  if(NOT DEM_OPENACC)
+    list(APPEND DEM_FORTRAN_FLAGS_COMMON -fno-semantic-interposition)
+  endif()
   if(DEM_OPENACC)
-    list(APPEND DEM_OPENACC_FLAGS -fopenacc)
+    # -ffp-contract=off: no fused multiply-adds in the offloaded code either (the nvptx
+    # back end has them, and GCC contracts by default), so that a GPU gives the host's bits
+    list(APPEND DEM_OPENACC_FLAGS -fopenacc -ffp-contract=off)
     execute_process(COMMAND ${CMAKE_Fortran_COMPILER} -print-prog-name=accel/nvptx-none/mkoffload
                     OUTPUT_VARIABLE _mkoffload OUTPUT_STRIP_TRAILING_WHITESPACE)
     if(EXISTS "${_mkoffload}")

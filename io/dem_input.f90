@@ -16,9 +16,9 @@ module dem_input
     use dem_stl, only: stl_read
     use dem_text, only: itoa
     use dem_particle_file, only: read_particle_file
-    use dem_insert, only: region_t, region_box, region_cylinder, region_mesh, size_dist_t, &
-                          size_normal, size_lognormal, size_dist_uniform, size_dist_normal, &
-                          size_dist_discrete, size_window
+    use dem_insert, only: region_t, region_box, region_cylinder, region_mesh, region_face, &
+                          size_dist_t, size_normal, size_lognormal, size_dist_uniform, &
+                          size_dist_normal, size_dist_discrete, size_window
     use dem_outlets, only: outlet_t, outlet_plane, outlet_box
     use dem_probes, only: probe_t, probe_count, probe_center_of_mass, probe_track, &
                           probe_histogram, probe_wall_load
@@ -45,9 +45,10 @@ module dem_input
         'particle: id material radius position velocity angular_velocity', &
         'particle_file: file', &
         'insert: n material radius_distribution radius_min radius_max radius_mean radius_sd ' // &
-        'radii fractions fraction_by region box_min box_max cylinder_base ' // &
-        'cylinder_radius cylinder_height mesh_file mesh_scale velocity seed start end ' // &
-        'duration rate mass_rate insert_every', &
+        'radii fractions fraction_by region box_min box_max face_center face_normal ' // &
+        'face_axis face_width cylinder_base cylinder_radius cylinder_height mesh_file ' // &
+        'mesh_scale velocity velocity_spread seed start end duration rate mass_rate ' // &
+        'insert_every', &
         'outlet: region point normal box_min box_max', &
         'probe: name kind region box_min box_max id time bins v_min v_max axis_point wall ' // &
         'axis', &
@@ -737,14 +738,20 @@ contains
         real(wp) :: fractions(max_radii) ! discrete: their fractions, > 0, summing to 1
         character(len=name_len) :: fraction_by  ! discrete: 'mass' (default, as LIGGGHTS) or
                                          ! 'number'
-        character(len=name_len) :: region    ! 'box' (default), 'cylinder' or 'mesh'
+        character(len=name_len) :: region    ! 'box' (default), 'cylinder', 'mesh' or 'face'
         real(wp) :: box_min(3), box_max(3)   ! corners of the box [m]
+        real(wp) :: face_center(3)       ! face: the centre of the rectangle a stream enters by [m]
+        real(wp) :: face_normal(3)       ! face: the way in (along the velocity), non-zero
+        real(wp) :: face_axis(3)         ! face: the direction of its first side, default the
+                                         ! one of x, y closest to the face's plane
+        real(wp) :: face_width(2)        ! face: its sides [m], each > a diameter
         real(wp) :: cylinder_base(3)     ! centre of the bottom of the (vertical) cylinder [m]
         real(wp) :: cylinder_radius      ! [m], > 0
         real(wp) :: cylinder_height      ! [m], > 0
         character(len=512) :: mesh_file  ! closed STL surface, relative to the case file
         real(wp) :: mesh_scale           ! metres per STL unit, > 0, default 1
         real(wp) :: velocity(3)          ! initial velocity [m/s], default 0
+        real(wp) :: velocity_spread(3)   ! each component uniform in velocity +- this [m/s], >= 0
         integer(i8) :: seed              ! of the random positions and radii, default 1
         real(wp) :: rate                 ! inflow: particles per second, > 0
         real(wp) :: mass_rate            ! inflow: kilograms per second, > 0 (or rate)
@@ -755,8 +762,9 @@ contains
                                          ! the time to move a diameter (dem_setup)
         namelist /insert/ n, material, radius_distribution, radius_min, radius_max, &
             radius_mean, radius_sd, radii, fractions, fraction_by, region, box_min, box_max, &
-            cylinder_base, cylinder_radius, cylinder_height, mesh_file, mesh_scale, velocity, &
-            seed, start, end, duration, rate, mass_rate, insert_every
+            face_center, face_normal, face_axis, face_width, cylinder_base, cylinder_radius, &
+            cylinder_height, mesh_file, mesh_scale, velocity, velocity_spread, seed, start, end, &
+            duration, rate, mass_rate, insert_every
         type(insert_t) :: g
         type(nml_block_t) :: b
         integer :: k_item, ios, k, im
@@ -780,12 +788,17 @@ contains
             region = 'box'
             box_min = unset
             box_max = unset
+            face_center = unset
+            face_normal = unset
+            face_axis = unset
+            face_width = unset
             cylinder_base = unset
             cylinder_radius = unset
             cylinder_height = unset
             mesh_file = ''
             mesh_scale = 1.0_wp
             velocity = 0.0_wp
+            velocity_spread = 0.0_wp
             seed = 1
             rate = unset
             mass_rate = unset
@@ -812,6 +825,12 @@ contains
             if (.not. size_of(dist)) return
             radius_max = dist%r_max
             if (.not. check_vector(at, velocity, 'velocity', .false., err)) return
+            if (.not. check_vector(at, velocity_spread, 'velocity_spread', .false., err)) return
+            if (any(velocity_spread < 0.0_wp)) then
+                call set_error(err, dem_err_input, at // ": key 'velocity_spread': must be " // &
+                               '>= 0 [m/s]')
+                return
+            end if
             reg = region_t()
             select case (region)
             case ('box')
@@ -851,9 +870,11 @@ contains
                     err%message = at // ": key 'mesh_file': " // err%message
                     return
                 end if
+            case ('face')
+                if (.not. face_of(reg)) return
             case default
                 call set_error(err, dem_err_input, at // ": key 'region': '" // trim(region) // &
-                               "' is not known (accepted: box, cylinder, mesh)")
+                               "' is not known (accepted: box, cylinder, mesh, face)")
                 return
             end select
             g%n = n
@@ -861,11 +882,57 @@ contains
             g%size = dist
             g%region = reg
             g%velocity = velocity
+            g%velocity_spread = velocity_spread
             g%seed = seed
             g%at = at
             c%inserts = [c%inserts, g]
         end do
     contains
+        !> The face a stream enters by (region 'face', an inflow group with a velocity into
+        !> it; dem_setup makes it the slab behind it); false with err set when a key is
+        !> missing or out of range.
+        logical function face_of(f) result(ok)
+            type(region_t), intent(inout) :: f
+            ok = .false.
+            if (.not. g%inflow) then
+                call set_error(err, dem_err_input, at // ": key 'region': a face is for an " // &
+                               "inflow (give 'rate' or 'mass_rate')")
+                return
+            end if
+            if (.not. check_vector(at, face_center, 'face_center', .true., err)) return
+            if (.not. check_vector(at, face_normal, 'face_normal', .true., err)) return
+            if (.not. check_direction(at, face_normal, 'face_normal', err)) return
+            if (any(face_axis /= unset)) then
+                if (.not. check_vector(at, face_axis, 'face_axis', .true., err)) return
+            else                                   ! x, or y for a face across x
+                face_axis = merge([0.0_wp, 1.0_wp, 0.0_wp], [1.0_wp, 0.0_wp, 0.0_wp], &
+                                  abs(face_normal(1)) > abs(face_normal(2)))
+            end if
+            face_axis = face_axis - dot_product(face_axis, face_normal) * face_normal
+            if (norm2(face_axis) < 1.0e-6_wp) then
+                call set_error(err, dem_err_input, at // ": key 'face_axis': must not be " // &
+                               'along face_normal')
+                return
+            end if
+            if (any(face_width == unset) .or. .not. all(ieee_is_finite(face_width)) .or. &
+                any(face_width <= 2.0_wp * radius_max)) then
+                call set_error(err, dem_err_input, at // ": key 'face_width': two sides, " // &
+                               'each wider than a sphere [m]')
+                return
+            end if
+            if (dot_product(velocity, face_normal) <= 0.0_wp) then
+                call set_error(err, dem_err_input, at // ": key 'velocity': a face needs a " // &
+                               'velocity into it (along face_normal)')
+                return
+            end if
+            f%kind = region_face
+            f%base = face_center
+            f%normal = face_normal
+            f%axis = face_axis / norm2(face_axis)
+            f%width = face_width
+            ok = .true.
+        end function face_of
+
         !> The inflow keys into gi (an inflow group: rate or mass_rate given); false with err
         !> set when one is out of range, or given without a rate.
         logical function inflow_of(gi) result(ok)

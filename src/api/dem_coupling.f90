@@ -14,7 +14,8 @@ module dem_coupling
                                            c_ptr, c_loc, c_null_ptr, c_associated, c_f_pointer
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_runtime
-    use dem_comm, only: comm_t, comm_from_handle, comm_free, comm_counts, comm_exchange, comm_sum
+    use dem_comm, only: comm_t, comm_from_handle, comm_free, comm_counts, comm_exchange, &
+                        comm_sum, comm_world, comm_world_end
     use dem_domain, only: sorted_by_rank
     use dem_case, only: case_t, case_release_particles
     use dem_setup, only: read_case
@@ -39,7 +40,7 @@ module dem_coupling
               dem_coupling_set_drag, dem_coupling_impulse, dem_coupling_deposit, &
               dem_coupling_removed_count, dem_coupling_removed, dem_coupling_set_force_by_id, &
               dem_coupling_set_drag_by_id, dem_coupling_views, dem_coupling_device_views, &
-              dem_coupling_deposit_cells
+              dem_coupling_deposit_cells, dem_coupling_mpi_world, dem_coupling_mpi_finalize
 
     !> A coupled run between coupling_init and coupling_finalize.
     type :: run_t
@@ -755,6 +756,18 @@ contains
         end if
         call c_message(text, message, message_len)
     end function dem_coupling_deposit_cells
+
+    !> The Fortran handle of MPI_COMM_WORLD, for dem_coupling_init; MPI is initialised if it
+    !> is not yet (for a caller without MPI of its own, such as the Python package).
+    integer(c_int) function dem_coupling_mpi_world() result(comm_f) &
+            bind(C, name='dem_coupling_mpi_world')
+        comm_f = comm_world()
+    end function dem_coupling_mpi_world
+
+    !> Finalise MPI if dem_coupling_mpi_world initialised it (and it is not finalised yet).
+    subroutine dem_coupling_mpi_finalize() bind(C, name='dem_coupling_mpi_finalize')
+        call comm_world_end()
+    end subroutine dem_coupling_mpi_finalize
 
     !> The coupling_t a C handle points to; null for a null handle.
     function from_c(handle) result(self)

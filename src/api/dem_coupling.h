@@ -32,6 +32,16 @@ typedef struct dem_coupling dem_coupling;
 int dem_coupling_init(dem_coupling **run, const char *file, int comm_f, char *message,
                       int message_len);
 
+/* The version of the solver (src/base/dem_version.f90); in the shared library libdem.so
+ * only (src/api/dem_shared.c), not in the static libraries. */
+const char *dem_coupling_version(void);
+
+/* The Fortran handle of MPI_COMM_WORLD, initialising MPI if nobody has (for a caller with
+ * no MPI of its own: the Python package without mpi4py); dem_coupling_mpi_finalize
+ * finalises MPI if dem_coupling_mpi_world initialised it, and does nothing otherwise. */
+int dem_coupling_mpi_world(void);
+void dem_coupling_mpi_finalize(void);
+
 /* Write the run's final outputs, release it and free the handle: *run becomes NULL (also
  * when the outputs fail, status 4). */
 int dem_coupling_finalize(dem_coupling **run, char *message, int message_len);

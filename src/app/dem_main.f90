@@ -10,6 +10,7 @@ program dem_main
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
                    solver_particles, solver_particle_steps, solver_parallel_stats, i8
     use dem_comm, only: comm_t, comm_init, comm_free, comm_max
+    use dem_acc, only: acc_traffic
     use dem_signals, only: signals_install
     use dem_folder, only: folder_conflict
     use dem_integrate, only: integrator_verlet
@@ -241,6 +242,12 @@ contains
         end do
         if (s%device >= 0) write(output_unit, '(a,i0,a)') &
             'timing: the kernels ran on OpenACC device ', s%device, ' (rank 0)'
+        ! what acc_data moved (OpenACC builds only; the same counts on a GPU and the host
+        ! fallback, as they count the calls; rank 0's)
+        if (sum(acc_traffic(2, :)) > 0) write(output_unit, '(a,i0,a,i0,a,i0,a,i0,a)') &
+            'traffic: host to device ', acc_traffic(1, 1), ' bytes in ', acc_traffic(2, 1), &
+            ' transfers, device to host ', acc_traffic(1, 2), ' bytes in ', acc_traffic(2, 2), &
+            ' transfers (acc_data, rank 0, the whole run)'
         if (peak_memory_kib() > 0) write(output_unit, '(a,f10.1,a,f10.1,a)') &
             'memory: peak resident ', peak_memory_kib() / 1024.0_wp, ' MiB, ', &
             1024.0_wp * peak_memory_kib() / max(1, s%particles_most), ' bytes per particle' // &

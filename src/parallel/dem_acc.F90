@@ -10,7 +10,13 @@ module dem_acc
     implicit none
     private
     public :: acc_data, acc_enter, acc_exit, acc_to_host, acc_to_device, acc_create, &
-              acc_select_device, acc_device_address
+              acc_select_device, acc_device_address, acc_traffic
+
+    !> What acc_data moved in this process (OpenACC builds; zero without -fopenacc): bytes and
+    !> transfers to the device (enter copyin, update device: element 1) and to the host
+    !> (update self: element 2). The counts are those of the calls, so the host fallback counts
+    !> what a GPU would move (doc/user/gpu.md).
+    integer(i8), protected :: acc_traffic(2, 2) = 0_i8   ! (bytes|transfers, to device|host)
 
     integer, parameter :: acc_enter = 1      !< create the device copy from the host's
     integer, parameter :: acc_exit = 2       !< delete the device copy
@@ -50,17 +56,30 @@ contains
         !$acc end host_data
     end function acc_device_address
 
+    !> Counts one transfer of `bits` bits in direction `dir` (1 to the device, 2 to the host).
+    subroutine tally(dir, bits)
+        integer, intent(in) :: dir
+        integer(i8), intent(in) :: bits
+#ifdef _OPENACC
+        acc_traffic(1, dir) = acc_traffic(1, dir) + bits / 8_i8
+        acc_traffic(2, dir) = acc_traffic(2, dir) + 1_i8
+#endif
+    end subroutine tally
+
     subroutine data_r1(a, op)
         real(wp), intent(inout) :: a(:)
         integer, intent(in) :: op
         select case (op)
         case (acc_enter)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc enter data copyin(a)
         case (acc_exit)
             !$acc exit data delete(a)
         case (acc_to_host)
+            call tally(2, storage_size(a, i8) * size(a, kind=i8))
             !$acc update self(a)
         case (acc_to_device)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc update device(a)
         case (acc_create)
             !$acc enter data create(a)
@@ -72,12 +91,15 @@ contains
         integer, intent(in) :: op
         select case (op)
         case (acc_enter)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc enter data copyin(a)
         case (acc_exit)
             !$acc exit data delete(a)
         case (acc_to_host)
+            call tally(2, storage_size(a, i8) * size(a, kind=i8))
             !$acc update self(a)
         case (acc_to_device)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc update device(a)
         case (acc_create)
             !$acc enter data create(a)
@@ -89,12 +111,15 @@ contains
         integer, intent(in) :: op
         select case (op)
         case (acc_enter)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc enter data copyin(a)
         case (acc_exit)
             !$acc exit data delete(a)
         case (acc_to_host)
+            call tally(2, storage_size(a, i8) * size(a, kind=i8))
             !$acc update self(a)
         case (acc_to_device)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc update device(a)
         case (acc_create)
             !$acc enter data create(a)
@@ -106,12 +131,15 @@ contains
         integer, intent(in) :: op
         select case (op)
         case (acc_enter)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc enter data copyin(a)
         case (acc_exit)
             !$acc exit data delete(a)
         case (acc_to_host)
+            call tally(2, storage_size(a, i8) * size(a, kind=i8))
             !$acc update self(a)
         case (acc_to_device)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc update device(a)
         case (acc_create)
             !$acc enter data create(a)
@@ -123,12 +151,15 @@ contains
         integer, intent(in) :: op
         select case (op)
         case (acc_enter)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc enter data copyin(a)
         case (acc_exit)
             !$acc exit data delete(a)
         case (acc_to_host)
+            call tally(2, storage_size(a, i8) * size(a, kind=i8))
             !$acc update self(a)
         case (acc_to_device)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc update device(a)
         case (acc_create)
             !$acc enter data create(a)
@@ -140,12 +171,15 @@ contains
         integer, intent(in) :: op
         select case (op)
         case (acc_enter)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc enter data copyin(a)
         case (acc_exit)
             !$acc exit data delete(a)
         case (acc_to_host)
+            call tally(2, storage_size(a, i8) * size(a, kind=i8))
             !$acc update self(a)
         case (acc_to_device)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc update device(a)
         case (acc_create)
             !$acc enter data create(a)
@@ -157,12 +191,15 @@ contains
         integer, intent(in) :: op
         select case (op)
         case (acc_enter)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc enter data copyin(a)
         case (acc_exit)
             !$acc exit data delete(a)
         case (acc_to_host)
+            call tally(2, storage_size(a, i8) * size(a, kind=i8))
             !$acc update self(a)
         case (acc_to_device)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc update device(a)
         case (acc_create)
             !$acc enter data create(a)
@@ -174,12 +211,15 @@ contains
         integer, intent(in) :: op
         select case (op)
         case (acc_enter)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc enter data copyin(a)
         case (acc_exit)
             !$acc exit data delete(a)
         case (acc_to_host)
+            call tally(2, storage_size(a, i8) * size(a, kind=i8))
             !$acc update self(a)
         case (acc_to_device)
+            call tally(1, storage_size(a, i8) * size(a, kind=i8))
             !$acc update device(a)
         case (acc_create)
             !$acc enter data create(a)

@@ -17,7 +17,8 @@ module dem_comm
     integer, parameter :: tag_data = 0       !< comm_exchange's messages
     public :: comm_t, comm_init, comm_from_handle, comm_free, comm_node_rank, comm_offset, &
               comm_any, comm_xor, comm_barrier, comm_info_null, comm_exchange, comm_counts, &
-              comm_sum, comm_max, comm_gather, comm_broadcast
+              comm_sum, comm_max, comm_gather, comm_broadcast, comm_world, comm_world_end
+    logical, save :: owns_world = .false.   !< comm_world called MPI_Init
 
     !> Send parts of an array to other ranks and receive theirs (point to point).
     interface comm_exchange
@@ -95,6 +96,27 @@ contains
             if (.not. down) call MPI_Finalize()
         end if
     end subroutine comm_free
+
+    !> The Fortran handle of MPI_COMM_WORLD, initialising MPI if nobody has (for a caller
+    !> that has no MPI of its own, as the Python package without mpi4py).
+    integer function comm_world() result(h)
+        logical :: up
+        call MPI_Initialized(up)
+        if (.not. up) then
+            call MPI_Init()
+            owns_world = .true.
+        end if
+        h = MPI_COMM_WORLD%mpi_val
+    end function comm_world
+
+    !> Finalise MPI if comm_world initialised it and nobody has finalised it since.
+    subroutine comm_world_end()
+        logical :: down
+        if (.not. owns_world) return
+        call MPI_Finalized(down)
+        if (.not. down) call MPI_Finalize()
+        owns_world = .false.
+    end subroutine comm_world_end
 
     !> Where this rank's n items start in the concatenation of every rank's (0-based), and
     !> the total.

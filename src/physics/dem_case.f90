@@ -35,6 +35,7 @@ module dem_case
         type(size_dist_t) :: size                     !< of the radii
         type(region_t) :: region
         real(wp) :: velocity(3) = 0.0_wp              !< [m/s]
+        real(wp) :: velocity_spread(3) = 0.0_wp       !< each component +- this [m/s]
         integer(i8) :: seed = 1
         character(len=:), allocatable :: at           !< the group's place in the file
         ! inflow (a rate given): inserted during the run from start to end, every `every`
@@ -170,7 +171,8 @@ contains
                 a = c%inserts(i)%mat
                 sm%rmin(a) = min(sm%rmin(a), c%inserts(i)%size%r_min)
                 sm%rmax(a) = max(sm%rmax(a), c%inserts(i)%size%r_max)
-                sm%speed = max(sm%speed, norm2(c%inserts(i)%velocity))
+                sm%speed = max(sm%speed, norm2(abs(c%inserts(i)%velocity) + &
+                                               c%inserts(i)%velocity_spread))
                 call region_bounds(c%inserts(i)%region, lo, hi)
                 do k = 0, 7                   ! (the corners of the region's box)
                     corner = merge(hi, lo, [btest(k, 0), btest(k, 1), btest(k, 2)])

@@ -9,13 +9,16 @@ module dem_insert
     use dem_vector, only: cross
     implicit none
     private
-    public :: region_t, region_box, region_cylinder, region_mesh, region_bounds, insert_random
+    public :: region_t, region_box, region_cylinder, region_mesh, region_face, region_bounds, &
+              region_slab, insert_random, insert_velocities
     public :: size_dist_t, size_uniform, size_normal, size_lognormal, size_discrete, &
               size_dist_uniform, size_dist_normal, size_dist_discrete, size_window, size_draw
 
     integer(ip), parameter :: region_box = 1       !< axis-aligned box lo..hi
     integer(ip), parameter :: region_cylinder = 2  !< vertical cylinder from a base centre
     integer(ip), parameter :: region_mesh = 3      !< inside a closed triangle mesh
+    integer(ip), parameter :: region_face = 4      !< a rectangle that a stream enters by (made
+                                                   !< the slab behind it, a mesh, by region_slab)
 
     integer(ip), parameter :: size_uniform = 1     !< uniform in [r_min, r_max]
     integer(ip), parameter :: size_normal = 2      !< normal, truncated to [r_min, r_max]
@@ -39,9 +42,53 @@ module dem_insert
         real(wp) :: radius = 0.0_wp                 !< cylinder radius [m]
         real(wp) :: height = 0.0_wp                 !< cylinder height [m]
         real(wp), allocatable :: vert(:, :, :)      !< closed mesh: (xyz, corner, triangle) [m]
+        real(wp) :: normal(3) = 0.0_wp              !< face: unit normal, the way in
+        real(wp) :: axis(3) = 0.0_wp                !< face: unit direction of its first side
+        real(wp) :: width(2) = 0.0_wp               !< face: its sides [m] (centre in base)
     end type region_t
 
 contains
+
+    !> The slab of thickness `length` behind a face (region_face, entered along its normal),
+    !> as a closed mesh of 12 triangles: the region a stream's spheres are placed in.
+    pure function region_slab(face, length) result(reg)
+        type(region_t), intent(in) :: face
+        real(wp), intent(in) :: length                !! [m]
+        type(region_t) :: reg
+        real(wp) :: c(3, 8), u(3), w(3)
+        integer :: k, i
+        integer, parameter :: quads(4, 6) = reshape([1, 2, 4, 3, 5, 6, 8, 7, 1, 2, 6, 5, &
+                                                     3, 4, 8, 7, 1, 3, 7, 5, 2, 4, 8, 6], [4, 6])
+        u = 0.5_wp * face%width(1) * face%axis
+        w = 0.5_wp * face%width(2) * cross(face%normal, face%axis)
+        do k = 0, 7                            ! corner k: -u/+u, -w/+w, face/back
+            c(:, k + 1) = face%base + merge(u, -u, btest(k, 0)) + merge(w, -w, btest(k, 1)) &
+                          - merge(length, 0.0_wp, btest(k, 2)) * face%normal
+        end do
+        reg%kind = region_mesh
+        allocate(reg%vert(3, 3, 12))
+        do i = 1, 6                            ! each side: two triangles
+            reg%vert(:, :, 2 * i - 1) = c(:, quads(1:3, i))
+            reg%vert(:, :, 2 * i) = c(:, quads([1, 3, 4], i))
+        end do
+    end function region_slab
+
+    !> The velocities of n new spheres: v, each component spread uniformly over
+    !> [v - dv, v + dv] by the generator (which is not used without a spread).
+    function insert_velocities(rng, v, dv, n) result(vs)
+        type(rng_t), intent(inout) :: rng
+        real(wp), intent(in) :: v(3), dv(3)           !! [m/s]
+        integer(ip), intent(in) :: n
+        real(wp) :: vs(3, n)
+        integer(ip) :: i, d
+        vs = spread(v, 2, n)
+        if (all(dv == 0.0_wp)) return
+        do i = 1, n
+            do d = 1, 3
+                vs(d, i) = v(d) + dv(d) * (2.0_wp * rng_uniform(rng) - 1.0_wp)
+            end do
+        end do
+    end function insert_velocities
 
     !> The box around a region.
     pure subroutine region_bounds(region, lo, hi)
@@ -171,16 +218,7 @@ contains
         integer(ip) :: dims(3), k, tries, m, total
         logical :: free
 
-        if (reg%kind == region_box) then
-            lo = reg%lo
-            hi = reg%hi
-        else if (reg%kind == region_mesh) then
-            lo = minval(minval(reg%vert, dim=2), dim=2)
-            hi = maxval(maxval(reg%vert, dim=2), dim=2)
-        else
-            lo = reg%base - [reg%radius, reg%radius, 0.0_wp]
-            hi = reg%base + [reg%radius, reg%radius, reg%height]
-        end if
+        call region_bounds(reg, lo, hi)
         rlo = lo                       ! the region's box
         rhi = hi
         big = dist%r_max

@@ -9,7 +9,7 @@ module dem_inflow
     use dem_error, only: error_t
     use dem_comm, only: comm_gather, comm_broadcast
     use dem_case, only: case_t, insert_t
-    use dem_insert, only: insert_random, region_bounds
+    use dem_insert, only: insert_random, insert_velocities, region_bounds
     use dem_random, only: rng_t
     use dem_run_state, only: solver_t, time_of, particle_data
     use dem_rebuild, only: rebuild, settle_outlets, new_particles_t
@@ -148,13 +148,14 @@ contains
             rng%state = s%rng_state
             call insert_random(rng, g%region, want, g%size, old(1:3, :), old(4, :), 10000, &
                                x, r, placed, 4.0_wp / 3.0_wp * pi * rho, goal)
-            s%rng_state = rng%state
             a%gid = [a%gid, (s%next_id + i, i = 0, placed - 1)]
             a%mat = [a%mat, spread(g%mat, 1, placed)]
             a%radius = [a%radius, r(1:placed)]
             a%density = [a%density, spread(rho, 1, placed)]
             a%x = reshape([a%x, x(:, 1:placed)], [3, size(a%gid)])
-            a%v = reshape([a%v, spread(g%velocity, 2, placed)], [3, size(a%gid)])
+            a%v = reshape([a%v, insert_velocities(rng, g%velocity, g%velocity_spread, placed)], &
+                          [3, size(a%gid)])
+            s%rng_state = rng%state
             old = reshape([old, [(x(:, i), r(i), i = 1, placed)]], [4, size(old, 2) + placed])
             s%next_id = s%next_id + placed
             s%inflow_count(k) = s%inflow_count(k) + placed

@@ -9,7 +9,7 @@ module dem_setup
     use dem_comm, only: comm_t, comm_any
     use dem_case, only: case_t, insert_t, time_scales_t, case_time_scales, case_summarize, &
                         case_speed_bound, case_energy_speed, case_append_particles
-    use dem_insert, only: insert_random
+    use dem_insert, only: insert_random, insert_velocities, region_face, region_slab
     use dem_random, only: rng_t, rng_seed
     use dem_input, only: read_case_file
     use dem_text, only: itoa
@@ -71,7 +71,6 @@ contains
                 allocate(x(3, n), r(n))
                 call insert_random(rng, g%region, n, g%size, &
                                    c%x(:, 1:c%n_held), c%radius(1:c%n_held), 10000, x, r, placed)
-                c%rng_state = rng%state
                 if (placed < n) then
                     call set_error(err, dem_err_input, g%at // ": key 'n': only " // &
                         itoa(placed) // ' of ' // itoa(n) // ' spheres found room in the ' // &
@@ -82,8 +81,10 @@ contains
                 next_id = 1
                 if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
                 call case_append_particles(c, [(next_id + i, i = 0, n - 1)], spread(g%mat, 1, n), &
-                                           r, x, spread(g%velocity, 2, n), &
+                                           r, x, insert_velocities(rng, g%velocity, &
+                                                                   g%velocity_spread, n), &
                                            spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n), n)
+                c%rng_state = rng%state
                 deallocate(x, r)
             end associate
         end do
@@ -91,7 +92,12 @@ contains
         if (c%n_held > 0) c%next_id = maxval(c%gid(1:c%n_held)) + 1
         do k = 1, size(c%inserts)
             if (.not. c%inserts(k)%inflow) cycle
-            if (c%inserts(k)%every == 0) c%inserts(k)%every = default_every(c%inserts(k))
+            associate (g => c%inserts(k))
+                if (g%every == 0) g%every = default_every(g)
+                if (g%region%kind == region_face) g%region = region_slab(g%region, &
+                    max(dot_product(g%velocity, g%region%normal) * real(g%every, wp) * c%dt, &
+                        3.0_wp * g%size%r_max))
+            end associate
         end do
         k = findloc(c%inserts%inflow, .true., dim=1)
         c%inflow = k > 0

@@ -133,6 +133,13 @@ for name, keys in (("lognormal", "radius_distribution = 'lognormal', radius_mean
         f.write(GOOD + INS + keys + " /\n")
     r, d = run(["--check", path], f"good_{name}_check")
     check(r.returncode == 0, f"good {name} insert: --check failed: {r.stderr}")
+FACE = ("radius_min = 1e-3, region = 'face', face_center = 0, 0, 0.1, face_normal = 0, 0, -1, "
+        "velocity = 0, 0, -1")
+path = os.path.join(work, "good_face.nml")
+with open(path, "w") as f:
+    f.write(GOOD + INS + FACE + ", rate = 10, face_width = 0.02, 0.02 /\n")
+r, d = run(["--check", path], "good_face_check")
+check(r.returncode == 0, f"good face insert: --check failed: {r.stderr}")
 NORMAL = "radius_distribution = 'normal', radius_mean = 2e-3, radius_sd = 5e-4, "
 DISCRETE = "radius_distribution = 'discrete', radii = 1e-3, 2e-3, "
 for name, keys, key, extra in (
@@ -168,7 +175,20 @@ for name, keys, key, extra in (
         ("inflow_end_duration", "radius_min = 1e-3, rate = 10, end = 0.2, duration = 0.1",
          "duration", "not both"),
         ("inflow_every", "radius_min = 1e-3, rate = 10, insert_every = -5", "insert_every",
-         ">= 1")):
+         ">= 1"),
+        ("face_no_rate", FACE + ", face_width = 0.02, 0.02", "region", "inflow"),
+        ("face_no_width", FACE + ", rate = 10", "face_width", "two sides"),
+        ("face_narrow", FACE + ", rate = 10, face_width = 0.02, 1e-3", "face_width", "wider"),
+        ("face_no_center", FACE.replace("face_center = 0, 0, 0.1, ", "") +
+         ", rate = 10, face_width = 0.02, 0.02", "face_center", "required"),
+        ("face_zero_normal", FACE.replace("face_normal = 0, 0, -1", "face_normal = 0, 0, 0") +
+         ", rate = 10, face_width = 0.02, 0.02", "face_normal", "non-zero"),
+        ("face_axis", FACE + ", rate = 10, face_width = 0.02, 0.02, face_axis = 0, 0, 2",
+         "face_axis", "along face_normal"),
+        ("face_velocity", FACE.replace("velocity = 0, 0, -1", "velocity = 1, 0, 0") +
+         ", rate = 10, face_width = 0.02, 0.02", "velocity", "into it"),
+        ("spread_negative", "radius_min = 1e-3, velocity_spread = 0, -1, 0", "velocity_spread",
+         ">= 0")):
     bad(name, GOOD + INS + keys + " /\n", "insert", key, extra)
 bad("bad_integrator", sub("t_end = 1e-5,", "t_end = 1e-5, integrator = 'rk4',"), "run",
     "integrator")

@@ -1,9 +1,11 @@
 """find_package(dem) works for a fluid code: this build is installed into WORKDIR/prefix, and
 tests/consumer (a Fortran and a C program, built with CMake against dem::dem only) is
 configured, built and run against the install: the C program's coupling checks pass on 2
-ranks, and the Fortran program advances ten fluid steps to t = 1e-3 s.
+ranks, and the Fortran program advances ten fluid steps to t = 1e-3 s. The shared library
+libdem.so is installed and exports the functions of dem_coupling.h, and nothing else.
 usage: test_package.py DEM WORKDIR BUILD_DIR MPIEXEC"""
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -38,6 +40,16 @@ for f in os.listdir(os.path.join(prefix, "lib", "cmake", "dem")):
             text = g.read()
         check("/usr/" not in text and ROOT not in text and build not in text,
               f"{f} holds no absolute path of the build machine")
+# the shared library: exactly the C interface (the functions the header declares)
+library = os.path.join(prefix, "lib", "libdem.so")
+check(os.path.exists(library), "installed lib/libdem.so")
+with open(os.path.join(ROOT, "src", "api", "dem_coupling.h")) as f:
+    declared = set(re.findall(r"\b(dem_coupling_\w+)\(", f.read()))
+symbols = step("the library's symbols", ["nm", "-D", "--defined-only", library])
+exported = {line.split()[-1] for line in symbols.splitlines()
+            if len(line.split()) == 3 and line.split()[1] in "TDBR"}
+check(exported == declared, f"libdem.so exports the header's {len(declared)} functions: "
+      f"missing {sorted(declared - exported)}, more {sorted(exported - declared)}")
 cache = open(os.path.join(build, "CMakeCache.txt")).read().splitlines()
 setting = {k.split(":")[0]: v for k, _, v in (line.partition("=") for line in cache) if ":" in k}
 consumer = os.path.join(work, "consumer")
