@@ -32,7 +32,7 @@ import xml.etree.ElementTree as ET
 
 try:
     from paraview import simple as pvs          # pvpython, pvbatch
-except ImportError:
+except Exception:                               # none, or Debian's beside VTK's wheel in a venv
     pvs = None
 
 DIRECTIONS = {"iso": ((1.0, -1.6, 0.9), (0, 0, 1)), "front": ((0, -1.0, 0), (0, 0, 1)),
