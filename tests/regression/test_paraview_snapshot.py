@@ -1,11 +1,12 @@
 """scripts/post/paraview-snapshot.py on a small run (60 spheres falling into a box), with each
-backend that is installed: ParaView's pvpython (with an Xvfb server when there is no display) and
-Python with VTK's wheel (this Python, or /usr/bin/python3, or /tmp/vtkvenv); each must
-write a PNG of the size asked for that is not blank (more than 50 colours; more than 2 % of
-the pixels neither the white background nor one flat colour) and say how many particles it
-drew. Also the XDMF index's material table: its Information element names the materials of
-the snapshot's /materials/name, in order, and the walls carry their material as a cell
-attribute. Exits 77 (CTest's SKIP_RETURN_CODE) when neither backend is found.
+backend that is installed: ParaView's pvpython (with an Xvfb server when there is no
+display) and each Python with a vtk module (this Python, .venv's, /usr/bin/python3; with
+--backend vtk; tried without a display first); each must write a PNG of the size asked for
+that is not blank (more than 50 colours; more than 2 % of the pixels neither the white
+background nor one flat colour) and say how many particles it drew. Also the XDMF index's
+material table: its Information element names the materials of the snapshot's
+/materials/name, in order, and the walls carry their material as a cell attribute. Exits 77
+(CTest's SKIP_RETURN_CODE) when neither backend is found.
 usage: test_paraview_snapshot.py DEM WORKDIR"""
 import os
 import shutil
@@ -113,7 +114,7 @@ def backends():
     pv = shutil.which("pvpython")
     if pv and (os.environ.get("DISPLAY") or shutil.which("Xvfb")):
         found.append(("pvpython", None, [pv, SCRIPT]))
-    for py in (sys.executable, "/usr/bin/python3", "/tmp/vtkvenv/bin/python"):
+    for py in (sys.executable, os.path.join(ROOT, ".venv", "bin", "python"), "/usr/bin/python3"):
         if not os.path.exists(py):
             continue
         # (--backend vtk: the VTK path also where paraview.simple could be imported)
