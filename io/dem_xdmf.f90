@@ -23,23 +23,30 @@ contains
 
     !> Write `path` for the snapshots of steps `step` at times `time` holding `n` particles
     !> each, with `n_tri` wall triangles; `force` and `contacts` say whether the snapshots
-    !> hold those fields.
-    subroutine xdmf_write(path, step, time, n, n_tri, force, contacts, err)
-        character(len=*), intent(in) :: path
+    !> hold those fields; `names` are the materials, whose indices the `material` attributes
+    !> hold (an Information element of the domain lists them: "1 name; 2 name; ...").
+    subroutine xdmf_write(path, step, time, n, n_tri, force, contacts, names, err)
+        character(len=*), intent(in) :: path, names(:)
         integer(i8), intent(in) :: step(:), n(:)
         real(wp), intent(in) :: time(:)
         integer(ip), intent(in) :: n_tri
         logical, intent(in) :: force, contacts
         type(error_t), intent(inout) :: err
         integer :: u, ios, k
-        character(len=:), allocatable :: h5
+        character(len=:), allocatable :: h5, table
 
         open(newunit=u, file=path // '.part', status='replace', action='write', iostat=ios)
         if (ios /= 0) then
             call set_error(err, dem_err_io, path // ': cannot write')
             return
         end if
-        write(u, '(a)') '<?xml version="1.0" ?>', '<Xdmf Version="3.0">', ' <Domain>', &
+        write(u, '(a)') '<?xml version="1.0" ?>', '<Xdmf Version="3.0">', ' <Domain>'
+        table = ''
+        do k = 1, size(names)
+            if (k > 1) table = table // '; '
+            table = table // itoa(int(k, i8)) // ' ' // escaped(trim(names(k)))
+        end do
+        write(u, '(a)') '  <Information Name="materials" Value="' // table // '"/>', &
             '  <Grid Name="dem" GridType="Collection" CollectionType="Temporal">'
         do k = 1, size(step)
             h5 = snapshot_file(step(k))
@@ -78,6 +85,8 @@ contains
                     '     </Geometry>'
                 call attribute('wall', 'Scalar', 'Cell', '/walls/wall', itoa(int(n_tri, i8)), &
                                'Int', 4)
+                call attribute('material', 'Scalar', 'Cell', '/walls/material', &
+                               itoa(int(n_tri, i8)), 'Int', 4)
                 write(u, '(a)') '    </Grid>'
             end if
             write(u, '(a)') '   </Grid>'
@@ -99,6 +108,23 @@ contains
                 '     </Attribute>'
         end subroutine attribute
     end subroutine xdmf_write
+
+    !> Text as an XML attribute value: &, <, > and " escaped.
+    function escaped(text) result(s)
+        character(len=*), intent(in) :: text
+        character(len=:), allocatable :: s
+        integer :: k
+        s = ''
+        do k = 1, len(text)
+            select case (text(k:k))
+            case ('&'); s = s // '&amp;'
+            case ('<'); s = s // '&lt;'
+            case ('>'); s = s // '&gt;'
+            case ('"'); s = s // '&quot;'
+            case default; s = s // text(k:k)
+            end select
+        end do
+    end function escaped
 
     !> A DataItem that points at an HDF5 dataset.
     function item(file, dataset, dims, number, precision) result(s)

@@ -5,7 +5,9 @@
   that module (one module per file, named after it), and every source file of src/ and io/
   is named there;
 - every `use` of a project module in a source file is of its own layer or one below (what
-  the build enforces with a module folder per layer, checked here from the sources).
+  the build enforces with a module folder per layer, checked here from the sources);
+- its table of the folders of the tree names every folder at the top of the tracked tree
+  (git ls-files; skipped outside a git checkout) and only folders that exist.
 usage: test_architecture.py DEM WORKDIR (neither is used: the test reads the tree)"""
 import glob
 import os
@@ -66,5 +68,23 @@ for path in sources:
         check(rank[layer_of_file[module]] <= rank[layer_of_file[stem]],
               f"{stem} ({layer_of_file[stem]}) uses {module} ({layer_of_file[module]}), a "
               "higher layer")
+# the folders of the tree: | `folder` | what | rows after the heading
+section = page.split("## The folders of the tree", 1)
+check(len(section) == 2, "the page has a section The folders of the tree")
+tree_rows = re.findall(r"^\| `([^`/]+)` \|", section[-1].split("\n## ", 1)[0], re.M)
+for folder in tree_rows:
+    check(os.path.isdir(os.path.join(ROOT, folder)), f"the folder {folder} of the page exists")
+try:
+    import subprocess
+    tracked = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True,
+                             check=True).stdout.split("\n")
+except (OSError, subprocess.CalledProcessError):
+    tracked = []
+    print("not a git checkout: the top-level folders are not checked")
+top = sorted({t.split("/")[0] for t in tracked if "/" in t})
+for folder in top:
+    check(folder in tree_rows, f"the top-level folder {folder} is in the page's table of the "
+          "folders of the tree (doc/architecture.md)")
+
 print(f"{len(sources)} source files, {len(named)} modules named, {len(layers)} layers")
 finish()

@@ -3,7 +3,8 @@
 1. snapshots.xmf is well-formed XML whose time series has one step per snapshot; every
    DataItem points at an existing file and dataset whose shape, number type and precision
    are the ones it declares; topology sizes agree with the datasets; each step's time is
-   the snapshot's /time.
+   the snapshot's /time; the domain's Information element names the materials of
+   /materials/name ("1 soft; 2 wall"); the walls carry the cell attributes wall and material.
 2. The particle fields are consistent with each other and with series.csv: ids unique and
    ordered, radii within the inserted range, material names; the contact counts add up to
    2 x contacts_pp + contacts_pw of the series row of the same step (velocity Verlet, so
@@ -53,6 +54,10 @@ series = np.genfromtxt(os.path.join(out, "series.csv"), delimiter=",", names=Tru
 
 # 1. the XDMF index
 root = ET.parse(os.path.join(out, "snapshots.xmf")).getroot()
+info = root.find("Domain").findall("Information")
+check(len(info) == 1 and info[0].get("Name") == "materials",
+      "snapshots.xmf: one Information element, the material table")
+table = info[0].get("Value") if info else None
 steps = root.find("Domain").find("Grid").findall("Grid")
 check(len(steps) == 7, f"7 time steps in snapshots.xmf (found {len(steps)})")
 kinds = {"Float": "f", "Int": "i"}
@@ -79,6 +84,9 @@ for grid in steps:
                   f"{name}:{dataset}: type {d.dtype}, XDMF says {item.get('NumberType')} "
                   f"{item.get('Precision')}")
     check(len(files) == 1, f"one snapshot file per step ({files})")
+    walls = [g for g in grid.findall("Grid") if g.get("Name") == "walls"]
+    check(len(walls) == 1 and [a.get("Name") for a in walls[0].findall("Attribute")] ==
+          ["wall", "material"], "the walls carry the cell attributes wall and material")
     name = files.pop()
     snapshots.append(name)
     with h5py.File(os.path.join(out, name)) as f:
@@ -106,6 +114,8 @@ for name in snapshots:
     check(np.all(np.diff(p["id"]) > 0), f"{name}: ids unique and ordered")
     check(np.all((p["radius"] >= 0.004) & (p["radius"] <= 0.005)), f"{name}: radii")
     check(mats == ["soft", "wall"] and np.all(p["material"] == 1), f"{name}: materials")
+    check(table == "; ".join(f"{k} {m}" for k, m in enumerate(mats, 1)),
+          f"{name}: the index's material table '{table}' names /materials/name")
     row = series[series["step"] == step]
     check(len(row) == 1 and p["contacts"].sum() == 2 * row["contacts_pp"][0] +
           row["contacts_pw"][0], f"{name}: contact counts add up to series.csv's")
