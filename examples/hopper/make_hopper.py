@@ -10,26 +10,13 @@
 usage: python3 examples/hopper/make_hopper.py"""
 import math
 import os
-import struct
+import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "..", "cases"))
+from make_geometry import write_stl  # noqa: E402  (the cases' STL writer)
+
 R, H, R_O, SIDES = 0.018, 0.1, 0.006, 64
-
-
-def normal(t):
-    a = [t[1][k] - t[0][k] for k in range(3)]
-    b = [t[2][k] - t[0][k] for k in range(3)]
-    n = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-    s = math.sqrt(sum(c * c for c in n)) or 1.0
-    return [c / s for c in n]
-
-
-def write_stl(path, tris, name):
-    with open(path, "wb") as f:
-        f.write(name.encode().ljust(80, b" "))
-        f.write(struct.pack("<I", len(tris)))
-        for t in tris:
-            f.write(struct.pack("<12fH", *normal(t), *t[0], *t[1], *t[2], 0))
 
 
 def ring(r, z, k):
