@@ -64,6 +64,8 @@ module dem_case
         logical :: inflow = .false.                   !< some &insert group inserts in the run
         real(wp) :: dt = 0.0_wp                       !< time step [s]
         real(wp) :: t_end = 0.0_wp                    !< end time [s]
+        real(wp) :: settle_time = 0.0_wp              !< a run may stop as settled from here
+                                                      !< (case_settle_time, set up once) [s]
         integer(ip) :: integrator = 1                 !< dem_integrate's integrator_*
         real(wp) :: gravity(3) = 0.0_wp               !< [m/s^2]
         real(wp) :: expected_speed = 0.0_wp           !< largest impact speed expected [m/s]

@@ -6,7 +6,7 @@ module dem_run_output
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
     use dem_comm, only: comm_sum
-    use dem_case, only: case_t, case_settle_time
+    use dem_case, only: case_t
     use dem_run_state, only: solver_t, time_of, particle_data
     use dem_rebuild, only: settle_outlets
     use dem_frames, only: capture, mesh_at
@@ -46,7 +46,7 @@ contains
                           ke_r, pe, vmax, mass)
             n = k
             call comm_sum(s%comm, n)
-            settled = s%step > 0 .and. time_of(s, c, s%step) >= case_settle_time(c) .and. &
+            settled = s%step > 0 .and. time_of(s, c, s%step) >= c%settle_time .and. &
                       ke_t + ke_r < c%stop_kinetic_energy
             if (settled) s%settled_energy = ke_t + ke_r
             if (s%comm%rank == 0) call output_series(out, time_of(s, c, s%step), s%step, &

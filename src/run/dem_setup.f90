@@ -8,7 +8,8 @@ module dem_setup
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_comm, only: comm_t, comm_any
     use dem_case, only: case_t, insert_t, time_scales_t, case_time_scales, case_summarize, &
-                        case_speed_bound, case_energy_speed, case_append_particles
+                        case_speed_bound, case_energy_speed, case_append_particles, &
+                        case_settle_time
     use dem_insert, only: insert_random, insert_velocities, region_face, region_slab
     use dem_random, only: rng_t, rng_seed
     use dem_input, only: read_case_file
@@ -33,6 +34,7 @@ contains
             if (size(c%inserts) > 0) call keep_share(c, comm%rank, comm%size)
             call case_summarize(c, comm)
             call drawn_from_particles(c, err)
+            c%settle_time = case_settle_time(c)
         end if
         if (.not. err%failed()) call check_pairs_used(c, err)
         if (.not. err%failed()) call check_ids(c, comm, err)

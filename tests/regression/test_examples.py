@@ -39,6 +39,9 @@ import numpy as np
 
 from regression_util import ROOT, check, finish
 
+sys.path.insert(0, os.path.join(ROOT, "examples", "restart"))
+from compare import h5_same  # noqa: E402  (the restart example's comparison)
+
 dem, work, mpiexec, example = (sys.argv[1], os.path.abspath(sys.argv[2]), sys.argv[3],
                                sys.argv[4])
 shutil.rmtree(work, ignore_errors=True)
@@ -236,28 +239,6 @@ def impact():
           f"{zb[-1] * 1e3:.1f} mm, surface {surface * 1e3:.1f} mm, floor at 0")
     print(f"impact: {v_in:.3f} m/s at the bed, ball ends at {zb[-1] * 1e3:.1f} mm (surface "
           f"{surface * 1e3:.1f} mm), energy {before * 1e3:.2f} -> {energy[-1] * 1e3:.2f} mJ")
-
-
-def h5_same(a, b):
-    """Every dataset and attribute of HDF5 files a and b the same, bit for bit (the bytes of
-    the files differ between 1 and 2 ranks in HDF5's own layout of the file)."""
-    import h5py
-    with h5py.File(a) as f, h5py.File(b) as g:
-        names, other = [], []
-        f.visit(names.append)
-        g.visit(other.append)
-        if sorted(names) != sorted(other):
-            return False
-        for n in names:
-            if sorted(f[n].attrs) != sorted(g[n].attrs) or any(
-                    np.asarray(f[n].attrs[k]).tobytes() != np.asarray(g[n].attrs[k]).tobytes()
-                    for k in f[n].attrs):
-                return False
-            if isinstance(f[n], h5py.Dataset) and (
-                    f[n].dtype != g[n].dtype or f[n].shape != g[n].shape or
-                    np.asarray(f[n][()]).tobytes() != np.asarray(g[n][()]).tobytes()):
-                return False
-    return True
 
 
 def restart():
