@@ -43,6 +43,10 @@ module dem_checkpoint
         real(wp), allocatable :: wall_xi(:, :, :)     !< (n_wall_history, column, particle)
         integer(i8), allocatable :: pair(:, :)        !< (lower id, higher id) per pair
         real(wp), allocatable :: pair_xi(:, :)        !< (n_pair_history, pair)
+        real(wp), allocatable :: x_ref(:, :)    !< positions at the last list build (periodic
+                                                !< cases' checkpoints: a restart rebuilds the
+                                                !< lists, and wraps, at the same steps)
+        real(wp), allocatable :: vert_ref(:, :, :)  !< and the moving walls' vertices then
         ! run bookkeeping
         real(wp) :: time0 = 0.0_wp                !< the time of step0 [s]
         integer(i8) :: step0 = 0                  !< steps count in dt from here
@@ -107,6 +111,7 @@ contains
         fr%x = moved(fr%x)
         fr%v = moved(fr%v)
         fr%w = moved(fr%w)
+        if (allocated(fr%x_ref)) fr%x_ref = moved(fr%x_ref)
         if (allocated(fr%contacts)) fr%contacts = int(reshape(moved_int(reshape(fr%contacts, &
                                                   [1, size(fr%contacts)])), [n]), ip)
         fr%f = moved(fr%f)
@@ -327,6 +332,10 @@ contains
                           distributed=.true.)
             call h5_write(h_, '/state/pair', fr%pair, err, distributed=.true.)
             call h5_write(h_, '/state/pair_history', fr%pair_xi, err, distributed=.true.)
+            if (allocated(fr%x_ref)) call h5_write(h_, '/state/list_reference', fr%x_ref, err, &
+                                                   distributed=.true.)
+            if (allocated(fr%vert_ref)) call h5_write(h_, '/state/wall_list_reference', &
+                reshape(fr%vert_ref, [9, size(fr%vert_ref, 3)]), err)
             call h5_group(h_, '/case', err)
             call h5_write(h_, '/case/input', c%input_text, err)
             call h5_write(h_, '/case/particles', int(c%n_particles, i8), err)
@@ -458,7 +467,7 @@ contains
         integer(ip) :: settled, nm
         character(len=:), allocatable :: format
         character(len=32), allocatable :: names(:)
-        real(wp), allocatable :: props(:, :), ref(:, :)
+        real(wp), allocatable :: props(:, :), ref(:, :), vref(:, :)
         type(mesh_t) :: pose
 
         call h5_open(h, path, err, comm)
@@ -546,6 +555,15 @@ contains
         call h5_read(h, '/particles/torque', fr%t, err, first)
         call h5_read(h, '/state/wall_contact_triangle', fr%wall_tri, err, first)
         call h5_read(h, '/state/wall_contact_history', fr%wall_xi, err, first)
+        if (.not. err%failed() .and. h5_exists(h, '/state/list_reference')) then
+            allocate(fr%x_ref(3, n))
+            call h5_read(h, '/state/list_reference', fr%x_ref, err, first)
+        end if
+        if (.not. err%failed() .and. h5_exists(h, '/state/wall_list_reference')) then
+            allocate(vref(9, c%mesh%n_tri))
+            call h5_read(h, '/state/wall_list_reference', vref, err)
+            fr%vert_ref = reshape(vref, [3, 3, c%mesh%n_tri])
+        end if
         call h5_dims(h, '/state/pair', dims, err, 2)
         if (.not. err%failed()) then
             call share(dims(2), first, n)           ! this rank's part of the pairs

@@ -23,6 +23,7 @@ module dem_input
     use dem_probes, only: probe_t, probe_count, probe_center_of_mass, probe_track, &
                           probe_histogram, probe_wall_load
     use dem_integrate, only: integrator_euler, integrator_verlet
+    use dem_periodic, only: periodic_set
     implicit none
     private
     public :: read_case_file
@@ -32,7 +33,7 @@ module dem_input
     integer, parameter :: max_table = 1000   !< points of a wall's velocity table
 
     !> The groups a case file may hold, and the keys of each (doc/user/input.md).
-    character(len=*), parameter :: input_groups(12) = [character(len=400) :: &
+    character(len=*), parameter :: input_groups(13) = [character(len=400) :: &
         'run: dt t_end integrator gravity expected_speed skin allow_unstable ' // &
         'stop_kinetic_energy max_speed max_energy wall_time_limit progress_interval ' // &
         'imbalance_limit gpu_aware_mpi', &
@@ -54,6 +55,7 @@ module dem_input
         'probe: name kind region box_min box_max id time bins v_min v_max axis_point wall ' // &
         'axis', &
         'wall_plane: material point normal half_width divisions name', &
+        'periodic: axis low high', &
         'wall_mesh: file scale material velocity velocity_start velocity_end rotation_axis ' // &
         'rotation_point angular_velocity rotation_start rotation_end oscillation_amplitude ' // &
         'oscillation_frequency oscillation_phase oscillation_start oscillation_end ' // &
@@ -120,6 +122,8 @@ contains
         call read_meshes(nf, c, err)
         if (err%failed()) return
         call read_run(nf, c, err)
+        if (err%failed()) return
+        call read_periodic(nf, c, err)
         if (err%failed()) return
         allocate(c%id_checks(0))
         call read_output(nf, c, comm, err)
@@ -1405,6 +1409,61 @@ contains
             c%mesh%name(c%mesh%n_wall) = name
         end do
     end subroutine read_walls
+
+    !> &periodic (one per periodic axis): space repeats along the axis between low and high
+    !> (dem_periodic; that the period holds the particles' reach is dem_setup's check).
+    subroutine read_periodic(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=name_len) :: axis  ! 'x', 'y' or 'z', required, each axis once
+        real(wp) :: low, high            ! the faces [m], high > low, required
+        namelist /periodic/ axis, low, high
+        type(nml_block_t) :: b
+        integer :: k_item, ios, k, a
+        character(len=512) :: msg
+        character(len=:), allocatable :: text, at
+        logical :: on(3)
+        real(wp) :: lo(3), hi(3)
+        on = .false.
+        lo = 0.0_wp
+        hi = 0.0_wp
+        do k = 1, count_blocks(nf, 'periodic')
+            axis = ''
+            low = unset
+            high = unset
+            b = nf%blocks(block_index(nf, 'periodic', k))
+            do k_item = 0, block_item_count(b)
+                text = block_text(b, k_item)
+                read(text, nml=periodic, iostat=ios, iomsg=msg)
+                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            end do
+            if (err%failed()) return
+            at = nml_location(nf, b)
+            a = index('xyz', trim(axis))
+            if (len_trim(axis) /= 1 .or. a == 0) then
+                call set_error(err, dem_err_input, at // ": key 'axis': '" // trim(axis) // &
+                               "' is not known (accepted: x, y, z)")
+                return
+            end if
+            if (on(a)) then
+                call set_error(err, dem_err_input, at // ": key 'axis': axis " // trim(axis) // &
+                               ' is periodic in an earlier &periodic group already')
+                return
+            end if
+            if (.not. check_vector(at, [low], 'low', .true., err)) return
+            if (.not. check_vector(at, [high], 'high', .true., err)) return
+            if (.not. high > low) then
+                call set_error(err, dem_err_input, at // ": key 'high': must exceed low [m]")
+                return
+            end if
+            on(a) = .true.
+            lo(a) = low
+            hi(a) = high
+            c%periodic_at(a) = at
+        end do
+        c%periodic = periodic_set(on, lo, hi)
+    end subroutine read_periodic
 
     !> &wall_mesh (repeated): a wall read from an STL file, at rest or in rigid motion.
     subroutine read_meshes(nf, c, err)

@@ -10,6 +10,7 @@ module dem_case
     use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt, &
                             tangential_critical_dt, squeeze_critical_dt
     use dem_comm, only: comm_t, comm_sum, comm_max
+    use dem_periodic, only: periodic_t
     implicit none
     private
     public :: case_t, time_scales_t, insert_t, id_check_t, case_time_scales, case_summarize, &
@@ -98,6 +99,8 @@ module dem_case
         integer(ip), allocatable :: mat(:)
         real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :)
         type(mesh_t) :: mesh
+        type(periodic_t) :: periodic                  !< the periodic axes (&periodic)
+        character(len=256) :: periodic_at(3) = ''     !< the place of each axis's group
         type(outlet_t), allocatable :: outlets(:)
         type(probe_t), allocatable :: probes(:)
         type(summary_t) :: summary                    !< of the particles of all ranks

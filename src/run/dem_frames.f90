@@ -11,7 +11,7 @@ module dem_frames
     use dem_mesh, only: mesh_t, mesh_move
     use dem_checkpoint, only: frame_t, frame_spread, checkpoint_latest, checkpoint_kept
     use dem_output, only: output_t, output_sizes
-    use dem_acc, only: acc_to_host
+    use dem_acc, only: acc_data, acc_to_host
     implicit none
     private
     public :: capture, frame_restore, mesh_at
@@ -41,6 +41,12 @@ contains
         s%p%f(:, 1:n) = fr%f
         s%p%t(:, 1:n) = fr%t
         call store_walls_restore(s%cs, n, fr%wall_tri, fr%wall_xi)
+        if (allocated(fr%x_ref) .and. c%periodic%on) then   ! for the first list build
+            allocate(s%p%x_built(3, size(s%p%gid)))
+            s%p%x_built = 0.0_wp
+            s%p%x_built(:, 1:n) = fr%x_ref
+            if (allocated(fr%vert_ref) .and. s%mesh%moving) s%vert_built = fr%vert_ref
+        end if
         call neighbors_set_history(s%nb, s%cs, n, s%p%gid, [(i, i = 1, n)], fr%pair, fr%pair_xi)
         s%trace = 0
         if (s%trace_id /= 0) s%trace = findloc(s%p%gid(1:n), s%trace_id, dim=1)
@@ -103,6 +109,14 @@ contains
             fr%x = p%x(:, order)
             fr%v = p%v(:, order)
             fr%w = p%w(:, order)
+            if (s%dom%pb%on .and. allocated(s%nb%x_ref)) then   ! (periodic: checkpoints)
+                call acc_data(s%nb%x_ref, acc_to_host)
+                fr%x_ref = s%nb%x_ref(:, order)
+                if (allocated(s%nb%vert_ref)) then
+                    call acc_data(s%nb%vert_ref, acc_to_host)
+                    fr%vert_ref = s%nb%vert_ref
+                end if
+            end if
         end associate
         call capture_history(s, c, order, fr)
         if (.not. present(local)) call frame_spread(fr, s%comm)

@@ -18,6 +18,7 @@ module dem_rebuild
     use dem_contact_store, only: store_walls_permute, store_pairs_forget_parted, &
                                  store_walls_reserve_on_device
     use dem_cells, only: fill_range, kept_indices
+    use dem_periodic, only: periodic_wrap
     use dem_contacts_pp, only: pp_scales
     use dem_diagnostics, only: momentum_sums
     use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host, acc_to_device
@@ -37,23 +38,25 @@ module dem_rebuild
 contains
 
     !> The lists rebuilt when a particle has moved too far for them (on every rank if on
-    !> one), with the parked particles removed; else, on several ranks, the ghosts' positions
-    !> and velocities refreshed from their owners.
+    !> one), with the parked particles removed; else, with ghosts, the ghosts' positions and
+    !> velocities refreshed from their owners. Along periodic axes the positions are first
+    !> put on their grid (dem_periodic).
     subroutine lists_refresh(s, err)
         type(solver_t), intent(inout) :: s
         type(error_t), intent(inout) :: err
         logical :: stale
+        if (s%dom%pb%on) call periodic_wrap(s%dom%pb, s%p%n_own, .false., s%p%x)
         stale = neighbors_stale(s%nb, s%p%n_own, s%p%x, s%mesh)
         if (s%comm%size > 1) stale = comm_any(s%comm, stale)
         if (stale) then
             call rebuild(s, s%parked > 0, err)
-        else if (s%comm%size > 1) then                ! only x, v, w of the ghosts change
+        else if (s%halo) then                         ! only x, v, w of the ghosts change
             call domain_update(s%dom, s%comm, s%p)
         end if
     end subroutine lists_refresh
 
-    !> The blocks of a run on several ranks, over the box of the particles of all ranks and
-    !> the walls.
+    !> The blocks of a run with ghosts, over the box of the particles of all ranks and the
+    !> walls (along periodic axes, the period).
     subroutine start_domain(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -87,15 +90,17 @@ contains
         rmin = 0.0_wp
         if (n > 0) rmin = -extent(7)
         call domain_init(s%dom, s%comm, lo, hi, p_lo, p_hi, 2.0_wp * (2.0_wp * rmin + c%skin), &
-                         c%skin)
+                         c%skin, c%periodic)
         s%dom%gpu_aware_mpi = c%gpu_aware_mpi
     end subroutine start_domain
 
     !> Re-sort the particles in space and rebuild the neighbour lists; the history follows
     !> the particles. With `outlets`, the particles the outlet flags mark (parked) are
-    !> removed. On several ranks the particles first go to the ranks of their blocks
-    !> (repartitioned when the load is out of balance), and the ghosts are exchanged after
-    !> the re-sort. All of it runs on the device; the host sees counts and the buffers MPI
+    !> removed. Along periodic axes the particles that left the period are first wrapped
+    !> back. On several ranks the particles then go to the ranks of their blocks
+    !> (repartitioned when the load is out of balance), and the ghosts (with periodic axes,
+    !> also on one rank: the images) are exchanged after the re-sort. All of it runs on the
+    !> device; the host sees counts and the buffers MPI
     !> sends (and the stores when they must grow or shrink for a rank's share). Collective;
     !> a failed partition or migration sets err on every rank.
     subroutine rebuild(s, outlets, err, added)
@@ -111,8 +116,10 @@ contains
         if (.not. s%pc%opts%reset_pair_history .and. s%lists_on_device) &
             call store_pairs_forget_parted(s%cs, s%nb%n_pairs)
         if (present(added)) call add_particles(s, added)
+        if (s%dom%pb%on .and. .not. allocated(s%p%x_built)) &   ! (not a restart's first)
+            call periodic_wrap(s%dom%pb, s%p%n_own, .true., s%p%x)
+        if (s%halo .and. s%lists_on_device) call domain_data(s%dom, acc_exit)
         if (s%comm%size > 1) then
-            if (s%lists_on_device) call domain_data(s%dom, acc_exit)
             call distribute(s, outlets, err)
             if (err%failed()) return
         end if
@@ -122,13 +129,15 @@ contains
         call neighbors_spatial_order(m, kept, s%p%x, s%sort_cell, order)
         call particles_permute(s%p, order(1:m))
         call store_walls_permute(s%cs, order(1:m))
-        if (s%comm%size > 1) then
+        if (s%halo) then
             call domain_ghosts(s%dom, s%comm, s%p)
             call domain_data(s%dom, acc_enter)
+            if (s%dom%pb%on) call domain_update(s%dom, s%comm, s%p)   ! the images' positions
         end if
         if (s%trace_id /= 0) s%trace = particles_find(s%p%n_own, s%p%gid, s%trace_id)
         call neighbors_build(s%nb, s%cs, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
                              s%p%radius, s%mesh, old_index=order)
+        if (allocated(s%p%x_built)) call built_reference(s)
         allocate(s%nb%scale(max(1, s%p%n_own + s%p%n_ghost)))
         call acc_data(s%nb%scale, acc_create)
         call pp_scales(s%p%n_own + s%p%n_ghost, s%p%mass, s%accel_bound, s%nb%scale)
@@ -138,6 +147,24 @@ contains
         if (allocated(s%gone)) call release_gone(s)   ! made anew for the new order
         s%parked = 0
     end subroutine rebuild
+
+    !> A periodic case's restart: the lists' reference positions (and moving walls) those
+    !> of the last list build of the run that wrote the checkpoint, so that the lists are
+    !> rebuilt, and the particles wrapped, at the same steps as in that run (the walls meet
+    !> a wrapped particle at another place, which would change the last bits).
+    subroutine built_reference(s)
+        type(solver_t), intent(inout) :: s
+        call acc_data(s%p%x_built, acc_to_host)
+        call acc_data(s%p%x_built, acc_exit)
+        s%nb%x_ref = s%p%x_built(:, 1:s%p%n_own)
+        call acc_data(s%nb%x_ref, acc_to_device)
+        deallocate(s%p%x_built)
+        if (allocated(s%vert_built)) then
+            s%nb%vert_ref = s%vert_built
+            call acc_data(s%nb%vert_ref, acc_to_device)
+            deallocate(s%vert_built)
+        end if
+    end subroutine built_reference
 
     !> Append `a` to the owned particles, at rest of forces and without contact history:
     !> the ghosts are dropped (the rebuild makes them anew) and the lists' pair history

@@ -112,7 +112,7 @@ contains
             call unstable(s, c, err)
             return
         end if
-        if (s%comm%size > 1) call domain_update(s%dom, s%comm, s%p)   ! the ghosts' positions
+        if (s%halo) call domain_update(s%dom, s%comm, s%p)   ! the ghosts' positions
         associate (p => s%p, k => s%p%n_own)
             call energies(s%comm, k, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, ke_t, &
                           ke_r, pe, vmax, mass)

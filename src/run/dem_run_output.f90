@@ -69,7 +69,7 @@ contains
     function contact_counts(s) result(counts)
         type(solver_t), intent(inout) :: s
         integer(i8) :: counts(3)
-        if (s%comm%size > 1) call domain_update(s%dom, s%comm, s%p)   ! on the device
+        if (s%halo) call domain_update(s%dom, s%comm, s%p)   ! on the device
         associate (p => s%p, n => s%p%n_own)
             counts(1) = count_pp_sides(n, n + p%n_ghost, size(s%nb%list, kind=ip), p%x, &
                                        p%radius, s%nb%start, s%nb%list)

@@ -71,7 +71,12 @@ module dem_run_state
         integer(ip) :: particles_most = 0  !< the most particles this rank held in them
         type(timers_t) :: timers       !< time per phase of those steps
         type(comm_t) :: comm           !< the ranks of the run
-        type(domain_t) :: dom          !< their blocks and ghosts (more than one rank)
+        type(domain_t) :: dom          !< their blocks and ghosts (when halo)
+        logical :: halo = .false.      !< there are ghosts: more than one rank, or periodic
+                                       !< axes (periodic images)
+        real(wp), allocatable :: vert_built(:, :, :)  !< the moving walls at the last list
+                                       !< build, from a periodic case's checkpoint to its
+                                       !< restart's first build (as p%x_built)
         real(wp) :: imbalance_limit = 1.0_wp  !< repartition above this load ratio ...
         real(wp) :: balanced = 1.0_wp  !< ... times the ratio the last partition achieved
         logical :: distributed = .false.  !< each rank holds only its own particles
@@ -173,7 +178,7 @@ contains
         if (op == acc_exit .and. s%lists_on_device) then
             call neighbors_free(s%nb)
             call store_pairs_drop(s%cs)
-            if (s%comm%size > 1) call domain_data(s%dom, op)
+            if (s%halo) call domain_data(s%dom, op)
             s%lists_on_device = .false.
         end if
     end subroutine device_data

@@ -36,6 +36,7 @@ contains
             call drawn_from_particles(c, err)
             c%settle_time = case_settle_time(c)
         end if
+        if (.not. err%failed()) call check_periods(c, err)
         if (.not. err%failed()) call check_pairs_used(c, err)
         if (.not. err%failed()) call check_ids(c, comm, err)
         call where_to_read(err)
@@ -165,6 +166,33 @@ contains
                 'allow_unstable = .true. runs anyway)')
         end if
     end subroutine drawn_from_particles
+
+    !> Each period at least 2 (2 R + skin), R the largest radius (of the inflow too): a
+    !> particle then meets at most one image of another, and none of itself.
+    subroutine check_periods(c, err)
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        real(wp) :: r, need
+        character(len=32) :: s1, s2
+        integer :: a, k
+        if (.not. c%periodic%on) return
+        r = maxval(c%summary%rmax)
+        do k = 1, size(c%inserts)
+            r = max(r, c%inserts(k)%size%r_max)
+        end do
+        need = 2.0_wp * (2.0_wp * r + c%skin)
+        do a = 1, 3
+            if (.not. c%periodic%axis(a)) cycle
+            if (c%periodic%length(a) >= need) cycle
+            write(s1, '(es10.3)') c%periodic%length(a)
+            write(s2, '(es10.3)') need
+            call set_error(err, dem_err_input, trim(c%periodic_at(a)) // ": key 'high': the " &
+                // 'period along ' // 'xyz'(a:a) // ', ' // trim(adjustl(s1)) // ' m, is ' // &
+                'shorter than 2 (2 R + skin) = ' // trim(adjustl(s2)) // ' m (R the largest ' // &
+                'radius): a particle would meet two images of another')
+            return
+        end do
+    end subroutine check_periods
 
     !> Every pair of materials that can touch must have a &pair group.
     subroutine check_pairs_used(c, err)

@@ -66,6 +66,7 @@ contains
         s%wload = 0.0_wp
         s%nb%skin = c%skin
         s%imbalance_limit = c%imbalance_limit
+        s%halo = comm%size > 1 .or. c%periodic%on
         s%sort_cell = 2.0_wp * minval(c%summary%rmin) + c%skin
         s%run%probed = case_particle_materials(c)
         call case_time_scales(c, s%scales)
@@ -172,7 +173,7 @@ contains
                                            itoa(ids(1)) // ' is given twice')
             if (failed_anywhere(s, err)) return
         end if
-        if (s%comm%size > 1) call start_domain(s, c)
+        if (s%halo) call start_domain(s, c)
         s%device = acc_select_device(comm_node_rank(s%comm))
         call device_data(s, acc_enter)
         call rebuild(s, .false., err)

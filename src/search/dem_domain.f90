@@ -14,6 +14,7 @@ module dem_domain
     use dem_cells, only: cell_coords, cell_number, prefix_sum, bin_items, gather_items, &
                          kept_indices
     use dem_metis, only: metis_partition
+    use dem_periodic, only: periodic_t, image_shift, image_possible, no_image, n_images
     use dem_neighbors, only: fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
                              particles_pack_ints, particles_pack_reals, &
@@ -37,7 +38,9 @@ module dem_domain
         real(wp) :: skin = 0.0_wp                !< neighbour-list skin [m]
         integer, allocatable :: owner(:)         !< rank of each block
         real(wp), allocatable :: rmax(:)         !< largest radius in each block [m]
+        type(periodic_t) :: pb                   !< the periodic axes
         integer(ip), allocatable :: send(:)      !< owned particles sent as ghosts, by rank
+        integer(ip), allocatable :: image(:)     !< the image each is sent as (dem_periodic)
         integer, allocatable :: send_counts(:)   !< ghosts sent to each rank
         integer, allocatable :: recv_counts(:)   !< ghosts received from each rank
         real(wp), allocatable :: sbuf(:, :)      !< x, v, w of the ghosts sent (9, send)
@@ -51,20 +54,28 @@ contains
 
     !> Blocks over the box [lo, hi], of edge at least h_min, about blocks_per_rank per rank
     !> in the box [p_lo, p_hi] of the particles (where the load is), at most
-    !> max_blocks_per_rank per rank in all.
-    subroutine domain_init(d, comm, lo, hi, p_lo, p_hi, h_min, skin)
+    !> max_blocks_per_rank per rank in all; along a periodic axis of pb, both boxes are its
+    !> period.
+    subroutine domain_init(d, comm, lo, hi, p_lo, p_hi, h_min, skin, pb)
         type(domain_t), intent(out) :: d
         type(comm_t), intent(in) :: comm
         real(wp), intent(in) :: lo(3), hi(3), p_lo(3), p_hi(3)   !! [m]
         real(wp), intent(in) :: h_min, skin    !! [m]
-        real(wp) :: volume
-        volume = product(max(p_hi - p_lo, h_min))
+        type(periodic_t), intent(in) :: pb
+        real(wp) :: volume, b_lo(3), b_hi(3), l_lo(3), l_hi(3)
+        b_lo = merge(pb%lo, lo, pb%axis)
+        b_hi = merge(pb%lo + pb%length, hi, pb%axis)
+        l_lo = merge(pb%lo, p_lo, pb%axis)
+        l_hi = merge(pb%lo + pb%length, p_hi, pb%axis)
+        volume = product(max(l_hi - l_lo, h_min))
         d%h = max(h_min, (volume / real(blocks_per_rank * comm%size, wp))**(1.0_wp / 3.0_wp))
         if (.not. d%h > 0.0_wp) d%h = 1.0_wp          ! an empty case: one block
-        call fit_grid(lo, hi, real(max_blocks_per_rank * comm%size, wp), d%h, d%n)
-        d%origin = lo
+        call fit_grid(b_lo, b_hi, real(max_blocks_per_rank * comm%size, wp), d%h, d%n)
+        d%origin = b_lo
         d%skin = skin
-        allocate(d%owner(product(d%n)), d%rmax(product(d%n)), d%send(0), d%sbuf(9, 0), &
+        d%pb = pb
+        allocate(d%owner(product(d%n)), d%rmax(product(d%n)), d%send(0), d%image(0), &
+                 d%sbuf(9, 0), &
                  d%rbuf(9, 0), d%send_counts(0:comm%size - 1), d%recv_counts(0:comm%size - 1))
         d%owner = 0
         d%rmax = 0.0_wp
@@ -476,8 +487,8 @@ contains
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         type(particles_t), intent(inout) :: p
-        integer(ip), allocatable :: per(:), first(:), to(:), from(:), by_rank(:), start(:), &
-                                    cnt(:)
+        integer(ip), allocatable :: per(:), first(:), to(:), from(:), img(:), by_rank(:), &
+                                    start(:), cnt(:)
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :)
         real(wp), allocatable :: rbuf(:, :), rrecv(:, :)
         integer(ip) :: n, m, nr, nb, last(1)
@@ -495,18 +506,21 @@ contains
         call acc_data(d%rmax, acc_to_device)
         rmax_all = maxval(d%rmax)
         call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, comm%rank, d%skin, &
-                         rmax_all, p%x, p%radius, per, first, 0, per, per)
+                         rmax_all, d%pb%axis, d%pb%lo, d%pb%length, p%x, p%radius, per, first, &
+                         0, per, per, per)
         call prefix_sum(n, per, first)
         call acc_data(first(n + 1:n + 1), acc_to_host)
         last = first(n + 1:n + 1)
         m = last(1) - 1
-        if (allocated(d%send)) deallocate(d%send)
-        allocate(to(max(1, m)), from(max(1, m)), by_rank(max(1, m)), start(comm%size + 1), &
-                 cnt(comm%size), d%send(m))
+        if (allocated(d%send)) deallocate(d%send, d%image)
+        allocate(to(max(1, m)), from(max(1, m)), img(max(1, m)), by_rank(max(1, m)), &
+                 start(comm%size + 1), cnt(comm%size), d%send(m), d%image(m))
         call acc_data(to, acc_create)
         call acc_data(from, acc_create)
+        call acc_data(img, acc_create)
         call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, comm%rank, d%skin, &
-                         rmax_all, p%x, p%radius, per, first, max(1, m), to, from)
+                         rmax_all, d%pb%axis, d%pb%lo, d%pb%length, p%x, p%radius, per, first, &
+                         max(1, m), to, from, img)
         call acc_data(by_rank, acc_create)
         call acc_data(start, acc_create)
         call acc_data(cnt, acc_create)
@@ -516,6 +530,9 @@ contains
         call acc_data(d%send, acc_create)
         call gather_items(m, from, by_rank, d%send)
         call acc_data(d%send, acc_to_host)
+        call acc_data(d%image, acc_create)
+        call gather_items(m, img, by_rank, d%image)
+        call acc_data(d%image, acc_to_host)
         allocate(ibuf(particles_pack_ints(p), m), rbuf(particles_pack_reals(p), m))
         call acc_data(ibuf, acc_create)
         call acc_data(rbuf, acc_create)
@@ -537,10 +554,12 @@ contains
         call acc_data(irecv, acc_exit)
         call acc_data(rbuf, acc_exit)
         call acc_data(ibuf, acc_exit)
+        call acc_data(d%image, acc_exit)
         call acc_data(d%send, acc_exit)
         call acc_data(cnt, acc_exit)
         call acc_data(start, acc_exit)
         call acc_data(by_rank, acc_exit)
+        call acc_data(img, acc_exit)
         call acc_data(from, acc_exit)
         call acc_data(to, acc_exit)
         call acc_data(first, acc_exit)
@@ -570,41 +589,60 @@ contains
         end do
     end subroutine block_radii
 
-    !> The ranks other than `rank` that particle i (1..n) goes to as a ghost: the owners of
-    !> the blocks b within radius(i) + rmax(b) + skin of it, each once (the first block of a
-    !> rank in the scan counts). With list_len = 0, per(i) = how many; otherwise the ranks,
-    !> plus one (for bin_items), and i go to to(k), from(k), k = first(i), first(i) + 1, ...
-    subroutine ghost_ranks(n, nb, origin, h, nblk, owner, rmax, rank, skin, rmax_all, x, &
-                           radius, per, first, list_len, to, from)
+    !> The ranks that particle i (1..n) goes to as a ghost, and as which image (dem_periodic):
+    !> for each of its images within reach of the periodic box (itself only, without
+    !> periodic axes), the owners of the blocks b within radius(i) + rmax(b) + skin of the
+    !> image, each once per image (the first block of a rank in the scan counts), `rank`
+    !> itself only for a shifted image. With list_len = 0, per(i) = how many; otherwise the
+    !> ranks, plus one (for bin_items), and i and the image go to to(k), from(k), img(k), k =
+    !> first(i), first(i) + 1, ...
+    subroutine ghost_ranks(n, nb, origin, h, nblk, owner, rmax, rank, skin, rmax_all, axis, &
+                           plo, length, x, radius, per, first, list_len, to, from, img)
         integer(ip), intent(in) :: n, nb, nblk(3), list_len
         real(wp), intent(in) :: origin(3), h, skin, rmax_all, x(:, :), radius(:)
         integer, intent(in) :: owner(nb), rank
         real(wp), intent(in) :: rmax(nb)
-        integer(ip), intent(inout) :: per(:), first(n + 1), to(list_len), from(list_len)
-        integer(ip) :: i, c0(3), w(3), t, u, k
-        integer :: q
+        logical, intent(in) :: axis(3)           !! periodic axes
+        real(wp), intent(in) :: plo(3), length(3)   !! their low faces and periods [m]
+        integer(ip), intent(inout) :: per(:), first(n + 1), to(list_len), from(list_len), &
+                                      img(list_len)
+        integer(ip) :: i, c0(3), w(3), t, u, k, code
+        integer :: q, skip
+        real(wp) :: xs(3), reach
         logical :: seen
-        !$acc parallel loop gang vector default(present) copyin(origin, nblk) &
-        !$acc private(c0, w, t, u, k, q, seen)
+        !$acc parallel loop gang vector default(present) copyin(origin, nblk, axis, plo, length) &
+        !$acc private(c0, w, t, u, k, q, seen, code, xs, reach, skip)
         do i = 1, n
-            c0 = cell_coords(x(:, i) - (radius(i) + rmax_all + skin), origin, h, nblk)
-            w = cell_coords(x(:, i) + (radius(i) + rmax_all + skin), origin, h, nblk) - c0 + 1
+            reach = radius(i) + rmax_all + skin
             k = 0
-            do t = 0, product(w) - 1
-                q = ghost_owner(t, c0, w, x(:, i), radius(i), skin, origin, h, nblk, &
-                                nb, owner, rmax, rank)
-                if (q < 0) cycle
-                seen = .false.
-                do u = 0, t - 1
-                    if (ghost_owner(u, c0, w, x(:, i), radius(i), skin, origin, h, nblk, &
-                                    nb, owner, rmax, rank) == q) seen = .true.
-                end do
-                if (seen) cycle
-                if (list_len > 0) then
-                    to(first(i) + k) = q + 1
-                    from(first(i) + k) = i
+            do code = 0, n_images - 1
+                if (code /= no_image) then
+                    if (.not. image_possible(code, axis, plo, length, x(:, i), reach)) cycle
+                    xs = x(:, i) + image_shift(code, length)
+                    skip = -1
+                else
+                    xs = x(:, i)
+                    skip = rank
                 end if
-                k = k + 1
+                c0 = cell_coords(xs - reach, origin, h, nblk)
+                w = cell_coords(xs + reach, origin, h, nblk) - c0 + 1
+                do t = 0, product(w) - 1
+                    q = ghost_owner(t, c0, w, xs, radius(i), skin, origin, h, nblk, axis, &
+                                    nb, owner, rmax, skip)
+                    if (q < 0) cycle
+                    seen = .false.
+                    do u = 0, t - 1
+                        if (ghost_owner(u, c0, w, xs, radius(i), skin, origin, h, nblk, axis, &
+                                        nb, owner, rmax, skip) == q) seen = .true.
+                    end do
+                    if (seen) cycle
+                    if (list_len > 0) then
+                        to(first(i) + k) = q + 1
+                        from(first(i) + k) = i
+                        img(first(i) + k) = code
+                    end if
+                    k = k + 1
+                end do
             end do
             if (list_len == 0) per(i) = k
         end do
@@ -612,32 +650,35 @@ contains
 
     !> The owner of block t (from 0, x fastest) of the box of w blocks from c0 if a sphere at
     !> x of radius r is within r + R_b + skin of it (R_b its largest radius) and the owner is
-    !> not `rank`, else -1. The outer blocks reach to infinity.
-    pure integer function ghost_owner(t, c0, w, x, r, skin, origin, h, nblk, nb, owner, rmax, &
-                                      rank) result(q)
+    !> not `skip`, else -1. The outer blocks reach to infinity, but along periodic axes.
+    pure integer function ghost_owner(t, c0, w, x, r, skin, origin, h, nblk, axis, nb, owner, &
+                                      rmax, skip) result(q)
         !$acc routine seq
         integer(ip), intent(in) :: t, c0(3), w(3), nblk(3), nb
         real(wp), intent(in) :: x(3), r, skin, origin(3), h, rmax(nb)
-        integer, intent(in) :: owner(nb), rank
+        logical, intent(in) :: axis(3)
+        integer, intent(in) :: owner(nb), skip
         integer(ip) :: c(3), b
         real(wp) :: lo(3), hi(3)
         c = c0 + [mod(t, w(1)), mod(t / w(1), w(2)), t / (w(1) * w(2))]
         b = cell_number(c, nblk)
         q = -1
-        if (owner(b) == rank .or. rmax(b) == 0.0_wp) return
-        lo = merge(-huge(1.0_wp), origin + c * h, c == 0)
-        hi = merge(huge(1.0_wp), origin + (c + 1) * h, c == nblk - 1)
+        if (owner(b) == skip .or. rmax(b) == 0.0_wp) return
+        lo = merge(-huge(1.0_wp), origin + c * h, c == 0 .and. .not. axis)
+        hi = merge(huge(1.0_wp), origin + (c + 1) * h, c == nblk - 1 .and. .not. axis)
         if (sum(max(0.0_wp, lo - x, x - hi)**2) < (r + rmax(b) + skin)**2) q = owner(b)
     end function ghost_owner
 
-    !> Refresh the ghosts' positions and velocities from their owners (every step): packed,
+    !> Refresh the ghosts' positions (shifted by the period for an image) and velocities
+    !> from their owners (every step): packed,
     !> exchanged and unpacked on the device during a run; MPI is handed the buffers' device
     !> addresses with gpu_aware_mpi, host copies of them otherwise.
     subroutine domain_update(d, comm, p)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         type(particles_t), intent(inout) :: p
-        call pack_halo(size(d%send, kind=ip), d%send, p%x, p%v, p%w, d%sbuf)
+        call pack_halo(size(d%send, kind=ip), d%send, d%image, d%pb%on, d%pb%length, p%x, p%v, &
+                       p%w, d%sbuf)
         call exchange_halo(comm, d%sbuf, d%send_counts, d%rbuf, d%recv_counts, d%gpu_aware_mpi)
         d%bytes = d%bytes + 8 * size(d%sbuf)
         call unpack_halo(p%n_own, p%n_ghost, d%rbuf, p%x, p%v, p%w)
@@ -660,13 +701,15 @@ contains
         end if
     end subroutine exchange_halo
 
-    !> sbuf(:, a) = x, v, w of particle send(a).
-    subroutine pack_halo(n_send, send, x, v, w, sbuf)
-        integer(ip), intent(in) :: n_send, send(n_send)
+    !> sbuf(:, a) = x, v, w of particle send(a), with `periodic` x shifted to its image(a).
+    subroutine pack_halo(n_send, send, image, periodic, length, x, v, w, sbuf)
+        integer(ip), intent(in) :: n_send, send(n_send), image(n_send)
+        logical, intent(in) :: periodic
+        real(wp), intent(in) :: length(3)        !! periods [m]
         real(wp), intent(in) :: x(:, :), v(:, :), w(:, :)
         real(wp), intent(out) :: sbuf(9, n_send)
         integer(ip) :: a, i, j
-        !$acc parallel loop default(present) private(i)
+        !$acc parallel loop default(present) copyin(length) private(i)
         do a = 1, n_send
             i = send(a)
             do j = 1, 3
@@ -674,6 +717,7 @@ contains
                 sbuf(3 + j, a) = v(j, i)
                 sbuf(6 + j, a) = w(j, i)
             end do
+            if (periodic) sbuf(1:3, a) = sbuf(1:3, a) + image_shift(image(a), length)
         end do
     end subroutine pack_halo
 
@@ -699,6 +743,7 @@ contains
         type(domain_t), intent(inout) :: d
         integer, intent(in) :: op
         call acc_data(d%send, op)
+        call acc_data(d%image, op)
         call acc_data(d%sbuf, op)
         call acc_data(d%rbuf, op)
     end subroutine domain_data

@@ -40,6 +40,10 @@ module dem_particles
         real(wp), allocatable :: ext(:, :)        !< (n_ext, capacity): external forces and
                                                   !< drag of a coupled run; unallocated in
                                                   !< a run of its own
+        real(wp), allocatable :: x_built(:, :)    !< positions at the last list build, from
+                                                  !< the checkpoint of a periodic case to
+                                                  !< its restart's first build (dem_frames,
+                                                  !< dem_rebuild); unallocated otherwise
     end type particles_t
 
     !> What particles_fields does to the fields of the store: an extension of this type per
@@ -139,6 +143,7 @@ contains
         call visit%vectors(p%f)
         call visit%vectors(p%t)
         if (allocated(p%ext)) call visit%vectors(p%ext)
+        if (allocated(p%x_built)) call visit%vectors(p%x_built)
     end subroutine particles_fields
 
     !> Allocate room for `capacity` particles, every field zero; the store starts empty.

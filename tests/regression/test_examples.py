@@ -21,6 +21,12 @@ impact   the ball falls freely until it touches the bed (height and velocity of 
          kinetic plus potential energy of the particles never exceeds its value before the
          impact; the ball rebounds at most with the pair's restitution; the ball ends at rest
          inside the bed (below its surface, above the floor).
+chute    from the committed steady state (the run from rest's end), 0.5 s of flow down the
+         periodic chute: the mass flow rate that of the long run (8 s of steady flow) within
+         5 %; the velocity profile is Bagnold's, v_b + A (h^1.5 - (h - z)^1.5), with h the
+         flow's top within two diameters, no slip at the base (|v_b| under a tenth of the
+         surface speed) and a residual under a third of a linear profile's; the free exponent
+         fitted lies in 1.3 .. 1.9; every particle stays in the run and inside the period.
 restart  the case straight through on 1 rank, on 2 ranks, and continued on 2 ranks from the
          1-rank run's checkpoint half-way: series.csv, probes.csv, final.csv, snapshots.xmf
          identical byte for byte, and every dataset and attribute of every snapshot bit for
@@ -241,6 +247,40 @@ def impact():
           f"{surface * 1e3:.1f} mm), energy {before * 1e3:.2f} -> {energy[-1] * 1e3:.2f} mJ")
 
 
+def chute():
+    path = case("chute", 0.5, "chute")
+    with open(path) as f:
+        text = f.read()
+    steady = os.path.join(EXAMPLES, "chute", "steady.csv")
+    text, n = re.subn(r"&insert [^/]*/", f"&particle_file file = '{steady}' /", text)
+    check(n == 1, "chute: one &insert group")
+    with open(path, "w") as f:
+        f.write(text)
+    run([path])
+    sys.path.insert(0, os.path.join(EXAMPLES, "chute"))
+    from flow_profile import analyse          # noqa: E402  (the example's own analysis)
+    d = 0.002
+    r = analyse(os.path.join(work, "chute"), 0.0, 0.02, 0.0008, RHO, d)
+    q_long = 0.1804                      # examples/chute/README.md: the run from rest, 4 .. 12 s
+    check(abs(r["flow_rate"] - q_long) < 0.05 * q_long, f"chute: flow rate "
+          f"{r['flow_rate']:.4f} kg/s, the long run's {q_long} kg/s")
+    b, free, lin = r["bagnold"], r["free"], r["linear"]
+    surface = r["layers"][-1][1]
+    check(abs(b["h"] - r["top"]) < 2 * d, f"chute: Bagnold's depth {b['h'] * 1e3:.1f} mm is "
+          f"the flow's top {r['top'] * 1e3:.1f} mm")
+    check(abs(b["v_b"]) < 0.1 * surface, f"chute: no slip at the base ({b['v_b']:.4f} m/s)")
+    check(b["rms"] < lin["rms"] / 3, f"chute: Bagnold's residual {b['rms']:.4f} m/s under a "
+          f"third of a linear profile's {lin['rms']:.4f} m/s")
+    check(1.3 <= free["p"] <= 1.9, f"chute: the fitted exponent {free['p']:.2f} is near 3/2")
+    f, _ = final("chute")
+    check(len(f["x"]) == 800 and np.all((f["x"] > -1e-3) & (f["x"] < 0.021) &
+                                        (f["y"] > -1e-3) & (f["y"] < 0.011)),
+          "chute: 800 particles, inside the period")
+    print(f"chute: Q = {r['flow_rate']:.4f} kg/s (long run {q_long}), Bagnold h "
+          f"{b['h'] * 1e3:.1f} mm, top {r['top'] * 1e3:.1f} mm, rms {b['rms']:.4f} m/s (linear "
+          f"{lin['rms']:.4f}), exponent {free['p']:.2f}")
+
+
 def restart():
     one, two, again = (case("restart", 0.3, out) for out in ("one", "two", "again"))
     for path in (one, two, again):                   # half-way: 0.15 s
@@ -273,5 +313,6 @@ def restart():
     print(f"restart: {len(names)} files compared, 1 rank, 2 ranks, restarted on 2 ranks")
 
 
-{"pour": pour, "hopper": hopper, "drum": drum, "impact": impact, "restart": restart}[example]()
+{"pour": pour, "hopper": hopper, "drum": drum, "impact": impact, "chute": chute,
+ "restart": restart}[example]()
 finish()

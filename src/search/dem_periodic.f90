@@ -1,0 +1,112 @@
+!> Periodic boundaries (doc/theory.md, section 14; doc/user/input.md, &periodic): along each
+!> periodic axis space repeats with the period L from a low face. The particles that leave
+!> are wrapped back at each list rebuild; the ones within reach of a face meet the others'
+!> images, ghosts shifted by L (dem_domain). Along those axes the positions are kept on a grid
+!> of spacing `unit` (a power of two, about 4e-16 of the box's size), on which the period is
+!> too: a shift by L is then exact, so a pair seen through the boundary has the same
+!> separation, negated, from both sides, as any other pair, and the forces and the contact
+!> history stay exact negatives (the same on any number of ranks).
+module dem_periodic
+    use dem_kinds, only: wp, ip
+    implicit none
+    private
+    public :: periodic_t, periodic_set, periodic_wrap, image_shift, image_possible, &
+              no_image, n_images
+
+    !> shift codes 0..26 of the images, (s1 + 1) + 3 (s2 + 1) + 9 (s3 + 1), s in {-1, 0, 1}
+    integer(ip), parameter :: n_images = 27
+    integer(ip), parameter :: no_image = 13    !< s = (0, 0, 0)
+
+    !> The periodic axes, their low faces and periods.
+    type :: periodic_t
+        logical :: on = .false.                !< some axis is periodic
+        logical :: axis(3) = .false.           !< periodic along x, y, z
+        real(wp) :: lo(3) = 0.0_wp             !< low face [m] (on the grid)
+        real(wp) :: length(3) = 0.0_wp         !< the period L [m] (on the grid; 0 if not)
+        real(wp) :: unit = 0.0_wp              !< spacing of the positions' grid [m]
+    end type periodic_t
+
+contains
+
+    !> The periodic box of the axes `axis` between lo and hi (hi > lo), the faces put on the
+    !> grid of a power-of-two unit u: positions of magnitude up to 4 B, B = max |face| + L,
+    !> are multiples of u below 2^53 u, so sums of them are exact.
+    function periodic_set(axis, lo, hi) result(pb)
+        logical, intent(in) :: axis(3)
+        real(wp), intent(in) :: lo(3), hi(3)     !! [m]
+        type(periodic_t) :: pb
+        real(wp) :: b
+        pb%axis = axis
+        pb%on = any(axis)
+        if (.not. pb%on) return
+        b = maxval(merge(max(abs(lo), abs(hi)) + (hi - lo), 0.0_wp, axis))
+        pb%unit = scale(1.0_wp, exponent(b) - 50)
+        pb%lo = merge(on_grid(lo, pb%unit), 0.0_wp, axis)
+        pb%length = merge(on_grid(hi, pb%unit) - pb%lo, 0.0_wp, axis)
+    end function periodic_set
+
+    !> x put on the grid of spacing u (u a power of two: x / u and its product are exact).
+    elemental real(wp) function on_grid(x, u) result(y)
+        !$acc routine seq
+        real(wp), intent(in) :: x, u
+        y = anint(x / u) * u
+    end function on_grid
+
+    !> The positions of particles 1..n along the periodic axes put on the grid and, with
+    !> `wrap`, brought into [lo, lo + L) (exactly: a shift by a multiple of L on the grid).
+    subroutine periodic_wrap(pb, n, wrap, x)
+        type(periodic_t), intent(in) :: pb
+        integer(ip), intent(in) :: n
+        logical, intent(in) :: wrap
+        real(wp), intent(inout) :: x(:, :)       !! [m]
+        real(wp) :: lo(3), length(3), u, y
+        logical :: axis(3)
+        integer(ip) :: i, k
+        lo = pb%lo
+        length = pb%length
+        u = pb%unit
+        axis = pb%axis
+        !$acc parallel loop gang vector default(present) copyin(lo, length, axis) private(y)
+        do i = 1, n
+            do k = 1, 3
+                if (.not. axis(k)) cycle
+                y = on_grid(x(k, i), u)
+                if (wrap) then
+                    if (y < lo(k) .or. y >= lo(k) + length(k)) &
+                        y = y - length(k) * floor((y - lo(k)) / length(k))
+                    if (y >= lo(k) + length(k)) y = y - length(k)   ! (round-off of the floor)
+                    if (y < lo(k)) y = y + length(k)
+                end if
+                x(k, i) = y
+            end do
+        end do
+    end subroutine periodic_wrap
+
+    !> The shift of image `code` [m].
+    pure function image_shift(code, length) result(s)
+        !$acc routine seq
+        integer(ip), intent(in) :: code
+        real(wp), intent(in) :: length(3)        !! periods (0 along the other axes) [m]
+        real(wp) :: s(3)
+        s = real([mod(code, 3_ip), mod(code / 3_ip, 3_ip), code / 9_ip] - 1, wp) * length
+    end function image_shift
+
+    !> Whether image `code` of a sphere at x can be within `reach` of the periodic box: a
+    !> shift only along periodic axes, +L only from within reach of the low face, -L of the
+    !> high one.
+    pure logical function image_possible(code, axis, lo, length, x, reach) result(ok)
+        !$acc routine seq
+        integer(ip), intent(in) :: code
+        logical, intent(in) :: axis(3)
+        real(wp), intent(in) :: lo(3), length(3), x(3), reach   !! [m]
+        integer(ip) :: s(3), k
+        s = [mod(code, 3_ip), mod(code / 3_ip, 3_ip), code / 9_ip] - 1
+        ok = .true.
+        do k = 1, 3
+            if (s(k) == 0) cycle
+            if (.not. axis(k)) ok = .false.
+            if (s(k) > 0 .and. x(k) - lo(k) >= reach) ok = .false.
+            if (s(k) < 0 .and. lo(k) + length(k) - x(k) >= reach) ok = .false.
+        end do
+    end function image_possible
+end module dem_periodic
