@@ -1,4 +1,4 @@
-!> Periodic boundaries (doc/theory.md, section 14; doc/user/input.md, &periodic): along each
+!> Periodic boundaries (doc/theory.md, section 16; doc/user/input.md, &periodic): along each
 !> periodic axis space repeats with the period L from a low face. The particles that leave
 !> are wrapped back at each list rebuild; the ones within reach of a face meet the others'
 !> images, ghosts shifted by L (dem_domain). Along those axes the positions are kept on a grid
@@ -29,8 +29,9 @@ module dem_periodic
 contains
 
     !> The periodic box of the axes `axis` between lo and hi (hi > lo), the faces put on the
-    !> grid of a power-of-two unit u: positions of magnitude up to 4 B, B = max |face| + L,
-    !> are multiples of u below 2^53 u, so sums of them are exact.
+    !> grid of the power-of-two unit u = 2^(e - 50), 2^(e - 1) <= B < 2^e, B = max |face| + L:
+    !> multiples of u below 2^53 u = 8 2^e in magnitude are doubles, so sums of them in that
+    !> range (a position shifted by a period among them) are exact.
     function periodic_set(axis, lo, hi) result(pb)
         logical, intent(in) :: axis(3)
         real(wp), intent(in) :: lo(3), hi(3)     !! [m]

@@ -1,4 +1,4 @@
-"""Periodic boundaries (doc/user/input.md, &periodic; doc/theory.md, section 14):
+"""Periodic boundaries (doc/user/input.md, &periodic; doc/theory.md, section 16):
 
 1. A granular gas periodic along x, y and z (125 spheres on a jittered lattice with random
    velocities, no walls, no gravity) and the same gas copied 2 x 2 x 2 times into a box of
