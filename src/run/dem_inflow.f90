@@ -10,6 +10,7 @@ module dem_inflow
     use dem_comm, only: comm_gather, comm_broadcast
     use dem_case, only: case_t, insert_t
     use dem_insert, only: insert_random, insert_velocities, region_bounds
+    use dem_periodic, only: with_images
     use dem_random, only: rng_t
     use dem_run_state, only: solver_t, time_of, particle_data
     use dem_rebuild, only: rebuild, settle_outlets, new_particles_t
@@ -88,31 +89,34 @@ contains
         end do
     end function inflow_to_come
 
-    !> This rank's owned particles within twice the largest radius of the case of the box of
-    !> a due group's region, as (x, y, z, r) in a row.
+    !> This rank's owned particles, and their periodic images, within twice the largest
+    !> radius of the case of the box of a due group's region, as (x, y, z, r) in a row.
     function nearby(s, c, due) result(near)
         type(solver_t), intent(in) :: s
         type(case_t), intent(in) :: c
         logical, intent(in) :: due(:)
-        real(wp), allocatable :: near(:)
+        real(wp), allocatable :: near(:), xa(:, :), ra(:)
         real(wp) :: lo(3), hi(3), reach
-        logical :: keep(s%p%n_own)
+        logical, allocatable :: keep(:)
         integer(ip) :: k, i
         reach = 2.0_wp * maxval(c%summary%rmax)
+        call with_images(c%periodic, s%p%x(:, 1:s%p%n_own), s%p%radius(1:s%p%n_own), reach, &
+                         xa, ra)
+        allocate(keep(size(ra)))
         keep = .false.
         do k = 1, size(c%inserts)
             if (.not. due(k)) cycle
             call region_bounds(c%inserts(k)%region, lo, hi)
-            do i = 1, s%p%n_own
-                keep(i) = keep(i) .or. (all(s%p%x(:, i) >= lo - reach) .and. &
-                                        all(s%p%x(:, i) <= hi + reach))
+            do i = 1, size(ra)
+                keep(i) = keep(i) .or. (all(xa(:, i) >= lo - reach) .and. &
+                                        all(xa(:, i) <= hi + reach))
             end do
         end do
         allocate(near(4 * count(keep)))
         k = 0
-        do i = 1, s%p%n_own
+        do i = 1, size(ra)
             if (.not. keep(i)) cycle
-            near(k + 1:k + 4) = [s%p%x(:, i), s%p%radius(i)]
+            near(k + 1:k + 4) = [xa(:, i), ra(i)]
             k = k + 4
         end do
     end function nearby

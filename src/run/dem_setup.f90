@@ -14,6 +14,7 @@ module dem_setup
     use dem_random, only: rng_t, rng_seed
     use dem_input, only: read_case_file
     use dem_text, only: itoa
+    use dem_periodic, only: with_images
     implicit none
     private
     public :: read_case
@@ -57,13 +58,13 @@ contains
     end subroutine where_to_read
 
     !> Each &insert group's spheres at random in its region, clear of all the particles
-    !> before them, with ids after the largest so far; the case's random generator is left
-    !> as the last group's.
+    !> before them (and of their periodic images), with ids after the largest so far; the
+    !> case's random generator is left as the last group's.
     subroutine place_inserts(c, err)
         type(case_t), intent(inout) :: c
         type(error_t), intent(inout) :: err
         type(rng_t) :: rng
-        real(wp), allocatable :: x(:, :), r(:)
+        real(wp), allocatable :: x(:, :), r(:), xa(:, :), ra(:)
         integer(i8) :: next_id
         integer(ip) :: k, i, n, placed
         do k = 1, size(c%inserts)
@@ -72,8 +73,10 @@ contains
                 n = g%n
                 rng = rng_seed(g%seed)
                 allocate(x(3, n), r(n))
-                call insert_random(rng, g%region, n, g%size, &
-                                   c%x(:, 1:c%n_held), c%radius(1:c%n_held), 10000, x, r, placed)
+                call with_images(c%periodic, c%x(:, 1:c%n_held), c%radius(1:c%n_held), &
+                                 2.0_wp * max(g%size%r_max, maxval(c%radius(1:c%n_held))), &
+                                 xa, ra)
+                call insert_random(rng, g%region, n, g%size, xa, ra, 10000, x, r, placed)
                 if (placed < n) then
                     call set_error(err, dem_err_input, g%at // ": key 'n': only " // &
                         itoa(placed) // ' of ' // itoa(n) // ' spheres found room in the ' // &

@@ -11,7 +11,7 @@ module dem_periodic
     implicit none
     private
     public :: periodic_t, periodic_set, periodic_wrap, image_shift, image_possible, &
-              no_image, n_images
+              with_images, no_image, n_images
 
     !> shift codes 0..26 of the images, (s1 + 1) + 3 (s2 + 1) + 9 (s3 + 1), s in {-1, 0, 1}
     integer(ip), parameter :: n_images = 27
@@ -82,6 +82,34 @@ contains
             end do
         end do
     end subroutine periodic_wrap
+
+    !> The spheres (x, r) and, with periodic axes, their images within `reach` of the box:
+    !> each sphere, then its images, in turn (without periodic axes, the spheres alone). On
+    !> the host: what insertion keeps clear of.
+    subroutine with_images(pb, x, r, reach, xa, ra)
+        type(periodic_t), intent(in) :: pb
+        real(wp), intent(in) :: x(:, :), r(:)    !! [m]
+        real(wp), intent(in) :: reach            !! [m]
+        real(wp), allocatable, intent(out) :: xa(:, :), ra(:)
+        integer(ip) :: i, code, m, pass
+        do pass = 1, 2
+            m = 0
+            do i = 1, size(r)
+                do code = 0, n_images - 1
+                    if (code /= no_image) then
+                        if (.not. pb%on) cycle
+                        if (.not. image_possible(code, pb%axis, pb%lo, pb%length, x(:, i), &
+                                                 reach)) cycle
+                    end if
+                    m = m + 1
+                    if (pass == 1) cycle
+                    xa(:, m) = x(:, i) + image_shift(code, pb%length)
+                    ra(m) = r(i)
+                end do
+            end do
+            if (pass == 1) allocate(xa(3, m), ra(m))
+        end do
+    end subroutine with_images
 
     !> The shift of image `code` [m].
     pure function image_shift(code, length) result(s)

@@ -12,7 +12,11 @@
 3. The chute example (periodic along x and y, a rough base of wall triangles) for 0.05 s on
    1, 2, 3 and 4 ranks: the same files byte for byte; a checkpoint written on 3 ranks,
    restarted on 2, ends as the uninterrupted run on 1.
-4. Bad &periodic groups: a period shorter than 2 (2 R + skin), an axis given twice, an
+4. Insertion through a face: spheres inserted (before the run, and by an inflow during it) in
+   a region along the low face, with given spheres reaching across the high face: no two
+   overlap through the face (minimum image), and none ever touches (at rest without gravity,
+   the kinetic energy stays 0), on 1 and 2 ranks alike.
+5. Bad &periodic groups: a period shorter than 2 (2 R + skin), an axis given twice, an
    unknown axis, high <= low; each error names the file, the group and the key.
 usage: test_periodic.py DEM WORKDIR MPIEXEC"""
 import os
@@ -159,7 +163,39 @@ for f in ("final.csv", "series.csv"):
     same_file(os.path.join(work, "chute_1", f), os.path.join(d, f),
               "chute: checkpoint on 3 ranks, restarted on 2")
 
-# 4. bad &periodic groups
+# 4. insertion clear of the images: a layer of spheres across the high x face (centres half a
+# radius inside it), spheres inserted, and an inflow, in the five radii along the low face
+layer = "".join(f"&particle id = {k + 1}, material = 'glass', radius = {R}, position = "
+                f"{L - R / 2}, {0.4e-3 + 1.1e-3 * (k % 6)}, {0.4e-3 + 1.1e-3 * (k // 6)} /\n"
+                for k in range(36))
+INSERTED = GAS.replace("&particle_file file = '{csv}' /\n", layer +
+                       "&insert n = 20, material = 'glass', radius_min = {R}, radius_max = {R}, "
+                       "region = 'box', box_min = 0, 0, 0, box_max = 2.5e-3, {L}, {L}, seed = 3 /\n"
+                       "&insert material = 'glass', radius_min = {R}, radius_max = {R}, "
+                       "rate = 2e5, start = 0, end = 1e-4, insert_every = 10, region = 'box', box_min = 0, 0, 0, "
+                       "box_max = 2.5e-3, {L}, {L}, seed = 4 /\n")
+for ranks in (1, 2):
+    name = f"inserted_{ranks}"
+    path = os.path.join(work, name + ".nml")
+    with open(path, "w") as f:
+        f.write(INSERTED.format(t_end=2e-4, out=os.path.join(work, name), L=L, R=R)
+                .replace("interval = 0.001", "interval = 1e-5"))
+    run(path, ranks)
+    a, x, _ = final(name)
+    d = x[:, None, :] - x[None, :, :]
+    d -= L * np.round(d / L)
+    dist = np.sqrt((d**2).sum(axis=-1))
+    np.fill_diagonal(dist, 1.0)
+    check(len(a) == 36 + 20 + 20, f"inserted on {ranks} ranks: 76 spheres ({len(a)})")
+    check(dist.min() >= 2 * R * (1 - 1e-9), f"inserted on {ranks} ranks: no two overlap "
+          f"through the face (closest {dist.min() / (2 * R):.6f} diameters)")
+    series = np.genfromtxt(os.path.join(work, name, "series.csv"), delimiter=",", names=True)
+    check(np.all(series["kinetic_translational"] == 0.0), f"inserted on {ranks} ranks: "
+          "nothing ever touched (the kinetic energy is 0 in every row: all at rest, no gravity)")
+same_file(os.path.join(work, "inserted_1", "final.csv"),
+          os.path.join(work, "inserted_2", "final.csv"), "inserted on 2 ranks")
+
+# 5. bad &periodic groups
 BAD = [
     ("&periodic axis = 'x', low = 0.0, high = 0.002 /", r"&periodic: key 'high': the period "
      r"along x, 2\.000E-03 m, is shorter than 2 \(2 R \+ skin\) = 2\.400E-03 m"),
