@@ -11,7 +11,10 @@ module dem_checkpoint
     use dem_version, only: dem_version_string
     use dem_comm, only: comm_t, comm_barrier, comm_counts, comm_exchange, comm_max, comm_sum, &
                         comm_any
-    use dem_particles, only: order_by_id
+    use dem_particles, only: particles_t, particles_init, particles_frame_copy, &
+                             particles_frame_pack, particles_frame_unpack, order_by_id, &
+                             particles_fields, field_visitor_t, frame_none, frame_state, &
+                             frame_force, frame_restart
     use dem_case, only: case_t
     use dem_mesh, only: mesh_t, mesh_move
     use dem_contact_store, only: max_wall_contacts, n_pair_history, n_wall_history, &
@@ -34,9 +37,9 @@ module dem_checkpoint
         real(wp) :: time = 0.0_wp                 !< [s]
         integer(i8) :: step = 0
         integer(ip) :: n = 0                      !< particles
-        integer(i8), allocatable :: gid(:)
-        integer(ip), allocatable :: mat(:)
-        real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :), f(:, :), t(:, :)
+        type(particles_t) :: p                    !< particles 1..n by id: the fields that
+                                                  !< frames hold (particles_fields; the
+                                                  !< derived ones are left at 0)
         integer(ip), allocatable :: contacts(:)   !< contacts of each particle (snapshots)
         ! contact history
         integer(ip), allocatable :: wall_tri(:, :)    !< (slot, particle)
@@ -67,6 +70,32 @@ module dem_checkpoint
         real(wp), allocatable :: inflow_mass(:)      !< their mass [kg]
     end type frame_t
 
+    !> Writes the fields of a frame's particles that a file of its kind holds
+    !> (particles_fields' roles: the state always, forces in checkpoints and in snapshots on
+    !> request, torques in checkpoints) as /particles/<name>, particles 1..n of each rank.
+    type, extends(field_visitor_t) :: frame_writer_t
+        type(h5_file_t) :: h
+        type(error_t) :: err
+        integer(ip) :: n = 0
+        logical :: checkpoint = .false.
+        logical :: force = .false.               !< snapshots hold forces
+    contains
+        procedure :: ids => write_ids, ints => write_ints, reals => write_reals, &
+                     vectors => write_vectors, holds => writer_holds
+    end type frame_writer_t
+
+    !> Reads every field that frames hold from /particles/<name> into particles 1..n, the
+    !> rows first + 1 ... first + n of the datasets (each rank its part).
+    type, extends(field_visitor_t) :: frame_reader_t
+        type(h5_file_t) :: h
+        type(error_t) :: err
+        integer(ip) :: n = 0
+        integer(i8) :: first = 0
+    contains
+        procedure :: ids => read_ids, ints => read_ints, reals => read_reals, &
+                     vectors => read_vectors
+    end type frame_reader_t
+
     interface
         integer(c_int) function c_sleep(seconds) bind(C, name='sleep')
             import :: c_int
@@ -87,35 +116,29 @@ contains
         type(frame_t), intent(inout) :: fr
         type(comm_t), intent(in) :: comm
         integer(i8) :: bound(0:comm%size)
-        integer(i8), allocatable :: gid(:, :)
-        integer(ip), allocatable :: order(:)
+        integer(ip), allocatable :: order(:), places(:)
+        type(particles_t) :: got
         integer :: send(0:comm%size - 1), recv(0:comm%size - 1), k, n, q
 
         if (comm%size == 1) return
-        bound = block_bounds(fr%gid, comm)
+        bound = block_bounds(fr%p%gid(1:fr%n), comm)
         ! the particles, in id order, are grouped by the rank of their block already
         send = 0
         do k = 1, fr%n
-            q = block_of(bound, fr%gid(k))
+            q = block_of(bound, fr%p%gid(k))
             send(q) = send(q) + 1
         end do
         recv = comm_counts(comm, send)
         n = sum(recv)
-        allocate(gid(1, n))
-        call comm_exchange(comm, reshape(fr%gid, [1, fr%n]), send, gid, recv)
-        order = order_by_id(gid(1, :))
+        call exchange_particles(fr%p, fr%n, got, n)
+        order = order_by_id(got%gid(1:n))
+        places = [(k, k = 1, n)]
         fr%n = n
-        fr%gid = gid(1, order)
-        fr%mat = int(reshape(moved_int(reshape(fr%mat, [1, size(fr%mat)])), [n]), ip)
-        fr%radius = reshape(moved(reshape(fr%radius, [1, size(fr%radius)])), [n])
-        fr%x = moved(fr%x)
-        fr%v = moved(fr%v)
-        fr%w = moved(fr%w)
+        call frame_particles(fr%p, n)
+        call particles_frame_copy(got, n, order, fr%p, places)
         if (allocated(fr%x_ref)) fr%x_ref = moved(fr%x_ref)
         if (allocated(fr%contacts)) fr%contacts = int(reshape(moved_int(reshape(fr%contacts, &
                                                   [1, size(fr%contacts)])), [n]), ip)
-        fr%f = moved(fr%f)
-        fr%t = moved(fr%t)
         fr%wall_tri = int(moved_int(fr%wall_tri), ip)
         fr%wall_xi = reshape(moved(reshape(fr%wall_xi, [n_wall_history * n_wall_columns, &
                                                         size(fr%wall_xi, 3)])), &
@@ -123,6 +146,25 @@ contains
 
         call route_pairs(fr, comm, bound, both=.false.)   ! to the rank of the lower id
     contains
+        !> The fields that frames hold of the m particles of `a` sent to the ranks of their
+        !> blocks (send), the n received into `b` in the order they come.
+        subroutine exchange_particles(a, m, b, n)
+            type(particles_t), intent(inout) :: a
+            integer(ip), intent(in) :: m, n
+            type(particles_t), intent(out) :: b
+            integer(i8), allocatable :: ibuf(:, :), irecv(:, :)
+            real(wp), allocatable :: rbuf(:, :), rrecv(:, :)
+            integer(ip), allocatable :: idx(:)
+            call frame_particles(b, n)
+            idx = [(k, k = 1, m)]
+            call particles_frame_pack(a, m, idx, ibuf, rbuf)
+            allocate(irecv(size(ibuf, 1), n), rrecv(size(rbuf, 1), n))
+            call comm_exchange(comm, ibuf, send, irecv, recv)
+            call comm_exchange(comm, rbuf, send, rrecv, recv)
+            idx = [(k, k = 1, n)]
+            call particles_frame_unpack(b, n, idx, irecv, rrecv)
+        end subroutine exchange_particles
+
         !> Per-particle columns sent to the ranks of their blocks, received in id order.
         function moved(a) result(b)
             real(wp), intent(in), contiguous :: a(:, :)
@@ -147,7 +189,7 @@ contains
         type(frame_t), intent(inout) :: fr
         type(comm_t), intent(in) :: comm
         if (comm%size == 1) return
-        call route_pairs(fr, comm, block_bounds(fr%gid, comm), both=.true.)
+        call route_pairs(fr, comm, block_bounds(fr%p%gid(1:fr%n), comm), both=.true.)
     end subroutine pairs_to_particles
 
     !> Send each pair of the history to the rank of the block (bounds `bound`) of its lower id,
@@ -255,7 +297,7 @@ contains
     !> Write a snapshot (checkpoint false; force and contacts if allocated) or a checkpoint
     !> of frame `fr` of case `c`, with the walls in pose `mesh`, to `path`, atomically.
     subroutine frame_write(fr, c, mesh, path, checkpoint, comm, err)
-        type(frame_t), intent(in) :: fr
+        type(frame_t), intent(inout) :: fr
         type(case_t), intent(in) :: c
         type(mesh_t), intent(in) :: mesh
         character(len=*), intent(in) :: path
@@ -263,6 +305,7 @@ contains
         type(comm_t), intent(in) :: comm
         type(error_t), intent(inout) :: err
         type(h5_file_t) :: h
+        type(frame_writer_t) :: writer
         character(len=:), allocatable :: part
         integer(ip) :: k
 
@@ -280,14 +323,14 @@ contains
         call h5_group(h, '/materials', err)
         call h5_write(h, '/materials/name', c%mats%name, err)
         call h5_group(h, '/particles', err)
-        call h5_write(h, '/particles/id', fr%gid, err, distributed=.true.)
-        call h5_write(h, '/particles/material', fr%mat, err, distributed=.true.)
-        call h5_write(h, '/particles/radius', fr%radius, err, distributed=.true.)
-        call h5_write(h, '/particles/position', fr%x, err, distributed=.true.)
-        call h5_write(h, '/particles/velocity', fr%v, err, distributed=.true.)
-        call h5_write(h, '/particles/angular_velocity', fr%w, err, distributed=.true.)
-        if (allocated(fr%f)) call h5_write(h, '/particles/force', fr%f, err, distributed=.true.)
-        if (checkpoint) call h5_write(h, '/particles/torque', fr%t, err, distributed=.true.)
+        writer%h = h
+        writer%err = err
+        writer%n = fr%n
+        writer%checkpoint = checkpoint
+        writer%force = c%snapshot_force
+        call particles_fields(fr%p, writer)       ! (a visitor: the file handle is a copy)
+        h = writer%h
+        err = writer%err
         if (allocated(fr%contacts)) call h5_write(h, '/particles/contacts', fr%contacts, err, &
                                                   distributed=.true.)
         call h5_group(h, '/walls', err)
@@ -469,6 +512,7 @@ contains
         character(len=32), allocatable :: names(:)
         real(wp), allocatable :: props(:, :), ref(:, :), vref(:, :)
         type(mesh_t) :: pose
+        type(frame_reader_t) :: reader
 
         call h5_open(h, path, err, comm)
         if (err%failed()) return
@@ -542,17 +586,14 @@ contains
         end if
         call share(dims(1), first, n)               ! this rank's block of particles (by id)
         fr%n = int(n, ip)
-        allocate(fr%gid(n), fr%mat(n), fr%radius(n), fr%x(3, n), fr%v(3, n), fr%w(3, n), &
-                 fr%f(3, n), fr%t(3, n), fr%wall_tri(max_wall_contacts, n), &
-                 fr%wall_xi(n_wall_history, n_wall_columns, n))
-        call h5_read(h, '/particles/id', fr%gid, err, first)
-        call h5_read(h, '/particles/material', fr%mat, err, first)
-        call h5_read(h, '/particles/radius', fr%radius, err, first)
-        call h5_read(h, '/particles/position', fr%x, err, first)
-        call h5_read(h, '/particles/velocity', fr%v, err, first)
-        call h5_read(h, '/particles/angular_velocity', fr%w, err, first)
-        call h5_read(h, '/particles/force', fr%f, err, first)
-        call h5_read(h, '/particles/torque', fr%t, err, first)
+        call frame_particles(fr%p, fr%n)
+        allocate(fr%wall_tri(max_wall_contacts, n), fr%wall_xi(n_wall_history, n_wall_columns, n))
+        reader%h = h
+        reader%err = err
+        reader%n = fr%n
+        reader%first = first
+        call particles_fields(fr%p, reader)       ! every field that frames hold
+        err = reader%err
         call h5_read(h, '/state/wall_contact_triangle', fr%wall_tri, err, first)
         call h5_read(h, '/state/wall_contact_history', fr%wall_xi, err, first)
         if (.not. err%failed() .and. h5_exists(h, '/state/list_reference')) then
@@ -595,16 +636,16 @@ contains
             allocate(fr%inflow_mass(size(fr%inflow_count)))
             call h5_read(h, '/state/inflow_mass', fr%inflow_mass, err)
         end if
-        prev = ids_before(fr%gid, fr%n)
+        prev = ids_before(fr%p%gid(1:fr%n), fr%n)
         if (.not. err%failed()) then
-            if (comm_any(comm, any(fr%mat < 1 .or. fr%mat > c%mats%n) .or. &
-                         any(fr%radius <= 0.0_wp) .or. &
+            if (comm_any(comm, any(fr%p%mat(1:fr%n) < 1 .or. fr%p%mat(1:fr%n) > c%mats%n) .or. &
+                         any(fr%p%radius(1:fr%n) <= 0.0_wp) .or. &
                          any(fr%wall_tri < 0 .or. fr%wall_tri > c%mesh%n_tri))) then
                 call set_error(err, dem_err_input, path // ': the particle data are not ' // &
                                'consistent (damaged file?)')
-            else if (comm_any(comm, any(fr%gid <= 0) .or. &
-                              any(fr%gid(2:) <= fr%gid(:fr%n - 1)) .or. &
-                              any(fr%gid(1:min(fr%n, 1)) <= prev(1)))) then
+            else if (comm_any(comm, any(fr%p%gid(1:fr%n) <= 0) .or. &
+                              any(fr%p%gid(2:fr%n) <= fr%p%gid(:fr%n - 1)) .or. &
+                              any(fr%p%gid(1:min(fr%n, 1)) <= prev(1)))) then
                 call set_error(err, dem_err_input, path // ': the particle ids are not ' // &
                                'positive and increasing, each given once (damaged file?)')
             else if (fr%step < 0 .or. fr%step0 < 0 .or. fr%step0 > fr%step .or. &
@@ -761,4 +802,81 @@ contains
         end do
         s = s // ')'
     end function name_list
+    !> Room for n particles in a frame (particles 1..n, the fields zero).
+    subroutine frame_particles(p, n)
+        type(particles_t), intent(out) :: p
+        integer(ip), intent(in) :: n
+        call particles_init(p, n)
+        p%n_own = n
+    end subroutine frame_particles
+
+    logical function writer_holds(self) result(holds)
+        class(frame_writer_t), intent(in) :: self
+        select case (self%role)
+        case (frame_state)
+            holds = .true.
+        case (frame_force)
+            holds = self%checkpoint .or. self%force
+        case (frame_restart)
+            holds = self%checkpoint
+        case default
+            holds = .false.
+        end select
+    end function writer_holds
+
+    subroutine write_ids(self, a)
+        class(frame_writer_t), intent(inout) :: self
+        integer(i8), allocatable, intent(inout) :: a(:)
+        if (self%holds()) call h5_write(self%h, '/particles/' // trim(self%name), a(1:self%n), &
+                                        self%err, distributed=.true.)
+    end subroutine write_ids
+
+    subroutine write_ints(self, a)
+        class(frame_writer_t), intent(inout) :: self
+        integer(ip), allocatable, intent(inout) :: a(:)
+        if (self%holds()) call h5_write(self%h, '/particles/' // trim(self%name), a(1:self%n), &
+                                        self%err, distributed=.true.)
+    end subroutine write_ints
+
+    subroutine write_reals(self, a)
+        class(frame_writer_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:)
+        if (self%holds()) call h5_write(self%h, '/particles/' // trim(self%name), a(1:self%n), &
+                                        self%err, distributed=.true.)
+    end subroutine write_reals
+
+    subroutine write_vectors(self, a)
+        class(frame_writer_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:, :)
+        if (self%holds()) call h5_write(self%h, '/particles/' // trim(self%name), &
+                                        a(:, 1:self%n), self%err, distributed=.true.)
+    end subroutine write_vectors
+
+    subroutine read_ids(self, a)
+        class(frame_reader_t), intent(inout) :: self
+        integer(i8), allocatable, intent(inout) :: a(:)
+        if (self%role /= frame_none) call h5_read(self%h, '/particles/' // trim(self%name), &
+                                                  a(1:self%n), self%err, self%first)
+    end subroutine read_ids
+
+    subroutine read_ints(self, a)
+        class(frame_reader_t), intent(inout) :: self
+        integer(ip), allocatable, intent(inout) :: a(:)
+        if (self%role /= frame_none) call h5_read(self%h, '/particles/' // trim(self%name), &
+                                                  a(1:self%n), self%err, self%first)
+    end subroutine read_ints
+
+    subroutine read_reals(self, a)
+        class(frame_reader_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:)
+        if (self%role /= frame_none) call h5_read(self%h, '/particles/' // trim(self%name), &
+                                                  a(1:self%n), self%err, self%first)
+    end subroutine read_reals
+
+    subroutine read_vectors(self, a)
+        class(frame_reader_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:, :)
+        if (self%role /= frame_none) call h5_read(self%h, '/particles/' // trim(self%name), &
+                                                  a(:, 1:self%n), self%err, self%first)
+    end subroutine read_vectors
 end module dem_checkpoint

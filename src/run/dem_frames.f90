@@ -5,7 +5,8 @@ module dem_frames
     use dem_kinds, only: wp, ip, i8
     use dem_case, only: case_t
     use dem_run_state, only: solver_t, time_of, particle_data
-    use dem_particles, only: particles_add, particles_reserve, order_by_id
+    use dem_particles, only: particles_reserve, particles_frame_copy, particles_derive, &
+                             particles_init, order_by_id
     use dem_neighbors, only: neighbors_history, neighbors_set_history, neighbors_data
     use dem_contact_store, only: store_walls_restore, store_pairs_data
     use dem_mesh, only: mesh_t, mesh_move
@@ -27,19 +28,18 @@ contains
     subroutine frame_restore(s, c, fr)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        type(frame_t), intent(in) :: fr
+        type(frame_t), intent(inout) :: fr
         character(len=:), allocatable :: latest
         integer(i8), allocatable :: kept(:)
+        integer(ip), allocatable :: places(:)
         integer(ip) :: i, n
         n = fr%n
         s%p%n_own = 0
         call particles_reserve(s%p, n)
-        do i = 1, n
-            call particles_add(s%p, fr%gid(i), fr%mat(i), fr%radius(i), &
-                               c%mats%density(fr%mat(i)), fr%x(:, i), fr%v(:, i), fr%w(:, i))
-        end do
-        s%p%f(:, 1:n) = fr%f
-        s%p%t(:, 1:n) = fr%t
+        s%p%n_own = n
+        places = [(i, i = 1, n)]
+        call particles_frame_copy(fr%p, n, places, s%p, places)
+        call particles_derive(s%p, 1, n, c%mats%density)
         call store_walls_restore(s%cs, n, fr%wall_tri, fr%wall_xi)
         if (allocated(fr%x_ref) .and. c%periodic%on) then   ! for the first list build
             allocate(s%p%x_built(3, size(s%p%gid)))
@@ -95,6 +95,7 @@ contains
         logical, intent(in), optional :: local
         integer(ip), allocatable :: order(:)
         integer(i8) :: bytes(3)
+        integer(ip) :: a
         call particle_data(s, acc_to_host)
         call neighbors_data(s%nb, acc_to_host)
         call store_pairs_data(s%cs, acc_to_host)
@@ -103,12 +104,9 @@ contains
             fr%time = time_of(s, c, s%step)
             fr%step = s%step
             fr%n = n
-            fr%gid = p%gid(order)
-            fr%mat = p%mat(order)
-            fr%radius = p%radius(order)
-            fr%x = p%x(:, order)
-            fr%v = p%v(:, order)
-            fr%w = p%w(:, order)
+            call particles_init(fr%p, n)
+            fr%p%n_own = n
+            call particles_frame_copy(p, n, order, fr%p, [(a, a = 1, n)])
             if (s%dom%pb%on .and. allocated(s%nb%x_ref)) then   ! (periodic: checkpoints)
                 call acc_data(s%nb%x_ref, acc_to_host)
                 fr%x_ref = s%nb%x_ref(:, order)
@@ -151,8 +149,6 @@ contains
         type(frame_t), intent(inout) :: fr
         integer(ip) :: a, i
         associate (p => s%p, n => s%p%n_own)
-            fr%f = p%f(:, order)
-            fr%t = p%t(:, order)
             fr%wall_tri = s%cs%wall_tri(:, order)
             fr%wall_xi = s%cs%wall_xi(:, :, order)
             call neighbors_history(s%nb, s%cs, n, p%gid, order, fr%pair, fr%pair_xi)

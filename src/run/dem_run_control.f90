@@ -189,7 +189,7 @@ contains
         if (any(s%ckpt_step > s%good%step)) then     ! a checkpoint newer than the last row
             saved = '; the last good state is in ' // c%output_dir // '/' // &
                     checkpoint_file(maxval(s%ckpt_step))
-        else if (allocated(s%good%gid)) then
+        else if (allocated(s%good%p%gid)) then
             good = s%good                         ! each rank's own particles: spread
             call frame_spread(good, s%comm)
             call write_frame_checkpoint(s, c, good, write_err)

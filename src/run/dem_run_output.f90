@@ -159,9 +159,8 @@ contains
         call settle_outlets(s, err)
         if (err%failed()) return
         call capture(s, c, none, fr)
-        n_total = size(fr%gid, kind=i8)
+        n_total = fr%n
         call comm_sum(s%comm, n_total)
-        if (.not. c%snapshot_force) deallocate(fr%f)
         call frame_write(fr, c, mesh_at(s, fr%time), c%output_dir // '/' // &
                          snapshot_file(s%step), .false., s%comm, err)
         if (err%failed()) return

@@ -295,8 +295,10 @@ contains
         if (s%emptied .and. s%stopped == stop_end) s%stopped = stop_emptied
         if (.not. err%failed() .and. any(s%stopped == [stop_end, stop_settled, stop_emptied])) then
             call capture(s, c, s%run%out, fr)
-            call output_final(c%output_dir, s%comm, fr%gid, c%mats%name(fr%mat), fr%radius, fr%x, &
-                              fr%v, fr%w, err)
+            associate (p => fr%p, n => fr%n)
+                call output_final(c%output_dir, s%comm, p%gid(1:n), c%mats%name(p%mat(1:n)), &
+                                  p%radius(1:n), p%x(:, 1:n), p%v(:, 1:n), p%w(:, 1:n), err)
+            end associate
             bad = failed_anywhere(s, err)
         end if
         if (s%comm%rank == 0) call output_close(s%run%out, err)

@@ -12,7 +12,9 @@ module dem_particles
               particles_reserve, particles_reserve_on_device, particles_data, index_of_id, &
               particles_find, particles_park, particles_pack, particles_unpack, &
               particles_pack_ints, particles_pack_reals, particles_external, sphere_mass, &
-              sphere_inv_inertia, ext_force, ext_torque, ext_beta, ext_fluid_v, ext_impulse, n_ext
+              sphere_inv_inertia, ext_force, ext_torque, ext_beta, ext_fluid_v, ext_impulse, n_ext, &
+              particles_fields, field_visitor_t, frame_none, frame_state, frame_force, frame_restart, &
+              particles_frame_copy, particles_frame_pack, particles_frame_unpack, particles_derive
 
     ! rows of particles_t%ext: what a coupled fluid code sets and gets (doc/user/coupling.md)
     integer, parameter :: ext_force = 1      !< 1:3 external force [N]
@@ -21,6 +23,14 @@ module dem_particles
     integer, parameter :: ext_fluid_v = 8    !< 8:10 fluid velocity at the particle [m/s]
     integer, parameter :: ext_impulse = 11   !< 11:13 impulse of all these since the reset [N s]
     integer, parameter :: n_ext = 13
+
+    ! what the frames (snapshots, checkpoints, the final state, the instability guard's last
+    ! good state: dem_frames, dem_checkpoint) hold of a field (particles_fields)
+    integer, parameter :: frame_none = 0     !< not held: derived from the radius and the
+                                             !< material (particles_derive), or the run's own
+    integer, parameter :: frame_state = 1    !< held, and in every snapshot
+    integer, parameter :: frame_force = 2    !< held, in checkpoints and in snapshots on request
+    integer, parameter :: frame_restart = 3  !< held, in checkpoints only
 
     !> Structure of arrays for spheres. Kernels receive the arrays, never the type.
     type :: particles_t
@@ -47,9 +57,13 @@ module dem_particles
     end type particles_t
 
     !> What particles_fields does to the fields of the store: an extension of this type per
-    !> operation (allocation and reserve, device data, permutation, packing), with a
-    !> procedure for each kind of field: global ids, integers, reals, vectors (rows, n).
+    !> operation (allocation and reserve, device data, permutation, packing; the frames'
+    !> copies, and their files in dem_checkpoint), with a procedure for each kind of field:
+    !> global ids, integers, reals, vectors (rows, n). The field's name and role are set
+    !> before each visit.
     type, abstract :: field_visitor_t
+        character(len=32) :: name = ''      !< the field visited: its dataset in the files
+        integer :: role = frame_none        !< what frames hold of it (frame_*)
     contains
         procedure(ids_visit), deferred :: ids
         procedure(ints_visit), deferred :: ints
@@ -121,30 +135,161 @@ module dem_particles
     end type packer_t
     integer, parameter :: mode_count = 0, mode_pack = 1, mode_unpack = 2
 
+    !> The fields that frames hold (role not frame_none), on the host: mode pack: particles
+    !> idx(1:n) into columns 1..n of the buffers; mode unpack: column k into particle idx(k);
+    !> mode count: the rows only.
+    type, extends(field_visitor_t) :: frame_packer_t
+        integer :: mode = 0
+        integer(ip) :: n = 0, irow = 0, rrow = 0
+        integer(ip), pointer, contiguous :: idx(:) => null()
+        integer(i8), pointer, contiguous :: ibuf(:, :) => null()
+        real(wp), pointer, contiguous :: rbuf(:, :) => null()
+    contains
+        procedure :: ids => frame_ids, ints => frame_ints, reals => frame_reals, &
+                     vectors => frame_vectors
+    end type frame_packer_t
+
+    !> A field with its name and role, to a visitor.
+    interface visit_field
+        module procedure visit_ids, visit_ints, visit_reals, visit_vectors
+    end interface visit_field
+
 contains
 
     !> The one description of a particle's fields: every operation on the whole store
     !> (allocation, reserve, device data, permutation, packing for another rank and back)
-    !> visits the fields here, in this order, which is also the order of their rows in the
-    !> packed buffers. A new per-particle quantity is a component of particles_t and a line
-    !> here (and, when a restart needs it, a field of the frames: dem_frames, dem_checkpoint).
+    !> and on the frames (their copies of the state, spread over the ranks, written to and
+    !> read from snapshots and checkpoints as /particles/<name>) visits the fields here, in
+    !> this order, which is also the order of their rows in the packed buffers and of their
+    !> datasets in the files. A new per-particle quantity is a component of particles_t and
+    !> a line here, with what frames hold of it.
     subroutine particles_fields(p, visit)
         type(particles_t), intent(inout) :: p
         class(field_visitor_t), intent(inout) :: visit
-        call visit%ids(p%gid)
-        call visit%ints(p%mat)
-        call visit%reals(p%radius)
-        call visit%reals(p%mass)
-        call visit%reals(p%inv_mass)
-        call visit%reals(p%inv_inertia)
-        call visit%vectors(p%x)
-        call visit%vectors(p%v)
-        call visit%vectors(p%w)
-        call visit%vectors(p%f)
-        call visit%vectors(p%t)
-        if (allocated(p%ext)) call visit%vectors(p%ext)
-        if (allocated(p%x_built)) call visit%vectors(p%x_built)
+        call visit_field(visit, p%gid, 'id', frame_state)
+        call visit_field(visit, p%mat, 'material', frame_state)
+        call visit_field(visit, p%radius, 'radius', frame_state)
+        call visit_field(visit, p%mass, 'mass', frame_none)
+        call visit_field(visit, p%inv_mass, 'inverse_mass', frame_none)
+        call visit_field(visit, p%inv_inertia, 'inverse_inertia', frame_none)
+        call visit_field(visit, p%x, 'position', frame_state)
+        call visit_field(visit, p%v, 'velocity', frame_state)
+        call visit_field(visit, p%w, 'angular_velocity', frame_state)
+        call visit_field(visit, p%f, 'force', frame_force)
+        call visit_field(visit, p%t, 'torque', frame_restart)
+        if (allocated(p%ext)) call visit_field(visit, p%ext, 'external', frame_none)
+        if (allocated(p%x_built)) call visit_field(visit, p%x_built, 'list_reference', &
+                                                   frame_none)
     end subroutine particles_fields
+
+    subroutine visit_ids(visit, a, name, role)
+        class(field_visitor_t), intent(inout) :: visit
+        integer(i8), allocatable, intent(inout) :: a(:)
+        character(len=*), intent(in) :: name
+        integer, intent(in) :: role
+        visit%name = name
+        visit%role = role
+        call visit%ids(a)
+    end subroutine visit_ids
+
+    subroutine visit_ints(visit, a, name, role)
+        class(field_visitor_t), intent(inout) :: visit
+        integer(ip), allocatable, intent(inout) :: a(:)
+        character(len=*), intent(in) :: name
+        integer, intent(in) :: role
+        visit%name = name
+        visit%role = role
+        call visit%ints(a)
+    end subroutine visit_ints
+
+    subroutine visit_reals(visit, a, name, role)
+        class(field_visitor_t), intent(inout) :: visit
+        real(wp), allocatable, intent(inout) :: a(:)
+        character(len=*), intent(in) :: name
+        integer, intent(in) :: role
+        visit%name = name
+        visit%role = role
+        call visit%reals(a)
+    end subroutine visit_reals
+
+    subroutine visit_vectors(visit, a, name, role)
+        class(field_visitor_t), intent(inout) :: visit
+        real(wp), allocatable, intent(inout) :: a(:, :)
+        character(len=*), intent(in) :: name
+        integer, intent(in) :: role
+        visit%name = name
+        visit%role = role
+        call visit%vectors(a)
+    end subroutine visit_vectors
+
+    !> The fields that frames hold of particles from(1:n) of `src` into particles to(1:n) of
+    !> `dst`, on the host (both stores there).
+    subroutine particles_frame_copy(src, n, from, dst, to)
+        type(particles_t), intent(inout) :: src, dst
+        integer(ip), intent(in) :: n
+        integer(ip), intent(in), target, contiguous :: from(:), to(:)
+        integer(i8), allocatable, target :: ibuf(:, :)
+        real(wp), allocatable, target :: rbuf(:, :)
+        call particles_frame_pack(src, n, from, ibuf, rbuf)
+        call particles_frame_unpack(dst, n, to, ibuf, rbuf)
+    end subroutine particles_frame_copy
+
+    !> The fields that frames hold of particles idx(1:n) into columns 1..n of new buffers
+    !> (integer and real rows), on the host.
+    subroutine particles_frame_pack(p, n, idx, ibuf, rbuf)
+        type(particles_t), intent(inout) :: p
+        integer(ip), intent(in) :: n
+        integer(ip), intent(in), target, contiguous :: idx(:)
+        integer(i8), allocatable, target, intent(out) :: ibuf(:, :)
+        real(wp), allocatable, target, intent(out) :: rbuf(:, :)
+        type(frame_packer_t) :: pack
+        pack%mode = mode_count
+        call particles_fields(p, pack)
+        allocate(ibuf(pack%irow, n), rbuf(pack%rrow, n))
+        pack = frame_packer_t(mode=mode_pack, n=n)
+        pack%idx => idx
+        pack%ibuf => ibuf
+        pack%rbuf => rbuf
+        call particles_fields(p, pack)
+    end subroutine particles_frame_pack
+
+    !> Columns 1..n of buffers that particles_frame_pack filled into particles idx(1:n).
+    subroutine particles_frame_unpack(p, n, idx, ibuf, rbuf)
+        type(particles_t), intent(inout) :: p
+        integer(ip), intent(in) :: n
+        integer(ip), intent(in), target, contiguous :: idx(:)
+        integer(i8), intent(in), target, contiguous :: ibuf(:, :)
+        real(wp), intent(in), target, contiguous :: rbuf(:, :)
+        type(frame_packer_t) :: unpack
+        unpack%mode = mode_unpack
+        unpack%n = n
+        unpack%idx => idx
+        unpack%ibuf => ibuf
+        unpack%rbuf => rbuf
+        call particles_fields(p, unpack)
+    end subroutine particles_frame_unpack
+
+    !> The fields of particles first..last derived from their radii and materials (mass,
+    !> inverse mass, inverse moment of inertia), on the host.
+    subroutine particles_derive(p, first, last, density)
+        type(particles_t), intent(inout) :: p
+        integer(ip), intent(in) :: first, last
+        real(wp), intent(in) :: density(:)     !! of each material [kg/m^3]
+        integer(ip) :: i
+        do i = first, last
+            call derive(p, i, density(p%mat(i)))
+        end do
+    end subroutine particles_derive
+
+    !> Mass, inverse mass and inverse moment of inertia of particle i from its radius.
+    subroutine derive(p, i, density)
+        type(particles_t), intent(inout) :: p
+        integer(ip), intent(in) :: i
+        real(wp), intent(in) :: density          !! [kg/m^3]
+        p%mass(i) = sphere_mass(p%radius(i), density)
+        p%inv_mass(i) = 1.0_wp / p%mass(i)
+        p%inv_inertia(i) = sphere_inv_inertia(p%mass(i), p%radius(i))
+    end subroutine derive
 
     !> Allocate room for `capacity` particles, every field zero; the store starts empty.
     subroutine particles_init(p, capacity)
@@ -203,9 +348,7 @@ contains
         p%gid(i) = gid
         p%mat(i) = mat
         p%radius(i) = radius
-        p%mass(i) = sphere_mass(radius, density)
-        p%inv_mass(i) = 1.0_wp / p%mass(i)
-        p%inv_inertia(i) = sphere_inv_inertia(p%mass(i), radius)
+        call derive(p, i, density)
         p%x(:, i) = x
         p%v(:, i) = v
         p%w(:, i) = w
@@ -528,4 +671,72 @@ contains
             width = 2 * width
         end do
     end function order_by_id
+    subroutine frame_ids(self, a)
+        class(frame_packer_t), intent(inout) :: self
+        integer(i8), allocatable, intent(inout) :: a(:)
+        integer(ip) :: k
+        if (self%role == frame_none) return
+        self%irow = self%irow + 1
+        if (self%mode == mode_pack) then
+            do k = 1, self%n
+                self%ibuf(self%irow, k) = a(self%idx(k))
+            end do
+        else if (self%mode == mode_unpack) then
+            do k = 1, self%n
+                a(self%idx(k)) = self%ibuf(self%irow, k)
+            end do
+        end if
+    end subroutine frame_ids
+
+    subroutine frame_ints(self, a)
+        class(frame_packer_t), intent(inout) :: self
+        integer(ip), allocatable, intent(inout) :: a(:)
+        integer(ip) :: k
+        if (self%role == frame_none) return
+        self%irow = self%irow + 1
+        if (self%mode == mode_pack) then
+            do k = 1, self%n
+                self%ibuf(self%irow, k) = a(self%idx(k))
+            end do
+        else if (self%mode == mode_unpack) then
+            do k = 1, self%n
+                a(self%idx(k)) = int(self%ibuf(self%irow, k), ip)
+            end do
+        end if
+    end subroutine frame_ints
+
+    subroutine frame_reals(self, a)
+        class(frame_packer_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:)
+        integer(ip) :: k
+        if (self%role == frame_none) return
+        self%rrow = self%rrow + 1
+        if (self%mode == mode_pack) then
+            do k = 1, self%n
+                self%rbuf(self%rrow, k) = a(self%idx(k))
+            end do
+        else if (self%mode == mode_unpack) then
+            do k = 1, self%n
+                a(self%idx(k)) = self%rbuf(self%rrow, k)
+            end do
+        end if
+    end subroutine frame_reals
+
+    subroutine frame_vectors(self, a)
+        class(frame_packer_t), intent(inout) :: self
+        real(wp), allocatable, intent(inout) :: a(:, :)
+        integer(ip) :: k, rows
+        if (self%role == frame_none) return
+        rows = size(a, 1, kind=ip)
+        if (self%mode == mode_pack) then
+            do k = 1, self%n
+                self%rbuf(self%rrow + 1:self%rrow + rows, k) = a(:, self%idx(k))
+            end do
+        else if (self%mode == mode_unpack) then
+            do k = 1, self%n
+                a(:, self%idx(k)) = self%rbuf(self%rrow + 1:self%rrow + rows, k)
+            end do
+        end if
+        self%rrow = self%rrow + rows
+    end subroutine frame_vectors
 end module dem_particles

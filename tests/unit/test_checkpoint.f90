@@ -1,6 +1,7 @@
 !> frame_spread of dem_checkpoint on any number of ranks (run with 1, 2 and 3): N particles
 !> with ids 3k + 1 (gaps between them) are dealt to the ranks in a scrambled order, rank 1
-!> holding none, every field a function of the id; the pairs of the contact history are
+!> holding none, every field that frames hold (dem_particles' particles_fields) a function
+!> of the id; the pairs of the contact history are
 !> held by the ranks of both their particles (twice when split; one rank holds each once,
 !> in order, as dem_neighbors captures them). After the spread, rank r
 !> must hold exactly the ids at positions r N / P + 1 ... (r + 1) N / P of the sorted list,
@@ -11,6 +12,7 @@ program test_checkpoint
     use dem_comm, only: comm_t, comm_init, comm_free
     use dem_checkpoint, only: frame_t, frame_spread
     use dem_contact_store, only: max_wall_contacts
+    use dem_particles, only: particles_init
     use dem_assert, only: assert_true, assert_finish
     implicit none
     integer, parameter :: n = 23, n_pairs = 2 * (n - 1) - 2
@@ -52,15 +54,16 @@ contains
             mine(k) = r == comm%rank
         end do
         f%n = count(mine)
-        f%gid = pack([(id_of(k), k = 0, n - 1)], mine)
-        allocate(f%mat(f%n), f%radius(f%n), f%x(3, f%n), f%v(3, f%n), f%w(3, f%n), &
-                 f%f(3, f%n), f%t(3, f%n), f%wall_tri(max_wall_contacts, f%n), &
-                 f%wall_xi(3, max_wall_contacts, f%n), f%contacts(f%n))
+        call particles_init(f%p, f%n)
+        f%p%n_own = f%n
+        f%p%gid = pack([(id_of(k), k = 0, n - 1)], mine)
+        allocate(f%wall_tri(max_wall_contacts, f%n), f%wall_xi(3, max_wall_contacts, f%n), &
+                 f%contacts(f%n))
         do m = 1, f%n
-            call fields(f, m, f%gid(m))
+            call fields(f, m, f%p%gid(m))
         end do
         do k = 1, n_pairs
-            held(k) = any(f%gid == pairs(1, k)) .or. any(f%gid == pairs(2, k))
+            held(k) = any(f%p%gid == pairs(1, k)) .or. any(f%p%gid == pairs(2, k))
         end do
         f%pair = pairs(:, pack([(k, k = 1, n_pairs)], held))
         allocate(f%pair_xi(3, size(f%pair, 2)))
@@ -75,13 +78,13 @@ contains
         integer(i8), intent(in) :: id
         real(wp) :: a
         a = real(id, wp)
-        f%mat(m) = int(mod(id, 3_i8), ip) + 1
-        f%radius(m) = 1.0e-3_wp * a
-        f%x(:, m) = [a, 2 * a, 3 * a]
-        f%v(:, m) = -f%x(:, m)
-        f%w(:, m) = 0.5_wp * f%x(:, m)
-        f%f(:, m) = f%x(:, m) + 1
-        f%t(:, m) = f%x(:, m) - 1
+        f%p%mat(m) = int(mod(id, 3_i8), ip) + 1
+        f%p%radius(m) = 1.0e-3_wp * a
+        f%p%x(:, m) = [a, 2 * a, 3 * a]
+        f%p%v(:, m) = -f%p%x(:, m)
+        f%p%w(:, m) = 0.5_wp * f%p%x(:, m)
+        f%p%f(:, m) = f%p%x(:, m) + 1
+        f%p%t(:, m) = f%p%x(:, m) - 1
         f%wall_tri(:, m) = int(id, ip) + [(k, k = 1, max_wall_contacts)]
         f%wall_xi(:, :, m) = a / 7
         f%contacts(m) = int(2 * id, ip)
@@ -102,20 +105,19 @@ contains
         integer(i8), allocatable :: expect(:, :)
         integer :: k, m
         logical :: keep(n_pairs)
-        call assert_true(f%n == last - first .and. size(f%gid) == f%n, what // ': count')
+        call assert_true(f%n == last - first .and. size(f%p%gid) == f%n, what // ': count')
         if (f%n /= last - first) return
-        call assert_true(all(f%gid == [(id_of(k), k = first, last - 1)]), what // ': ids')
-        allocate(want%mat(f%n), want%radius(f%n), want%x(3, f%n), want%v(3, f%n), &
-                 want%w(3, f%n), want%f(3, f%n), want%t(3, f%n), &
-                 want%wall_tri(max_wall_contacts, f%n), want%wall_xi(3, max_wall_contacts, f%n), &
+        call assert_true(all(f%p%gid == [(id_of(k), k = first, last - 1)]), what // ': ids')
+        call particles_init(want%p, f%n)
+        allocate(want%wall_tri(max_wall_contacts, f%n), want%wall_xi(3, max_wall_contacts, f%n), &
                  want%contacts(f%n))
         do m = 1, f%n
-            call fields(want, m, f%gid(m))
+            call fields(want, m, f%p%gid(m))
         end do
-        call assert_true(all(f%mat == want%mat) .and. all(f%radius == want%radius) .and. &
-                         all(f%x == want%x) .and. all(f%v == want%v) .and. &
-                         all(f%w == want%w) .and. all(f%f == want%f) .and. &
-                         all(f%t == want%t) .and. all(f%wall_tri == want%wall_tri) .and. &
+        call assert_true(all(f%p%mat == want%p%mat) .and. all(f%p%radius == want%p%radius) .and. &
+                         all(f%p%x == want%p%x) .and. all(f%p%v == want%p%v) .and. &
+                         all(f%p%w == want%p%w) .and. all(f%p%f == want%p%f) .and. &
+                         all(f%p%t == want%p%t) .and. all(f%wall_tri == want%wall_tri) .and. &
                          all(f%wall_xi == want%wall_xi) .and. all(f%contacts == want%contacts), &
                          what // ': fields follow their particles')
         ! the pairs (in order, distinct) with the lower id in the block

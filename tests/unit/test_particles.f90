@@ -4,16 +4,21 @@
 !>   mass, 1/m, 1/I, x, v, w, f, t), 13 more with a coupled run's block;
 !> - pack then unpack into another store gives back every field of the particles sent;
 !> - a permutation puts particle order(k) at place k in every field and zeroes the rest;
-!> - a reserve keeps every field of the particles stored.
+!> - a reserve keeps every field of the particles stored;
+!> - a frame's copy (particles_frame_copy) carries the fields frames hold (id, material,
+!>   radius, x, v, w, f, t) of the particles it is given, to the places it is given, and
+!>   nothing else (the derived mass and inertia, the coupling block stay 0); with the
+!>   densities, particles_derive gives back the mass, 1/m and 1/I of particles_add.
 program test_particles
     use dem_kinds, only: wp, ip, i8
     use dem_particles, only: particles_t, particles_init, particles_add, particles_pack, &
                              particles_unpack, particles_pack_ints, particles_pack_reals, &
-                             particles_permute, particles_reserve, particles_external, n_ext
+                             particles_permute, particles_reserve, particles_external, n_ext, &
+                             particles_frame_copy, particles_derive
     use dem_assert, only: assert_true, assert_finish
     implicit none
     integer(ip), parameter :: n = 7
-    type(particles_t) :: a, b, ref
+    type(particles_t) :: a, b, ref, fr
     integer(i8), allocatable :: ibuf(:, :)
     real(wp), allocatable :: rbuf(:, :)
     integer(ip) :: i, sent(3), order(4)
@@ -55,6 +60,20 @@ program test_particles
     do i = 1, 4
         call assert_true(same(ref, i, a, i), 'a reserve keeps the particles stored')
     end do
+
+    call particles_init(fr, 3_ip)
+    call particles_external(fr)
+    call particles_frame_copy(a, 3_ip, [3_ip, 1_ip, 4_ip], fr, [2_ip, 3_ip, 1_ip])
+    call assert_true(frame_same(a, 3_ip, fr, 2_ip) .and. frame_same(a, 1_ip, fr, 3_ip) .and. &
+                     frame_same(a, 4_ip, fr, 1_ip), 'a frame copy carries the frame fields')
+    call assert_true(all(fr%mass == 0.0_wp) .and. all(fr%inv_mass == 0.0_wp) .and. &
+                     all(fr%inv_inertia == 0.0_wp) .and. all(fr%ext == 0.0_wp), &
+                     'and not the derived fields or the coupling block')
+    call particles_derive(fr, 1_ip, 3_ip, [2500.0_wp, 2500.0_wp, 2500.0_wp])
+    call assert_true(all(fr%mass(1:3) == a%mass([4, 3, 1])) .and. &
+                     all(fr%inv_mass(1:3) == a%inv_mass([4, 3, 1])) .and. &
+                     all(fr%inv_inertia(1:3) == a%inv_inertia([4, 3, 1])), &
+                     'the derived fields from the radius and the density, as particles_add')
     call assert_finish()
 contains
 
@@ -82,4 +101,14 @@ contains
                all(p%w(:, i) == q%w(:, j)) .and. all(p%f(:, i) == q%f(:, j)) .and. &
                all(p%t(:, i) == q%t(:, j)) .and. all(p%ext(:, i) == q%ext(:, j))
     end function same
+
+    !> The fields that frames hold of particle i of p equal those of particle j of q.
+    logical function frame_same(p, i, q, j)
+        type(particles_t), intent(in) :: p, q
+        integer(ip), intent(in) :: i, j
+        frame_same = p%gid(i) == q%gid(j) .and. p%mat(i) == q%mat(j) .and. &
+                     p%radius(i) == q%radius(j) .and. all(p%x(:, i) == q%x(:, j)) .and. &
+                     all(p%v(:, i) == q%v(:, j)) .and. all(p%w(:, i) == q%w(:, j)) .and. &
+                     all(p%f(:, i) == q%f(:, j)) .and. all(p%t(:, i) == q%t(:, j))
+    end function frame_same
 end program test_particles
