@@ -159,6 +159,7 @@ contains
         type(case_t), intent(in) :: c
         type(time_scales_t) :: ts
         real(wp) :: mem
+        integer :: k
         call case_time_scales(c, ts)
         ! peak resident sizes measured (doc/user/running.md): 31 MiB for a sphere on a plane, plus
         ! about 2900 bytes per particle (a bed of 25 000) and 790 per triangle (planes of
@@ -168,6 +169,11 @@ contains
         write(output_unit, '(a,i0,a,i0,a)') '  particles            ', c%n_particles, &
             ' (wall triangles ', c%mesh%n_tri, ')'
         write(output_unit, '(a,es12.5,a)') '  total mass           ', c%summary%mass, ' kg'
+        do k = 1, 3
+            if (.not. c%periodic%axis(k)) cycle
+            write(output_unit, '(a,es12.5,a,es12.5,a)') '  periodic along ' // 'xyz'(k:k) // &
+                '     from ', c%periodic%lo(k), ' m, period ', c%periodic%length(k), ' m'
+        end do
         write(output_unit, '(a,es12.5,a,es10.3,a)') '  Rayleigh time        ', ts%rayleigh, &
             ' s (smallest particle, radius ', ts%rayleigh_radius, ' m)'
         if (ts%speed > 0.0_wp) then
