@@ -357,7 +357,9 @@ contains
     !> with kernel 'cell', 'trilinear' or 'dpvm': the solids volume fraction eps, and the sums
     !> per cell of the particle momentum [kg m/s], of the drag coefficients [kg/s] and of
     !> beta v [N]. Every rank gets the whole grid, the same bit for bit on any number of
-    !> ranks. Particles outside the grid are left out (status 0; the message counts them).
+    !> ranks. Along a periodic axis of the case where the grid spans the period, the grid is
+    !> periodic too (a particle near a face deposits on both sides). Particles outside the
+    !> grid are left out (status 0; the message counts them).
     subroutine coupling_deposit(self, origin, h, nc, kernel, eps, momentum, beta_sum, beta_v, &
                                 status, message)
         type(coupling_t), intent(in) :: self
@@ -370,6 +372,7 @@ contains
         type(error_t) :: err
         real(wp), allocatable :: sums(:, :), beta(:)
         integer(i8) :: n_outside
+        logical :: wrap(3)
         integer :: k
         k = 0
         if (ready(self, err)) then
@@ -395,10 +398,13 @@ contains
         call report(err, status, message)
         if (err%failed()) return
         allocate(sums(n_deposit, product(nc)))
-        associate (p => self%run%s%p, n => self%run%s%p%n_own)
+        associate (p => self%run%s%p, n => self%run%s%p%n_own, pb => self%run%c%periodic)
             beta = p%ext(ext_beta, 1:n)                  ! a row: copied to be contiguous
+            ! periodic along an axis where the grid spans the case's period (to 1e-9 of it)
+            wrap = pb%axis .and. abs(origin - pb%lo) <= 1.0e-9_wp * pb%length .and. &
+                   abs(nc * h - pb%length) <= 1.0e-9_wp * pb%length
             call deposit_grid(self%run%comm, n, p%x(:, 1:n), p%radius(1:n), p%mass(1:n), &
-                              p%v(:, 1:n), beta, k, origin, h, nc, sums, n_outside)
+                              p%v(:, 1:n), beta, k, origin, h, nc, wrap, sums, n_outside)
         end associate
         eps(1:product(nc)) = sums(1, :) / product(h)
         momentum(:, 1:product(nc)) = sums(2:4, :)

@@ -3,7 +3,8 @@
 !> particle momentum, and the drag sums (beta, beta v) a semi-implicit fluid solver needs. On
 !> a grid, each particle's weights over the cells are separable (a product of one weight per
 !> axis), renormalised to sum to one over the cells of the grid, so that the deposits
-!> conserve volume and momentum; on a list, a particle goes whole to its nearest centre. The
+!> conserve volume and momentum (along an axis where the grid spans a periodic case's
+!> period, the weights beyond a face go to the cells at the other face); on a list, a particle goes whole to its nearest centre. The
 !> sums over particles and ranks are taken in fixed point (dem_fixed_sum), where addition is
 !> exact and so does not depend on the order: the result is the same bit for bit on any
 !> number of ranks.
@@ -25,16 +26,18 @@ module dem_deposit
 contains
 
     !> sums(:, c) over every rank's n particles, for the grid of nc(1) x nc(2) x nc(3) cells
-    !> of size h from origin (cell c = 1 + i + nc(1) (j + nc(2) k), x fastest). Particles
-    !> whose weights all fall outside the grid are left out, and counted in n_outside.
-    subroutine deposit_grid(comm, n, x, radius, mass, v, beta, kernel, origin, h, nc, sums, &
-                            n_outside)
+    !> of size h from origin (cell c = 1 + i + nc(1) (j + nc(2) k), x fastest). Along the axes
+    !> of `wrap` the grid is periodic: cell indices are taken modulo nc. Particles whose
+    !> weights all fall outside the grid are left out, and counted in n_outside.
+    subroutine deposit_grid(comm, n, x, radius, mass, v, beta, kernel, origin, h, nc, wrap, &
+                            sums, n_outside)
         type(comm_t), intent(in) :: comm
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: x(3, n), radius(n), mass(n), v(3, n), beta(n)
         integer, intent(in) :: kernel
         real(wp), intent(in) :: origin(3), h(3)   !! [m]
         integer, intent(in) :: nc(3)
+        logical, intent(in) :: wrap(3)            !! periodic axes of the grid
         real(wp), intent(out) :: sums(n_deposit, product(nc))
         integer(i8), intent(out) :: n_outside
         real(wp) :: q(n_deposit, n), weights(512)
@@ -46,7 +49,7 @@ contains
         call fixed_sum_start(fixed, comm, bound(q), int(n), product(nc))
         outside = 0
         do i = 1, n
-            call grid_weights(kernel, x(:, i), radius(i), origin, h, nc, cells, weights, m)
+            call grid_weights(kernel, x(:, i), radius(i), origin, h, nc, wrap, cells, weights, m)
             if (m == 0) outside = outside + 1
             do k = 1, m
                 call fixed_sum_add(fixed, weights(k) * q(:, i), cells(k))
@@ -59,15 +62,17 @@ contains
 
     !> The cells and weights of a particle at x (radius r) on the grid of deposit_grid: the
     !> products of its weights on the three axes (m cells; 0: all outside).
-    pure subroutine grid_weights(kernel, x, r, origin, h, nc, cells, weights, m_all)
+    pure subroutine grid_weights(kernel, x, r, origin, h, nc, wrap, cells, weights, m_all)
         integer, intent(in) :: kernel, nc(3)
         real(wp), intent(in) :: x(3), r, origin(3), h(3)
+        logical, intent(in) :: wrap(3)
         integer, intent(out) :: cells(:), m_all
         real(wp), intent(out) :: weights(:)
         real(wp) :: w(8, 3)
-        integer :: first(3), m(3), a, b, c3, d, cell
+        integer :: c(8, 3), m(3), a, b, c3, d, cell
         do d = 1, 3
-            call axis_weights(kernel, x(d), r, origin(d), h(d), nc(d), first(d), m(d), w(:, d))
+            call axis_weights(kernel, x(d), r, origin(d), h(d), nc(d), wrap(d), c(:, d), m(d), &
+                              w(:, d))
         end do
         m_all = product(m)
         do cell = 0, m_all - 1
@@ -75,7 +80,7 @@ contains
             b = mod(cell / m(1), m(2))
             c3 = cell / (m(1) * m(2))
             weights(cell + 1) = w(a + 1, 1) * w(b + 1, 2) * w(c3 + 1, 3)
-            cells(cell + 1) = 1 + first(1) + a + nc(1) * (first(2) + b + nc(2) * (first(3) + c3))
+            cells(cell + 1) = 1 + c(a + 1, 1) + nc(1) * (c(b + 1, 2) + nc(2) * c(c3 + 1, 3))
         end do
     end subroutine grid_weights
 
@@ -160,16 +165,17 @@ contains
         if (size(q, 2) > 0) b = maxval(abs(q), dim=2)
     end function bound
 
-    !> One axis: the particle at x (radius r) gives weights w(1:m) to the cells first ..
-    !> first + m - 1 (0-based) of the nc cells of size h from o, summing to one; m = 0 when
-    !> all its weight lies outside them.
-    pure subroutine axis_weights(kernel, x, r, o, h, nc, first, m, w)
+    !> One axis: the particle at x (radius r) gives weights w(1:m) to the cells c(1:m)
+    !> (0-based) of the nc cells of size h from o, summing to one; m = 0 when all its weight
+    !> lies outside them. With `wrap` no cell is outside: cell k is cell modulo(k, nc).
+    pure subroutine axis_weights(kernel, x, r, o, h, nc, wrap, c, m, w)
         integer, intent(in) :: kernel, nc
         real(wp), intent(in) :: x, r, o, h
-        integer, intent(out) :: first, m
+        logical, intent(in) :: wrap
+        integer, intent(out) :: c(8), m
         real(wp), intent(out) :: w(8)
         real(wp) :: s, lo, hi
-        integer :: k, last
+        integer :: k, first, last
         w = 0.0_wp
         s = (x - o) / h                      ! position in cells
         select case (kernel)
@@ -191,16 +197,23 @@ contains
                 w(k - first + 1) = max(0.0_wp, min(hi, real(k + 1, wp)) - max(lo, real(k, wp)))
             end do
         end select
-        do k = first, last                   ! cells outside the grid take nothing
-            if (k < 0 .or. k >= nc) w(k - first + 1) = 0.0_wp
-        end do
-        if (first < 0) then
-            w = eoshift(w, -first)
-            last = last - first
-            first = 0
+        c = 0
+        if (wrap) then                       ! every cell is in the grid, by its period
+            m = last - first + 1
+            c(1:m) = [(modulo(k, nc), k = first, last)]
+        else
+            do k = first, last               ! cells outside the grid take nothing
+                if (k < 0 .or. k >= nc) w(k - first + 1) = 0.0_wp
+            end do
+            if (first < 0) then
+                w = eoshift(w, -first)
+                last = last - first
+                first = 0
+            end if
+            last = min(last, nc - 1)
+            m = max(0, last - first + 1)
+            c(1:m) = [(k, k = first, last)]
         end if
-        last = min(last, nc - 1)
-        m = max(0, last - first + 1)
         if (m > 0) then
             if (sum(w(1:m)) > 0.0_wp) then
                 w(1:m) = w(1:m) / sum(w(1:m))
