@@ -46,9 +46,9 @@ module dem_checkpoint
         real(wp), allocatable :: wall_xi(:, :, :)     !< (n_wall_history, column, particle)
         integer(i8), allocatable :: pair(:, :)        !< (lower id, higher id) per pair
         real(wp), allocatable :: pair_xi(:, :)        !< (n_pair_history, pair)
-        real(wp), allocatable :: x_ref(:, :)    !< positions at the last list build (periodic
-                                                !< cases' checkpoints: a restart rebuilds the
-                                                !< lists, and wraps, at the same steps)
+        real(wp), allocatable :: x_ref(:, :)    !< positions at the last list build (cases
+                                                !< whose results depend on when the lists are
+                                                !< built: a restart replays that build)
         real(wp), allocatable :: vert_ref(:, :, :)  !< and the moving walls' vertices then
         ! run bookkeeping
         real(wp) :: time0 = 0.0_wp                !< the time of step0 [s]

@@ -41,7 +41,7 @@ contains
         call particles_frame_copy(fr%p, n, places, s%p, places)
         call particles_derive(s%p, 1, n, c%mats%density)
         call store_walls_restore(s%cs, n, fr%wall_tri, fr%wall_xi)
-        if (allocated(fr%x_ref) .and. c%periodic%on) then   ! for the first list build
+        if (allocated(fr%x_ref)) then            ! the first list build replays the last
             allocate(s%p%x_built(3, size(s%p%gid)))
             s%p%x_built = 0.0_wp
             s%p%x_built(:, 1:n) = fr%x_ref
@@ -107,7 +107,7 @@ contains
             call particles_init(fr%p, n)
             fr%p%n_own = n
             call particles_frame_copy(p, n, order, fr%p, [(a, a = 1, n)])
-            if (s%dom%pb%on .and. allocated(s%nb%x_ref)) then   ! (periodic: checkpoints)
+            if (build_dependent(s) .and. allocated(s%nb%x_ref)) then   ! (dem_rebuild)
                 call acc_data(s%nb%x_ref, acc_to_host)
                 fr%x_ref = s%nb%x_ref(:, order)
                 if (allocated(s%nb%vert_ref)) then
@@ -171,4 +171,12 @@ contains
         m = s%mesh
         if (m%moving) call mesh_move(m, time)
     end function mesh_at
+
+    !> Whether the results depend on when the lists were built (periodic axes: particles are
+    !> wrapped then; parted pairs that keep their history until a build): the frames then
+    !> hold the positions (and moving walls) of the last build, for a restart to replay it.
+    logical function build_dependent(s) result(dependent)
+        type(solver_t), intent(in) :: s
+        dependent = s%dom%pb%on .or. .not. s%pc%opts%reset_pair_history
+    end function build_dependent
 end module dem_frames

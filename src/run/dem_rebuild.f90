@@ -111,13 +111,17 @@ contains
                                                  !! parked: not with outlets)
         integer(ip), allocatable :: order(:), kept(:)
         integer(ip) :: m
+        real(wp), allocatable :: pose(:, :, :)
+        logical :: replay
         ! a list build during the run ends the history of the parted pairs that keep it
         ! (reset_pair_history false, doc/theory.md section 3); not the first build of a run
         if (.not. s%pc%opts%reset_pair_history .and. s%lists_on_device) &
             call store_pairs_forget_parted(s%cs, s%nb%n_pairs)
         if (present(added)) call add_particles(s, added)
-        if (s%dom%pb%on .and. .not. allocated(s%p%x_built)) &   ! (not a restart's first)
-            call periodic_wrap(s%dom%pb, s%p%n_own, .true., s%p%x)
+        replay = allocated(s%p%x_built)          ! a restart's first build: that of the run
+        if (replay) call build_pose(s, pose)     ! before it, at its positions and walls
+        if (s%dom%pb%on .and. .not. replay) call periodic_wrap(s%dom%pb, s%p%n_own, .true., &
+                                                               s%p%x)
         if (s%halo .and. s%lists_on_device) call domain_data(s%dom, acc_exit)
         if (s%comm%size > 1) then
             call distribute(s, outlets, err)
@@ -137,7 +141,7 @@ contains
         if (s%trace_id /= 0) s%trace = particles_find(s%p%n_own, s%p%gid, s%trace_id)
         call neighbors_build(s%nb, s%cs, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
                              s%p%radius, s%mesh, old_index=order)
-        if (allocated(s%p%x_built)) call built_reference(s)
+        if (replay) call pose_now(s, pose)
         allocate(s%nb%scale(max(1, s%p%n_own + s%p%n_ghost)))
         call acc_data(s%nb%scale, acc_create)
         call pp_scales(s%p%n_own + s%p%n_ghost, s%p%mass, s%accel_bound, s%nb%scale)
@@ -148,23 +152,54 @@ contains
         s%parked = 0
     end subroutine rebuild
 
-    !> A periodic case's restart: the lists' reference positions (and moving walls) those
-    !> of the last list build of the run that wrote the checkpoint, so that the lists are
-    !> rebuilt, and the particles wrapped, at the same steps as in that run (the walls meet
-    !> a wrapped particle at another place, which would change the last bits).
-    subroutine built_reference(s)
+    !> The first build of a restart whose checkpoint holds the positions of the last list
+    !> build of the run that wrote it (p%x_built; a case whose results depend on when the
+    !> lists are built: periodic, or keeping parted pairs' history until a build) is that
+    !> build again: the particles (and moving walls, in `now` meanwhile) are put where they
+    !> were then, so that the lists are those of that run, and so are the steps of the next
+    !> builds (pose_now puts them back).
+    subroutine build_pose(s, now)
         type(solver_t), intent(inout) :: s
-        call acc_data(s%p%x_built, acc_to_host)
+        real(wp), allocatable, intent(out) :: now(:, :, :)    !! the walls now [m]
+        call swap_columns(s%p%n_own, s%p%x, s%p%x_built)
+        if (.not. allocated(s%vert_built)) return
+        call acc_data(s%mesh%vert, acc_to_host)
+        now = s%mesh%vert
+        s%mesh%vert = s%vert_built
+        call acc_data(s%mesh%vert, acc_to_device)
+    end subroutine build_pose
+
+    !> The particles and walls back where they are now after build_pose's build, the ghosts
+    !> refreshed from them.
+    subroutine pose_now(s, now)
+        type(solver_t), intent(inout) :: s
+        real(wp), allocatable, intent(inout) :: now(:, :, :)
+        call swap_columns(s%p%n_own, s%p%x, s%p%x_built)
         call acc_data(s%p%x_built, acc_exit)
-        s%nb%x_ref = s%p%x_built(:, 1:s%p%n_own)
-        call acc_data(s%nb%x_ref, acc_to_device)
         deallocate(s%p%x_built)
-        if (allocated(s%vert_built)) then
-            s%nb%vert_ref = s%vert_built
-            call acc_data(s%nb%vert_ref, acc_to_device)
+        if (allocated(now)) then
+            s%mesh%vert = now
+            call acc_data(s%mesh%vert, acc_to_device)
             deallocate(s%vert_built)
         end if
-    end subroutine built_reference
+        if (s%halo) call domain_update(s%dom, s%comm, s%p)
+    end subroutine pose_now
+
+    !> Exchange columns 1..n of a and b (on the device).
+    subroutine swap_columns(n, a, b)
+        integer(ip), intent(in) :: n
+        real(wp), intent(inout) :: a(:, :), b(:, :)
+        real(wp) :: t
+        integer(ip) :: i, j
+        !$acc parallel loop gang vector default(present) private(t)
+        do i = 1, n
+            do j = 1, size(a, 1)
+                t = a(j, i)
+                a(j, i) = b(j, i)
+                b(j, i) = t
+            end do
+        end do
+    end subroutine swap_columns
 
     !> Append `a` to the owned particles, at rest of forces and without contact history:
     !> the ghosts are dropped (the rebuild makes them anew) and the lists' pair history

@@ -75,8 +75,8 @@ module dem_run_state
         logical :: halo = .false.      !< there are ghosts: more than one rank, or periodic
                                        !< axes (periodic images)
         real(wp), allocatable :: vert_built(:, :, :)  !< the moving walls at the last list
-                                       !< build, from a periodic case's checkpoint to its
-                                       !< restart's first build (as p%x_built)
+                                       !< build, from a checkpoint to its restart's first
+                                       !< build (as p%x_built; dem_rebuild)
         real(wp) :: imbalance_limit = 1.0_wp  !< repartition above this load ratio ...
         real(wp) :: balanced = 1.0_wp  !< ... times the ratio the last partition achieved
         logical :: distributed = .false.  !< each rank holds only its own particles

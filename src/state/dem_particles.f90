@@ -51,8 +51,8 @@ module dem_particles
                                                   !< drag of a coupled run; unallocated in
                                                   !< a run of its own
         real(wp), allocatable :: x_built(:, :)    !< positions at the last list build, from
-                                                  !< the checkpoint of a periodic case to
-                                                  !< its restart's first build (dem_frames,
+                                                  !< a checkpoint that holds them to its
+                                                  !< restart's first build (dem_frames,
                                                   !< dem_rebuild); unallocated otherwise
     end type particles_t
 
