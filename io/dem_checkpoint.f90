@@ -120,7 +120,10 @@ contains
         type(particles_t) :: got
         integer :: send(0:comm%size - 1), recv(0:comm%size - 1), k, n, q
 
-        if (comm%size == 1) return
+        if (comm%size == 1) then           ! the pairs once each (a pair through a periodic
+            call unique_pairs(fr)          ! face is held from both sides, as between ranks)
+            return
+        end if
         bound = block_bounds(fr%p%gid(1:fr%n), comm)
         ! the particles, in id order, are grouped by the rank of their block already
         send = 0
@@ -182,6 +185,16 @@ contains
             b = b(:, order)
         end function moved_int
     end subroutine frame_spread
+
+    !> The frame's pairs once each, ordered by the two ids.
+    subroutine unique_pairs(fr)
+        type(frame_t), intent(inout) :: fr
+        integer(i8), allocatable :: pair(:, :)
+        real(wp), allocatable :: pair_xi(:, :)
+        call move_alloc(fr%pair, pair)
+        call move_alloc(fr%pair_xi, pair_xi)
+        call store_unique_pairs(pair, pair_xi, fr%pair, fr%pair_xi)
+    end subroutine unique_pairs
 
     !> Give each pair of the history (read in parts) to the ranks whose block of particles
     !> holds either of its ids (blocks as frame_spread's: the particles were read in them).

@@ -10,7 +10,9 @@
    every sphere is inside the period to half the skin.
 2. The gas on 1, 2, 3 and 4 ranks: final.csv and series.csv identical byte for byte.
 3. The chute example (periodic along x and y, a rough base of wall triangles) for 0.05 s on
-   1, 2 and 3 ranks: the same files byte for byte; a checkpoint written on 3 ranks,
+   1, 2 and 3 ranks: the same files byte for byte, and the same checkpoint datasets (each
+   pair of the history once, also on one rank, where a pair through a face is held from
+   both sides); a checkpoint written on 3 ranks,
    restarted on 2, ends as the uninterrupted run on 1.
 4. Insertion through a face: spheres inserted (before the run, and by an inflow during it) in
    a region along the low face, with given spheres reaching across the high face: no two
@@ -25,6 +27,7 @@ import shutil
 import subprocess
 import sys
 
+import h5py
 import numpy as np
 
 from regression_util import ROOT, check, finish
@@ -72,6 +75,17 @@ def gas_case(name, t_end, period, csv):
 def final(name):
     a = np.genfromtxt(os.path.join(work, name, "final.csv"), delimiter=",", names=True)
     return a, np.c_[a["x"], a["y"], a["z"]], np.c_[a["vx"], a["vy"], a["vz"]]
+
+
+def same_state(a, b):
+    """Every dataset of /particles and /state of the first checkpoint of runs a and b is the
+    same (the /case group names the run's own folder)."""
+    name = sorted(c for c in os.listdir(os.path.join(a, "checkpoints")) if c.endswith(".h5"))[0]
+    with h5py.File(os.path.join(a, "checkpoints", name)) as fa, \
+            h5py.File(os.path.join(b, "checkpoints", name)) as fb:
+        keys = [f"{g}/{k}" for g in ("particles", "state") for k in fa[g]]
+        return (keys == [f"{g}/{k}" for g in ("particles", "state") for k in fb[g]] and
+                all(np.array_equal(fa[k][()], fb[k][()]) for k in keys))
 
 
 def same_file(a, b, what):
@@ -152,6 +166,8 @@ for ranks in (1, 2, 3):
         for f in ("final.csv", "series.csv"):
             same_file(os.path.join(work, "chute_1", f), os.path.join(work, f"chute_{ranks}", f),
                       f"chute on {ranks} ranks")
+        check(same_state(os.path.join(work, "chute_1"), os.path.join(work, f"chute_{ranks}")),
+              f"chute on {ranks} ranks: the checkpoints' particles and state (pairs once each)")
 d = os.path.join(work, "chute_restart")
 shutil.copytree(os.path.join(work, "chute_3"), d)
 ck = sorted(c for c in os.listdir(os.path.join(d, "checkpoints")) if c.endswith(".h5"))[0]
