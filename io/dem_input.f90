@@ -219,10 +219,7 @@ contains
         if (.not. check_vector(at, gravity, 'gravity', .false., err)) return
         c%gravity = gravity
         c%run_at = at
-        if (.not. in_range(expected_speed, 0.0_wp, unset, .true., .false.)) then
-            call set_error(err, dem_err_input, at // ": key 'expected_speed': must be >= 0 [m/s]")
-            return
-        end if
+        if (.not. check_nonnegative(at, expected_speed, 'expected_speed', '[m/s]', err)) return
         if (skin /= unset) then                 ! (else dem_setup: 0.4 of the smallest radius)
             if (.not. check_positive(at, skin, 'skin', '[m]', err)) return
         end if
@@ -231,11 +228,8 @@ contains
         c%expected_speed = expected_speed
         c%skin = skin
         c%allow_unstable = allow_unstable
-        if (.not. in_range(stop_kinetic_energy, 0.0_wp, unset, .true., .false.)) then
-            call set_error(err, dem_err_input, at // ": key 'stop_kinetic_energy': must be " // &
-                           '>= 0 [J]')
-            return
-        end if
+        if (.not. check_nonnegative(at, stop_kinetic_energy, &
+                                    'stop_kinetic_energy', '[J]', err)) return
         c%stop_kinetic_energy = stop_kinetic_energy
         if (max_speed /= unset) then            ! (else dem_setup: case_speed_bound)
             if (.not. check_positive(at, max_speed, 'max_speed', '[m/s]', err)) return
@@ -245,16 +239,9 @@ contains
             if (.not. check_positive(at, max_energy, 'max_energy', '[J]', err)) return
             c%max_energy = max_energy
         end if
-        if (.not. in_range(wall_time_limit, 0.0_wp, unset, .true., .false.)) then
-            call set_error(err, dem_err_input, at // ": key 'wall_time_limit': must be >= 0 [s]")
-            return
-        end if
+        if (.not. check_nonnegative(at, wall_time_limit, 'wall_time_limit', '[s]', err)) return
         c%wall_time_limit = wall_time_limit
-        if (.not. in_range(progress_interval, 0.0_wp, unset, .true., .false.)) then
-            call set_error(err, dem_err_input, at // ": key 'progress_interval': must be " // &
-                           '>= 0 [s]')
-            return
-        end if
+        if (.not. check_nonnegative(at, progress_interval, 'progress_interval', '[s]', err)) return
         c%progress_interval = progress_interval
         if (.not. in_range(imbalance_limit, 1.0_wp, unset, .true., .false.)) then
             call set_error(err, dem_err_input, at // ": key 'imbalance_limit': must be >= 1")
@@ -321,16 +308,10 @@ contains
             end if
             if (trace_id /= 0) c%id_checks = [c%id_checks, id_check_t(trace_id, at // &
                 ": key 'trace_id': no particle has this id")]
-            if (.not. in_range(snapshot_interval, 0.0_wp, unset, .true., .false.)) then
-                call set_error(err, dem_err_input, at // ": key 'snapshot_interval': must " // &
-                               'be >= 0 [s]')
-                return
-            end if
-            if (.not. in_range(checkpoint_interval, 0.0_wp, unset, .true., .false.)) then
-                call set_error(err, dem_err_input, at // ": key 'checkpoint_interval': must " // &
-                               'be >= 0 [s]')
-                return
-            end if
+            if (.not. check_nonnegative(at, snapshot_interval, &
+                                        'snapshot_interval', '[s]', err)) return
+            if (.not. check_nonnegative(at, checkpoint_interval, &
+                                        'checkpoint_interval', '[s]', err)) return
             if (checkpoint_keep < 1) then
                 call set_error(err, dem_err_input, at // ": key 'checkpoint_keep': must be >= 1")
                 return
@@ -617,24 +598,15 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'friction' is required")
                 return
             end if
-            if (.not. in_range(friction, 0.0_wp, unset, .true., .false.)) then
-                call set_error(err, dem_err_input, at // ": key 'friction': must be >= 0")
-                return
-            end if
-            if (.not. in_range(rolling_friction, 0.0_wp, unset, .true., .false.)) then
-                call set_error(err, dem_err_input, at // ": key 'rolling_friction': must be >= 0")
-                return
-            end if
+            if (.not. check_nonnegative(at, friction, 'friction', '', err)) return
+            if (.not. check_nonnegative(at, rolling_friction, 'rolling_friction', '', err)) return
             if (rolling_model /= 'cdt' .and. rolling_model /= 'epsd2') then
                 call set_error(err, dem_err_input, at // ": key 'rolling_model': must be " // &
                                "'cdt' or 'epsd2' (got '" // trim(rolling_model) // "')")
                 return
             end if
-            if (.not. in_range(cohesion_energy_density, 0.0_wp, unset, .true., .false.)) then
-                call set_error(err, dem_err_input, at // ": key 'cohesion_energy_density': " // &
-                               'must be >= 0')
-                return
-            end if
+            if (.not. check_nonnegative(at, cohesion_energy_density, &
+                                        'cohesion_energy_density', '', err)) return
             c%mats%rolling_model(ia, ib) = merge(rolling_epsd2, rolling_cdt, &
                                                  rolling_model == 'epsd2')
             c%mats%rolling_model(ib, ia) = c%mats%rolling_model(ia, ib)
@@ -1002,10 +974,7 @@ contains
                 gi%mass_rate = mass_rate
             end if
             if (start == unset) start = 0.0_wp
-            if (.not. in_range(start, 0.0_wp, unset, .true., .false.)) then
-                call set_error(err, dem_err_input, at // ": key 'start': must be >= 0 [s]")
-                return
-            end if
+            if (.not. check_nonnegative(at, start, 'start', '[s]', err)) return
             if (end /= unset .and. duration /= unset) then
                 call set_error(err, dem_err_input, at // ": key 'duration': give 'end' or " // &
                                "'duration', not both")
@@ -1820,6 +1789,16 @@ contains
             ok = .true.
         end if
     end function check_positive
+
+    !> Check that a key with a default is finite and >= 0 (unit: '[s]' and such, or '').
+    logical function check_nonnegative(at, val, key, unit, err) result(ok)
+        character(len=*), intent(in) :: at, key, unit
+        real(wp), intent(in) :: val
+        type(error_t), intent(inout) :: err
+        ok = in_range(val, 0.0_wp, unset, .true., .false.)
+        if (.not. ok) call set_error(err, dem_err_input, at // ": key '" // key // &
+                                     "': must be >= 0" // trim(' ' // unit))
+    end function check_nonnegative
 
     !> True if val is finite and lies between lo and hi (each end closed or open). NaN is
     !> tested first, so that no comparison with it traps in a Debug build.

@@ -117,8 +117,16 @@ contains
         integer(ip), intent(in) :: code
         real(wp), intent(in) :: length(3)        !! periods (0 along the other axes) [m]
         real(wp) :: s(3)
-        s = real([mod(code, 3_ip), mod(code / 3_ip, 3_ip), code / 9_ip] - 1, wp) * length
+        s = real(image_steps(code), wp) * length
     end function image_shift
+
+    !> The periods image `code` is shifted by along each axis: -1, 0 or 1.
+    pure function image_steps(code) result(s)
+        !$acc routine seq
+        integer(ip), intent(in) :: code
+        integer(ip) :: s(3)
+        s = [mod(code, 3_ip), mod(code / 3_ip, 3_ip), code / 9_ip] - 1
+    end function image_steps
 
     !> Whether image `code` of a sphere at x can be within `reach` of the periodic box: a
     !> shift only along periodic axes, +L only from within reach of the low face, -L of the
@@ -129,7 +137,7 @@ contains
         logical, intent(in) :: axis(3)
         real(wp), intent(in) :: lo(3), length(3), x(3), reach   !! [m]
         integer(ip) :: s(3), k
-        s = [mod(code, 3_ip), mod(code / 3_ip, 3_ip), code / 9_ip] - 1
+        s = image_steps(code)
         ok = .true.
         do k = 1, 3
             if (s(k) == 0) cycle

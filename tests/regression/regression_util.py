@@ -36,6 +36,22 @@ def run_dem(dem, case, workdir, expect_rc=0):
     return r.returncode, r.stdout, r.stderr
 
 
+def run_ranks(mpiexec, dem, case, ranks, workdir, *args, code=0):
+    """Run `dem args case` on `ranks` MPI ranks from workdir; check the exit status."""
+    cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(ranks), dem,
+           *args, case]
+    r = subprocess.run(cmd, cwd=workdir, capture_output=True, text=True, timeout=900)
+    check(r.returncode == code, f"{os.path.basename(case)} on {ranks} ranks: exit "
+                                f"{r.returncode}, expected {code}: {r.stderr.strip()[-2000:]}")
+    return r
+
+
+def same_file(a, b, what):
+    """Files a and b are the same byte for byte."""
+    with open(a, "rb") as fa, open(b, "rb") as fb:
+        check(fa.read() == fb.read(), f"{what}: {b} differs from {a}")
+
+
 def finish():
     print(f"{checks} checks, {len(failures)} failed")
     sys.exit(1 if failures else 0)

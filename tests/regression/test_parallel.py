@@ -32,13 +32,12 @@ usage: test_parallel.py DEM WORKDIR MPIEXEC"""
 import os
 import re
 import shutil
-import subprocess
 import sys
 
 import h5py
 import numpy as np
 
-from regression_util import ROOT, check, finish
+from regression_util import ROOT, check, finish, run_ranks, same_file
 import checkpoint_util as cu
 
 sys.path.insert(0, os.path.join(ROOT, "cases"))
@@ -51,17 +50,9 @@ os.makedirs(work)
 
 def run(case, ranks, *args, code=0):
     """Run dem on `ranks` ranks from `work`; check the exit status."""
-    cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(ranks), dem,
-           *args, case]
-    r = subprocess.run(cmd, cwd=work, capture_output=True, text=True, timeout=900)
-    check(r.returncode == code, f"{os.path.basename(case)} on {ranks} ranks: exit "
-                                f"{r.returncode}: {r.stderr.strip()[-2000:]}")
-    return r
+    return run_ranks(mpiexec, dem, case, ranks, work, *args, code=code)
 
 
-def same_file(a, b, what):
-    with open(a, "rb") as fa, open(b, "rb") as fb:
-        check(fa.read() == fb.read(), f"{what}: {b} differs from {a}")
 
 
 def same_state(a, b, what):

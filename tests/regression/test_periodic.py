@@ -24,13 +24,12 @@ usage: test_periodic.py DEM WORKDIR MPIEXEC"""
 import os
 import re
 import shutil
-import subprocess
 import sys
 
 import h5py
 import numpy as np
 
-from regression_util import ROOT, check, finish
+from regression_util import ROOT, check, finish, run_ranks, same_file
 
 dem, work, mpiexec = sys.argv[1], os.path.abspath(sys.argv[2]), sys.argv[3]
 shutil.rmtree(work, ignore_errors=True)
@@ -49,12 +48,7 @@ GAS = """&run dt = 1e-6, t_end = {t_end}, gravity = 0, 0, 0, progress_interval =
 
 
 def run(case, ranks=1, *args, code=0):
-    cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(ranks), dem, *args,
-           case]
-    r = subprocess.run(cmd, cwd=work, capture_output=True, text=True, timeout=600)
-    check(r.returncode == code, f"{os.path.basename(case)} on {ranks} ranks: exit "
-                                f"{r.returncode}, expected {code}: {r.stderr.strip()[-1500:]}")
-    return r
+    return run_ranks(mpiexec, dem, case, ranks, work, *args, code=code)
 
 
 def write_gas(path, x, v):
@@ -86,11 +80,6 @@ def same_state(a, b):
         keys = [f"{g}/{k}" for g in ("particles", "state") for k in fa[g]]
         return (keys == [f"{g}/{k}" for g in ("particles", "state") for k in fb[g]] and
                 all(np.array_equal(fa[k][()], fb[k][()]) for k in keys))
-
-
-def same_file(a, b, what):
-    with open(a, "rb") as fa, open(b, "rb") as fb:
-        check(fa.read() == fb.read(), f"{what}: {os.path.basename(a)} differs")
 
 
 # 1. the gas, and its 2 x 2 x 2 copy in twice the period
