@@ -278,7 +278,8 @@ contains
             end if
             if (written) then
                 if (.not. row) then           ! (a row has checked the state)
-                    call energy_guard(s, c, err)
+                    call settle_outlets(s, err)      ! (the parked have no inertia)
+                    if (.not. err%failed()) call energy_guard(s, c, err)
                     if (failed_anywhere(s, err)) return
                 end if
                 call write_checkpoint(s, c, r%out, err)
