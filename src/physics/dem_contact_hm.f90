@@ -43,26 +43,27 @@ contains
         real(wp), intent(out) :: ft(3)    !! tangential force on i [N]
         real(wp) :: f(1)
         call hm_lanes(1_ip, [overlap], nrm(1:1), nrm(2:2), nrm(3:3), vrel(1:1), vrel(2:2), &
-                      vrel(3:3), [rstar], [kn], [st], [cn * sqrt(sn * mstar)], &
-                      [ct * sqrt(st * mstar)], [mu], clamp_normal, keep_length, dt, xi(1:1), &
+                      vrel(3:3), [rstar], [mstar], [kn], [st], [cn * sqrt(sn)], &
+                      [ct * sqrt(st)], [mu], clamp_normal, keep_length, dt, xi(1:1), &
                       xi(2:2), xi(3:3), f, ft(1:1), ft(2:2), ft(3:3))
         fn = f(1)
     end subroutine hm_force
 
     !> hm_force for m <= max_lanes contacts, each given by components (lanes l = 1..m), and
-    !> with the damping factors of each contact given: dn = cn sqrt(sn m*) and
-    !> dtan = ct sqrt(st m*) (the particle-pair kernel keeps them from the list build). The
-    !> operations of each lane are those of one contact, in the same order.
-    pure subroutine hm_lanes(m, overlap, n1, n2, n3, v1, v2, v3, rstar, kn, st, dn, dtan, mu, &
-                             clamp_normal, keep_length, dt, x1, x2, x3, fn, f1, f2, f3)
+    !> with the damping factors of each contact given: gn = cn sqrt(sn) and gt = ct sqrt(st)
+    !> (pair_constants_t), so that the damping coefficients gn sqrt(m* sqrt(R* d)) and
+    !> gt sqrt(m* sqrt(R* d)) take one square root. The operations of each lane are those of
+    !> one contact, in the same order.
+    pure subroutine hm_lanes(m, overlap, n1, n2, n3, v1, v2, v3, rstar, mstar, kn, st, gn, gt, &
+                             mu, clamp_normal, keep_length, dt, x1, x2, x3, fn, f1, f2, f3)
         !$acc routine seq
         integer(ip), intent(in) :: m
         real(wp), intent(in) :: overlap(m)                 !! [m]
         real(wp), intent(in) :: n1(m), n2(m), n3(m)        !! unit normals
         real(wp), intent(in) :: v1(m), v2(m), v3(m)        !! relative velocities [m/s]
-        real(wp), intent(in) :: rstar(m), kn(m), st(m), mu(m)
-        real(wp), intent(in) :: dn(m)        !! cn sqrt(sn m*) [kg^(1/2) Pa^(1/2)]
-        real(wp), intent(in) :: dtan(m)      !! ct sqrt(st m*) [kg^(1/2) Pa^(1/2)]
+        real(wp), intent(in) :: rstar(m), mstar(m), kn(m), st(m), mu(m)   !! [m], [kg], [Pa]
+        real(wp), intent(in) :: gn(m)        !! cn sqrt(sn) [Pa^(1/2)]
+        real(wp), intent(in) :: gt(m)        !! ct sqrt(st) [Pa^(1/2)]
         logical, intent(in) :: clamp_normal, keep_length
         real(wp), intent(in) :: dt                         !! [s]
         real(wp), intent(inout) :: x1(m), x2(m), x3(m)     !! tangential displacements [m]
@@ -73,13 +74,13 @@ contains
         real(wp) :: vn, len_old, len_new, s, kt, ft2, ft_max, g
         integer(ip) :: l
 
-        ! normal force; sqrt(S m*) = sqrt(s m*) (R* d)^(1/4) for S = s sqrt(R* d): the square
-        ! roots of the masses and constants (dn, dtan) do not wait for the overlap's
+        ! normal force; c sqrt(S m*) = c sqrt(s) sqrt(m* sqrt(R* d)) for S = s sqrt(R* d): one
+        ! square root q for both damping coefficients
         do l = 1, m
             root(l) = sqrt(rstar(l) * overlap(l))
-            q(l) = sqrt(root(l))
+            q(l) = sqrt(mstar(l) * root(l))
             vn = v1(l) * n1(l) + v2(l) * n2(l) + v3(l) * n3(l)
-            fn(l) = kn(l) * overlap(l) * root(l) + dn(l) * q(l) * vn
+            fn(l) = kn(l) * overlap(l) * root(l) + gn(l) * q(l) * vn
             if (clamp_normal) fn(l) = max(fn(l), 0.0_wp)
             t1(l) = v1(l) - vn * n1(l)
             t2(l) = v2(l) - vn * n2(l)
@@ -141,7 +142,7 @@ contains
                 x2(l) = -f2(l) / kt
                 x3(l) = -f3(l) / kt
             else
-                g = dtan(l) * q(l)
+                g = gt(l) * q(l)
                 f1(l) = f1(l) - g * t1(l)
                 f2(l) = f2(l) - g * t2(l)
                 f3(l) = f3(l) - g * t3(l)

@@ -41,17 +41,17 @@ contains
 
     !> Add the contact force and torque of every overlapping pair to the owned particles
     !> (the pair's constants, doc/theory.md section 1, from the material pair's table and the
-    !> two particles' radii and masses, when it touches). The pairs are taken in tiles
-    !> of `tile`: the overlapping pairs of a tile are gathered into lanes and the contact law
-    !> runs over those lanes at once (hm_lanes). The lever of a particle's rotation in the
-    !> relative velocity is R - shift_v d, in the torque R - shift_t d (0: the radius; 1/2:
-    !> the contact point at mid-overlap, as LIGGGHTS). With `reset`, a pair's history is
+    !> two particles' radii and masses, when it touches: 1/r, R* and m* from one division).
+    !> The pairs are taken in tiles of `tile`: the overlapping pairs of a tile are gathered
+    !> into lanes and the contact law runs over those lanes at once (hm_lanes). The lever of a
+    !> particle's rotation in the relative velocity is R - shift_v d, in the torque
+    !> R - shift_t d (0: the radius; 1/2: the contact point at mid-overlap, as LIGGGHTS). With `reset`, a pair's history is
     !> cleared when its contact ends; without, it is kept while the pair is listed (LIGGGHTS
     !> 3.8.0) and continued by its next contact. With `extra` (a case whose pairs resist
     !> rolling or cohere), the rolling torque and the sJKR force (dem_contact_extra) of the
     !> pair's model follow the contact law; the EPSD2 spring is xi(4:6, p).
     subroutine pp_forces(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
-                         kn_ab, sn_ab, st_ab, cn_ab, ct_ab, mu_ab, clamp_normal, keep_length, &
+                         kn_ab, st_ab, gn_ab, gt_ab, mu_ab, clamp_normal, keep_length, &
                          shift_v, shift_t, reset, extra, rmodel_ab, mur_ab, kcoh_ab, dt, xi, &
                          touching, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
@@ -62,8 +62,8 @@ contains
         integer(ip), intent(in) :: mat(n_all)
         real(wp), intent(in) :: scale(n_all)      !! fixed-point scales (pp_scales)
         integer(ip), intent(in) :: pair(2, n_pairs)  !! the two particles of a pair
-        real(wp), intent(in) :: kn_ab(nm, nm), sn_ab(nm, nm), st_ab(nm, nm)  !! [Pa]
-        real(wp), intent(in) :: cn_ab(nm, nm), ct_ab(nm, nm), mu_ab(nm, nm)  !! [-]
+        real(wp), intent(in) :: kn_ab(nm, nm), st_ab(nm, nm), mu_ab(nm, nm)  !! [Pa], [-]
+        real(wp), intent(in) :: gn_ab(nm, nm), gt_ab(nm, nm)  !! damping factors [Pa^(1/2)]
         logical, intent(in) :: clamp_normal, keep_length   !! (hm_lanes)
         real(wp), intent(in) :: shift_v, shift_t     !! levers R - shift d [-]
         logical, intent(in) :: reset                 !! the history cleared when a contact ends
@@ -84,11 +84,11 @@ contains
         logical :: over
         integer(i8) :: kf(3), kc(3)
         real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, g, sv, &
-                    st_, ri, rj, mstar, wr(3), hr(3), tr(3)
+                    st_, ri, rj, rsum, msum, wr(3), hr(3), tr(3)
         logical :: shifted_v, shifted_t, extra_
         real(wp), dimension(tile + 1) :: e1, e2, e3, e4
-        real(wp), dimension(tile) :: ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, &
-                                     dtan, mu, x1, x2, x3, fn, f1, f2, f3
+        real(wp), dimension(tile) :: ov, n1, n2, n3, v1, v2, v3, rs, ms, kn, st, gn, &
+                                     gt, mu, x1, x2, x3, fn, f1, f2, f3
 
         sv = shift_v
         st_ = shift_t
@@ -98,10 +98,10 @@ contains
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc) &
-        !$acc private(over, side, a, b, mstar) &
+        !$acc private(over, side, a, b, rsum, msum) &
         !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g, ri, rj) &
         !$acc firstprivate(sv, st_, shifted_v, shifted_t, extra_) private(wr, hr, tr) &
-        !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu) &
+        !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, ms, kn, st, gn, gt, mu) &
         !$acc private(x1, x2, x3, fn, f1, f2, f3)
         do p0 = 0, n_pairs - 1, tile
             ! the pairs of the tile that overlap, as lanes 1..m (every pair is written to lane
@@ -135,11 +135,14 @@ contains
                 i = pair(1, p)
                 j = pair(2, p)
                 dist = sqrt(e4(l))
-                inv = 1.0_wp / dist
+                rsum = radius(i) + radius(j)
+                msum = mass(i) + mass(j)
+                g = 1.0_wp / (dist * (rsum * msum))      ! one division for 1/dist, R*, m*
+                inv = (rsum * msum) * g
                 n1(l) = e1(l) * inv
                 n2(l) = e2(l) * inv
                 n3(l) = e3(l) * inv
-                ov(l) = (radius(i) + radius(j)) - dist
+                ov(l) = rsum - dist
                 ws1 = radius(i) * w(1, i) + radius(j) * w(1, j)
                 ws2 = radius(i) * w(2, i) + radius(j) * w(2, j)
                 ws3 = radius(i) * w(3, i) + radius(j) * w(3, j)
@@ -148,12 +151,13 @@ contains
                 v3(l) = v(3, i) - v(3, j) + (ws1 * n2(l) - ws2 * n1(l))
                 a = mat(i)
                 b = mat(j)
-                rs(l) = radius(i) * radius(j) / (radius(i) + radius(j))
-                mstar = mass(i) * mass(j) / (mass(i) + mass(j))
+                g = dist * g
+                rs(l) = radius(i) * radius(j) * msum * g
+                ms(l) = mass(i) * mass(j) * rsum * g
                 kn(l) = kn_ab(a, b)
                 st(l) = st_ab(a, b)
-                dn(l) = cn_ab(a, b) * sqrt(sn_ab(a, b) * mstar)
-                dtan(l) = ct_ab(a, b) * sqrt(st_ab(a, b) * mstar)
+                gn(l) = gn_ab(a, b)
+                gt(l) = gt_ab(a, b)
                 mu(l) = mu_ab(a, b)
                 x1(l) = xi(1, p)
                 x2(l) = xi(2, p)
@@ -174,7 +178,7 @@ contains
                     v3(l) = v(3, i) - v(3, j) + (ws1 * n2(l) - ws2 * n1(l))
                 end do
             end if
-            call hm_lanes(m, ov, n1, n2, n3, v1, v2, v3, rs, kn, st, dn, dtan, mu, &
+            call hm_lanes(m, ov, n1, n2, n3, v1, v2, v3, rs, ms, kn, st, gn, gt, mu, &
                           clamp_normal, keep_length, dt, x1, x2, x3, fn, f1, f2, f3)
             if (extra_) then        ! rolling resistance, cohesion: the torques into the sums
                 do l = 1, m         ! (over R, as n x F_t), the cohesion into fn
@@ -301,13 +305,14 @@ contains
         k = to_fixed(t * g * s) - to_fixed(t * s)
     end function lever_word
 
-    !> y rounded to the nearest integer (halves away from zero), clipped to +-2^61 (16 times
-    !> the bound of fixed_scale; a term beyond it is an unstable run's).
+    !> y rounded toward zero to an integer (symmetric: to_fixed(-y) = -to_fixed(y), as the
+    !> two sides of a pair need), clipped to +-2^61 (16 times the bound of fixed_scale; a
+    !> term beyond it is an unstable run's).
     pure integer(i8) function to_fixed(y) result(k)
         !$acc routine seq
         real(wp), intent(in) :: y
         real(wp) :: yc
         yc = min(max(y, -fixed_limit), fixed_limit)
-        k = int(yc + sign(0.5_wp, yc), i8)
+        k = int(yc, i8)
     end function to_fixed
 end module dem_contacts_pp

@@ -171,6 +171,8 @@ contains
         call acc_data(s%pc%cn, op)
         call acc_data(s%pc%ct, op)
         call acc_data(s%pc%mu, op)
+        call acc_data(s%pc%gn, op)
+        call acc_data(s%pc%gt, op)
         if (s%mesh%n_tri > 0) then
             call mesh_data(s%mesh, op)
         end if

@@ -54,6 +54,9 @@ module dem_materials
         real(wp), allocatable :: cn(:, :)     !< -2 sqrt(5/6) beta (>= 0) [-]
         real(wp), allocatable :: ct(:, :)     !< cn, or 0 without tangential damping [-]
         real(wp), allocatable :: mu(:, :)     !< sliding friction [-]
+        !> the damping factors of the particle kernel, cn sqrt(sn) and ct sqrt(st): its
+        !> damping coefficients are gn sqrt(m* sqrt(R* d)) and gt sqrt(m* sqrt(R* d))
+        real(wp), allocatable :: gn(:, :), gt(:, :)   !< [Pa^(1/2)]
         type(contact_options_t) :: opts       !< the variant's switches, for the kernels
         !> rolling resistance and cohesion (doc/theory.md, section 15): whether any pair has
         !> them (the kernels take their extra path only then), and per pair the model, the
@@ -115,6 +118,9 @@ contains
         pc%cn = 0.0_wp
         pc%ct = 0.0_wp
         pc%mu = 0.0_wp
+        allocate(pc%gn(n, n), pc%gt(n, n))
+        pc%gn = 0.0_wp
+        pc%gt = 0.0_wp
         allocate(pc%rmodel(n, n), pc%mur(n, n), pc%kcoh(n, n))
         pc%rmodel = rolling_none
         pc%mur = 0.0_wp
@@ -131,6 +137,8 @@ contains
                 pc%cn(a, b) = -2.0_wp * sqrt(5.0_wp / 6.0_wp) &
                               * damping_ratio(mats%restitution(a, b))
                 if (opts%tangential_damping) pc%ct(a, b) = pc%cn(a, b)
+                pc%gn(a, b) = pc%cn(a, b) * sqrt(pc%sn(a, b))
+                pc%gt(a, b) = pc%ct(a, b) * sqrt(pc%st(a, b))
                 pc%mu(a, b) = mats%friction(a, b)
                 if (allocated(mats%rolling_model)) then
                     if (mats%rolling_friction(a, b) > 0.0_wp) then

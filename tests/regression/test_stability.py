@@ -29,10 +29,11 @@
    material's smallest sphere squeezed by its largest (doc/theory.md, section 6): a run at
    0.9 of the bound that `dem --check` prints completes, its kinetic + gravitational energy
    never above its start (the spheres start apart and at rest or falling: what the contacts
-   store as elastic energy or dissipate comes from it; a blow-up adds energy). At 3 us,
-   0.73 of the bound
-   of the two-body contacts alone (4.11 us), the bound refuses dt, and with allow_unstable
-   the instability guard stops the run (exit 3): the check above can fail.
+   store as elastic energy or dissipate comes from it; a blow-up adds energy). At 3.5 us,
+   0.85 of the bound of the two-body contacts alone (4.11 us), the bound refuses dt, and with
+   allow_unstable the instability guard stops the run (exit 3): the check above can fail.
+   (At 3 us the blow-up within the run is a matter of chance: a change in the last bits of
+   the contact law, issue 28's fifth step, let that run finish.)
 5. The energy guard: the head-on glass spheres of part 2 at +-25 m/s, with restitution 1,
    run with allow_unstable at 2 and 5 times the stability bound that `dem --check` prints.
    Their speeds stay below the speed guard's bound (250 m/s: 10 v), but the overlap
@@ -208,13 +209,13 @@ print(f"size ratio 20 at 0.9 of the bound: energy {energy[0]:.6g} J at the start
       f"{energy.max():.6g} J, {energy[-1]:.4g} J at the end")
 check(rise <= 1e-12, f"size ratio 20 at 0.9 of the bound: the energy rose above its start "
       f"by {rise:.3g} of it")
-rc, out, err = run_dem(dem, ratio_case("ratio_refused", 3e-6), work, expect_rc=2)
+rc, out, err = run_dem(dem, ratio_case("ratio_refused", 3.5e-6), work, expect_rc=2)
 check(rc == 2 and "exceeds the stability bound" in out + err,
-      "size ratio 20 at 3 us: not refused by the bound")
-rc, out, err = run_dem(dem, ratio_case("ratio_unstable", 3e-6, ", allow_unstable = .true."),
+      "size ratio 20 at 3.5 us: not refused by the bound")
+rc, out, err = run_dem(dem, ratio_case("ratio_unstable", 3.5e-6, ", allow_unstable = .true."),
                        work, expect_rc=3)
 check(rc == 3 and "unstable" in out + err,
-      "size ratio 20 at 3 us with allow_unstable: the guard did not stop it")
+      "size ratio 20 at 3.5 us with allow_unstable: the guard did not stop it")
 
 # 5. the energy guard
 HEAD_ON = """&material name = 'glass', density = 2800.0, youngs_modulus = 48.0e9, poisson_ratio = 0.2 /

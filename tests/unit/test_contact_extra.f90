@@ -63,7 +63,7 @@ program test_contact_extra
             xi3 = 0.0_wp
             touching = .false.
             call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
-                           kn, sn, st, zero, zero, mu, .false., .true., 0.0_wp, 0.0_wp, &
+                           kn, st, zero, zero, mu, .false., .true., 0.0_wp, 0.0_wp, &
                            .true., .true., none, zero, kc, dt, xi3, touching, acc, f, t)
             call assert_close(-f(1, 1), hertz - kcoh * pi * a2, 1.0e-9_wp, &
                               'sJKR pair: Hertz less k pi a^2')
@@ -112,7 +112,7 @@ program test_contact_extra
     t = 0.0_wp
     xi3 = 0.0_wp
     touching = .false.
-    call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, kn, sn, &
+    call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, kn, &
                    st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, .true., .true., &
                    model, mur, zero, dt, xi3, touching, acc, f, t)
     call assert_close(t(2, 1), -0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: on the turning one')
@@ -139,7 +139,7 @@ program test_contact_extra
         f = 0.0_wp
         t = 0.0_wp
         call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, kn, &
-                       sn, st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, .true., &
+                       st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, .true., &
                        .true., model, mur, zero, dt, xi6, touching, acc, f, t)
         expect = min(s * kr * 2.0_wp * dt, lim)
         if (mod(s, 50) == 0) then

@@ -51,10 +51,10 @@ program test_contacts_pp
     do variant = 1, 2
         shift = 0.5_wp * (variant - 1)
         call brute_force(fb, tb)
-        ! each term of a fixed-point sum is off by at most half a unit, 1 / (2 scale); the
-        ! floating-point sums by a few roundings of the largest term
+        ! each term of a fixed-point sum is off by less than a unit, 1 / scale (rounded toward
+        ! zero); the floating-point sums by a few roundings of the largest term
         quantum = [(1.0_wp / fixed_scale(m(i) * accel_bound), i = 1, n)]
-        tol_f = contacts * (0.5_wp * quantum + 4.0_wp * epsilon(1.0_wp) * big)
+        tol_f = contacts * (quantum + 4.0_wp * epsilon(1.0_wp) * big)
         tol_t = r * tol_f
 
         do trial = 1, 3
@@ -69,7 +69,8 @@ program test_contacts_pp
             f = 0.0_wp
             t = 0.0_wp
             call pp_forces(n, n, nb%n_pairs, 1_ip, x(:, order), v(:, order), w(:, order), &
-                           r(order), m(order), mat, nb%scale, nb%pair, kn, sn, st, cn, cn, mu, &
+                           r(order), m(order), mat, nb%scale, nb%pair, kn, st, cn * sqrt(sn), &
+                           cn * sqrt(st), mu, &
                            .false., .true., shift, shift, .true., .false., none, cn, cn, dt, &
                            cs%xi, cs%touching, nb%acc, f, t)
             back(order) = [(i, i = 1, n)]

@@ -57,6 +57,9 @@ program test_materials
     call assert_close(pc%cn(1, 2), -2.0_wp * sqrt(5.0_wp / 6.0_wp) * damping_ratio(0.5_wp), &
                       1e-15_wp, 'cn')
     call assert_true(pc%ct(1, 2) == pc%cn(1, 2), 'tangential damping on by default')
+    ! the particle kernel's damping factors: cn sqrt(2 E*), ct sqrt(8 G*)
+    call assert_close(pc%gn(2, 1), pc%cn(1, 2) * sqrt(2.0_wp * estar), 1e-15_wp, 'gn')
+    call assert_close(pc%gt(1, 2), pc%cn(1, 2) * sqrt(8.0_wp * gstar), 1e-15_wp, 'gt')
     call assert_true(pc%kn(2, 4) == 0.0_wp .and. pc%kn(4, 4) == 0.0_wp, &
                      'no constants for undefined or rigid-rigid pairs')
     opts%tangential_stiffness_factor = 2.0_wp / 3.0_wp
@@ -65,5 +68,6 @@ program test_materials
     call assert_close(pc%st(1, 2), 16.0_wp / 3.0_wp * gstar, 1e-15_wp, &
                       'MercuryDPM stiffness (16/3) G*')
     call assert_true(pc%ct(1, 2) == 0.0_wp, 'MercuryDPM: no tangential damping')
+    call assert_true(pc%gt(1, 2) == 0.0_wp, 'MercuryDPM: no tangential damping factor')
     call assert_finish()
 end program test_materials
