@@ -12,6 +12,7 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -74,7 +75,6 @@ class Display:
     def get(self):
         if self.env is not None or not shutil.which("Xvfb"):
             return self.env
-        import time
         for n in range(140, 200):
             if not os.path.exists(f"/tmp/.X{n}-lock") and \
                     not os.path.exists(f"/tmp/.X11-unix/X{n}"):
@@ -145,6 +145,9 @@ for k, (name, cmd, fallback) in enumerate(found):
         if cmd is not None:
             print(f"{name}: failed without a display (exit {r.returncode}); again with Xvfb")
         r = draw(fallback, png, display.get())
+        if r.returncode != 0:           # (a loaded machine: the new server not ready yet)
+            time.sleep(2.0)
+            r = draw(fallback, png, display.get())
     check(r.returncode == 0 and os.path.exists(png),
           f"{name}: exit {r.returncode}, {png} written: {r.stdout[-1500:]}{r.stderr[-1500:]}")
     if r.returncode != 0 or not os.path.exists(png):

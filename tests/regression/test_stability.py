@@ -50,6 +50,7 @@ usage: test_stability.py DEM WORKDIR"""
 import math
 import os
 import re
+import shutil
 import subprocess
 import sys
 
@@ -60,7 +61,8 @@ from regression_util import HERE, check, check_close, finish, run_dem
 import chung_ooi as co
 
 dem, work = sys.argv[1], sys.argv[2]
-os.makedirs(work, exist_ok=True)
+shutil.rmtree(work, ignore_errors=True)    # (an output folder of another case is refused)
+os.makedirs(work)
 
 
 def variant(case, integrator):
