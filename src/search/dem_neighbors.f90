@@ -64,6 +64,10 @@ module dem_neighbors
         integer(ip), allocatable :: item(:)
     end type grid_t
 
+    !> candidate triangles of a particle kept from the counting search of a wall-list build;
+    !> the rows with more are searched again to be filled
+    integer(ip), parameter :: kept_rows = 8
+
 contains
 
     !> True when some owned particle, or some vertex of a moving wall, moved more than skin/2
@@ -623,7 +627,7 @@ contains
         type(mesh_t), intent(in) :: mesh
         real(wp), intent(in) :: h                !! cell size [m]
         integer(ip), allocatable :: box(:, :), tcount(:), toff(:), ecell(:), etri(:), &
-                                    gstart(:), gitem(:), cnt(:)
+                                    gstart(:), gitem(:), cnt(:), kept(:, :)
         integer(ip) :: n(3), n_tri, n_e, n_found
         real(wp) :: hh
 
@@ -657,18 +661,24 @@ contains
         call triangle_entries(n_tri, n_e, n, box, tcount, toff, ecell, etri)
         call bin_items(n_e, product(n), ecell, gstart, gitem, cnt)
 
-        ! candidates of each particle: count, then fill (each row by triangle)
+        ! candidates of each particle: counted, the first kept_rows of them kept; then the
+        ! rows filled, from what was kept or, for the longer rows, by a second search (each
+        ! row by triangle)
+        allocate(kept(kept_rows, max(1, n_own)))
+        call acc_data(kept, acc_create)
         call wall_rows(.false., n_own, n_all, n_tri, n_e, product(n), x, radius, nb%skin, lo, &
-                       hh, n, mesh%vert, box, etri, gstart, gitem, nb%wstart, &
-                       size(cnt, kind=ip), cnt, nb%tri_tests)
+                       hh, n, mesh%vert, box, etri, gstart, gitem, nb%wstart, kept_rows, &
+                       kept, size(cnt, kind=ip), cnt, nb%tri_tests)
         call prefix_sum(n_own, cnt, nb%wstart)
         call acc_data(nb%wstart(n_own + 1:n_own + 1), acc_to_host)
         n_found = nb%wstart(n_own + 1) - 1
         allocate(nb%wlist(n_found))
         call acc_data(nb%wlist, acc_create)
+        call copy_kept_rows(n_own, kept_rows, kept, nb%wstart, n_found, nb%wlist)
         call wall_rows(.true., n_own, n_all, n_tri, n_e, product(n), x, radius, nb%skin, lo, &
-                       hh, n, mesh%vert, box, etri, gstart, gitem, nb%wstart, n_found, &
-                       nb%wlist, nb%tri_tests)
+                       hh, n, mesh%vert, box, etri, gstart, gitem, nb%wstart, kept_rows, &
+                       kept, n_found, nb%wlist, nb%tri_tests)
+        call acc_data(kept, acc_exit)
         call acc_data(cnt, acc_exit)
         call acc_data(gstart, acc_exit)
         call acc_data(gitem, acc_exit)
@@ -773,18 +783,21 @@ contains
     end subroutine triangle_entries
 
     !> The triangles within R_i + skin of each owned particle i: their number into out(i)
-    !> (fill false), with the number of closest-point tests made, or the triangles, in
-    !> increasing order, into out(start(i):start(i + 1) - 1) (fill true). A triangle is
-    !> tested in the first cell (lowest coordinates) shared by its box and the particle's
-    !> reach, so once.
+    !> and the first kept of them into kept(:, i) (fill false), with the number of
+    !> closest-point tests made; or (fill true) the triangles of the rows longer than kept
+    !> holds into out(start(i):start(i + 1) - 1), then every row in increasing order (the
+    !> shorter rows copied from kept before). A triangle is tested in the first cell (lowest
+    !> coordinates) shared by its box and the particle's reach, so once.
     subroutine wall_rows(fill, n_own, n_all, n_tri, n_e, n_cells, x, radius, skin, origin, h, &
-                         n, vert, box, etri, gstart, gitem, start, n_out, out, tests)
+                         n, vert, box, etri, gstart, gitem, start, n_kept, kept, n_out, out, &
+                         tests)
         logical, intent(in) :: fill
-        integer(ip), intent(in) :: n_own, n_all, n_tri, n_e, n_cells, n(3), n_out
+        integer(ip), intent(in) :: n_own, n_all, n_tri, n_e, n_cells, n(3), n_kept, n_out
         real(wp), intent(in) :: x(3, n_all), radius(n_all), skin, origin(3), h
         real(wp), intent(in) :: vert(3, 3, n_tri)
         integer(ip), intent(in) :: box(6, n_tri), etri(max(1, n_e)), gstart(n_cells + 1), &
                                    gitem(max(1, n_e)), start(n_own + 1)
+        integer(ip), intent(inout) :: kept(n_kept, max(1, n_own))
         integer(ip), intent(inout) :: out(n_out)
         integer(i8), intent(inout) :: tests
         integer(ip) :: i, k, m, t, cx, cy, cz, c(3), c0(3), c1(3), cell, feature
@@ -795,6 +808,9 @@ contains
         !$acc private(k, m, t, cx, cy, cz, c, c0, c1, cell, feature, reach, lo, hi, q) &
         !$acc reduction(+:tested)
         do i = 1, n_own
+            if (fill) then
+                if (start(i + 1) - start(i) <= n_kept) cycle     ! (copied from kept)
+            end if
             k = 0
             reach = radius(i) + skin
             lo = x(:, i) - reach
@@ -818,7 +834,11 @@ contains
                             tested = tested + 1
                             if ((q(1) - x(1, i))**2 + (q(2) - x(2, i))**2 &
                                 + (q(3) - x(3, i))**2 >= reach**2) cycle
-                            if (fill) out(start(i) + k) = t
+                            if (fill) then
+                                out(start(i) + k) = t
+                            else if (k < n_kept) then
+                                kept(k + 1, i) = t
+                            end if
                             k = k + 1
                         end do
                     end do
@@ -835,6 +855,21 @@ contains
             call sort_segment(n_out, out, start(i), start(i + 1) - 1)
         end do
     end subroutine wall_rows
+
+    !> The rows of at most n_kept triangles, from kept(:, i) into out(start(i):start(i + 1) - 1).
+    subroutine copy_kept_rows(n_own, n_kept, kept, start, n_out, out)
+        integer(ip), intent(in) :: n_own, n_kept, kept(n_kept, max(1, n_own)), start(n_own + 1)
+        integer(ip), intent(in) :: n_out
+        integer(ip), intent(inout) :: out(n_out)
+        integer(ip) :: i, k
+        !$acc parallel loop gang vector default(present) private(k)
+        do i = 1, n_own
+            if (start(i + 1) - start(i) > n_kept) cycle
+            do k = 1, start(i + 1) - start(i)
+                out(start(i) + k - 1) = kept(k, i)
+            end do
+        end do
+    end subroutine copy_kept_rows
 
     !> One operation of dem_acc on the lists: acc_to_host brings what the host reads (rows,
     !> partners, history, contacts); acc_exit (and the others) acts on every array allocated.
