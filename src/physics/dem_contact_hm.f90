@@ -20,7 +20,7 @@ contains
     !> then projected into the plane (LIGGGHTS 3.8). When the spring force exceeds the Coulomb
     !> limit mu |F_n| the contact slides: the spring is rescaled to the limit and the tangential
     !> damping is dropped (as LIGGGHTS, MUSEN, MercuryDPM and Yade do).
-    pure subroutine hm_force(overlap, nrm, vrel, rstar, mstar, kn, sn, st, cn, ct, mu, &
+    pure subroutine hm_force(overlap, nrm, vrel, rstar, mstar, kn, st, gn, gt, mu, &
                              clamp_normal, keep_length, dt, xi, fn, ft)
         !$acc routine seq
         real(wp), intent(in) :: overlap   !! d_n > 0 [m]
@@ -29,10 +29,9 @@ contains
         real(wp), intent(in) :: rstar     !! effective radius [m]
         real(wp), intent(in) :: mstar     !! effective mass [kg]
         real(wp), intent(in) :: kn        !! (4/3) E* [Pa]
-        real(wp), intent(in) :: sn        !! 2 E* [Pa]
         real(wp), intent(in) :: st        !! 8 G* (times the stiffness factor) [Pa]
-        real(wp), intent(in) :: cn        !! normal damping factor -2 sqrt(5/6) beta [-]
-        real(wp), intent(in) :: ct        !! tangential damping factor [-]
+        real(wp), intent(in) :: gn        !! normal damping factor cn sqrt(2 E*) [Pa^(1/2)]
+        real(wp), intent(in) :: gt        !! tangential damping factor ct sqrt(st) [Pa^(1/2)]
         real(wp), intent(in) :: mu        !! sliding friction [-]
         logical, intent(in) :: clamp_normal  !! no attractive normal force (Yade)
         logical, intent(in) :: keep_length   !! the history turned keeping its length (else
@@ -43,9 +42,8 @@ contains
         real(wp), intent(out) :: ft(3)    !! tangential force on i [N]
         real(wp) :: f(1)
         call hm_lanes(1_ip, [overlap], nrm(1:1), nrm(2:2), nrm(3:3), vrel(1:1), vrel(2:2), &
-                      vrel(3:3), [rstar], [mstar], [kn], [st], [cn * sqrt(sn)], &
-                      [ct * sqrt(st)], [mu], clamp_normal, keep_length, dt, xi(1:1), &
-                      xi(2:2), xi(3:3), f, ft(1:1), ft(2:2), ft(3:3))
+                      vrel(3:3), [rstar], [mstar], [kn], [st], [gn], [gt], [mu], clamp_normal, &
+                      keep_length, dt, xi(1:1), xi(2:2), xi(3:3), f, ft(1:1), ft(2:2), ft(3:3))
         fn = f(1)
     end subroutine hm_force
 

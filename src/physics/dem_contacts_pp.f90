@@ -45,11 +45,12 @@ contains
     !> The pairs are taken in tiles of `tile`: the overlapping pairs of a tile are gathered
     !> into lanes and the contact law runs over those lanes at once (hm_lanes). The lever of a
     !> particle's rotation in the relative velocity is R - shift_v d, in the torque
-    !> R - shift_t d (0: the radius; 1/2: the contact point at mid-overlap, as LIGGGHTS). With `reset`, a pair's history is
-    !> cleared when its contact ends; without, it is kept while the pair is listed (LIGGGHTS
-    !> 3.8.0) and continued by its next contact. With `extra` (a case whose pairs resist
-    !> rolling or cohere), the rolling torque and the sJKR force (dem_contact_extra) of the
-    !> pair's model follow the contact law; the EPSD2 spring is xi(4:6, p).
+    !> R - shift_t d (0: the radius; 1/2: the contact point at mid-overlap, as LIGGGHTS).
+    !> With `reset`, a pair's history is cleared when its contact ends; without, it is kept
+    !> while the pair is listed (LIGGGHTS 3.8.0) and continued by its next contact. With
+    !> `extra` (a case whose pairs resist rolling or cohere), the rolling torque and the sJKR
+    !> force (dem_contact_extra) of the pair's model follow the contact law; the EPSD2 spring
+    !> is xi(4:6, p).
     subroutine pp_forces(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
                          kn_ab, st_ab, gn_ab, gt_ab, mu_ab, clamp_normal, keep_length, &
                          shift_v, shift_t, reset, extra, rmodel_ab, mur_ab, kcoh_ab, dt, xi, &

@@ -182,8 +182,8 @@ contains
     !> rotation taken from the particle's); the EPSD2 spring of slot s is
     !> wxi(:, max_wall_contacts + s).
     subroutine pw_forces(n_own, n_row, row, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, &
-                         mat, wstart, wlist, vert, tmat, twall, wall_v, wall_w, wall_c, kn, sn, &
-                         st, cn, ct, mu, clamp_normal, keep_length, shift_v, shift_t, extra, &
+                         mat, wstart, wlist, vert, tmat, twall, wall_v, wall_w, wall_c, kn, st, &
+                         gn, gt, mu, clamp_normal, keep_length, shift_v, shift_t, extra, &
                          rmodel, mur, kcoh, dt, wtri, wxi, record, n_load, wload, f, t, overflow)
         integer(ip), intent(in) :: n_own, n_cand, n_tri, n_wall, nm
         integer(ip), intent(in) :: n_row, row(:)   !! the particles near walls or with wall
@@ -198,8 +198,8 @@ contains
         real(wp), intent(in) :: wall_v(3, n_wall)   !! translation velocity of each wall [m/s]
         real(wp), intent(in) :: wall_w(3, n_wall)   !! angular velocity of each wall [rad/s]
         real(wp), intent(in) :: wall_c(3, n_wall)   !! a point of its rotation axis [m]
-        real(wp), intent(in) :: kn(nm, nm), sn(nm, nm), st(nm, nm)   !! [Pa]
-        real(wp), intent(in) :: cn(nm, nm), ct(nm, nm), mu(nm, nm)   !! [-]
+        real(wp), intent(in) :: kn(nm, nm), st(nm, nm), mu(nm, nm)   !! [Pa], [-]
+        real(wp), intent(in) :: gn(nm, nm), gt(nm, nm)   !! damping factors [Pa^(1/2)]
         logical, intent(in) :: clamp_normal, keep_length              !! (hm_force)
         real(wp), intent(in) :: shift_v, shift_t                      !! [-]
         logical, intent(in) :: extra              !! some pair resists rolling or coheres
@@ -287,9 +287,8 @@ contains
                 vrel(3) = v(3, i) + (ws(1) * nrm(2) - ws(2) * nrm(1)) - wall_v(3, wl) &
                           - (wall_w(1, wl) * d(2) - wall_w(2, wl) * d(1))
                 b = tmat(tri)
-                call hm_force(r - dist, nrm, vrel, r, mass(i), kn(a, b), sn(a, b), st(a, b), &
-                              cn(a, b), ct(a, b), mu(a, b), clamp_normal, keep_length, dt, &
-                              xik, fn, ft)
+                call hm_force(r - dist, nrm, vrel, r, mass(i), kn(a, b), st(a, b), gn(a, b), &
+                              gt(a, b), mu(a, b), clamp_normal, keep_length, dt, xik, fn, ft)
                 if (extra) then          ! rolling resistance, cohesion
                     xr = 0.0_wp
                     if (spring .and. slot(c) > 0) xr = wxi(:, max_wall_contacts + slot(c), i)

@@ -4,10 +4,10 @@
 !> a grid, each particle's weights over the cells are separable (a product of one weight per
 !> axis), renormalised to sum to one over the cells of the grid, so that the deposits
 !> conserve volume and momentum (along an axis where the grid spans a periodic case's
-!> period, the weights beyond a face go to the cells at the other face); on a list, a particle goes whole to its nearest centre. The
-!> sums over particles and ranks are taken in fixed point (dem_fixed_sum), where addition is
-!> exact and so does not depend on the order: the result is the same bit for bit on any
-!> number of ranks.
+!> period, the weights beyond a face go to the cells at the other face); on a list, a
+!> particle goes whole to its nearest centre. The sums over particles and ranks are taken in
+!> fixed point (dem_fixed_sum), where addition is exact and so does not depend on the order:
+!> the result is the same bit for bit on any number of ranks.
 module dem_deposit
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_sum

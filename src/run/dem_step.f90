@@ -170,8 +170,8 @@ contains
                    n => s%p%n_own)
             call pw_forces(n, nb%n_wrow, nb%wrow, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, &
                            p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%wstart, nb%wlist, m%vert, &
-                           m%mat, m%wall, m%wall_v, m%wall_w, m%wall_c, pc%kn, pc%sn, pc%st, &
-                           pc%cn, pc%ct, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, &
+                           m%mat, m%wall, m%wall_v, m%wall_w, m%wall_c, pc%kn, pc%st, pc%gn, &
+                           pc%gt, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, &
                            o%shift_t, pc%rolling .or. pc%cohesion, pc%rmodel, pc%mur, pc%kcoh, &
                            c%dt, s%cs%wall_tri, s%cs%wall_xi, s%loads_due, n_load, &
                            s%wload, p%f, p%t, overflow)

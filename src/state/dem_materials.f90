@@ -49,12 +49,11 @@ module dem_materials
     !> Kernel constants per material pair (i, j), symmetric.
     type :: pair_constants_t
         real(wp), allocatable :: kn(:, :)     !< (4/3) E* [Pa]
-        real(wp), allocatable :: sn(:, :)     !< 2 E*: S_n = sn sqrt(R* d) [Pa]
         real(wp), allocatable :: st(:, :)     !< 8 G* times the stiffness factor [Pa]
         real(wp), allocatable :: cn(:, :)     !< -2 sqrt(5/6) beta (>= 0) [-]
         real(wp), allocatable :: ct(:, :)     !< cn, or 0 without tangential damping [-]
         real(wp), allocatable :: mu(:, :)     !< sliding friction [-]
-        !> the damping factors of the particle kernel, cn sqrt(sn) and ct sqrt(st): its
+        !> the damping factors of the kernels, cn sqrt(2 E*) and ct sqrt(st): a contact's
         !> damping coefficients are gn sqrt(m* sqrt(R* d)) and gt sqrt(m* sqrt(R* d))
         real(wp), allocatable :: gn(:, :), gt(:, :)   !< [Pa^(1/2)]
         type(contact_options_t) :: opts       !< the variant's switches, for the kernels
@@ -111,9 +110,8 @@ contains
         integer(ip) :: a, b, n
         real(wp) :: estar, gstar
         n = mats%n
-        allocate(pc%kn(n, n), pc%sn(n, n), pc%st(n, n), pc%cn(n, n), pc%ct(n, n), pc%mu(n, n))
+        allocate(pc%kn(n, n), pc%st(n, n), pc%cn(n, n), pc%ct(n, n), pc%mu(n, n))
         pc%kn = 0.0_wp
-        pc%sn = 0.0_wp
         pc%st = 0.0_wp
         pc%cn = 0.0_wp
         pc%ct = 0.0_wp
@@ -132,12 +130,11 @@ contains
                 if (mats%rigid(a) .and. mats%rigid(b)) cycle
                 call effective_moduli(mats, a, b, estar, gstar)
                 pc%kn(a, b) = 4.0_wp / 3.0_wp * estar
-                pc%sn(a, b) = 2.0_wp * estar
                 pc%st(a, b) = 8.0_wp * gstar * opts%tangential_stiffness_factor
                 pc%cn(a, b) = -2.0_wp * sqrt(5.0_wp / 6.0_wp) &
                               * damping_ratio(mats%restitution(a, b))
                 if (opts%tangential_damping) pc%ct(a, b) = pc%cn(a, b)
-                pc%gn(a, b) = pc%cn(a, b) * sqrt(pc%sn(a, b))
+                pc%gn(a, b) = pc%cn(a, b) * sqrt(2.0_wp * estar)
                 pc%gt(a, b) = pc%ct(a, b) * sqrt(pc%st(a, b))
                 pc%mu(a, b) = mats%friction(a, b)
                 if (allocated(mats%rolling_model)) then

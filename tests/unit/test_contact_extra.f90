@@ -22,7 +22,7 @@ program test_contact_extra
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp), estar = 1.0e8_wp, kcoh = 3.0e5_wp
     real(wp), parameter :: dt = 1.0e-6_wp
-    real(wp) :: kn(1, 1), sn(1, 1), st(1, 1), zero(1, 1), mu(1, 1), kc(1, 1), mur(1, 1)
+    real(wp) :: kn(1, 1), st(1, 1), zero(1, 1), mu(1, 1), kc(1, 1), mur(1, 1)
     integer(ip) :: none(1, 1), model(1, 1)
     real(wp) :: x(3, 2), v(3, 2), w(3, 2), r(2), m(2), f(3, 2), t(3, 2), scale(2)
     real(wp) :: rstar, d, dist, a2, hertz, xi3(3, 1), xi6(6, 1), mr(3), tr(3), kr, lim, fn_el, &
@@ -33,7 +33,6 @@ program test_contact_extra
     type(mesh_t) :: plane
 
     kn = 4.0_wp / 3.0_wp * estar
-    sn = 2.0_wp * estar
     st = 8.0_wp * 0.4_wp * estar
     zero = 0.0_wp
     mu = 0.5_wp
@@ -168,7 +167,7 @@ contains
         call pw_forces(1_ip, 1_ip, [1_ip], plane%n_tri, plane%n_tri, plane%n_wall, 1_ip, &
                        reshape([0.0_wp, 0.0_wp, z], [3, 1]), v(:, 1:1), w(:, 1:1), r(1:1), &
                        m(1:1), [1_ip], [1_ip, plane%n_tri + 1], wlist, plane%vert, plane%mat, &
-                       plane%wall, plane%wall_v, plane%wall_w, plane%wall_c, kn, sn, st, zero, &
+                       plane%wall, plane%wall_v, plane%wall_w, plane%wall_c, kn, st, zero, &
                        zero, mu, .false., .true., 0.0_wp, 0.0_wp, .true., none, zero, kc, dt, &
                        wtri, wxi, .false., 1_ip, load, ff, tt, overflow)
         fw = ff(:, 1)

@@ -133,8 +133,9 @@ contains
                                                  + (r(b) - shift * ov) * w(:, b), nrm)
                 xi = 0.0_wp
                 call hm_force(ov, nrm, vrel, r(a) * r(b) / (r(a) + r(b)), &
-                              m(a) * m(b) / (m(a) + m(b)), kn(1, 1), sn(1, 1), st(1, 1), &
-                              cn(1, 1), cn(1, 1), mu(1, 1), .false., .true., dt, xi, fn, ft)
+                              m(a) * m(b) / (m(a) + m(b)), kn(1, 1), st(1, 1), &
+                              cn(1, 1) * sqrt(sn(1, 1)), cn(1, 1) * sqrt(st(1, 1)), mu(1, 1), &
+                              .false., .true., dt, xi, fn, ft)
                 fo(:, a) = fo(:, a) + (-fn * nrm + ft)
                 contacts(a) = contacts(a) + 1
                 big(a) = max(big(a), maxval(abs(-fn * nrm + ft)))

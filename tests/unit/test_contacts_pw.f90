@@ -180,8 +180,8 @@ contains
         call pw_forces(1_ip, 1_ip, [1_ip], mm%n_tri, mm%n_tri, mm%n_wall, 2_ip, x, v, w, [r], &
                        [1.0e-3_wp], &
                        [1_ip], [1_ip, mm%n_tri + 1], wlist, mm%vert, mm%mat, mm%wall, &
-                       mm%wall_v, mm%wall_w, mm%wall_c, kn, &
-                       2.0_wp * estar + zero, st, zero, zero, mu, .false., .true., 0.0_wp, &
+                       mm%wall_v, mm%wall_w, mm%wall_c, kn, st, zero, zero, mu, .false., &
+                       .true., 0.0_wp, &
                        0.0_wp, .false., reshape([0_ip, 0_ip, 0_ip, 0_ip], [2, 2]), zero, &
                        zero, 1.0e-3_wp, stri, sxi, .true., 1_ip, load, fo, to, overflow)
         call assert_true(overflow == 0, 'no overflow')
