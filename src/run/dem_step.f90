@@ -245,15 +245,24 @@ contains
     end subroutine remove_outlet_particles
 
     !> A row of series.csv and probes.csv of the state now, which passes the energy guard
-    !> first (the particles that outlets took out removed).
+    !> first (state_checked).
     subroutine write_row(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        call state_checked(s, c, err)
+        if (.not. err%failed()) call write_series(s, c, s%run%out, err)
+    end subroutine write_row
+
+    !> The state an output writes, checked by the energy guard: the particles that outlets
+    !> took out removed first (they are parked with no inertia).
+    subroutine state_checked(s, c, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
         call settle_outlets(s, err)
         if (.not. err%failed()) call energy_guard(s, c, err)
-        if (.not. err%failed()) call write_series(s, c, s%run%out, err)
-    end subroutine write_row
+    end subroutine state_checked
 
     !> The outputs that fall due at this step (the same steps on every rank; an error in one,
     !> a rank's file, is shared by all ranks before the next collective), then run control:
@@ -278,8 +287,7 @@ contains
             end if
             if (written) then
                 if (.not. row) then           ! (a row has checked the state)
-                    call settle_outlets(s, err)      ! (the parked have no inertia)
-                    if (.not. err%failed()) call energy_guard(s, c, err)
+                    call state_checked(s, c, err)
                     if (failed_anywhere(s, err)) return
                 end if
                 call write_checkpoint(s, c, r%out, err)
