@@ -68,7 +68,7 @@ contains
         real(wp), intent(out) :: fn(m)                     !! normal forces [N]
         real(wp), intent(out) :: f1(m), f2(m), f3(m)       !! tangential forces [N]
         real(wp) :: root(max_lanes), q(max_lanes), t1(max_lanes), t2(max_lanes), &
-                    t3(max_lanes)
+                    t3(max_lanes), fs2(max_lanes), fmax(max_lanes)
         real(wp) :: vn, len_old, len_new, s, kt, ft2, ft_max, g
         integer(ip) :: l
 
@@ -90,26 +90,17 @@ contains
         if (keep_length) then
             do l = 1, m
                 len_old = x1(l) * x1(l) + x2(l) * x2(l) + x3(l) * x3(l)
-                if (len_old > 0.0_wp) then
-                    s = x1(l) * n1(l) + x2(l) * n2(l) + x3(l) * n3(l)
-                    x1(l) = x1(l) - s * n1(l)
-                    x2(l) = x2(l) - s * n2(l)
-                    x3(l) = x3(l) - s * n3(l)
-                    len_new = x1(l) * x1(l) + x2(l) * x2(l) + x3(l) * x3(l)
-                    if (len_new > 0.0_wp) then
-                        g = sqrt(len_old / len_new)
-                        x1(l) = x1(l) * g
-                        x2(l) = x2(l) * g
-                        x3(l) = x3(l) * g
-                    else
-                        x1(l) = 0.0_wp
-                        x2(l) = 0.0_wp
-                        x3(l) = 0.0_wp
-                    end if
-                end if
-                x1(l) = x1(l) + t1(l) * dt
-                x2(l) = x2(l) + t2(l) * dt
-                x3(l) = x3(l) + t3(l) * dt
+                s = x1(l) * n1(l) + x2(l) * n2(l) + x3(l) * n3(l)
+                x1(l) = x1(l) - s * n1(l)
+                x2(l) = x2(l) - s * n2(l)
+                x3(l) = x3(l) - s * n3(l)
+                len_new = x1(l) * x1(l) + x2(l) * x2(l) + x3(l) * x3(l)
+                ! (where x is 0 now, no spring or one along the normal, x g stays 0: the
+                ! max keeps g finite without a branch)
+                g = sqrt(len_old / max(len_new, tiny(1.0_wp)))
+                x1(l) = x1(l) * g + t1(l) * dt
+                x2(l) = x2(l) * g + t2(l) * dt
+                x3(l) = x3(l) * g + t3(l) * dt
             end do
         else
             do l = 1, m
@@ -123,7 +114,9 @@ contains
             end do
         end if
 
-        ! spring force, Coulomb limit: sliding rescales the spring to the limit, no damping
+        ! spring force with damping; where it exceeds the Coulomb limit (rarely), the spring
+        ! force alone is rescaled to the limit and the spring with it (in a loop of its own,
+        ! so that the first one has no branch and runs on vector registers)
         do l = 1, m
             kt = st(l) * root(l)
             f1(l) = -kt * x1(l)
@@ -131,19 +124,25 @@ contains
             f3(l) = -kt * x3(l)
             ft2 = f1(l) * f1(l) + f2(l) * f2(l) + f3(l) * f3(l)
             ft_max = mu(l) * abs(fn(l))
-            if (ft2 > ft_max**2) then
-                g = ft_max / sqrt(ft2)
+            ! the damping where ft2 <= ft_max^2, else none: times 1 or 0 (sign() of the
+            ! difference, exact, as a comparison would branch the loop)
+            g = gt(l) * q(l) * (0.5_wp + sign(0.5_wp, ft_max**2 - ft2))
+            f1(l) = f1(l) - g * t1(l)
+            f2(l) = f2(l) - g * t2(l)
+            f3(l) = f3(l) - g * t3(l)
+            fs2(l) = ft2
+            fmax(l) = ft_max
+        end do
+        do l = 1, m
+            if (fs2(l) > fmax(l)**2) then
+                g = fmax(l) / sqrt(fs2(l))
+                kt = st(l) * root(l)
                 f1(l) = f1(l) * g
                 f2(l) = f2(l) * g
                 f3(l) = f3(l) * g
                 x1(l) = -f1(l) / kt
                 x2(l) = -f2(l) / kt
                 x3(l) = -f3(l) / kt
-            else
-                g = gt(l) * q(l)
-                f1(l) = f1(l) - g * t1(l)
-                f2(l) = f2(l) - g * t2(l)
-                f3(l) = f3(l) - g * t3(l)
             end if
         end do
     end subroutine hm_lanes
