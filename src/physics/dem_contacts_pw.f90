@@ -180,9 +180,12 @@ contains
     !> contact point go to wload, beside its slot of wtri. With `extra`, the rolling torque
     !> and the sJKR force of the pair's model follow (as in pp_forces; R* = R, the wall's
     !> rotation taken from the particle's); the EPSD2 spring of slot s is
-    !> wxi(:, max_wall_contacts + s).
+    !> wxi(:, max_wall_contacts + s). A candidate triangle whose slack (dem_neighbors) is more
+    !> than the particle and the walls have moved since the lists' build cannot touch the
+    !> particle and is not tested.
     subroutine pw_forces(n_own, n_row, row, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, &
-                         mat, wstart, wlist, vert, tmat, twall, wall_v, wall_w, wall_c, kn, st, &
+                         mat, wstart, wlist, x_ref, wslack, wmove, vert, tmat, twall, wall_v, &
+                         wall_w, wall_c, kn, st, &
                          gn, gt, mu, clamp_normal, keep_length, shift_v, shift_t, extra, &
                          rmodel, mur, kcoh, dt, wtri, wxi, record, n_load, wload, f, t, overflow)
         integer(ip), intent(in) :: n_own, n_cand, n_tri, n_wall, nm
@@ -192,6 +195,9 @@ contains
         real(wp), intent(in) :: radius(n_own), mass(n_own)             !! [m], [kg]
         integer(ip), intent(in) :: mat(n_own)
         integer(ip), intent(in) :: wstart(n_own + 1), wlist(n_cand)    !! candidate triangles
+        real(wp), intent(in) :: x_ref(3, n_own)   !! positions at the lists' build [m]
+        real(wp), intent(in) :: wslack(n_cand)    !! the candidates' slack [m] (dem_neighbors)
+        real(wp), intent(in) :: wmove             !! how far the walls have moved since [m]
         real(wp), intent(in) :: vert(3, 3, n_tri)                      !! [m]
         integer(ip), intent(in) :: tmat(n_tri)                         !! material of a triangle
         integer(ip), intent(in) :: twall(n_tri)                        !! wall of a triangle
@@ -220,7 +226,7 @@ contains
         integer(ip) :: slot(max_wall_candidates)
         real(wp) :: q(3, max_wall_candidates), qk(3)
         real(wp) :: cv(3, 3, max_wall_candidates), new_xi(3, max_wall_contacts)
-        real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r, tol, &
+        real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r, tol, moved, &
                     ws(3), d(3), lever, tr(3), xr(3), new_xr(3, max_wall_contacts)
         logical :: keep(max_wall_candidates), many, over, spring
 
@@ -228,7 +234,8 @@ contains
         spring = n_wall_columns > max_wall_contacts   ! the slots' EPSD2 springs after theirs
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
         !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk) &
-        !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, tol, keep, slot) &
+        !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, tol, moved, keep) &
+        !$acc private(slot) &
         !$acc private(many, over, i, wl, ws, d, lever, tr, xr, new_xr) firstprivate(spring)
         do kr = 1, n_row
             i = row(kr)
@@ -236,7 +243,11 @@ contains
             tol = 1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
             nc = 0
             many = .false.
+            ! candidates with more slack than that cannot touch: not tested
+            moved = sqrt((x(1, i) - x_ref(1, i))**2 + (x(2, i) - x_ref(2, i))**2 &
+                         + (x(3, i) - x_ref(3, i))**2) + wmove
             do k = wstart(i), wstart(i + 1) - 1
+                if (wslack(k) > moved) cycle
                 tri = wlist(k)
                 call closest_point_triangle(x(:, i), vert(:, 1, tri), vert(:, 2, tri), &
                                             vert(:, 3, tri), qk, fk)

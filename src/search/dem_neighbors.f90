@@ -23,7 +23,7 @@ module dem_neighbors
               neighbors_history, neighbors_set_history, neighbors_row_history, &
               neighbors_set_rows, fit_grid, neighbors_data, &
               neighbors_free, neighbors_moved, grid_t, grid_shape, grid_fill, cell_of, &
-              neighbors_entry_history
+              neighbors_entry_history, neighbors_wall_motion
 
     !> The lists, their pairs (each once; their history is in dem_contact_store, numbered
     !> as they are) and the positions they were built at.
@@ -49,6 +49,9 @@ module dem_neighbors
                                               !< particles' sums, zero between steps
         integer(ip), allocatable :: wstart(:) !< wall row i is wstart(i):wstart(i+1)-1
         integer(ip), allocatable :: wlist(:)  !< candidate triangle
+        real(wp), allocatable :: wslack(:)    !< how far the particle and the walls may move
+                                              !< (together) before candidate wlist(k) can
+                                              !< touch it; <= 0: it may touch now [m]
         integer(ip) :: n_wrow = 0             !< particles the wall kernel visits:
         integer(ip), allocatable :: wrow(:)   !< those with candidates or wall history
         real(wp), allocatable :: x_ref(:, :)  !< positions at the last build [m]
@@ -67,6 +70,9 @@ module dem_neighbors
     !> candidate triangles of a particle kept from the counting search of a wall-list build;
     !> the rows with more are searched again to be filled
     integer(ip), parameter :: kept_rows = 8
+    !> partners of a particle kept from the counting search of a pair-list build (a row in a
+    !> dense packing with a skin of 0.4 R has about 10), the same way
+    integer(ip), parameter :: kept_partners = 16
 
 contains
 
@@ -84,6 +90,15 @@ contains
         if (stale .or. .not. mesh%moving) return
         stale = max_displacement2(3 * mesh%n_tri, mesh%vert, nb%vert_ref) > (0.5_wp * nb%skin)**2
     end function neighbors_stale
+
+    !> The farthest any vertex of a moving wall has moved since the last build (0 when no
+    !> wall moves) [m]: as the walls move rigidly, no point of a triangle has moved farther.
+    real(wp) function neighbors_wall_motion(nb, mesh) result(d)
+        type(neighbors_t), intent(in) :: nb
+        type(mesh_t), intent(in) :: mesh
+        d = 0.0_wp
+        if (mesh%moving) d = sqrt(max_displacement2(3 * mesh%n_tri, mesh%vert, nb%vert_ref))
+    end function neighbors_wall_motion
 
     !> The flagged particles' reference positions set to where they are now (particles moved
     !> on purpose, which need no rebuild: parked ones).
@@ -199,7 +214,7 @@ contains
         integer(ip), intent(in), optional :: old_index(:)
         integer(ip), allocatable :: old_start(:), same(:), level(:), cell(:), gstart(:), &
                                     gitem(:), cnt(:), n_of(:, :), off(:), pstart(:)
-        integer(ip), allocatable :: old_pref(:), found(:), cstart(:)
+        integer(ip), allocatable :: old_pref(:), kept(:, :)
         integer(i8), allocatable :: old_partner(:)
         real(wp), allocatable :: old_xi(:, :), rmax(:), origin(:, :), h(:)
         real(wp) :: lo(3), hi(3), margin
@@ -262,21 +277,14 @@ contains
         call grid_cells(n_all, n_levels, x, level, origin, h, n_of, off, cell)
         call bin_items(n_all, n_cells, cell, gstart, gitem, cnt)
 
-        ! particle pairs within R_i + R_j + skin: the candidates of each row counted from
-        ! the cells' counts (a bound), the pairs found into rows of that size, then packed
-        ! into nb%list and each row ordered by id
+        ! particle pairs within R_i + R_j + skin: counted, the first kept_partners of each
+        ! row kept; then the rows filled, from what was kept or, for the longer rows, by a
+        ! second search; then each row ordered by id
+        allocate(kept(kept_partners, max(1, n_own)))
+        call acc_data(kept, acc_create)
         call pair_rows(.false., n_own, n_all, n_levels, x, radius, nb%skin, rmax, origin, h, &
-                       n_of, off, n_cells, gstart, gitem, nb%start, size(cnt, kind=ip), cnt, cnt)
-        call prefix_sum(n_own, cnt, nb%start)
-        call acc_data(nb%start(n_own + 1:n_own + 1), acc_to_host)
-        allocate(found(max(1, nb%start(n_own + 1) - 1)))
-        call acc_data(found, acc_create)
-        call pair_rows(.true., n_own, n_all, n_levels, x, radius, nb%skin, rmax, origin, h, &
-                       n_of, off, n_cells, gstart, gitem, nb%start, size(found, kind=ip), found, &
-                       cnt)
-        allocate(cstart(n_own + 1))
-        call acc_data(cstart, acc_create)
-        call copy_range(n_own + 1, nb%start, cstart)
+                       n_of, off, n_cells, gstart, gitem, nb%start, kept_partners, kept, &
+                       size(cnt, kind=ip), cnt)
         call prefix_sum(n_own, cnt, nb%start)
         call acc_data(nb%start(n_own + 1:n_own + 1), acc_to_host)
         n_entries = nb%start(n_own + 1) - 1
@@ -286,9 +294,11 @@ contains
         call acc_data(nb%partner, acc_create)
         call acc_data(nb%mirror, acc_create)
         call acc_data(nb%pref, acc_create)
-        call pack_rows(n_own, size(found, kind=ip), n_entries, cstart, found, nb%start, nb%list)
-        call acc_data(cstart, acc_exit)
-        call acc_data(found, acc_exit)
+        call copy_kept_rows(n_own, kept_partners, kept, nb%start, n_entries, nb%list)
+        call pair_rows(.true., n_own, n_all, n_levels, x, radius, nb%skin, rmax, origin, h, &
+                       n_of, off, n_cells, gstart, gitem, nb%start, kept_partners, kept, &
+                       n_entries, nb%list)
+        call acc_data(kept, acc_exit)
         call pair_partners(n_own, n_all, n_entries, gid, nb%start, nb%list, nb%partner, &
                            nb%mirror)
 
@@ -436,24 +446,28 @@ contains
     end subroutine grid_cells
 
     !> The partners of each owned particle i (within R_i + R_j + skin) from the cells of
-    !> every level's grid its reach covers. Without `fill`, out(i) = the particles in those
-    !> cells (a bound of its partners, found without a distance); with `fill`, the partners
-    !> into out(start(i):), their number into cnt(i).
+    !> every level's grid its reach covers. Without `fill`, their number into out(i) and the
+    !> first n_kept of them into kept(:, i); with `fill`, the partners of the rows longer than
+    !> that into out(start(i):start(i + 1) - 1) (the others are copied from kept).
     subroutine pair_rows(fill, n_own, n_all, n_levels, x, radius, skin, rmax, origin, h, n_of, &
-                         off, n_cells, gstart, gitem, start, n_out, out, cnt)
+                         off, n_cells, gstart, gitem, start, n_kept, kept, n_out, out)
         logical, intent(in) :: fill
-        integer(ip), intent(in) :: n_own, n_all, n_levels, n_cells, n_out
+        integer(ip), intent(in) :: n_own, n_all, n_levels, n_cells, n_kept, n_out
         real(wp), intent(in) :: x(3, n_all), radius(n_all), skin
         real(wp), intent(in) :: rmax(0:n_levels - 1), origin(3, 0:n_levels - 1), &
                                 h(0:n_levels - 1)
         integer(ip), intent(in) :: n_of(3, 0:n_levels - 1), off(0:n_levels - 1)
         integer(ip), intent(in) :: gstart(n_cells + 1), gitem(max(1, n_all)), start(n_own + 1)
-        integer(ip), intent(inout) :: out(n_out), cnt(:)
+        integer(ip), intent(inout) :: kept(n_kept, max(1, n_own))
+        integer(ip), intent(inout) :: out(n_out)
         integer(ip) :: i, j, k, l, m, cy, cz, c0(3), c1(3), c(3), cell, last
         real(wp) :: reach, lo(3), hi(3)
         !$acc parallel loop gang vector default(present) copyin(rmax, origin, h, n_of, off) &
         !$acc private(j, k, l, m, cy, cz, c0, c1, c, cell, last, reach, lo, hi)
         do i = 1, n_own
+            if (fill) then
+                if (start(i + 1) - start(i) <= n_kept) cycle     ! (copied from kept)
+            end if
             k = 0
             do l = 0, n_levels - 1
                 if (rmax(l) == 0.0_wp) cycle
@@ -471,55 +485,25 @@ contains
                         c(3) = cz
                         cell = off(l) + cell_number(c, n_of(:, l))
                         last = cell + c1(1) - c0(1)
-                        if (.not. fill) then
-                            k = k + gstart(last + 1) - gstart(cell)
-                            cycle
-                        end if
                         do m = gstart(cell), gstart(last + 1) - 1
                             j = gitem(m)
                             if (j == i) cycle
                             if ((x(1, j) - x(1, i))**2 + (x(2, j) - x(2, i))**2 &
                                 + (x(3, j) - x(3, i))**2 &
                                 >= (radius(i) + radius(j) + skin)**2) cycle
-                            out(start(i) + k) = j
+                            if (fill) then
+                                out(start(i) + k) = j
+                            else if (k < n_kept) then
+                                kept(k + 1, i) = j
+                            end if
                             k = k + 1
                         end do
                     end do
                 end do
             end do
-            if (fill) then
-                cnt(i) = k
-            else
-                out(i) = k
-            end if
+            if (.not. fill) out(i) = k
         end do
     end subroutine pair_rows
-
-    !> The rows found(from(i):from(i) + n_i - 1), n_i = to(i + 1) - to(i), packed into
-    !> list(to(i):to(i + 1) - 1).
-    subroutine pack_rows(n_own, n_found, n_list, from, found, to, list)
-        integer(ip), intent(in) :: n_own, n_found, n_list
-        integer(ip), intent(in) :: from(n_own + 1), found(n_found), to(n_own + 1)
-        integer(ip), intent(inout) :: list(n_list)
-        integer(ip) :: i, k
-        !$acc parallel loop gang vector default(present) private(k)
-        do i = 1, n_own
-            do k = 0, to(i + 1) - to(i) - 1
-                list(to(i) + k) = found(from(i) + k)
-            end do
-        end do
-    end subroutine pack_rows
-
-    !> b(1:n) = a(1:n).
-    subroutine copy_range(n, a, b)
-        integer(ip), intent(in) :: n, a(n)
-        integer(ip), intent(inout) :: b(n)
-        integer(ip) :: k
-        !$acc parallel loop gang vector default(present)
-        do k = 1, n
-            b(k) = a(k)
-        end do
-    end subroutine copy_range
 
     !> Each row ordered by the partners' global ids (insertion sort: rows are short), the
     !> partners' ids, and the mirror entries: the partner's entry for the same pair (a binary
@@ -633,8 +617,9 @@ contains
 
         n_tri = mesh%n_tri
         if (n_tri == 0) then
-            allocate(nb%wlist(0))
+            allocate(nb%wlist(0), nb%wslack(0))
             call acc_data(nb%wlist, acc_create)
+            call acc_data(nb%wslack, acc_create)
             call fill_range(n_own + 1, nb%wstart, 1, 0)
             return
         end if
@@ -672,12 +657,15 @@ contains
         call prefix_sum(n_own, cnt, nb%wstart)
         call acc_data(nb%wstart(n_own + 1:n_own + 1), acc_to_host)
         n_found = nb%wstart(n_own + 1) - 1
-        allocate(nb%wlist(n_found))
+        allocate(nb%wlist(n_found), nb%wslack(n_found))
         call acc_data(nb%wlist, acc_create)
+        call acc_data(nb%wslack, acc_create)
         call copy_kept_rows(n_own, kept_rows, kept, nb%wstart, n_found, nb%wlist)
         call wall_rows(.true., n_own, n_all, n_tri, n_e, product(n), x, radius, nb%skin, lo, &
                        hh, n, mesh%vert, box, etri, gstart, gitem, nb%wstart, kept_rows, &
                        kept, n_found, nb%wlist, nb%tri_tests)
+        call wall_slack(n_own, n_all, n_tri, n_found, x, radius, mesh%vert, nb%wstart, &
+                        nb%wlist, nb%wslack)
         call acc_data(kept, acc_exit)
         call acc_data(cnt, acc_exit)
         call acc_data(gstart, acc_exit)
@@ -856,7 +844,7 @@ contains
         end do
     end subroutine wall_rows
 
-    !> The rows of at most n_kept triangles, from kept(:, i) into out(start(i):start(i + 1) - 1).
+    !> The rows of at most n_kept entries, from kept(:, i) into out(start(i):start(i + 1) - 1).
     subroutine copy_kept_rows(n_own, n_kept, kept, start, n_out, out)
         integer(ip), intent(in) :: n_own, n_kept, kept(n_kept, max(1, n_own)), start(n_own + 1)
         integer(ip), intent(in) :: n_out
@@ -871,6 +859,31 @@ contains
         end do
     end subroutine copy_kept_rows
 
+    !> The slack of each candidate triangle of each row: its distance from the particle now
+    !> (at the build) less R_i, less a margin of 1e-6 max(R_i, |x_i|) far above the rounding
+    !> of either distance; while the particle and the walls have moved less than that since
+    !> (|x_i - x_ref_i| + neighbors_wall_motion), the triangle cannot touch the particle and
+    !> the wall kernel need not test it (doc/theory.md, section 9).
+    subroutine wall_slack(n_own, n_all, n_tri, n_cand, x, radius, vert, wstart, wlist, slack)
+        integer(ip), intent(in) :: n_own, n_all, n_tri, n_cand
+        real(wp), intent(in) :: x(3, n_all), radius(n_all), vert(3, 3, n_tri)
+        integer(ip), intent(in) :: wstart(n_own + 1), wlist(n_cand)
+        real(wp), intent(inout) :: slack(n_cand)
+        integer(ip) :: i, k, t, feature
+        real(wp) :: q(3), margin
+        !$acc parallel loop gang vector default(present) private(k, t, feature, q, margin)
+        do i = 1, n_own
+            margin = 1.0e-6_wp * max(radius(i), abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
+            do k = wstart(i), wstart(i + 1) - 1
+                t = wlist(k)
+                call closest_point_triangle(x(:, i), vert(:, 1, t), vert(:, 2, t), &
+                                            vert(:, 3, t), q, feature)
+                slack(k) = sqrt((q(1) - x(1, i))**2 + (q(2) - x(2, i))**2 &
+                                + (q(3) - x(3, i))**2) - radius(i) - margin
+            end do
+        end do
+    end subroutine wall_slack
+
     !> One operation of dem_acc on the lists: acc_to_host brings what the host reads (rows,
     !> partners, history, contacts); acc_exit (and the others) acts on every array allocated.
     subroutine neighbors_data(nb, op)
@@ -884,6 +897,7 @@ contains
         if (allocated(nb%wstart)) call acc_data(nb%wstart, op)
         if (allocated(nb%wlist)) call acc_data(nb%wlist, op)
         if (op == acc_to_host) return
+        if (allocated(nb%wslack)) call acc_data(nb%wslack, op)
         if (allocated(nb%wrow)) call acc_data(nb%wrow, op)
         if (allocated(nb%pair)) call acc_data(nb%pair, op)
         if (allocated(nb%scale)) call acc_data(nb%scale, op)

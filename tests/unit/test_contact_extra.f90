@@ -166,7 +166,9 @@ contains
         tt = 0.0_wp
         call pw_forces(1_ip, 1_ip, [1_ip], plane%n_tri, plane%n_tri, plane%n_wall, 1_ip, &
                        reshape([0.0_wp, 0.0_wp, z], [3, 1]), v(:, 1:1), w(:, 1:1), r(1:1), &
-                       m(1:1), [1_ip], [1_ip, plane%n_tri + 1], wlist, plane%vert, plane%mat, &
+                       m(1:1), [1_ip], [1_ip, plane%n_tri + 1], wlist, &
+                       reshape([0.0_wp, 0.0_wp, z], [3, 1]), spread(-1.0_wp, 1, plane%n_tri), &
+                       0.0_wp, plane%vert, plane%mat, &
                        plane%wall, plane%wall_v, plane%wall_w, plane%wall_c, kn, st, zero, &
                        zero, mu, .false., .true., 0.0_wp, 0.0_wp, .true., none, zero, kc, dt, &
                        wtri, wxi, .false., 1_ip, load, ff, tt, overflow)

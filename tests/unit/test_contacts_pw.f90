@@ -179,7 +179,8 @@ contains
         to = 0.0_wp
         call pw_forces(1_ip, 1_ip, [1_ip], mm%n_tri, mm%n_tri, mm%n_wall, 2_ip, x, v, w, [r], &
                        [1.0e-3_wp], &
-                       [1_ip], [1_ip, mm%n_tri + 1], wlist, mm%vert, mm%mat, mm%wall, &
+                       [1_ip], [1_ip, mm%n_tri + 1], wlist, x, spread(-1.0_wp, 1, mm%n_tri), &
+                       0.0_wp, mm%vert, mm%mat, mm%wall, &
                        mm%wall_v, mm%wall_w, mm%wall_c, kn, st, zero, zero, mu, .false., &
                        .true., 0.0_wp, &
                        0.0_wp, .false., reshape([0_ip, 0_ip, 0_ip, 0_ip], [2, 2]), zero, &

@@ -1,7 +1,8 @@
 !> Verlet lists against brute force for random polydisperse spheres (size ratios 1 to 20),
 !> near the edges of the domain too: every pair within R_i + R_j + skin is listed in both
 !> rows and no other, rows ordered by partner id; the wall list holds exactly the triangles
-!> within R_i + skin, found with far fewer tests than particles x triangles; the tangential
+!> within R_i + skin, found with far fewer tests than particles x triangles, each with a
+!> slack that the particle can move towards it without touching it; the tangential
 !> history of pairs still listed survives a rebuild and a spatial re-sort of the particles;
 !> the rebuild criterion is skin/2. The rows of history a migrating particle takes along
 !> hold each of its pairs with history once, seen from its side (the lower id's value, negated
@@ -21,7 +22,7 @@ program test_neighbors
     type(neighbors_t) :: nb
     type(contact_store_t) :: cs
     type(mesh_t) :: m
-    real(wp) :: x(3, n), r(n), u, ratio, q(3), hk(3)
+    real(wp) :: x(3, n), r(n), u, ratio, q(3), hk(3), gap, xm(3)
     integer(i8) :: gid(n)
     integer(ip) :: i, j, k, found, case_no, t, feature, order(n)
     integer(ip), allocatable :: expected(:), kept(:)
@@ -67,8 +68,23 @@ program test_neighbors
             expected = pack([(t, t = 1, m%n_tri)], [(near(t, i), t = 1, m%n_tri)])
             ok = ok .and. size(expected) == nb%wstart(i + 1) - nb%wstart(i)
             if (ok) ok = all(expected == nb%wlist(nb%wstart(i):nb%wstart(i + 1) - 1))
+            ! a candidate's slack: moved (nearly) that far straight at the triangle, the
+            ! particle does not touch it yet; the slack is the gap, less at most 1e-6
+            do k = nb%wstart(i), nb%wstart(i + 1) - 1
+                t = nb%wlist(k)
+                call closest_point_triangle(x(:, i), m%vert(:, 1, t), m%vert(:, 2, t), &
+                                            m%vert(:, 3, t), q, feature)
+                gap = norm2(q - x(:, i)) - r(i)
+                ok = ok .and. nb%wslack(k) <= gap .and. nb%wslack(k) > gap - 1.0e-6_wp
+                if (nb%wslack(k) <= 0.0_wp) cycle
+                xm = x(:, i) + 0.999999_wp * nb%wslack(k) * (q - x(:, i)) / norm2(q - x(:, i))
+                call closest_point_triangle(xm, m%vert(:, 1, t), m%vert(:, 2, t), &
+                                            m%vert(:, 3, t), q, feature)
+                ok = ok .and. norm2(q - xm) > r(i)
+            end do
         end do
-        call assert_true(ok, 'lists equal brute force, rows ordered by partner id')
+        call assert_true(ok, 'lists equal brute force, rows ordered by partner id; a wall &
+                         &candidate cannot touch before the particle moves its slack')
         call assert_true(nb%tri_tests < n * m%n_tri / 100, 'wall search tests few triangles')
         call assert_true(all(nb%partner == gid(nb%list)), 'partners carry global ids')
 
