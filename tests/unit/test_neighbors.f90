@@ -7,13 +7,14 @@
 !> the rebuild criterion is skin/2. The rows of history a migrating particle takes along
 !> hold each of its pairs with history once, seen from its side (the lower id's value, negated
 !> in the higher id's row, never the stale entry of the side that does not evaluate), ordered
-!> by partner id, and a build from them gives both sides of each pair their values back.
+!> by partner id, and a build from them gives both sides of each pair their values back. No
+!> point of a turning, moving wall moves farther than neighbors_wall_motion says.
 program test_neighbors
     use dem_kinds, only: wp, ip, i8
-    use dem_mesh, only: mesh_t, mesh_add_plane
+    use dem_mesh, only: mesh_t, mesh_add_plane, mesh_set_motion, mesh_move
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
                              neighbors_spatial_order, neighbors_row_history, neighbors_set_rows, &
-                             neighbors_entry_history
+                             neighbors_entry_history, neighbors_wall_motion
     use dem_contact_store, only: contact_store_t, store_init
     use dem_mesh, only: closest_point_triangle
     use dem_assert, only: assert_true, assert_finish
@@ -21,7 +22,10 @@ program test_neighbors
     integer(ip), parameter :: n = 300
     type(neighbors_t) :: nb
     type(contact_store_t) :: cs
-    type(mesh_t) :: m
+    type(mesh_t) :: m, mv, ref
+    type(neighbors_t) :: nb2
+    type(contact_store_t) :: cs2
+    real(wp) :: dmove, bary(3)
     real(wp) :: x(3, n), r(n), u, ratio, q(3), hk(3), gap, xm(3)
     integer(i8) :: gid(n)
     integer(ip) :: i, j, k, found, case_no, t, feature, order(n)
@@ -199,6 +203,30 @@ program test_neighbors
         end do
     end do
     call assert_true(ok, 'a build from rows of history gives both sides their values')
+
+    ! a wall that turns and moves: since the build no point of its triangles has moved
+    ! farther than neighbors_wall_motion, the bound the slack is compared with
+    mv = m
+    call mesh_set_motion(mv, 2_ip, [0.1_wp, -0.2_wp, 0.05_wp], [0.0_wp, 1.0_wp], &
+                         [0.3_wp, 1.0_wp, 0.2_wp], [0.7_wp, 0.2_wp, 0.4_wp], 2.0_wp, &
+                         [0.0_wp, 1.0_wp])
+    call store_init(cs2, n)
+    nb2 = neighbors_t(skin=0.004_wp)
+    call neighbors_build(nb2, cs2, n, n, gid, x, r, mv)
+    ref = mv
+    ok = neighbors_wall_motion(nb2, mv) == 0.0_wp
+    call mesh_move(mv, 0.01_wp)
+    dmove = neighbors_wall_motion(nb2, mv)
+    ok = ok .and. dmove > 0.0_wp
+    do t = 1, mv%n_tri
+        do k = 1, 20               ! points of the triangle, from barycentric coordinates
+            call random_number(bary)
+            bary = bary / sum(bary)
+            ok = ok .and. norm2(matmul(mv%vert(:, :, t) - ref%vert(:, :, t), bary)) &
+                          <= dmove * (1.0_wp + 1.0e-12_wp)
+        end do
+    end do
+    call assert_true(ok, 'no point of a moving wall moves farther than neighbors_wall_motion')
     call assert_finish()
 
 contains
