@@ -50,11 +50,10 @@ module dem_materials
     type :: pair_constants_t
         real(wp), allocatable :: kn(:, :)     !< (4/3) E* [Pa]
         real(wp), allocatable :: st(:, :)     !< 8 G* times the stiffness factor [Pa]
-        real(wp), allocatable :: cn(:, :)     !< -2 sqrt(5/6) beta (>= 0) [-]
-        real(wp), allocatable :: ct(:, :)     !< cn, or 0 without tangential damping [-]
         real(wp), allocatable :: mu(:, :)     !< sliding friction [-]
-        !> the damping factors of the kernels, cn sqrt(2 E*) and ct sqrt(st): a contact's
-        !> damping coefficients are gn sqrt(m* sqrt(R* d)) and gt sqrt(m* sqrt(R* d))
+        !> the damping factors of the kernels, cn sqrt(2 E*) and ct sqrt(st), with
+        !> cn = -2 sqrt(5/6) beta (>= 0) and ct = cn, or 0 without tangential damping: a
+        !> contact's damping coefficients are gn sqrt(m* sqrt(R* d)) and gt sqrt(m* sqrt(R* d))
         real(wp), allocatable :: gn(:, :), gt(:, :)   !< [Pa^(1/2)]
         type(contact_options_t) :: opts       !< the variant's switches, for the kernels
         !> rolling resistance and cohesion (doc/theory.md, section 15): whether any pair has
@@ -108,13 +107,11 @@ contains
         type(contact_options_t), intent(in) :: opts
         type(pair_constants_t), intent(out) :: pc
         integer(ip) :: a, b, n
-        real(wp) :: estar, gstar
+        real(wp) :: estar, gstar, cn, ct
         n = mats%n
-        allocate(pc%kn(n, n), pc%st(n, n), pc%cn(n, n), pc%ct(n, n), pc%mu(n, n))
+        allocate(pc%kn(n, n), pc%st(n, n), pc%mu(n, n))
         pc%kn = 0.0_wp
         pc%st = 0.0_wp
-        pc%cn = 0.0_wp
-        pc%ct = 0.0_wp
         pc%mu = 0.0_wp
         allocate(pc%gn(n, n), pc%gt(n, n))
         pc%gn = 0.0_wp
@@ -131,11 +128,10 @@ contains
                 call effective_moduli(mats, a, b, estar, gstar)
                 pc%kn(a, b) = 4.0_wp / 3.0_wp * estar
                 pc%st(a, b) = 8.0_wp * gstar * opts%tangential_stiffness_factor
-                pc%cn(a, b) = -2.0_wp * sqrt(5.0_wp / 6.0_wp) &
-                              * damping_ratio(mats%restitution(a, b))
-                if (opts%tangential_damping) pc%ct(a, b) = pc%cn(a, b)
-                pc%gn(a, b) = pc%cn(a, b) * sqrt(2.0_wp * estar)
-                pc%gt(a, b) = pc%ct(a, b) * sqrt(pc%st(a, b))
+                cn = -2.0_wp * sqrt(5.0_wp / 6.0_wp) * damping_ratio(mats%restitution(a, b))
+                ct = merge(cn, 0.0_wp, opts%tangential_damping)
+                pc%gn(a, b) = cn * sqrt(2.0_wp * estar)
+                pc%gt(a, b) = ct * sqrt(pc%st(a, b))
                 pc%mu(a, b) = mats%friction(a, b)
                 if (allocated(mats%rolling_model)) then
                     if (mats%rolling_friction(a, b) > 0.0_wp) then
