@@ -13,7 +13,7 @@ module dem_rebuild
                              particles_reserve_on_device
     use dem_domain, only: domain_init, domain_data, domain_balance, domain_imbalance, &
                           domain_migrate, domain_ghosts, domain_update
-    use dem_neighbors, only: neighbors_build, neighbors_stale, neighbors_spatial_order, &
+    use dem_neighbors, only: neighbors_build, neighbors_check, neighbors_spatial_order, &
                              neighbors_row_history, neighbors_set_rows
     use dem_contact_store, only: store_walls_permute, store_pairs_forget_parted, &
                                  store_walls_reserve_on_device
@@ -46,7 +46,7 @@ contains
         type(error_t), intent(inout) :: err
         logical :: stale
         if (s%dom%pb%on) call periodic_wrap(s%dom%pb, s%p%n_own, .false., s%p%x)
-        stale = neighbors_stale(s%nb, s%p%n_own, s%p%x, s%mesh)
+        call neighbors_check(s%nb, s%p%n_own, s%p%x, s%mesh, stale)
         if (s%comm%size > 1) stale = comm_any(s%comm, stale)
         if (stale) then
             call rebuild(s, s%parked > 0, err)

@@ -19,7 +19,7 @@ module dem_step
     use dem_mesh, only: mesh_move
     use dem_outlets, only: outlets_mark
     use dem_particles, only: particles_park
-    use dem_neighbors, only: neighbors_moved, neighbors_wall_motion
+    use dem_neighbors, only: neighbors_moved
     use dem_diagnostics, only: count_unstable
     use dem_run_output, only: write_series, write_trace, write_snapshot, write_checkpoint
     use dem_run_control, only: run_control, progress, energy_guard, unstable
@@ -170,7 +170,7 @@ contains
                    n => s%p%n_own)
             call pw_forces(n, nb%n_wrow, nb%wrow, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, &
                            p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%wstart, nb%wlist, &
-                           nb%x_ref, nb%wslack, neighbors_wall_motion(nb, m), m%vert, m%mat, &
+                           nb%x_ref, nb%wslack, nb%wall_moved, m%vert, m%mat, &
                            m%wall, m%wall_v, m%wall_w, m%wall_c, pc%kn, pc%st, pc%gn, &
                            pc%gt, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, &
                            o%shift_t, pc%rolling .or. pc%cohesion, pc%rmodel, pc%mur, pc%kcoh, &

@@ -19,11 +19,11 @@ module dem_neighbors
                                  history_counts, history_fill, side_history, sort_history_row
     implicit none
     private
-    public :: neighbors_t, neighbors_build, neighbors_stale, neighbors_spatial_order, &
+    public :: neighbors_t, neighbors_build, neighbors_check, neighbors_spatial_order, &
               neighbors_history, neighbors_set_history, neighbors_row_history, &
               neighbors_set_rows, fit_grid, neighbors_data, &
               neighbors_free, neighbors_moved, grid_t, grid_shape, grid_fill, cell_of, &
-              neighbors_entry_history, neighbors_wall_motion
+              neighbors_entry_history
 
     !> The lists, their pairs (each once; their history is in dem_contact_store, numbered
     !> as they are) and the positions they were built at.
@@ -56,6 +56,8 @@ module dem_neighbors
         integer(ip), allocatable :: wrow(:)   !< those with candidates or wall history
         real(wp), allocatable :: x_ref(:, :)  !< positions at the last build [m]
         real(wp), allocatable :: vert_ref(:, :, :)  !< moving walls' vertices then [m]
+        real(wp) :: wall_moved = 0.0_wp       !< how far they had moved at the last
+                                              !< neighbors_check [m]
     end type neighbors_t
 
     !> A uniform grid over a box, with the items of each cell (compressed rows).
@@ -76,29 +78,27 @@ module dem_neighbors
 
 contains
 
-    !> True when some owned particle, or some vertex of a moving wall, moved more than skin/2
-    !> since the last build (together they close by at most the skin).
-    logical function neighbors_stale(nb, n, x, mesh) result(stale)
-        type(neighbors_t), intent(in) :: nb
+    !> `stale` when some owned particle, or some vertex of a moving wall, moved more than
+    !> skin/2 since the last build (together they close by at most the skin); the farthest a
+    !> vertex moved is kept in nb%wall_moved (as the walls move rigidly, no point of a
+    !> triangle has moved farther), for the wall kernel's slack.
+    subroutine neighbors_check(nb, n, x, mesh, stale)
+        type(neighbors_t), intent(inout) :: nb
         integer(ip), intent(in) :: n        !! owned particles
         real(wp), intent(in) :: x(:, :)     !! positions [m]
         type(mesh_t), intent(in) :: mesh
+        logical, intent(out) :: stale
+        real(wp) :: d2
         stale = .true.
+        nb%wall_moved = 0.0_wp
         if (.not. allocated(nb%x_ref)) return
         if (size(nb%x_ref, 2) /= n) return
-        stale = max_displacement2(n, x, nb%x_ref) > (0.5_wp * nb%skin)**2
-        if (stale .or. .not. mesh%moving) return
-        stale = max_displacement2(3 * mesh%n_tri, mesh%vert, nb%vert_ref) > (0.5_wp * nb%skin)**2
-    end function neighbors_stale
-
-    !> The farthest any vertex of a moving wall has moved since the last build (0 when no
-    !> wall moves) [m]: as the walls move rigidly, no point of a triangle has moved farther.
-    real(wp) function neighbors_wall_motion(nb, mesh) result(d)
-        type(neighbors_t), intent(in) :: nb
-        type(mesh_t), intent(in) :: mesh
-        d = 0.0_wp
-        if (mesh%moving) d = sqrt(max_displacement2(3 * mesh%n_tri, mesh%vert, nb%vert_ref))
-    end function neighbors_wall_motion
+        d2 = 0.0_wp
+        if (mesh%moving) d2 = max_displacement2(3 * mesh%n_tri, mesh%vert, nb%vert_ref)
+        nb%wall_moved = sqrt(d2)
+        stale = max_displacement2(n, x, nb%x_ref) > (0.5_wp * nb%skin)**2 &
+                .or. d2 > (0.5_wp * nb%skin)**2
+    end subroutine neighbors_check
 
     !> The flagged particles' reference positions set to where they are now (particles moved
     !> on purpose, which need no rebuild: parked ones).
@@ -862,7 +862,7 @@ contains
     !> The slack of each candidate triangle of each row: its distance from the particle now
     !> (at the build) less R_i, less a margin of 1e-6 max(R_i, |x_i|) far above the rounding
     !> of either distance; while the particle and the walls have moved less than that since
-    !> (|x_i - x_ref_i| + neighbors_wall_motion), the triangle cannot touch the particle and
+    !> (|x_i - x_ref_i| + nb%wall_moved), the triangle cannot touch the particle and
     !> the wall kernel need not test it (doc/theory.md, section 9).
     subroutine wall_slack(n_own, n_all, n_tri, n_cand, x, radius, vert, wstart, wlist, slack)
         integer(ip), intent(in) :: n_own, n_all, n_tri, n_cand

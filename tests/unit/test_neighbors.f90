@@ -8,13 +8,13 @@
 !> hold each of its pairs with history once, seen from its side (the lower id's value, negated
 !> in the higher id's row, never the stale entry of the side that does not evaluate), ordered
 !> by partner id, and a build from them gives both sides of each pair their values back. No
-!> point of a turning, moving wall moves farther than neighbors_wall_motion says.
+!> point of a turning, moving wall moves farther than neighbors_check says (nb%wall_moved).
 program test_neighbors
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t, mesh_add_plane, mesh_set_motion, mesh_move
-    use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_stale, &
+    use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_check, &
                              neighbors_spatial_order, neighbors_row_history, neighbors_set_rows, &
-                             neighbors_entry_history, neighbors_wall_motion
+                             neighbors_entry_history
     use dem_contact_store, only: contact_store_t, store_init
     use dem_mesh, only: closest_point_triangle
     use dem_assert, only: assert_true, assert_finish
@@ -97,11 +97,11 @@ program test_neighbors
             cs%xi(:, k) = side_xi(gid(nb%pair(1, k)), gid(nb%pair(2, k)))
         end do
         call assert_true(nb%n_pairs == size(nb%list) / 2, 'each pair is stored once')
-        call assert_true(.not. neighbors_stale(nb, n, x, m), 'fresh lists are not stale')
+        call assert_true(.not. stale_now(nb, x, m), 'fresh lists are not stale')
         x(1, 7) = x(1, 7) + 0.45_wp * nb%skin
-        call assert_true(.not. neighbors_stale(nb, n, x, m), 'moved less than skin/2')
+        call assert_true(.not. stale_now(nb, x, m), 'moved less than skin/2')
         x(2, 9) = x(2, 9) + 0.55_wp * nb%skin
-        call assert_true(neighbors_stale(nb, n, x, m), 'moved more than skin/2')
+        call assert_true(stale_now(nb, x, m), 'moved more than skin/2')
         call neighbors_build(nb, cs, n, n, gid, x, r, m)
         ok = .true.
         do i = 1, n
@@ -205,7 +205,7 @@ program test_neighbors
     call assert_true(ok, 'a build from rows of history gives both sides their values')
 
     ! a wall that turns and moves: since the build no point of its triangles has moved
-    ! farther than neighbors_wall_motion, the bound the slack is compared with
+    ! farther than nb%wall_moved, the bound the slack is compared with
     mv = m
     call mesh_set_motion(mv, 2_ip, [0.1_wp, -0.2_wp, 0.05_wp], [0.0_wp, 1.0_wp], &
                          [0.3_wp, 1.0_wp, 0.2_wp], [0.7_wp, 0.2_wp, 0.4_wp], 2.0_wp, &
@@ -214,9 +214,10 @@ program test_neighbors
     nb2 = neighbors_t(skin=0.004_wp)
     call neighbors_build(nb2, cs2, n, n, gid, x, r, mv)
     ref = mv
-    ok = neighbors_wall_motion(nb2, mv) == 0.0_wp
+    ok = .not. stale_now(nb2, x, mv) .and. nb2%wall_moved == 0.0_wp
     call mesh_move(mv, 0.01_wp)
-    dmove = neighbors_wall_motion(nb2, mv)
+    ok = ok .and. stale_now(nb2, x, mv)
+    dmove = nb2%wall_moved
     ok = ok .and. dmove > 0.0_wp
     do t = 1, mv%n_tri
         do k = 1, 20               ! points of the triangle, from barycentric coordinates
@@ -226,10 +227,18 @@ program test_neighbors
                           <= dmove * (1.0_wp + 1.0e-12_wp)
         end do
     end do
-    call assert_true(ok, 'no point of a moving wall moves farther than neighbors_wall_motion')
+    call assert_true(ok, 'no point of a moving wall moves farther than nb%wall_moved')
     call assert_finish()
 
 contains
+
+    !> Whether the lists of nb are stale for positions x_ and walls mesh_ (neighbors_check).
+    logical function stale_now(nb_, x_, mesh_)
+        type(neighbors_t), intent(inout) :: nb_
+        real(wp), intent(in) :: x_(:, :)
+        type(mesh_t), intent(in) :: mesh_
+        call neighbors_check(nb_, n, x_, mesh_, stale_now)
+    end function stale_now
 
     !> Whether the pair of ids a, b is taken to be in contact (two in three pairs).
     logical function touching(a_, b_)
