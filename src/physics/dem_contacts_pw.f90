@@ -25,12 +25,13 @@ contains
     !> or vertex point q_k only if no other triangle holding q_k has a closest point elsewhere
     !> (which would be nearer, as a convex set's closest point is unique), and only once when
     !> several triangles share it (a face then stands for it, else the first of them).
-    pure subroutine wall_contact_select(nc, q, feature, tri_vert, tol, keep)
+    pure subroutine wall_contact_select(nc, q, feature, ctri, n_tri, vert, tol, keep)
         !$acc routine seq
-        integer(ip), intent(in) :: nc
+        integer(ip), intent(in) :: nc, n_tri
         real(wp), intent(in) :: q(3, nc)             !! closest points [m]
         integer(ip), intent(in) :: feature(nc)
-        real(wp), intent(in) :: tri_vert(3, 3, nc)   !! the candidates' corners [m]
+        integer(ip), intent(in) :: ctri(nc)          !! the candidates' triangles
+        real(wp), intent(in) :: vert(3, 3, n_tri)    !! [m]
         real(wp), intent(in) :: tol                  !! points closer than this coincide [m]
         logical, intent(out) :: keep(nc)
         integer(ip) :: k, m
@@ -40,7 +41,7 @@ contains
             if (feature(k) == feature_face) cycle
             do m = 1, nc
                 if (m == k) cycle
-                if (shadows(q(:, k), q(:, m), feature(m), tri_vert(:, :, m), m < k, tol)) then
+                if (shadows(q(:, k), q(:, m), feature(m), vert(:, :, ctri(m)), m < k, tol)) then
                     keep(k) = .false.
                     exit
                 end if
@@ -69,14 +70,14 @@ contains
     !> closest point found again as needed, only the kept contacts stored (at most `most`;
     !> `over` if there are more).
     pure subroutine wall_contacts_streamed(xi, r, first, last, n_cand, wlist, n_tri, vert, tol, &
-                                           most, nc, q, feature, ctri, tri_vert, over)
+                                           most, nc, q, feature, ctri, over)
         !$acc routine seq
         real(wp), intent(in) :: xi(3), r                   !! the sphere's centre, radius [m]
         integer(ip), intent(in) :: first, last, n_cand, wlist(n_cand), n_tri, most
         real(wp), intent(in) :: vert(3, 3, n_tri)          !! [m]
         real(wp), intent(in) :: tol                        !! [m]
         integer(ip), intent(out) :: nc
-        real(wp), intent(inout) :: q(3, most), tri_vert(3, 3, most)
+        real(wp), intent(inout) :: q(3, most)
         integer(ip), intent(inout) :: feature(most), ctri(most)
         logical, intent(out) :: over
         integer(ip) :: k, m, fk, fm, tk, tm
@@ -108,23 +109,22 @@ contains
                 over = .true.
                 return
             end if
-            call add_candidate(qk, fk, tk, vert(:, :, tk), most, nc, q, feature, ctri, tri_vert)
+            call add_candidate(qk, fk, tk, most, nc, q, feature, ctri)
         end do
     end subroutine wall_contacts_streamed
 
-    !> Append a touching triangle (closest point qk, feature fk, index tk, corners vk) to the
-    !> nc stored ones.
-    pure subroutine add_candidate(qk, fk, tk, vk, most, nc, q, feature, ctri, tri_vert)
+    !> Append a touching triangle (closest point qk, feature fk, index tk) to the nc stored
+    !> ones.
+    pure subroutine add_candidate(qk, fk, tk, most, nc, q, feature, ctri)
         !$acc routine seq
-        real(wp), intent(in) :: qk(3), vk(3, 3)            !! [m]
+        real(wp), intent(in) :: qk(3)                      !! [m]
         integer(ip), intent(in) :: fk, tk, most
         integer(ip), intent(inout) :: nc, feature(most), ctri(most)
-        real(wp), intent(inout) :: q(3, most), tri_vert(3, 3, most)  !! [m]
+        real(wp), intent(inout) :: q(3, most)              !! [m]
         nc = nc + 1
         q(:, nc) = qk
         feature(nc) = fk
         ctri(nc) = tk
-        tri_vert(:, :, nc) = vk
     end subroutine add_candidate
 
     !> The history slot each kept contact continues: the slot of its own triangle, or else,
@@ -143,9 +143,9 @@ contains
         logical :: claimed(max_wall_contacts)
         integer(ip) :: c, s, fs
         real(wp) :: qs(3), d2, best
-        slot = 0
         claimed = .false.
         do c = 1, nc
+            slot(c) = 0
             if (.not. keep(c)) cycle
             do s = 1, max_wall_contacts
                 if (stri(s) == ctri(c)) then
@@ -225,7 +225,7 @@ contains
         integer(ip) :: new_tri(max_wall_contacts), ctri(max_wall_candidates), fk
         integer(ip) :: slot(max_wall_candidates)
         real(wp) :: q(3, max_wall_candidates), qk(3)
-        real(wp) :: cv(3, 3, max_wall_candidates), new_xi(3, max_wall_contacts)
+        real(wp) :: new_xi(3, max_wall_contacts)
         real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r, tol, moved, &
                     ws(3), d(3), lever, tr(3), xr(3), new_xr(3, max_wall_contacts)
         logical :: keep(max_wall_candidates), many, over, spring
@@ -234,13 +234,12 @@ contains
         spring = n_wall_columns > max_wall_contacts   ! the slots' EPSD2 springs after theirs
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
         !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk) &
-        !$acc private(cv, new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, tol, moved, keep) &
+        !$acc private(new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, tol, moved, keep) &
         !$acc private(slot) &
         !$acc private(many, over, i, wl, ws, d, lever, tr, xr, new_xr) firstprivate(spring)
         do kr = 1, n_row
             i = row(kr)
             r = radius(i)
-            tol = 1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
             nc = 0
             many = .false.
             ! candidates with more slack than that cannot touch: not tested
@@ -256,18 +255,19 @@ contains
                     many = .true.
                     exit
                 end if
-                call add_candidate(qk, fk, tri, vert(:, :, tri), max_wall_candidates, nc, q, &
-                                   feat, ctri, cv)
+                call add_candidate(qk, fk, tri, max_wall_candidates, nc, q, feat, ctri)
             end do
+            if (nc == 0 .and. wtri(1, i) == 0) cycle     ! no contact, none ended
+            tol = 1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
             if (many) then                 ! many triangles meet here: the kept ones only
                 call wall_contacts_streamed(x(:, i), r, wstart(i), wstart(i + 1) - 1, n_cand, &
                                             wlist, n_tri, vert, tol, max_wall_candidates, nc, &
-                                            q, feat, ctri, cv, over)
+                                            q, feat, ctri, over)
                 if (over) overflow = overflow + 1
                 keep(1:nc) = .true.
             else
-                call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), cv(:, :, 1:nc), tol, &
-                                         keep(1:nc))
+                call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), ctri(1:nc), n_tri, vert, &
+                                         tol, keep(1:nc))
             end if
             call history_slots(nc, keep(1:nc), ctri(1:nc), q(:, 1:nc), wtri(:, i), n_tri, &
                                vert, twall, slot(1:nc))
@@ -325,9 +325,11 @@ contains
                 ti(2) = ti(2) + lever * (nrm(3) * ft(1) - nrm(1) * ft(3))
                 ti(3) = ti(3) + lever * (nrm(1) * ft(2) - nrm(2) * ft(1))
             end do
-            wtri(1:ns, i) = new_tri(1:ns)
-            wxi(:, 1:ns, i) = new_xi(:, 1:ns)
-            if (spring) wxi(:, max_wall_contacts + 1:max_wall_contacts + ns, i) = new_xr(:, 1:ns)
+            do c = 1, ns                           ! the contacts into their new slots
+                wtri(c, i) = new_tri(c)
+                wxi(:, c, i) = new_xi(:, c)
+                if (spring) wxi(:, max_wall_contacts + c, i) = new_xr(:, c)
+            end do
             do c = ns + 1, max_wall_contacts       ! empty the slots no longer used
                 if (wtri(c, i) == 0) exit
                 wtri(c, i) = 0

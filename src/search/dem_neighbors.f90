@@ -280,7 +280,7 @@ contains
         ! particle pairs within R_i + R_j + skin: counted, the first kept_partners of each
         ! row kept; then the rows filled, from what was kept or, for the longer rows, by a
         ! second search; then each row ordered by id
-        allocate(kept(kept_partners, max(1, n_own)))
+        allocate(kept(kept_partners + 1, max(1, n_own)))
         call acc_data(kept, acc_create)
         call pair_rows(.false., n_own, n_all, n_levels, x, radius, nb%skin, rmax, origin, h, &
                        n_of, off, n_cells, gstart, gitem, nb%start, kept_partners, kept, &
@@ -447,8 +447,11 @@ contains
 
     !> The partners of each owned particle i (within R_i + R_j + skin) from the cells of
     !> every level's grid its reach covers. Without `fill`, their number into out(i) and the
-    !> first n_kept of them into kept(:, i); with `fill`, the partners of the rows longer than
-    !> that into out(start(i):start(i + 1) - 1) (the others are copied from kept).
+    !> first n_kept of them into kept(1:n_kept, i); with `fill`, the partners of the rows
+    !> longer than that into out(start(i):start(i + 1) - 1) (the others are copied from
+    !> kept). The search does not branch on the distance, which a branch predictor cannot
+    !> foresee: without `fill`, every candidate is written to the row's next place and kept by
+    !> counting it (kept(n_kept + 1, i) takes the candidates past n_kept).
     subroutine pair_rows(fill, n_own, n_all, n_levels, x, radius, skin, rmax, origin, h, n_of, &
                          off, n_cells, gstart, gitem, start, n_kept, kept, n_out, out)
         logical, intent(in) :: fill
@@ -458,12 +461,13 @@ contains
                                 h(0:n_levels - 1)
         integer(ip), intent(in) :: n_of(3, 0:n_levels - 1), off(0:n_levels - 1)
         integer(ip), intent(in) :: gstart(n_cells + 1), gitem(max(1, n_all)), start(n_own + 1)
-        integer(ip), intent(inout) :: kept(n_kept, max(1, n_own))
+        integer(ip), intent(inout) :: kept(n_kept + 1, max(1, n_own))
         integer(ip), intent(inout) :: out(n_out)
         integer(ip) :: i, j, k, l, m, cy, cz, c0(3), c1(3), c(3), cell, last
         real(wp) :: reach, lo(3), hi(3)
+        logical :: near
         !$acc parallel loop gang vector default(present) copyin(rmax, origin, h, n_of, off) &
-        !$acc private(j, k, l, m, cy, cz, c0, c1, c, cell, last, reach, lo, hi)
+        !$acc private(j, k, l, m, cy, cz, c0, c1, c, cell, last, reach, lo, hi, near)
         do i = 1, n_own
             if (fill) then
                 if (start(i + 1) - start(i) <= n_kept) cycle     ! (copied from kept)
@@ -487,16 +491,15 @@ contains
                         last = cell + c1(1) - c0(1)
                         do m = gstart(cell), gstart(last + 1) - 1
                             j = gitem(m)
-                            if (j == i) cycle
-                            if ((x(1, j) - x(1, i))**2 + (x(2, j) - x(2, i))**2 &
-                                + (x(3, j) - x(3, i))**2 &
-                                >= (radius(i) + radius(j) + skin)**2) cycle
+                            near = j /= i .and. .not. ((x(1, j) - x(1, i))**2 &
+                                + (x(2, j) - x(2, i))**2 + (x(3, j) - x(3, i))**2 &
+                                >= (radius(i) + radius(j) + skin)**2)
                             if (fill) then
-                                out(start(i) + k) = j
-                            else if (k < n_kept) then
-                                kept(k + 1, i) = j
+                                if (near) out(start(i) + k) = j
+                            else
+                                kept(min(k, n_kept) + 1, i) = j
                             end if
-                            k = k + 1
+                            k = k + merge(1, 0, near)
                         end do
                     end do
                 end do
@@ -649,7 +652,7 @@ contains
         ! candidates of each particle: counted, the first kept_rows of them kept; then the
         ! rows filled, from what was kept or, for the longer rows, by a second search (each
         ! row by triangle)
-        allocate(kept(kept_rows, max(1, n_own)))
+        allocate(kept(kept_rows + 1, max(1, n_own)))
         call acc_data(kept, acc_create)
         call wall_rows(.false., n_own, n_all, n_tri, n_e, product(n), x, radius, nb%skin, lo, &
                        hh, n, mesh%vert, box, etri, gstart, gitem, nb%wstart, kept_rows, &
@@ -771,11 +774,13 @@ contains
     end subroutine triangle_entries
 
     !> The triangles within R_i + skin of each owned particle i: their number into out(i)
-    !> and the first kept of them into kept(:, i) (fill false), with the number of
-    !> closest-point tests made; or (fill true) the triangles of the rows longer than kept
-    !> holds into out(start(i):start(i + 1) - 1), then every row in increasing order (the
-    !> shorter rows copied from kept before). A triangle is tested in the first cell (lowest
-    !> coordinates) shared by its box and the particle's reach, so once.
+    !> and the first kept of them into kept(1:n_kept, i) (fill false; without a branch on
+    !> the distance, as pair_rows), with the number of closest-point tests made; or (fill
+    !> true) the triangles of the rows longer than kept holds into
+    !> out(start(i):start(i + 1) - 1), then every row in increasing order (the shorter rows
+    !> copied from kept before). A triangle is tested in the first cell (lowest coordinates)
+    !> shared by its box and the particle's reach, so once; the cells of a row along x are
+    !> numbered in a row.
     subroutine wall_rows(fill, n_own, n_all, n_tri, n_e, n_cells, x, radius, skin, origin, h, &
                          n, vert, box, etri, gstart, gitem, start, n_kept, kept, n_out, out, &
                          tests)
@@ -785,16 +790,17 @@ contains
         real(wp), intent(in) :: vert(3, 3, n_tri)
         integer(ip), intent(in) :: box(6, n_tri), etri(max(1, n_e)), gstart(n_cells + 1), &
                                    gitem(max(1, n_e)), start(n_own + 1)
-        integer(ip), intent(inout) :: kept(n_kept, max(1, n_own))
+        integer(ip), intent(inout) :: kept(n_kept + 1, max(1, n_own))
         integer(ip), intent(inout) :: out(n_out)
         integer(i8), intent(inout) :: tests
-        integer(ip) :: i, k, m, t, cx, cy, cz, c(3), c0(3), c1(3), cell, feature
+        integer(ip) :: i, k, m, t, cx, cy, cz, c(3), c0(3), c1(3), cell, first, feature
         real(wp) :: reach, lo(3), hi(3), q(3)
         integer(i8) :: tested
+        logical :: near
         tested = 0
         !$acc parallel loop gang vector default(present) copyin(origin, n) &
-        !$acc private(k, m, t, cx, cy, cz, c, c0, c1, cell, feature, reach, lo, hi, q) &
-        !$acc reduction(+:tested)
+        !$acc private(k, m, t, cx, cy, cz, c, c0, c1, cell, first, feature, reach, lo, hi, q) &
+        !$acc private(near) reduction(+:tested)
         do i = 1, n_own
             if (fill) then
                 if (start(i + 1) - start(i) <= n_kept) cycle     ! (copied from kept)
@@ -807,11 +813,12 @@ contains
             c1 = cell_coords(hi, origin, h, n)
             do cz = c0(3), c1(3)
                 do cy = c0(2), c1(2)
+                    c(1) = c0(1)
+                    c(2) = cy
+                    c(3) = cz
+                    first = cell_number(c, n)       ! (the cells along x follow it)
                     do cx = c0(1), c1(1)
-                        c(1) = cx
-                        c(2) = cy
-                        c(3) = cz
-                        cell = cell_number(c, n)
+                        cell = first + cx - c0(1)
                         do m = gstart(cell), gstart(cell + 1) - 1
                             t = etri(gitem(m))
                             if (cx /= max(c0(1), box(1, t)) .or. &
@@ -820,14 +827,14 @@ contains
                             call closest_point_triangle(x(:, i), vert(:, 1, t), vert(:, 2, t), &
                                                         vert(:, 3, t), q, feature)
                             tested = tested + 1
-                            if ((q(1) - x(1, i))**2 + (q(2) - x(2, i))**2 &
-                                + (q(3) - x(3, i))**2 >= reach**2) cycle
+                            near = .not. ((q(1) - x(1, i))**2 + (q(2) - x(2, i))**2 &
+                                          + (q(3) - x(3, i))**2 >= reach**2)
                             if (fill) then
-                                out(start(i) + k) = t
-                            else if (k < n_kept) then
-                                kept(k + 1, i) = t
+                                if (near) out(start(i) + k) = t
+                            else
+                                kept(min(k, n_kept) + 1, i) = t
                             end if
-                            k = k + 1
+                            k = k + merge(1, 0, near)
                         end do
                     end do
                 end do
@@ -844,9 +851,11 @@ contains
         end do
     end subroutine wall_rows
 
-    !> The rows of at most n_kept entries, from kept(:, i) into out(start(i):start(i + 1) - 1).
+    !> The rows of at most n_kept entries, from kept(:, i) into out(start(i):start(i + 1) - 1)
+    !> (kept(n_kept + 1, i): where the searches put what a row does not keep).
     subroutine copy_kept_rows(n_own, n_kept, kept, start, n_out, out)
-        integer(ip), intent(in) :: n_own, n_kept, kept(n_kept, max(1, n_own)), start(n_own + 1)
+        integer(ip), intent(in) :: n_own, n_kept, kept(n_kept + 1, max(1, n_own)), &
+                                   start(n_own + 1)
         integer(ip), intent(in) :: n_out
         integer(ip), intent(inout) :: out(n_out)
         integer(ip) :: i, k
