@@ -510,7 +510,8 @@ contains
 
     !> Each row ordered by the partners' global ids (insertion sort: rows are short), the
     !> partners' ids, and the mirror entries: the partner's entry for the same pair (a binary
-    !> search of its row), negated when the partner has the lower id, 0 for a ghost partner.
+    !> search of its row, without a branch on the ids, which a branch predictor cannot
+    !> foresee), negated when the partner has the lower id, 0 for a ghost partner.
     subroutine pair_partners(n_own, n_all, n_entries, gid, start, list, partner, mirror)
         integer(ip), intent(in) :: n_own, n_all, n_entries
         integer(i8), intent(in) :: gid(n_all)
@@ -518,7 +519,7 @@ contains
         integer(ip), intent(inout) :: list(n_entries)
         integer(i8), intent(inout) :: partner(n_entries)
         integer(ip), intent(inout) :: mirror(n_entries)
-        integer(ip) :: i, j, a, b, key, lo, hi, e
+        integer(ip) :: i, j, a, b, key, lo, span, e
         !$acc parallel loop gang vector default(present) private(a, b, key)
         do i = 1, n_own
             do a = start(i) + 1, start(i + 1) - 1
@@ -536,27 +537,24 @@ contains
         do a = 1, n_entries
             partner(a) = gid(list(a))
         end do
-        !$acc parallel loop gang vector default(present) private(j, a, lo, hi, e)
+        !$acc parallel loop gang vector default(present) private(j, a, lo, span, e)
         do i = 1, n_own
             do a = start(i), start(i + 1) - 1
                 j = list(a)
                 e = 0
                 if (j <= n_own) then
+                    ! the last entry of row j whose id is not above gid(i): the range from lo
+                    ! of `span` entries halved each time (row j holds i: lists are symmetric)
                     lo = start(j)
-                    hi = start(j + 1) - 1
-                    do while (lo <= hi)
-                        e = (lo + hi) / 2
-                        if (partner(e) == gid(i)) exit
-                        if (partner(e) < gid(i)) then
-                            lo = e + 1
-                        else
-                            hi = e - 1
-                        end if
+                    span = start(j + 1) - start(j)
+                    do while (span > 1)
+                        e = span / 2
+                        lo = merge(lo + e, lo, partner(lo + e) <= gid(i))
+                        span = span - e
                     end do
-                    if (lo > hi) e = 0
+                    if (span == 1) e = merge(lo, 0, partner(lo) == gid(i))
                 end if
-                mirror(a) = e
-                if (partner(a) < gid(i)) mirror(a) = -e
+                mirror(a) = merge(-e, e, partner(a) < gid(i))
             end do
         end do
     end subroutine pair_partners
