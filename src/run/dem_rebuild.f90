@@ -26,6 +26,10 @@ module dem_rebuild
     private
     public :: lists_refresh, rebuild, settle_outlets, start_domain, new_particles_t
 
+    !> steps between spatial sorts of the particles at list builds, at least (LAMMPS and
+    !> LIGGGHTS sort every 1000 steps by default)
+    integer(i8), parameter :: sort_interval = 1000
+
     !> Particles that join the run at a rebuild (inserted), owned by the rank that adds them
     !> until the rebuild's migration.
     type :: new_particles_t
@@ -130,9 +134,14 @@ contains
         call kept_particles(s, outlets .and. s%comm%size == 1, kept, m)
         allocate(order(max(1, m)))
         call acc_data(order, acc_create)
-        call neighbors_spatial_order(m, kept, s%p%x, s%sort_cell, order)
-        call particles_permute(s%p, order(1:m))
-        call store_walls_permute(s%cs, order(1:m))
+        if (resort_due(s, m, present(added))) then
+            call neighbors_spatial_order(m, kept, s%p%x, s%sort_cell, order)
+            call particles_permute(s%p, order(1:m))
+            call store_walls_permute(s%cs, order(1:m))
+            s%sorted_step = s%step
+        else                                     ! the particles keep their places
+            call fill_range(m, order, 1, 1)
+        end if
         if (s%halo) then
             call domain_ghosts(s%dom, s%comm, s%p)
             call domain_data(s%dom, acc_enter)
@@ -151,6 +160,18 @@ contains
         if (allocated(s%gone)) call release_gone(s)   ! made anew for the new order
         s%parked = 0
     end subroutine rebuild
+
+    !> Whether a build re-sorts the particles along the Morton curve: at the first build of
+    !> a run, when particles join, leave or move between ranks, and else once sort_interval
+    !> steps have passed since the last sort (the order is for cache locality only: results
+    !> do not depend on it, as the forces are summed in fixed point).
+    logical function resort_due(s, m, joined) result(due)
+        type(solver_t), intent(in) :: s
+        integer(ip), intent(in) :: m             !! the particles that stay
+        logical, intent(in) :: joined            !! particles are added
+        due = .not. s%lists_on_device .or. s%comm%size > 1 .or. joined .or. m /= s%p%n_own &
+              .or. s%step - s%sorted_step >= sort_interval
+    end function resort_due
 
     !> The first build of a restart whose checkpoint holds the positions of the last list
     !> build of the run that wrote it (p%x_built; a case whose results depend on when the

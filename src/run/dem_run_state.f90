@@ -61,6 +61,7 @@ module dem_run_state
         integer(i8) :: trace_id = 0    !< global id of the traced particle, 0: none
         integer(ip) :: trace = 0       !< its local index
         real(wp) :: sort_cell = 0.0_wp !< cell size of the spatial order [m]
+        integer(i8) :: sorted_step = 0 !< the step of the last spatial sort (a list build's)
         integer(i8) :: removed = 0     !< particles removed by outlets
         integer(i8), allocatable :: removed_ids(:)  !< their ids on this rank, when allocated
         logical :: settled = .false.   !< the kinetic energy fell below stop_kinetic_energy
