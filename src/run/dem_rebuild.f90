@@ -162,14 +162,16 @@ contains
     end subroutine rebuild
 
     !> Whether a build re-sorts the particles along the Morton curve: at the first build of
-    !> a run, when particles join, leave or move between ranks, and else once sort_interval
+    !> a run, when particles join or an outlet removes some, and else once sort_interval
     !> steps have passed since the last sort (the order is for cache locality only: results
-    !> do not depend on it, as the forces are summed in fixed point).
+    !> do not depend on it, as the forces are summed in fixed point). Particles that arrive
+    !> from other ranks stay where the migration put them, after those that stayed, until
+    !> then.
     logical function resort_due(s, m, joined) result(due)
         type(solver_t), intent(in) :: s
         integer(ip), intent(in) :: m             !! the particles that stay
         logical, intent(in) :: joined            !! particles are added
-        due = .not. s%lists_on_device .or. s%comm%size > 1 .or. joined .or. m /= s%p%n_own &
+        due = .not. s%lists_on_device .or. joined .or. m /= s%p%n_own &
               .or. s%step - s%sorted_step >= sort_interval
     end function resort_due
 
