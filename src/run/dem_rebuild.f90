@@ -134,7 +134,7 @@ contains
         call kept_particles(s, outlets .and. s%comm%size == 1, kept, m)
         allocate(order(max(1, m)))
         call acc_data(order, acc_create)
-        if (resort_due(s, m, present(added))) then
+        if (resort_due(s, outlets, present(added))) then
             call neighbors_spatial_order(m, kept, s%p%x, s%sort_cell, order)
             call particles_permute(s%p, order(1:m))
             call store_walls_permute(s%cs, order(1:m))
@@ -167,11 +167,11 @@ contains
     !> do not depend on it, as the forces are summed in fixed point). Particles that arrive
     !> from other ranks stay where the migration put them, after those that stayed, until
     !> then.
-    logical function resort_due(s, m, joined) result(due)
+    logical function resort_due(s, outlets, joined) result(due)
         type(solver_t), intent(in) :: s
-        integer(ip), intent(in) :: m             !! the particles that stay
+        logical, intent(in) :: outlets           !! the parked particles are removed
         logical, intent(in) :: joined            !! particles are added
-        due = .not. s%lists_on_device .or. joined .or. m /= s%p%n_own &
+        due = .not. s%lists_on_device .or. outlets .or. joined &
               .or. s%step - s%sorted_step >= sort_interval
     end function resort_due
 
