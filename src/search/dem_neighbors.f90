@@ -494,12 +494,8 @@ contains
                             near = j /= i .and. .not. ((x(1, j) - x(1, i))**2 &
                                 + (x(2, j) - x(2, i))**2 + (x(3, j) - x(3, i))**2 &
                                 >= (radius(i) + radius(j) + skin)**2)
-                            if (fill) then
-                                if (near) out(start(i) + k) = j
-                            else
-                                kept(min(k, n_kept) + 1, i) = j
-                            end if
-                            k = k + merge(1, 0, near)
+                            call row_entry(fill, near, j, start(i), n_kept, kept(:, i), n_out, &
+                                           out, k)
                         end do
                     end do
                 end do
@@ -507,6 +503,23 @@ contains
             if (.not. fill) out(i) = k
         end do
     end subroutine pair_rows
+
+    !> A candidate `item` of a row whose k entries so far start at out(first), near enough or
+    !> not: with `fill`, into out(first + k) if near; without, into keep(k + 1) either way
+    !> (keep(n_kept + 1) takes what the row does not keep), so that a search does not branch
+    !> on the distance; k counts it if near.
+    pure subroutine row_entry(fill, near, item, first, n_kept, keep, n_out, out, k)
+        !$acc routine seq
+        logical, intent(in) :: fill, near
+        integer(ip), intent(in) :: item, first, n_kept, n_out
+        integer(ip), intent(inout) :: keep(n_kept + 1), out(n_out), k
+        if (fill) then
+            if (near) out(first + k) = item
+        else
+            keep(min(k, n_kept) + 1) = item
+        end if
+        k = k + merge(1, 0, near)
+    end subroutine row_entry
 
     !> Each row ordered by the partners' global ids (insertion sort: rows are short), the
     !> partners' ids, and the mirror entries: the partner's entry for the same pair (a binary
@@ -827,12 +840,8 @@ contains
                             tested = tested + 1
                             near = .not. ((q(1) - x(1, i))**2 + (q(2) - x(2, i))**2 &
                                           + (q(3) - x(3, i))**2 >= reach**2)
-                            if (fill) then
-                                if (near) out(start(i) + k) = t
-                            else
-                                kept(min(k, n_kept) + 1, i) = t
-                            end if
-                            k = k + merge(1, 0, near)
+                            call row_entry(fill, near, t, start(i), n_kept, kept(:, i), n_out, &
+                                           out, k)
                         end do
                     end do
                 end do
