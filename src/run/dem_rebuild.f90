@@ -161,7 +161,7 @@ contains
         s%parked = 0
     end subroutine rebuild
 
-    !> Whether a build re-sorts the particles along the Morton curve: at the first build of
+    !> Whether a build re-sorts the particles (neighbors_spatial_order): at the first build of
     !> a run, when particles join or an outlet removes some, and else once sort_interval
     !> steps have passed since the last sort (the order is for cache locality only: results
     !> do not depend on it, as the forces are summed in fixed point). Particles that arrive

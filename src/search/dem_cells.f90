@@ -9,7 +9,7 @@ module dem_cells
     implicit none
     private
     public :: prefix_sum, bin_items, cell_number, cell_coords, fill_range, kept_indices, &
-              sort_segment, gather_items, morton_bits, morton_number
+              sort_segment, gather_items, axes_by_extent
 
     integer(ip), parameter :: chunk = 256    !< counts summed by one thread in prefix_sum
 
@@ -180,30 +180,16 @@ contains
         cell = 1 + c(1) + n(1) * (c(2) + n(2) * c(3))
     end function cell_number
 
-    !> Bits of each cell coordinate of a grid of n cells: the least b with 2^b >= n.
-    pure function morton_bits(n) result(b)
+    !> The axes of a grid of n cells, from the one with the fewest cells to the one with the
+    !> most (ties in axis order): cells numbered along them (cell_number of the coordinates
+    !> in this order) run in rows along the first axis, and in layers across the last, each
+    !> layer as few cells as the grid allows.
+    pure function axes_by_extent(n) result(a)
         integer(ip), intent(in) :: n(3)
-        integer(ip) :: b(3)
-        b = bit_size(n) - leadz(n - 1)
-    end function morton_bits
-
-    !> Number (from 1) of the cell of coordinates c along a Morton (Z-order) curve through a
-    !> grid whose coordinates take b(1), b(2), b(3) bits: the coordinates' bits interleaved,
-    !> lowest first, x before y before z, a coordinate's bits left out once it has none left
-    !> (so that the numbers of a grid of n cells stay below 2^(b1 + b2 + b3) < 8 n1 n2 n3).
-    pure integer(ip) function morton_number(c, b) result(cell)
-        !$acc routine seq
-        integer(ip), intent(in) :: c(3), b(3)
-        integer(ip) :: k, d, pos
-        cell = 0
-        pos = 0
-        do k = 0, maxval(b) - 1
-            do d = 1, 3
-                if (k >= b(d)) cycle
-                if (btest(c(d), k)) cell = ibset(cell, pos)
-                pos = pos + 1
-            end do
-        end do
-        cell = cell + 1
-    end function morton_number
+        integer(ip) :: a(3)
+        a = [1, 2, 3]
+        if (n(a(2)) < n(a(1))) a([1, 2]) = a([2, 1])
+        if (n(a(3)) < n(a(2))) a([2, 3]) = a([3, 2])
+        if (n(a(2)) < n(a(1))) a([1, 2]) = a([2, 1])
+    end function axes_by_extent
 end module dem_cells

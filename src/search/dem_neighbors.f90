@@ -10,7 +10,7 @@ module dem_neighbors
     use dem_kinds, only: wp, ip, i8
     use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host
     use dem_cells, only: prefix_sum, bin_items, cell_coords, cell_number, fill_range, &
-                         sort_segment, gather_items, morton_bits, morton_number
+                         sort_segment, gather_items, axes_by_extent
     use dem_particles, only: index_of_id
     use dem_mesh, only: mesh_t, closest_point_triangle
     use dem_contact_store, only: contact_store_t, n_pair_history, max_pair_history, &
@@ -136,9 +136,11 @@ contains
         end do
     end function max_displacement2
 
-    !> The particles kept(1:m) in the order of the cells of a grid of size about h along a
-    !> Morton curve, for cache locality: neighbours in space become neighbours in memory, in
-    !> every direction (not only along x). On the device: kept, x and order are there.
+    !> The particles kept(1:m) in the order of the cells of a grid of size about h, in rows
+    !> along the grid's shortest axis and layers across its longest (axes_by_extent), for
+    !> cache locality: a particle's partners lie at most about a layer of cells away in memory,
+    !> and the contact kernel meets the particles of the next layer in the order they are
+    !> stored (doc/theory.md, section 9). On the device: kept, x and order are there.
     subroutine neighbors_spatial_order(m, kept, x, h, order)
         integer(ip), intent(in) :: m
         integer(ip), intent(in) :: kept(m)
@@ -148,7 +150,7 @@ contains
         real(wp), allocatable :: xk(:, :)
         integer(ip), allocatable :: cell(:), start(:), item(:), cnt(:)
         real(wp) :: lo(3), hi(3), hh
-        integer(ip) :: n(3), b(3), n_cells
+        integer(ip) :: n(3), a(3), n_cells
         if (m == 0) return
         allocate(xk(3, m), cell(m), item(m))
         call acc_data(xk, acc_create)
@@ -156,14 +158,14 @@ contains
         call acc_data(item, acc_create)
         call gather_columns(m, size(x, 2, kind=ip), kept, x, xk)
         call bounds(m, xk, lo, hi)
-        hh = h                              ! at most m cells: below 8 m curve numbers
+        hh = h                              ! at most about one cell per particle
         call fit_grid(lo, hi, max(27.0_wp, real(m, wp)), hh, n)
-        b = morton_bits(n)
-        n_cells = ishft(1_ip, sum(b))
+        a = axes_by_extent(n)
+        n_cells = product(n)
         allocate(start(n_cells + 1), cnt(n_cells))
         call acc_data(start, acc_create)
         call acc_data(cnt, acc_create)
-        call curve_cells(m, xk, lo, hh, n, b, cell)
+        call layered_cells(m, xk, lo, hh, n, a, cell)
         call bin_items(m, n_cells, cell, start, item, cnt)
         call gather_items(m, kept, item, order)
         call acc_data(cnt, acc_exit)
@@ -173,17 +175,19 @@ contains
         call acc_data(xk, acc_exit)
     end subroutine neighbors_spatial_order
 
-    !> The number of each point's cell along the Morton curve of a grid (morton_number).
-    subroutine curve_cells(m, x, origin, h, n, b, cell)
-        integer(ip), intent(in) :: m, n(3), b(3)
+    !> The number of each point's cell in a grid of n cells, numbered along the axes a (from
+    !> the fastest).
+    subroutine layered_cells(m, x, origin, h, n, a, cell)
+        integer(ip), intent(in) :: m, n(3), a(3)
         real(wp), intent(in) :: x(3, m), origin(3), h
         integer(ip), intent(inout) :: cell(m)
-        integer(ip) :: k
-        !$acc parallel loop gang vector default(present) copyin(origin, n, b)
+        integer(ip) :: k, c(3)
+        !$acc parallel loop gang vector default(present) copyin(origin, n, a) private(c)
         do k = 1, m
-            cell(k) = morton_number(cell_coords(x(:, k), origin, h, n), b)
+            c = cell_coords(x(:, k), origin, h, n)
+            cell(k) = cell_number(c(a), n(a))
         end do
-    end subroutine curve_cells
+    end subroutine layered_cells
 
     !> xk(:, k) = x(:, kept(k)), for k = 1..m.
     subroutine gather_columns(m, n_x, kept, x, xk)

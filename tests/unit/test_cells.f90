@@ -2,25 +2,25 @@
 !> boundaries of prefix_sum (n = 1, 255-257, 1000, 0); the counting sort bin_items (every
 !> binned item in its cell once, cells in increasing order, items left out absent), on random
 !> cells with many items per cell and with empty cells; kept_indices against pack; the
-!> storage's permute kernels against a gather (and zeros after the kept ones); the Morton
-!> numbers of grids of unequal sides: one per cell, all below 2^(bx + by + bz); each 2x2x2
-!> block of cells a run of 8 consecutive numbers; the numbers of two cells from the bits of
-!> their coordinates by hand.
+!> storage's permute kernels against a gather (and zeros after the kept ones); the axes of
+!> a grid sorted by extent, and the cells numbered along them: one number per cell, rows
+!> along the shortest axis, layers across the longest, one number by hand.
 program test_cells
     use dem_kinds, only: wp, ip, i8
-    use dem_cells, only: prefix_sum, bin_items, kept_indices, morton_bits, morton_number
+    use dem_cells, only: prefix_sum, bin_items, kept_indices, cell_number, axes_by_extent
     use dem_storage, only: permute_real, permute_int, permute_i8
     use dem_assert, only: assert_true, assert_finish
     implicit none
     integer(ip), parameter :: sizes(6) = [1, 255, 256, 257, 1000, 0]
-    integer(ip), parameter :: grids(3, 3) = reshape([5, 3, 9, 8, 8, 8, 1, 7, 2], [3, 3])
+    integer(ip), parameter :: perms(3, 6) = reshape([3, 5, 9, 3, 9, 5, 5, 3, 9, 5, 9, 3, 9, 3, 5, &
+                                                     9, 5, 3], [3, 6])
     integer(ip), parameter :: items(3) = [5000, 300, 1], cells(3) = [40, 2000, 3]
     integer(ip), allocatable :: cnt(:), start(:), cell(:), item(:), kept(:), work(:), order(:)
     integer(ip), allocatable :: ia(:, :), ia0(:, :)
     integer(i8), allocatable :: la(:), la0(:)
     real(wp), allocatable :: u(:), ra(:, :), ra0(:, :)
     logical, allocatable :: drop(:)
-    integer(ip) :: k, n, m, c, n_cells, a, trial, nb3(3), bb(3), cx, cy, cz
+    integer(ip) :: k, n, m, c, n_cells, a, trial, nb3(3), aa(3), cx, cy, cz
     logical, allocatable :: seen(:)
     logical :: ok
 
@@ -90,45 +90,44 @@ program test_cells
     call assert_true(all(la(1:m) == la0(order)) .and. all(la(m + 1:) == 0), &
                      'permute_i8 gathers and zeroes the rest')
 
-    ! Morton numbers: a bijection onto [1, 2^(bx+by+bz)] restricted to the grid, blocks of
-    ! 2x2x2 cells consecutive, and the interleaving written out for one cell
-    do trial = 1, 3
-        nb3 = grids(:, trial)
-        bb = morton_bits(nb3)
-        ok = all(2**bb >= nb3 .and. 2**bb < 2 * nb3)
-        allocate(seen(2**sum(bb)))
-        seen = .false.
-        do cz = 0, nb3(3) - 1
-            do cy = 0, nb3(2) - 1
-                do cx = 0, nb3(1) - 1
-                    k = morton_number([cx, cy, cz], bb)
-                    ok = ok .and. k >= 1 .and. k <= 2**sum(bb)
-                    if (.not. ok) exit
-                    ok = ok .and. .not. seen(k)
-                    seen(k) = .true.
-                end do
-            end do
-        end do
-        call assert_true(ok .and. count(seen) == product(nb3), 'Morton numbers: one per cell')
-        deallocate(seen)
-    end do
-    bb = [3, 3, 3]
+    ! cells numbered along the axes by extent: the axes sorted by their cells (ties in axis
+    ! order), a bijection onto [1, n1 n2 n3], rows along the shortest axis, a step across
+    ! the longest one layer of the fewest cells, and one cell's number by hand
     ok = .true.
-    do cz = 0, 7, 2
-        do cy = 0, 7, 2
-            do cx = 0, 7, 2
-                k = morton_number([cx, cy, cz], bb)
-                ok = ok .and. mod(k - 1, 8) == 0
-                ok = ok .and. morton_number([cx + 1, cy + 1, cz + 1], bb) == k + 7
+    do trial = 1, 6
+        nb3 = perms(:, trial)
+        aa = axes_by_extent(nb3)
+        ok = ok .and. all(nb3(aa) == [3, 5, 9])
+    end do
+    call assert_true(ok, 'axes by extent: the fewest cells first, for every order of the axes')
+    call assert_true(all(axes_by_extent([4, 4, 2]) == [3, 1, 2]) .and. &
+                     all(axes_by_extent([7, 7, 7]) == [1, 2, 3]), 'axes by extent: ties in order')
+    nb3 = [5, 3, 9]
+    aa = axes_by_extent(nb3)
+    allocate(seen(product(nb3)))
+    seen = .false.
+    ok = .true.
+    do cz = 0, nb3(3) - 1
+        do cy = 0, nb3(2) - 1
+            do cx = 0, nb3(1) - 1
+                k = layered([cx, cy, cz])
+                ok = ok .and. k >= 1 .and. k <= product(nb3)
+                if (.not. ok) exit
+                ok = ok .and. .not. seen(k)
+                seen(k) = .true.
+                if (cy > 0) ok = ok .and. k == layered([cx, cy - 1, cz]) + 1
+                if (cz > 0) ok = ok .and. k == layered([cx, cy, cz - 1]) + 15
             end do
         end do
     end do
-    call assert_true(ok, 'Morton numbers: each 2x2x2 block of cells is a run of 8')
-    ! (5, 3, 6) = 101, 011, 110 in x, y, z with 3 bits each: bits x0 y0 z0 x1 y1 z1 x2 y2 z2
-    ! = 1 1 0 0 1 1 1 0 1 from the lowest: 1 + 2 + 16 + 32 + 64 + 256 = 371, numbered from 1
-    call assert_true(morton_number([5, 3, 6], bb) == 372, 'Morton number by hand')
-    ! an axis with fewer bits drops out: (3, 1, 0) with bits (2, 1, 0): x0 y0 x1 = 1 1 1, 7 + 1
-    call assert_true(morton_number([3, 1, 0], [2, 1, 0]) == 1 + 1 + 2 + 4, &
-                     'Morton number of a flat grid')
+    call assert_true(ok .and. all(seen), 'cells by extent: one number per cell, rows along ' &
+                     // 'y (3 cells), layers of 15 cells along z')
+    ! (4, 2, 6): y first (2), then x (4), then z (6): 1 + 2 + 3 (4 + 5 * 6) = 105
+    call assert_true(layered([4, 2, 6]) == 105, 'cells by extent: a number by hand')
     call assert_finish()
+contains
+    integer(ip) function layered(cc)
+        integer(ip), intent(in) :: cc(3)
+        layered = cell_number(cc(aa), nb3(aa))
+    end function layered
 end program test_cells
