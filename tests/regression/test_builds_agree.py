@@ -1,6 +1,8 @@
 """An OpenACC build gives the same results as the plain build: the same cases, run with both
 executables, write identical files (every digit of every number; the HDF5 snapshots and
-checkpoints byte for byte, as they carry no time stamps).
+checkpoints byte for byte, as they carry no time stamps). scripts/install/build makes the
+OpenACC build for any x86-64 and the plain one for the machine's vector instructions
+(DEM_SIMD), so this also checks that these give the same bits.
 usage: test_builds_agree.py DEM WORKDIR REFERENCE_DEM"""
 import filecmp
 import os
