@@ -18,6 +18,9 @@ module dem_contacts_pw
     !> meeting at a vertex) has its contacts found from its list, without storing them
     integer(ip), parameter :: max_wall_candidates = 16
 
+    !> rows of pw_forces whose particle data are loaded together (one thread's work)
+    integer(ip), parameter :: rows_per_block = 8
+
 contains
 
     !> Of the nc triangles touching a sphere (closest points q, features), keep those whose
@@ -182,7 +185,8 @@ contains
     !> rotation taken from the particle's); the EPSD2 spring of slot s is
     !> wxi(:, max_wall_contacts + s). A candidate triangle whose slack (dem_neighbors) is more
     !> than the particle and the walls have moved since the lists' build cannot touch the
-    !> particle and is not tested.
+    !> particle and is not tested. The rows go in blocks of rows_per_block, whose particle data
+    !> are loaded together before the block's rows are computed (doc/theory.md, section 9).
     subroutine pw_forces(n_own, n_row, row, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, &
                          mat, wstart, wlist, x_ref, wslack, wmove, vert, tmat, twall, wall_v, &
                          wall_w, wall_c, kn, st, &
@@ -229,115 +233,130 @@ contains
         real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r, tol, moved, &
                     ws(3), d(3), lever, tr(3), xr(3), new_xr(3, max_wall_contacts)
         logical :: keep(max_wall_candidates), many, over, spring
+        integer(ip) :: k0
+        real(wp), volatile :: lines
 
         overflow = 0
         spring = n_wall_columns > max_wall_contacts   ! the slots' EPSD2 springs after theirs
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
         !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk) &
         !$acc private(new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, tol, moved, keep) &
-        !$acc private(slot) &
+        !$acc private(slot, lines) &
         !$acc private(many, over, i, wl, ws, d, lever, tr, xr, new_xr) firstprivate(spring)
-        do kr = 1, n_row
-            i = row(kr)
-            r = radius(i)
-            nc = 0
-            many = .false.
-            ! candidates with more slack than that cannot touch: not tested
-            moved = sqrt((x(1, i) - x_ref(1, i))**2 + (x(2, i) - x_ref(2, i))**2 &
-                         + (x(3, i) - x_ref(3, i))**2) + wmove
-            do k = wstart(i), wstart(i + 1) - 1
-                if (wslack(k) > moved) cycle
-                tri = wlist(k)
-                call closest_point_triangle(x(:, i), vert(:, 1, tri), vert(:, 2, tri), &
-                                            vert(:, 3, tri), qk, fk)
-                if (sum((qk - x(:, i))**2) >= r**2) cycle
-                if (nc == max_wall_candidates) then
-                    many = .true.
-                    exit
-                end if
-                call add_candidate(qk, fk, tri, max_wall_candidates, nc, q, feat, ctri)
+        do k0 = 0, n_row - 1, rows_per_block
+            ! the lines of the particle data that the block's rows read, loaded first in a
+            ! short loop of their own (a vector's first and last component: it may straddle
+            ! two lines): the rows lie scattered in memory, and a row's steps, which depend on
+            ! one another, would wait for each of its cache misses in turn; here the misses of
+            ! the block's rows overlap (`lines` is VOLATILE, so that the loads are kept)
+            do kr = k0 + 1, min(k0 + rows_per_block, n_row)
+                i = row(kr)
+                lines = x(1, i) + x(3, i) + x_ref(1, i) + x_ref(3, i) + radius(i) + mass(i) &
+                        + v(1, i) + v(3, i) + w(1, i) + w(3, i) + f(1, i) + f(3, i) + t(1, i) &
+                        + t(3, i) + wxi(1, 1, i) + real(wstart(i) + wtri(1, i) + mat(i), wp)
             end do
-            if (nc == 0 .and. wtri(1, i) == 0) cycle     ! no contact, none ended
-            tol = 1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
-            if (many) then                 ! many triangles meet here: the kept ones only
-                call wall_contacts_streamed(x(:, i), r, wstart(i), wstart(i + 1) - 1, n_cand, &
-                                            wlist, n_tri, vert, tol, max_wall_candidates, nc, &
-                                            q, feat, ctri, over)
-                if (over) overflow = overflow + 1
-                keep(1:nc) = .true.
-            else
-                call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), ctri(1:nc), n_tri, vert, &
-                                         tol, keep(1:nc))
-            end if
-            call history_slots(nc, keep(1:nc), ctri(1:nc), q(:, 1:nc), wtri(:, i), n_tri, &
-                               vert, twall, slot(1:nc))
-            fi = 0.0_wp
-            ti = 0.0_wp
-            ns = 0
-            a = mat(i)
-            do c = 1, nc
-                if (.not. keep(c)) cycle
-                if (ns == max_wall_contacts) then
-                    overflow = overflow + 1
-                    exit
-                end if
-                tri = ctri(c)
-                xik = 0.0_wp
-                if (slot(c) > 0) xik = wxi(:, slot(c), i)
-                dist = sqrt(sum((q(:, c) - x(:, i))**2))
-                nrm = (q(:, c) - x(:, i)) / dist
-                ! minus the wall's velocity at the contact point
-                wl = twall(tri)
-                lever = r - shift_v * (r - dist)
-                ws = lever * w(:, i)
-                d = q(:, c) - wall_c(:, wl)
-                vrel(1) = v(1, i) + (ws(2) * nrm(3) - ws(3) * nrm(2)) - wall_v(1, wl) &
-                          - (wall_w(2, wl) * d(3) - wall_w(3, wl) * d(2))
-                vrel(2) = v(2, i) + (ws(3) * nrm(1) - ws(1) * nrm(3)) - wall_v(2, wl) &
-                          - (wall_w(3, wl) * d(1) - wall_w(1, wl) * d(3))
-                vrel(3) = v(3, i) + (ws(1) * nrm(2) - ws(2) * nrm(1)) - wall_v(3, wl) &
-                          - (wall_w(1, wl) * d(2) - wall_w(2, wl) * d(1))
-                b = tmat(tri)
-                call hm_force(r - dist, nrm, vrel, r, mass(i), kn(a, b), st(a, b), gn(a, b), &
-                              gt(a, b), mu(a, b), clamp_normal, keep_length, dt, xik, fn, ft)
-                if (extra) then          ! rolling resistance, cohesion
-                    xr = 0.0_wp
-                    if (spring .and. slot(c) > 0) xr = wxi(:, max_wall_contacts + slot(c), i)
-                    if (rmodel(a, b) /= rolling_none) then
-                        call rolling_torque(rmodel(a, b), mur(a, b), r, kn(a, b), st(a, b), &
-                                            r - dist, fn, nrm, w(:, i) - wall_w(:, wl), dt, &
-                                            xr, tr)
-                        ti = ti + tr
+            do kr = k0 + 1, min(k0 + rows_per_block, n_row)
+                i = row(kr)
+                r = radius(i)
+                nc = 0
+                many = .false.
+                ! candidates with more slack than that cannot touch: not tested
+                moved = sqrt((x(1, i) - x_ref(1, i))**2 + (x(2, i) - x_ref(2, i))**2 &
+                             + (x(3, i) - x_ref(3, i))**2) + wmove
+                do k = wstart(i), wstart(i + 1) - 1
+                    if (wslack(k) > moved) cycle
+                    tri = wlist(k)
+                    call closest_point_triangle(x(:, i), vert(:, 1, tri), vert(:, 2, tri), &
+                                                vert(:, 3, tri), qk, fk)
+                    if (sum((qk - x(:, i))**2) >= r**2) cycle
+                    if (nc == max_wall_candidates) then
+                        many = .true.
+                        exit
                     end if
-                    new_xr(:, ns + 1) = xr
-                    if (kcoh(a, b) > 0.0_wp) fn = fn - kcoh(a, b) * sjkr_area_wall(r, dist)
+                    call add_candidate(qk, fk, tri, max_wall_candidates, nc, q, feat, ctri)
+                end do
+                if (nc == 0 .and. wtri(1, i) == 0) cycle     ! no contact, none ended
+                tol = 1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
+                if (many) then                 ! many triangles meet here: the kept ones only
+                    call wall_contacts_streamed(x(:, i), r, wstart(i), wstart(i + 1) - 1, n_cand, &
+                                                wlist, n_tri, vert, tol, max_wall_candidates, nc, &
+                                                q, feat, ctri, over)
+                    if (over) overflow = overflow + 1
+                    keep(1:nc) = .true.
+                else
+                    call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), ctri(1:nc), n_tri, vert, &
+                                             tol, keep(1:nc))
                 end if
-                ns = ns + 1
-                new_tri(ns) = tri
-                new_xi(:, ns) = xik
-                if (record) then
-                    wload(1:3, ns, i) = ft - fn * nrm
-                    wload(4:6, ns, i) = q(:, c)
-                end if
-                fi = fi - fn * nrm + ft
-                lever = r - shift_t * (r - dist)
-                ti(1) = ti(1) + lever * (nrm(2) * ft(3) - nrm(3) * ft(2))
-                ti(2) = ti(2) + lever * (nrm(3) * ft(1) - nrm(1) * ft(3))
-                ti(3) = ti(3) + lever * (nrm(1) * ft(2) - nrm(2) * ft(1))
+                call history_slots(nc, keep(1:nc), ctri(1:nc), q(:, 1:nc), wtri(:, i), n_tri, &
+                                   vert, twall, slot(1:nc))
+                fi = 0.0_wp
+                ti = 0.0_wp
+                ns = 0
+                a = mat(i)
+                do c = 1, nc
+                    if (.not. keep(c)) cycle
+                    if (ns == max_wall_contacts) then
+                        overflow = overflow + 1
+                        exit
+                    end if
+                    tri = ctri(c)
+                    xik = 0.0_wp
+                    if (slot(c) > 0) xik = wxi(:, slot(c), i)
+                    dist = sqrt(sum((q(:, c) - x(:, i))**2))
+                    nrm = (q(:, c) - x(:, i)) / dist
+                    ! minus the wall's velocity at the contact point
+                    wl = twall(tri)
+                    lever = r - shift_v * (r - dist)
+                    ws = lever * w(:, i)
+                    d = q(:, c) - wall_c(:, wl)
+                    vrel(1) = v(1, i) + (ws(2) * nrm(3) - ws(3) * nrm(2)) - wall_v(1, wl) &
+                              - (wall_w(2, wl) * d(3) - wall_w(3, wl) * d(2))
+                    vrel(2) = v(2, i) + (ws(3) * nrm(1) - ws(1) * nrm(3)) - wall_v(2, wl) &
+                              - (wall_w(3, wl) * d(1) - wall_w(1, wl) * d(3))
+                    vrel(3) = v(3, i) + (ws(1) * nrm(2) - ws(2) * nrm(1)) - wall_v(3, wl) &
+                              - (wall_w(1, wl) * d(2) - wall_w(2, wl) * d(1))
+                    b = tmat(tri)
+                    call hm_force(r - dist, nrm, vrel, r, mass(i), kn(a, b), st(a, b), gn(a, b), &
+                                  gt(a, b), mu(a, b), clamp_normal, keep_length, dt, xik, fn, ft)
+                    if (extra) then          ! rolling resistance, cohesion
+                        xr = 0.0_wp
+                        if (spring .and. slot(c) > 0) xr = wxi(:, max_wall_contacts + slot(c), i)
+                        if (rmodel(a, b) /= rolling_none) then
+                            call rolling_torque(rmodel(a, b), mur(a, b), r, kn(a, b), st(a, b), &
+                                                r - dist, fn, nrm, w(:, i) - wall_w(:, wl), dt, &
+                                                xr, tr)
+                            ti = ti + tr
+                        end if
+                        new_xr(:, ns + 1) = xr
+                        if (kcoh(a, b) > 0.0_wp) fn = fn - kcoh(a, b) * sjkr_area_wall(r, dist)
+                    end if
+                    ns = ns + 1
+                    new_tri(ns) = tri
+                    new_xi(:, ns) = xik
+                    if (record) then
+                        wload(1:3, ns, i) = ft - fn * nrm
+                        wload(4:6, ns, i) = q(:, c)
+                    end if
+                    fi = fi - fn * nrm + ft
+                    lever = r - shift_t * (r - dist)
+                    ti(1) = ti(1) + lever * (nrm(2) * ft(3) - nrm(3) * ft(2))
+                    ti(2) = ti(2) + lever * (nrm(3) * ft(1) - nrm(1) * ft(3))
+                    ti(3) = ti(3) + lever * (nrm(1) * ft(2) - nrm(2) * ft(1))
+                end do
+                do c = 1, ns                           ! the contacts into their new slots
+                    wtri(c, i) = new_tri(c)
+                    wxi(:, c, i) = new_xi(:, c)
+                    if (spring) wxi(:, max_wall_contacts + c, i) = new_xr(:, c)
+                end do
+                do c = ns + 1, max_wall_contacts       ! empty the slots no longer used
+                    if (wtri(c, i) == 0) exit
+                    wtri(c, i) = 0
+                    wxi(:, c, i) = 0.0_wp
+                    if (spring) wxi(:, max_wall_contacts + c, i) = 0.0_wp
+                end do
+                f(:, i) = f(:, i) + fi
+                t(:, i) = t(:, i) + ti
             end do
-            do c = 1, ns                           ! the contacts into their new slots
-                wtri(c, i) = new_tri(c)
-                wxi(:, c, i) = new_xi(:, c)
-                if (spring) wxi(:, max_wall_contacts + c, i) = new_xr(:, c)
-            end do
-            do c = ns + 1, max_wall_contacts       ! empty the slots no longer used
-                if (wtri(c, i) == 0) exit
-                wtri(c, i) = 0
-                wxi(:, c, i) = 0.0_wp
-                if (spring) wxi(:, max_wall_contacts + c, i) = 0.0_wp
-            end do
-            f(:, i) = f(:, i) + fi
-            t(:, i) = t(:, i) + ti
         end do
     end subroutine pw_forces
 end module dem_contacts_pw
