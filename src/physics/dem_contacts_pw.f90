@@ -5,7 +5,7 @@
 !> and follows a contact onto the neighbouring triangle of the same wall.
 module dem_contacts_pw
     use dem_kinds, only: wp, ip
-    use dem_contact_hm, only: hm_force
+    use dem_contact_hm, only: hm_lanes, max_lanes
     use dem_contact_extra, only: rolling_torque, sjkr_area_wall
     use dem_materials, only: rolling_none
     use dem_mesh, only: closest_point_triangle, feature_face
@@ -18,8 +18,10 @@ module dem_contacts_pw
     !> meeting at a vertex) has its contacts found from its list, without storing them
     integer(ip), parameter :: max_wall_candidates = 16
 
-    !> rows of pw_forces whose particle data are loaded together (one thread's work)
-    integer(ip), parameter :: rows_per_block = 8
+    !> rows of pw_forces taken together (one thread's work): their particle data are loaded
+    !> together, and the law runs over all their contacts at once (at most max_lanes)
+    integer(ip), parameter :: rows_per_block = max_lanes / max_wall_contacts
+    integer(ip), parameter :: wall_lanes = rows_per_block * max_wall_contacts
 
 contains
 
@@ -210,7 +212,7 @@ contains
         real(wp), intent(in) :: wall_c(3, n_wall)   !! a point of its rotation axis [m]
         real(wp), intent(in) :: kn(nm, nm), st(nm, nm), mu(nm, nm)   !! [Pa], [-]
         real(wp), intent(in) :: gn(nm, nm), gt(nm, nm)   !! damping factors [Pa^(1/2)]
-        logical, intent(in) :: clamp_normal, keep_length              !! (hm_force)
+        logical, intent(in) :: clamp_normal, keep_length              !! (hm_lanes)
         real(wp), intent(in) :: shift_v, shift_t                      !! [-]
         logical, intent(in) :: extra              !! some pair resists rolling or coheres
         integer(ip), intent(in) :: rmodel(nm, nm) !! rolling model (dem_materials)
@@ -225,39 +227,55 @@ contains
         real(wp), intent(inout) :: wload(6, max_wall_contacts, n_load) !! [N], [m]
         real(wp), intent(inout) :: f(3, n_own), t(3, n_own)           !! [N], [N m]
         integer(ip), intent(out) :: overflow
-        integer(ip) :: i, k, c, nc, ns, a, b, tri, feat(max_wall_candidates), kr, wl
+        integer(ip) :: i, k, c, nc, ns, a, b, tri, feat(max_wall_candidates), kr, wl, l, m, k0, &
+                       n_block
         integer(ip) :: new_tri(max_wall_contacts), ctri(max_wall_candidates), fk
         integer(ip) :: slot(max_wall_candidates)
         real(wp) :: q(3, max_wall_candidates), qk(3)
         real(wp) :: new_xi(3, max_wall_contacts)
-        real(wp) :: nrm(3), vrel(3), xik(3), fn, ft(3), fi(3), ti(3), dist, r, tol, moved, &
-                    ws(3), d(3), lever, tr(3), xr(3), new_xr(3, max_wall_contacts)
+        real(wp) :: nrm(3), vrel(3), ft(3), fi(3), ti(3), dist, r, tol, moved, ws(3), d(3), &
+                    lever, tr(3), xr(3), new_xr(3, max_wall_contacts)
         logical :: keep(max_wall_candidates), many, over, spring
-        integer(ip) :: k0
+        ! the block's rows: their lanes first(kr)..last(kr) (none if `idle`: no contact, none
+        ! ended); the lanes: the contacts' law (hm_lanes) and what follows it
+        integer(ip), dimension(rows_per_block) :: first, last
+        logical :: idle(rows_per_block)
+        integer(ip), dimension(wall_lanes) :: ltri, lslot
+        real(wp) :: lq(3, wall_lanes)
+        real(wp), dimension(wall_lanes) :: ld, ov, n1, n2, n3, v1, v2, v3, rs, ms, kn_l, st_l, &
+                                          gn_l, gt_l, mu_l, x1, x2, x3, fn, f1, f2, f3
         real(wp), volatile :: lines
 
         overflow = 0
         spring = n_wall_columns > max_wall_contacts   ! the slots' EPSD2 springs after theirs
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
-        !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk) &
-        !$acc private(new_xi, nrm, vrel, xik, fn, ft, fi, ti, dist, r, tol, moved, keep) &
-        !$acc private(slot, lines) &
+        !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk, l, m) &
+        !$acc private(new_xi, nrm, vrel, ft, fi, ti, dist, r, tol, moved, keep, n_block) &
+        !$acc private(slot, lines, first, last, idle, ltri, lslot, lq, ld, ov, n1, n2, n3) &
+        !$acc private(v1, v2, v3, rs, ms, kn_l, st_l, gn_l, gt_l, mu_l, x1, x2, x3, fn, f1) &
+        !$acc private(f2, f3) &
         !$acc private(many, over, i, wl, ws, d, lever, tr, xr, new_xr) firstprivate(spring)
         do k0 = 0, n_row - 1, rows_per_block
+            n_block = min(rows_per_block, n_row - k0)
             ! the lines of the particle data that the block's rows read, loaded first in a
             ! short loop of their own (a vector's first and last component: it may straddle
             ! two lines): the rows lie scattered in memory, and a row's steps, which depend on
             ! one another, would wait for each of its cache misses in turn; here the misses of
             ! the block's rows overlap (`lines` is VOLATILE, so that the loads are kept)
-            do kr = k0 + 1, min(k0 + rows_per_block, n_row)
-                i = row(kr)
+            do kr = 1, n_block
+                i = row(k0 + kr)
                 lines = x(1, i) + x(3, i) + x_ref(1, i) + x_ref(3, i) + radius(i) + mass(i) &
                         + v(1, i) + v(3, i) + w(1, i) + w(3, i) + f(1, i) + f(3, i) + t(1, i) &
                         + t(3, i) + wxi(1, 1, i) + real(wstart(i) + wtri(1, i) + mat(i), wp)
             end do
-            do kr = k0 + 1, min(k0 + rows_per_block, n_row)
-                i = row(kr)
+            ! each row's contacts, their history slots, normals, overlaps, relative
+            ! velocities, constants and history into lanes
+            m = 0
+            do kr = 1, n_block
+                i = row(k0 + kr)
                 r = radius(i)
+                first(kr) = m + 1
+                last(kr) = m
                 nc = 0
                 many = .false.
                 ! candidates with more slack than that cannot touch: not tested
@@ -275,33 +293,41 @@ contains
                     end if
                     call add_candidate(qk, fk, tri, max_wall_candidates, nc, q, feat, ctri)
                 end do
-                if (nc == 0 .and. wtri(1, i) == 0) cycle     ! no contact, none ended
+                idle(kr) = nc == 0 .and. wtri(1, i) == 0       ! no contact, none ended
+                if (idle(kr)) cycle
                 tol = 1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
                 if (many) then                 ! many triangles meet here: the kept ones only
-                    call wall_contacts_streamed(x(:, i), r, wstart(i), wstart(i + 1) - 1, n_cand, &
-                                                wlist, n_tri, vert, tol, max_wall_candidates, nc, &
-                                                q, feat, ctri, over)
+                    call wall_contacts_streamed(x(:, i), r, wstart(i), wstart(i + 1) - 1, &
+                                                n_cand, wlist, n_tri, vert, tol, &
+                                                max_wall_candidates, nc, q, feat, ctri, over)
                     if (over) overflow = overflow + 1
                     keep(1:nc) = .true.
                 else
-                    call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), ctri(1:nc), n_tri, vert, &
-                                             tol, keep(1:nc))
+                    call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), ctri(1:nc), n_tri, &
+                                             vert, tol, keep(1:nc))
                 end if
                 call history_slots(nc, keep(1:nc), ctri(1:nc), q(:, 1:nc), wtri(:, i), n_tri, &
                                    vert, twall, slot(1:nc))
-                fi = 0.0_wp
-                ti = 0.0_wp
-                ns = 0
                 a = mat(i)
                 do c = 1, nc
                     if (.not. keep(c)) cycle
-                    if (ns == max_wall_contacts) then
+                    if (m - first(kr) + 1 == max_wall_contacts) then
                         overflow = overflow + 1
                         exit
                     end if
+                    m = m + 1
                     tri = ctri(c)
-                    xik = 0.0_wp
-                    if (slot(c) > 0) xik = wxi(:, slot(c), i)
+                    ltri(m) = tri
+                    lslot(m) = slot(c)
+                    lq(:, m) = q(:, c)
+                    x1(m) = 0.0_wp
+                    x2(m) = 0.0_wp
+                    x3(m) = 0.0_wp
+                    if (slot(c) > 0) then
+                        x1(m) = wxi(1, slot(c), i)
+                        x2(m) = wxi(2, slot(c), i)
+                        x3(m) = wxi(3, slot(c), i)
+                    end if
                     dist = sqrt(sum((q(:, c) - x(:, i))**2))
                     nrm = (q(:, c) - x(:, i)) / dist
                     ! minus the wall's velocity at the contact point
@@ -316,28 +342,64 @@ contains
                     vrel(3) = v(3, i) + (ws(1) * nrm(2) - ws(2) * nrm(1)) - wall_v(3, wl) &
                               - (wall_w(1, wl) * d(2) - wall_w(2, wl) * d(1))
                     b = tmat(tri)
-                    call hm_force(r - dist, nrm, vrel, r, mass(i), kn(a, b), st(a, b), gn(a, b), &
-                                  gt(a, b), mu(a, b), clamp_normal, keep_length, dt, xik, fn, ft)
+                    ld(m) = dist
+                    ov(m) = r - dist
+                    n1(m) = nrm(1)
+                    n2(m) = nrm(2)
+                    n3(m) = nrm(3)
+                    v1(m) = vrel(1)
+                    v2(m) = vrel(2)
+                    v3(m) = vrel(3)
+                    rs(m) = r
+                    ms(m) = mass(i)
+                    kn_l(m) = kn(a, b)
+                    st_l(m) = st(a, b)
+                    gn_l(m) = gn(a, b)
+                    gt_l(m) = gt(a, b)
+                    mu_l(m) = mu(a, b)
+                end do
+                last(kr) = m
+            end do
+            ! the law over the block's contacts at once (R* = R and m* = m against a wall)
+            call hm_lanes(m, ov, n1, n2, n3, v1, v2, v3, rs, ms, kn_l, st_l, gn_l, gt_l, mu_l, &
+                          clamp_normal, keep_length, dt, x1, x2, x3, fn, f1, f2, f3)
+            ! each row's forces, torques and slots from its lanes
+            do kr = 1, n_block
+                if (idle(kr)) cycle
+                i = row(k0 + kr)
+                r = radius(i)
+                a = mat(i)
+                fi = 0.0_wp
+                ti = 0.0_wp
+                ns = 0
+                do l = first(kr), last(kr)
+                    tri = ltri(l)
+                    nrm = [n1(l), n2(l), n3(l)]
+                    ft = [f1(l), f2(l), f3(l)]
+                    dist = ld(l)
                     if (extra) then          ! rolling resistance, cohesion
+                        wl = twall(tri)
+                        b = tmat(tri)
                         xr = 0.0_wp
-                        if (spring .and. slot(c) > 0) xr = wxi(:, max_wall_contacts + slot(c), i)
+                        if (spring .and. lslot(l) > 0) xr = wxi(:, max_wall_contacts + lslot(l), i)
                         if (rmodel(a, b) /= rolling_none) then
-                            call rolling_torque(rmodel(a, b), mur(a, b), r, kn(a, b), st(a, b), &
-                                                r - dist, fn, nrm, w(:, i) - wall_w(:, wl), dt, &
-                                                xr, tr)
+                            call rolling_torque(rmodel(a, b), mur(a, b), r, kn(a, b), &
+                                                st(a, b), r - dist, fn(l), nrm, &
+                                                w(:, i) - wall_w(:, wl), dt, xr, tr)
                             ti = ti + tr
                         end if
                         new_xr(:, ns + 1) = xr
-                        if (kcoh(a, b) > 0.0_wp) fn = fn - kcoh(a, b) * sjkr_area_wall(r, dist)
+                        if (kcoh(a, b) > 0.0_wp) fn(l) = fn(l) - kcoh(a, b) &
+                                                         * sjkr_area_wall(r, dist)
                     end if
                     ns = ns + 1
                     new_tri(ns) = tri
-                    new_xi(:, ns) = xik
+                    new_xi(:, ns) = [x1(l), x2(l), x3(l)]
                     if (record) then
-                        wload(1:3, ns, i) = ft - fn * nrm
-                        wload(4:6, ns, i) = q(:, c)
+                        wload(1:3, ns, i) = ft - fn(l) * nrm
+                        wload(4:6, ns, i) = lq(:, l)
                     end if
-                    fi = fi - fn * nrm + ft
+                    fi = fi - fn(l) * nrm + ft
                     lever = r - shift_t * (r - dist)
                     ti(1) = ti(1) + lever * (nrm(2) * ft(3) - nrm(3) * ft(2))
                     ti(2) = ti(2) + lever * (nrm(3) * ft(1) - nrm(1) * ft(3))
