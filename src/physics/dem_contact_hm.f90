@@ -19,7 +19,9 @@ contains
     !> plane keeping its length and advanced by vt dt (`keep_length`), or advanced by vt dt and
     !> then projected into the plane (LIGGGHTS 3.8). When the spring force exceeds the Coulomb
     !> limit mu |F_n| the contact slides: the spring is rescaled to the limit and the tangential
-    !> damping is dropped (as LIGGGHTS, MUSEN, MercuryDPM and Yade do).
+    !> damping is dropped (as LIGGGHTS, MUSEN, MercuryDPM and Yade do). The law for one
+    !> contact, as the tests and section 2.1 of doc/theory.md state it; the contact kernels
+    !> take their contacts in lanes (hm_lanes), each lane with the same operations.
     pure subroutine hm_force(overlap, nrm, vrel, rstar, mstar, kn, st, gn, gt, mu, &
                              clamp_normal, keep_length, dt, xi, fn, ft)
         !$acc routine seq
