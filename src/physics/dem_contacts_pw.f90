@@ -249,7 +249,7 @@ contains
         overflow = 0
         spring = n_wall_columns > max_wall_contacts   ! the slots' EPSD2 springs after theirs
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
-        !$acc private(k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk, l, m) &
+        !$acc private(kr, k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk, l, m) &
         !$acc private(new_xi, nrm, vrel, ft, fi, ti, dist, r, tol, moved, keep, n_block) &
         !$acc private(slot, lines, first, last, idle, ltri, lslot, lq, ld, ov, n1, n2, n3) &
         !$acc private(v1, v2, v3, rs, ms, kn_l, st_l, gn_l, gt_l, mu_l, x1, x2, x3, fn, f1) &
