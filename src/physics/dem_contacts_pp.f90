@@ -46,15 +46,17 @@ contains
     !> into lanes and the contact law runs over those lanes at once (hm_lanes). The lever of a
     !> particle's rotation in the relative velocity is R - shift_v d, in the torque
     !> R - shift_t d (0: the radius; 1/2: the contact point at mid-overlap, as LIGGGHTS).
-    !> With `reset`, a pair's history is cleared when its contact ends; without, it is kept
-    !> while the pair is listed (LIGGGHTS 3.8.0) and continued by its next contact. With
-    !> `extra` (a case whose pairs resist rolling or cohere), the rolling torque and the sJKR
-    !> force (dem_contact_extra) of the pair's model follow the contact law; the EPSD2 spring
-    !> is xi(4:6, p).
+    !> A pair's history is in the slot of the store (dem_contact_store) that slot(p) names:
+    !> a contact that begins takes its pair's slot back or, the first time since the lists'
+    !> build, the next free one (cleared). With `reset`, a pair's history is cleared when its
+    !> contact ends; without, it is kept while the pair is listed (LIGGGHTS 3.8.0) and
+    !> continued by its next contact. With `extra` (a case whose pairs resist rolling or
+    !> cohere), the rolling torque and the sJKR force (dem_contact_extra) of the pair's model
+    !> follow the contact law; the EPSD2 spring is hist(4:6, slot).
     subroutine pp_forces(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
                          kn_ab, st_ab, gn_ab, gt_ab, mu_ab, clamp_normal, keep_length, &
-                         shift_v, shift_t, reset, extra, rmodel_ab, mur_ab, kcoh_ab, dt, xi, &
-                         touching, acc, f, t)
+                         shift_v, shift_t, reset, extra, rmodel_ab, mur_ab, kcoh_ab, dt, slot, &
+                         hist, n_hist, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
         integer(ip), intent(in) :: nm             !! materials
@@ -73,14 +75,15 @@ contains
         real(wp), intent(in) :: mur_ab(nm, nm)       !! rolling friction [-]
         real(wp), intent(in) :: kcoh_ab(nm, nm)      !! cohesion energy density [J/m^3]
         real(wp), intent(in) :: dt                   !! [s]
-        real(wp), intent(inout) :: xi(n_pair_history, n_pairs)  !! history of the first:
+        integer(ip), intent(inout) :: slot(n_pairs)  !! > 0: in contact, history in that
+                                                     !! slot; < 0: history kept there; 0: none
+        real(wp), intent(inout) :: hist(n_pair_history, n_pairs)  !! history of the first:
                                                      !! xi [m], (EPSD2) spring [N m]
-        logical, intent(inout) :: touching(n_pairs)  !! in contact (with `reset`, xi /= 0
-                                                     !! only if so)
+        integer(ip), intent(inout) :: n_hist(1)      !! slots in use
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
                                                      !! (zero between calls)
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m]
-        integer(ip) :: i, j, p, p0, c, l, m, side, a, b
+        integer(ip) :: i, j, p, p0, c, l, m, side, a, b, s
         integer(ip) :: lp(tile + 1)
         logical :: over
         integer(i8) :: kf(3), kc(3)
@@ -98,7 +101,7 @@ contains
         extra_ = extra
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
-        !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc) &
+        !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, s) &
         !$acc private(over, side, a, b, rsum, msum) &
         !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g, ri, rj) &
         !$acc firstprivate(sv, st_, shifted_v, shifted_t, extra_) private(wr, hr, tr) &
@@ -123,11 +126,19 @@ contains
                 e4(m + 1) = dist2
                 over = .not. (dist2 >= (radius(i) + radius(j))**2)
                 m = m + merge(1, 0, over)
-                if (over .neqv. touching(p)) then
-                    if (.not. over) then                      ! the contact has ended
-                        touching(p) = .false.
-                        if (reset) xi(:, p) = 0.0_wp
+                s = slot(p)
+                if (over .neqv. s > 0) then                ! the contact begins or ends
+                    if (.not. over) then
+                        if (reset) hist(:, s) = 0.0_wp
+                    else if (s == 0) then                  ! its first since the build
+                        !$acc atomic capture
+                        n_hist(1) = n_hist(1) + 1
+                        s = n_hist(1)
+                        !$acc end atomic
+                        hist(:, s) = 0.0_wp
+                        s = -s
                     end if
+                    slot(p) = -s
                 end if
             end do
             ! their normals, overlaps, relative velocities, constants and history
@@ -160,9 +171,10 @@ contains
                 gn(l) = gn_ab(a, b)
                 gt(l) = gt_ab(a, b)
                 mu(l) = mu_ab(a, b)
-                x1(l) = xi(1, p)
-                x2(l) = xi(2, p)
-                x3(l) = xi(3, p)
+                s = slot(p)
+                x1(l) = hist(1, s)
+                x2(l) = hist(2, s)
+                x3(l) = hist(3, s)
             end do
             if (shifted_v) then     ! the relative velocities again, with levers R - shift_v d
                 do l = 1, m
@@ -190,11 +202,11 @@ contains
                     b = mat(j)
                     if (rmodel_ab(a, b) /= rolling_none) then
                         hr = 0.0_wp
-                        if (rmodel_ab(a, b) == rolling_epsd2) hr = xi(4:6, p)
+                        if (rmodel_ab(a, b) == rolling_epsd2) hr = hist(4:6, slot(p))
                         wr = w(:, i) - w(:, j)
                         call rolling_torque(rmodel_ab(a, b), mur_ab(a, b), rs(l), kn(l), st(l), &
                                             ov(l), fn(l), [n1(l), n2(l), n3(l)], wr, dt, hr, tr)
-                        if (rmodel_ab(a, b) == rolling_epsd2) xi(4:6, p) = hr
+                        if (rmodel_ab(a, b) == rolling_epsd2) hist(4:6, slot(p)) = hr
                         do c = 1, 3
                             kc(c) = to_fixed(tr(c) / radius(i) * scale(i))
                             !$acc atomic update
@@ -217,10 +229,10 @@ contains
                 p = lp(l)
                 i = pair(1, p)
                 j = pair(2, p)
-                xi(1, p) = x1(l)
-                xi(2, p) = x2(l)
-                xi(3, p) = x3(l)
-                touching(p) = .true.
+                s = slot(p)
+                hist(1, s) = x1(l)
+                hist(2, s) = x2(l)
+                hist(3, s) = x3(l)
                 fp(1) = -fn(l) * n1(l) + f1(l)
                 fp(2) = -fn(l) * n2(l) + f2(l)
                 fp(3) = -fn(l) * n3(l) + f3(l)

@@ -156,8 +156,9 @@ contains
                 allocate(fr%contacts(n))
                 do a = 1, n
                     i = order(a)
-                    fr%contacts(a) = count(s%cs%touching(abs(s%nb%pref(s%nb%start(i): &
-                                     s%nb%start(i + 1) - 1)))) + count(s%cs%wall_tri(:, i) > 0)
+                    fr%contacts(a) = count(s%cs%slot(abs(s%nb%pref(s%nb%start(i): &
+                                     s%nb%start(i + 1) - 1))) > 0) &
+                                     + count(s%cs%wall_tri(:, i) > 0)
                 end do
             end if
         end associate

@@ -147,7 +147,8 @@ contains
                            p%mass, p%mat, nb%scale, nb%pair, pc%kn, pc%st, pc%gn, pc%gt, pc%mu, &
                            o%clamp_normal, o%keep_length, o%shift_v, o%shift_t, &
                            o%reset_pair_history, pc%rolling .or. pc%cohesion, pc%rmodel, &
-                           pc%mur, pc%kcoh, c%dt, s%cs%xi, s%cs%touching, nb%acc, p%f, p%t)
+                           pc%mur, pc%kcoh, c%dt, s%cs%slot, s%cs%hist, s%cs%n_hist, nb%acc, p%f, &
+                           p%t)
         end associate
     end subroutine particle_contacts
 

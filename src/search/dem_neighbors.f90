@@ -14,8 +14,7 @@ module dem_neighbors
     use dem_particles, only: index_of_id
     use dem_mesh, only: mesh_t, closest_point_triangle
     use dem_contact_store, only: contact_store_t, n_pair_history, max_pair_history, &
-                                 store_pairs_new, &
-                                 store_pairs_take, carry_history, touching_from_history, &
+                                 store_pairs_take, store_pairs_history, carry_history, &
                                  history_counts, history_fill, side_history, sort_history_row
     implicit none
     private
@@ -220,7 +219,7 @@ contains
                                     gitem(:), cnt(:), n_of(:, :), off(:), pstart(:)
         integer(ip), allocatable :: old_pref(:), kept(:, :)
         integer(i8), allocatable :: old_partner(:)
-        real(wp), allocatable :: old_xi(:, :), rmax(:), origin(:, :), h(:)
+        real(wp), allocatable :: old_xi(:, :), xi(:, :), rmax(:), origin(:, :), h(:)
         real(wp) :: lo(3), hi(3), margin
         integer(ip) :: l, n_levels, n_cells, n_entries
         logical :: keep_history
@@ -232,7 +231,7 @@ contains
             call move_alloc(nb%start, old_start)
             call move_alloc(nb%partner, old_partner)
             call move_alloc(nb%pref, old_pref)
-            call move_alloc(cs%xi, old_xi)
+            call store_pairs_history(cs, old_xi)
         end if
         call neighbors_free(nb)
         allocate(nb%start(n_own + 1), nb%wstart(n_own + 1), nb%x_ref(3, n_own))
@@ -317,15 +316,16 @@ contains
         nb%acc = 0
         call acc_data(nb%pair, acc_create)
         call acc_data(nb%acc, acc_enter)
-        call store_pairs_new(cs, nb%n_pairs)
+        allocate(xi(n_pair_history, max(1, nb%n_pairs)))
+        call acc_data(xi, acc_create)
         call number_pairs(n_own, n_entries, nb%n_pairs, nb%start, nb%list, nb%mirror, pstart, &
-                          nb%pref, nb%pair, cs%xi)
+                          nb%pref, nb%pair, xi)
         call acc_data(pstart, acc_exit)
         if (keep_history) then
             if (present(old_index)) then
                 call carry_history(n_own, size(old_start, kind=ip), n_entries, nb%n_pairs, &
                                    size(old_partner, kind=ip), size(old_xi, 2, kind=ip), &
-                                   old_index, nb%start, nb%partner, nb%pref, cs%xi, &
+                                   old_index, nb%start, nb%partner, nb%pref, xi, &
                                    old_start, old_partner, old_pref, old_xi)
             else                                 ! the particles kept their places
                 allocate(same(n_own))
@@ -333,7 +333,7 @@ contains
                 call fill_range(n_own, same, 1, 1)
                 call carry_history(n_own, size(old_start, kind=ip), n_entries, nb%n_pairs, &
                                    size(old_partner, kind=ip), size(old_xi, 2, kind=ip), &
-                                   same, nb%start, nb%partner, nb%pref, cs%xi, &
+                                   same, nb%start, nb%partner, nb%pref, xi, &
                                    old_start, old_partner, old_pref, old_xi)
                 call acc_data(same, acc_exit)
             end if
@@ -342,7 +342,7 @@ contains
             call acc_data(old_pref, acc_exit)
             call acc_data(old_xi, acc_exit)
         end if
-        call touching_from_history(nb%n_pairs, cs%xi, cs%touching)
+        call store_pairs_take(cs, xi)          ! (the pairs with history are in contact)
         call acc_data(cnt, acc_exit)
         call acc_data(gstart, acc_exit)
         call acc_data(gitem, acc_exit)
@@ -946,16 +946,19 @@ contains
         integer(ip), intent(in) :: order(:)      !! the owned particles by increasing id
         integer(i8), allocatable, intent(out) :: pair(:, :)  !! (2, pairs)
         real(wp), allocatable, intent(out) :: xi(:, :)       !! (n_pair_history, pairs) [m]
+        real(wp), allocatable :: pxi(:, :)
         integer(ip) :: a, i, k, m, pass, nh
         real(wp) :: h(max_pair_history)
         nh = n_pair_history
+        call store_pairs_history(cs, pxi)                    ! each pair's, on the host too
+        call acc_data(pxi, acc_to_host)
         do pass = 1, 2
             m = 0
             do a = 1, n_own
                 i = order(a)
                 do k = nb%start(i), nb%start(i + 1) - 1
-                    call side_history(size(nb%pref, kind=ip), size(cs%xi, 2, kind=ip), k, &
-                                      nb%pref, cs%xi, h(1:nh))
+                    call side_history(size(nb%pref, kind=ip), size(pxi, 2, kind=ip), k, &
+                                      nb%pref, pxi, h(1:nh))
                     if (all(h(1:nh) == 0.0_wp)) cycle
                     if (nb%partner(k) < gid(i) .and. nb%mirror(k) /= 0) cycle
                     m = m + 1
@@ -971,6 +974,7 @@ contains
             end do
             if (pass == 1) allocate(pair(2, m), xi(n_pair_history, m))
         end do
+        call acc_data(pxi, acc_exit)
     end subroutine neighbors_history
 
     !> The tangential history each owned particle holds, seen from its own side, as rows
@@ -988,13 +992,15 @@ contains
         integer(i8), allocatable, intent(out) :: hpartner(:)
         real(wp), allocatable, intent(out) :: hxi(:, :)
         integer(ip), allocatable :: cnt(:)
+        real(wp), allocatable :: pxi(:, :)
         integer(ip) :: n_h
         allocate(hstart(n_own + 1), cnt(max(1, n_own)))
         call acc_data(hstart, acc_create)
         call acc_data(cnt, acc_create)
         if (allocated(nb%start)) then
-            call history_counts(n_own, size(nb%partner, kind=ip), size(cs%xi, 2, kind=ip), &
-                                nb%start, nb%pref, cs%xi, cnt)
+            call store_pairs_history(cs, pxi)
+            call history_counts(n_own, size(nb%partner, kind=ip), size(pxi, 2, kind=ip), &
+                                nb%start, nb%pref, pxi, cnt)
         else
             call fill_range(n_own, cnt, 0, 0)
         end if
@@ -1005,8 +1011,9 @@ contains
         call acc_data(hpartner, acc_create)
         call acc_data(hxi, acc_create)
         if (n_h > 0) call history_fill(n_own, size(nb%partner, kind=ip), &
-                                       size(cs%xi, 2, kind=ip), nb%start, nb%partner, &
-                                       nb%pref, cs%xi, hstart, n_h, hpartner, hxi)
+                                       size(pxi, 2, kind=ip), nb%start, nb%partner, &
+                                       nb%pref, pxi, hstart, n_h, hpartner, hxi)
+        if (allocated(pxi)) call acc_data(pxi, acc_exit)
         call acc_data(cnt, acc_exit)
     end subroutine neighbors_row_history
 
@@ -1016,7 +1023,12 @@ contains
         type(contact_store_t), intent(in) :: cs
         integer(ip), intent(in) :: k
         real(wp) :: h(n_pair_history)
-        call side_history(size(nb%pref, kind=ip), size(cs%xi, 2, kind=ip), k, nb%pref, cs%xi, h)
+        integer(ip) :: s
+        h = 0.0_wp
+        s = abs(cs%slot(abs(nb%pref(k))))
+        if (s == 0) return
+        h = cs%hist(:, s)
+        if (nb%pref(k) < 0) h = -h
     end function neighbors_entry_history
 
     !> Make rows of history (as neighbors_row_history gives them, on the device) the lists'

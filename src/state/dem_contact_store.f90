@@ -1,8 +1,9 @@
 !> The history of the contacts, in one place: the tangential displacement of every particle
-!> pair in contact, numbered as the neighbour lists number their pairs (dem_neighbors), and of
-!> every particle's wall contacts, in slots per particle keyed by triangle. This module gives
-!> the contact kernels their arrays and moves the history across list rebuilds (carried by
-!> partner id), between ranks (packed rows) and into and out of checkpoints (pairs by id).
+!> pair in contact, in slots that the neighbour lists' pairs name (dem_neighbors; doc/theory.md
+!> section 9), and of every particle's wall contacts, in slots per particle keyed by triangle.
+!> This module gives the contact kernels their arrays and moves the history across list
+!> rebuilds (carried by partner id), between ranks (packed rows) and into and out of
+!> checkpoints (pairs by id).
 !> A pair's history has n_pair_history reals: the tangential displacement (3), followed, in
 !> a case with a rolling spring (EPSD2), by the spring's torque (3 more). A particle's wall
 !> history has n_wall_columns columns of 3 reals: the displacements of its max_wall_contacts
@@ -16,11 +17,11 @@ module dem_contact_store
     implicit none
     private
     public :: contact_store_t, n_pair_history, n_wall_history, max_wall_contacts, &
-              n_wall_pack_real, store_pairs_new, store_pairs_take, store_pairs_drop, &
+              n_wall_pack_real, store_pairs_take, store_pairs_history, store_pairs_drop, &
               store_pairs_data, store_pairs_forget_parted, store_walls_data, &
               store_init, store_walls_reserve, store_walls_reserve_on_device, store_walls_restore, &
               store_walls_permute, store_walls_pack, store_walls_unpack, store_unique_pairs, &
-              carry_history, touching_from_history, history_counts, history_fill, &
+              carry_history, history_counts, history_fill, &
               side_history, sort_history_row, store_history_widths, max_pair_history, &
               n_wall_columns
 
@@ -36,11 +37,19 @@ module dem_contact_store
     !$acc declare copyin(n_pair_history)
 
     type :: contact_store_t
-        !> history of each pair p of the lists (of their first particle's side), and whether
-        !> the pair is in contact (xi /= 0 only then); after a migration or a restart, until
-        !> the next list build, the history of rows of entries (dem_neighbors' set_rows)
-        real(wp), allocatable :: xi(:, :)        !< (n_pair_history, pair)
-        logical, allocatable :: touching(:)
+        !> the history of each pair p of the lists (of their first particle's side): for a
+        !> pair in contact slot(p) > 0 and its history is hist(:, slot(p)); for a pair out of
+        !> contact whose history is kept (until the next list build, as LIGGGHTS 3.8.0 does),
+        !> slot(p) < 0 and hist(:, -slot(p)); 0: no history. At a list build the pairs with
+        !> history take the first slots, in the order of the pairs; a contact that begins
+        !> later takes the next one (n_hist(1) are in use; a pair keeps its slot until the
+        !> next build, so there are never more than pairs). The contact kernel so reads and
+        !> writes the history of the pairs in contact only. After a migration or a restart,
+        !> until the next list build, the history of rows of entries (dem_neighbors'
+        !> set_rows), numbered as the entries.
+        integer(ip), allocatable :: slot(:)
+        real(wp), allocatable :: hist(:, :)      !< (n_pair_history, slot)
+        integer(ip), allocatable :: n_hist(:)    !< (1)
         integer(ip), allocatable :: wall_tri(:, :)   !< (slot, particle); 0: a free slot
         real(wp), allocatable :: wall_xi(:, :, :)    !< (n_wall_history, column, particle)
     end type contact_store_t
@@ -59,46 +68,84 @@ contains
         !$acc update device(n_pair_history)
     end subroutine store_history_widths
 
-    !> No history for n_pairs new pairs (on the device, not set: the caller fills xi).
-    subroutine store_pairs_new(cs, n_pairs)
-        type(contact_store_t), intent(inout) :: cs
-        integer(ip), intent(in) :: n_pairs
-        call store_pairs_drop(cs)
-        allocate(cs%xi(n_pair_history, max(1, n_pairs)), cs%touching(max(1, n_pairs)))
-        call acc_data(cs%xi, acc_create)
-        call acc_data(cs%touching, acc_create)
-    end subroutine store_pairs_new
-
-    !> The pair history becomes xi (on the device); the touching flags are allocated, not
-    !> set (the next list build sets them from the history).
+    !> The history of the pairs, xi(:, p) for pair p (on the device; zero: none), becomes
+    !> the store's: the pairs with history take the first slots, in order (a pair in contact
+    !> at a list build is one with history); xi is freed.
     subroutine store_pairs_take(cs, xi)
         type(contact_store_t), intent(inout) :: cs
         real(wp), allocatable, intent(inout) :: xi(:, :)
+        integer(ip) :: n
         call store_pairs_drop(cs)
-        call move_alloc(xi, cs%xi)               ! (its device copy goes with it)
-        allocate(cs%touching(size(cs%xi, 2)))
-        call acc_data(cs%touching, acc_create)
+        n = size(xi, 2, kind=ip)
+        allocate(cs%slot(n), cs%hist(n_pair_history, n), cs%n_hist(1))
+        call acc_data(cs%slot, acc_create)
+        call acc_data(cs%hist, acc_create)
+        cs%n_hist = 0
+        call acc_data(cs%n_hist, acc_enter)
+        call number_slots(n, xi, cs%slot, cs%hist, cs%n_hist)
+        call acc_data(xi, acc_exit)
+        deallocate(xi)
     end subroutine store_pairs_take
+
+    subroutine number_slots(n, xi, slot, hist, n_hist)
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: xi(n_pair_history, n)
+        integer(ip), intent(inout) :: slot(n), n_hist(1)
+        real(wp), intent(inout) :: hist(n_pair_history, n)
+        integer(ip) :: p, s
+        !$acc parallel loop gang vector default(present) private(s)
+        do p = 1, n
+            slot(p) = 0
+            if (all(xi(:, p) == 0.0_wp)) cycle
+            !$acc atomic capture
+            n_hist(1) = n_hist(1) + 1
+            s = n_hist(1)
+            !$acc end atomic
+            slot(p) = s
+            hist(:, s) = xi(:, p)
+        end do
+    end subroutine number_slots
+
+    !> The history of the store's pairs as xi(:, p) for pair p (zero: none), on the device.
+    subroutine store_pairs_history(cs, xi)
+        type(contact_store_t), intent(in) :: cs
+        real(wp), allocatable, intent(out) :: xi(:, :)
+        allocate(xi(n_pair_history, size(cs%slot)))
+        call acc_data(xi, acc_create)
+        call slots_history(size(cs%slot, kind=ip), cs%slot, cs%hist, xi)
+    end subroutine store_pairs_history
+
+    subroutine slots_history(n, slot, hist, xi)
+        integer(ip), intent(in) :: n
+        integer(ip), intent(in) :: slot(n)
+        real(wp), intent(in) :: hist(n_pair_history, n)
+        real(wp), intent(inout) :: xi(n_pair_history, n)
+        integer(ip) :: p
+        !$acc parallel loop gang vector default(present)
+        do p = 1, n
+            xi(:, p) = 0.0_wp
+            if (slot(p) /= 0) xi(:, p) = hist(:, abs(slot(p)))
+        end do
+    end subroutine slots_history
 
     !> The pair history off the device and freed.
     subroutine store_pairs_drop(cs)
         type(contact_store_t), intent(inout) :: cs
-        if (allocated(cs%xi)) then
-            call acc_data(cs%xi, acc_exit)
-            deallocate(cs%xi)
-        end if
-        if (allocated(cs%touching)) then
-            call acc_data(cs%touching, acc_exit)
-            deallocate(cs%touching)
-        end if
+        if (.not. allocated(cs%slot)) return
+        call acc_data(cs%slot, acc_exit)
+        call acc_data(cs%hist, acc_exit)
+        call acc_data(cs%n_hist, acc_exit)
+        deallocate(cs%slot, cs%hist, cs%n_hist)
     end subroutine store_pairs_drop
 
     !> An OpenACC data operation (dem_acc) on the pair history (it follows the lists).
     subroutine store_pairs_data(cs, op)
         type(contact_store_t), intent(inout) :: cs
         integer, intent(in) :: op
-        if (allocated(cs%xi)) call acc_data(cs%xi, op)
-        if (allocated(cs%touching)) call acc_data(cs%touching, op)
+        if (.not. allocated(cs%slot)) return
+        call acc_data(cs%slot, op)
+        call acc_data(cs%hist, op)
+        call acc_data(cs%n_hist, op)
     end subroutine store_pairs_data
 
     !> An OpenACC data operation on the wall-contact history (it follows the particles).
@@ -263,31 +310,18 @@ contains
     subroutine store_pairs_forget_parted(cs, n_pairs)
         type(contact_store_t), intent(inout) :: cs
         integer(ip), intent(in) :: n_pairs
-        call forget_parted(n_pairs, cs%touching, cs%xi)
+        call forget_parted(n_pairs, cs%slot)
     end subroutine store_pairs_forget_parted
 
-    subroutine forget_parted(n_pairs, touching, xi)
+    subroutine forget_parted(n_pairs, slot)
         integer(ip), intent(in) :: n_pairs
-        logical, intent(in) :: touching(max(1, n_pairs))
-        real(wp), intent(inout) :: xi(n_pair_history, max(1, n_pairs))
+        integer(ip), intent(inout) :: slot(max(1, n_pairs))
         integer(ip) :: p
         !$acc parallel loop gang vector default(present)
         do p = 1, n_pairs
-            if (.not. touching(p)) xi(:, p) = 0.0_wp
+            slot(p) = max(slot(p), 0)
         end do
     end subroutine forget_parted
-
-    !> touching(p) = the pair has history (the contact kernel resets both when it ends).
-    subroutine touching_from_history(n_pairs, xi, touching)
-        integer(ip), intent(in) :: n_pairs
-        real(wp), intent(in) :: xi(n_pair_history, max(1, n_pairs))
-        logical, intent(inout) :: touching(max(1, n_pairs))
-        integer(ip) :: p
-        !$acc parallel loop gang vector default(present)
-        do p = 1, n_pairs
-            touching(p) = any(xi(:, p) /= 0.0_wp)
-        end do
-    end subroutine touching_from_history
 
     !> cnt(i) = the entries of row i with history (side_history nonzero).
     subroutine history_counts(n_own, n_entries, n_pairs, start, pref, xi, cnt)

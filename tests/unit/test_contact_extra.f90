@@ -29,7 +29,7 @@ program test_contact_extra
                 expect
     integer(ip) :: pair(2, 1), k, ri, s
     integer(i8) :: acc(6, 2)
-    logical :: touching(1)
+    integer(ip) :: slot(1), n_hist(1)   ! the pair's history slot, slots in use
     type(mesh_t) :: plane
 
     kn = 4.0_wp / 3.0_wp * estar
@@ -60,10 +60,11 @@ program test_contact_extra
             f = 0.0_wp
             t = 0.0_wp
             xi3 = 0.0_wp
-            touching = .false.
+            slot = 0
+            n_hist = 0
             call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
                            kn, st, zero, zero, mu, .false., .true., 0.0_wp, 0.0_wp, &
-                           .true., .true., none, zero, kc, dt, xi3, touching, acc, f, t)
+                           .true., .true., none, zero, kc, dt, slot, xi3, n_hist, acc, f, t)
             call assert_close(-f(1, 1), hertz - kcoh * pi * a2, 1.0e-9_wp, &
                               'sJKR pair: Hertz less k pi a^2')
             call assert_close(f(1, 2), -f(1, 1), 1.0e-12_wp, 'sJKR pair: opposite forces')
@@ -110,10 +111,11 @@ program test_contact_extra
     f = 0.0_wp
     t = 0.0_wp
     xi3 = 0.0_wp
-    touching = .false.
+    slot = 0
+    n_hist = 0
     call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, kn, &
                    st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, .true., .true., &
-                   model, mur, zero, dt, xi3, touching, acc, f, t)
+                   model, mur, zero, dt, slot, xi3, n_hist, acc, f, t)
     call assert_close(t(2, 1), -0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: on the turning one')
     call assert_close(t(2, 2), 0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: the opposite')
     call assert_true(all(t([1, 3], :) == 0.0_wp), 'CDT pair: about y only')
@@ -133,13 +135,14 @@ program test_contact_extra
     kr = st(1, 1) * sqrt(rstar * d) * rstar**2
     lim = 0.1_wp * rstar * kn(1, 1) * d * sqrt(rstar * d)
     xi6 = 0.0_wp
-    touching = .false.
+    slot = 0
+    n_hist = 0
     do s = 1, 1000
         f = 0.0_wp
         t = 0.0_wp
         call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, kn, &
                        st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, .true., &
-                       .true., model, mur, zero, dt, xi6, touching, acc, f, t)
+                       .true., model, mur, zero, dt, slot, xi6, n_hist, acc, f, t)
         expect = min(s * kr * 2.0_wp * dt, lim)
         if (mod(s, 50) == 0) then
             call assert_close(xi6(5, 1), expect, 1.0e-9_wp, 'EPSD2: k_r w t, then the limit')

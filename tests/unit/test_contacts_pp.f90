@@ -72,7 +72,7 @@ program test_contacts_pp
                            r(order), m(order), mat, nb%scale, nb%pair, kn, st, cn * sqrt(sn), &
                            cn * sqrt(st), mu, &
                            .false., .true., shift, shift, .true., .false., none, cn, cn, dt, &
-                           cs%xi, cs%touching, nb%acc, f, t)
+                           cs%slot, cs%hist, cs%n_hist, nb%acc, f, t)
             back(order) = [(i, i = 1, n)]
             f = f(:, back)                     ! back in the order of the brute force
             t = t(:, back)

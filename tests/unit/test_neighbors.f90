@@ -15,7 +15,8 @@ program test_neighbors
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_check, &
                              neighbors_spatial_order, neighbors_row_history, neighbors_set_rows, &
                              neighbors_entry_history
-    use dem_contact_store, only: contact_store_t, store_init
+    use dem_contact_store, only: contact_store_t, store_init, store_pairs_take, n_pair_history
+    use dem_acc, only: acc_data, acc_enter
     use dem_mesh, only: closest_point_triangle
     use dem_assert, only: assert_true, assert_finish
     implicit none
@@ -35,7 +36,7 @@ program test_neighbors
     integer(ip) :: nk, a
     integer(ip), allocatable :: hstart(:)
     integer(i8), allocatable :: hpartner(:), want(:)
-    real(wp), allocatable :: hxi(:, :)
+    real(wp), allocatable :: hxi(:, :), pxi(:, :)
     real(wp), parameter :: ratios(4) = [1.0_wp, 2.0_wp, 10.0_wp, 20.0_wp]
     logical :: ok
 
@@ -93,9 +94,12 @@ program test_neighbors
         call assert_true(all(nb%partner == gid(nb%list)), 'partners carry global ids')
 
         ! history: give each pair a value made of its ids, move a little, rebuild
+        allocate(pxi(n_pair_history, max(1, nb%n_pairs)))
         do k = 1, nb%n_pairs
-            cs%xi(:, k) = side_xi(gid(nb%pair(1, k)), gid(nb%pair(2, k)))
+            pxi(:, k) = side_xi(gid(nb%pair(1, k)), gid(nb%pair(2, k)))
         end do
+        call acc_data(pxi, acc_enter)
+        call store_pairs_take(cs, pxi)
         call assert_true(nb%n_pairs == size(nb%list) / 2, 'each pair is stored once')
         call assert_true(.not. stale_now(nb, x, m), 'fresh lists are not stale')
         x(1, 7) = x(1, 7) + 0.45_wp * nb%skin
@@ -114,7 +118,7 @@ program test_neighbors
             end do
         end do
         call assert_true(ok, 'history follows its pair through a rebuild')
-        call assert_true(count(cs%xi(1, 1:nb%n_pairs) /= 0.0_wp) >= nb%n_pairs - 2 * n / 10, &
+        call assert_true(count(cs%slot(1:nb%n_pairs) /= 0) >= nb%n_pairs - 2 * n / 10, &
                          'most pairs kept their history')
 
         ! re-sort the particles in space and rebuild: the history follows the pairs
@@ -135,7 +139,7 @@ program test_neighbors
             end do
         end do
         call assert_true(ok, 'history follows its pair through a re-sort')
-        call assert_true(count(cs%xi(1, 1:nb%n_pairs) /= 0.0_wp) >= nb%n_pairs - 2 * n / 10, &
+        call assert_true(count(cs%slot(1:nb%n_pairs) /= 0) >= nb%n_pairs - 2 * n / 10, &
                          'the pairs kept their history through the re-sort')
 
         ! remove every third particle (as an outlet does) and rebuild: still brute force
@@ -169,12 +173,15 @@ program test_neighbors
     ! the pairs out of contact (zero)
     nb = neighbors_t(skin=0.004_wp)
     call neighbors_build(nb, cs, n, n, gid, x, r, m)
+    allocate(pxi(n_pair_history, max(1, nb%n_pairs)))
     do k = 1, nb%n_pairs
         i = nb%pair(1, k)
         j = nb%pair(2, k)
-        cs%xi(:, k) = 0.0_wp
-        if (touching(gid(i), gid(j))) cs%xi(:, k) = side_xi(gid(i), gid(j))
+        pxi(:, k) = 0.0_wp
+        if (touching(gid(i), gid(j))) pxi(:, k) = side_xi(gid(i), gid(j))
     end do
+    call acc_data(pxi, acc_enter)
+    call store_pairs_take(cs, pxi)
     call neighbors_row_history(nb, cs, n, hstart, hpartner, hxi)
     ok = .true.
     do i = 1, n
