@@ -128,17 +128,17 @@ contains
                 m = m + merge(1, 0, over)
                 s = slot(p)
                 if (over .neqv. s > 0) then                ! the contact begins or ends
-                    if (.not. over) then
-                        if (reset) hist(:, s) = 0.0_wp
-                    else if (s == 0) then                  ! its first since the build
+                    if (s == 0) then                       ! its first since the build:
                         !$acc atomic capture
                         n_hist(1) = n_hist(1) + 1
                         s = n_hist(1)
                         !$acc end atomic
-                        hist(:, s) = 0.0_wp
+                        hist(:, s) = 0.0_wp                ! the next slot, cleared
+                    else                                   ! its slot back, or kept for it
+                        if (.not. over .and. reset) hist(:, s) = 0.0_wp
                         s = -s
                     end if
-                    slot(p) = -s
+                    slot(p) = s
                 end if
             end do
             ! their normals, overlaps, relative velocities, constants and history
