@@ -14,8 +14,9 @@ module dem_neighbors
     use dem_particles, only: index_of_id
     use dem_mesh, only: mesh_t, closest_point_triangle
     use dem_contact_store, only: contact_store_t, n_pair_history, max_pair_history, &
-                                 store_pairs_take, store_pairs_history, carry_history, &
-                                 history_counts, history_fill, side_history, sort_history_row
+                                 store_pairs_take, store_pairs_from, store_pairs_release, &
+                                 carry_history, history_counts, history_fill, entry_history, &
+                                 sort_history_row
     implicit none
     private
     public :: neighbors_t, neighbors_build, neighbors_check, neighbors_spatial_order, &
@@ -217,9 +218,9 @@ contains
         integer(ip), intent(in), optional :: old_index(:)
         integer(ip), allocatable :: old_start(:), same(:), level(:), cell(:), gstart(:), &
                                     gitem(:), cnt(:), n_of(:, :), off(:), pstart(:)
-        integer(ip), allocatable :: old_pref(:), kept(:, :)
+        integer(ip), allocatable :: old_pref(:), old_slot(:), from(:), kept(:, :)
         integer(i8), allocatable :: old_partner(:)
-        real(wp), allocatable :: old_xi(:, :), xi(:, :), rmax(:), origin(:, :), h(:)
+        real(wp), allocatable :: old_hist(:, :), rmax(:), origin(:, :), h(:)
         real(wp) :: lo(3), hi(3), margin
         integer(ip) :: l, n_levels, n_cells, n_entries
         logical :: keep_history
@@ -231,7 +232,10 @@ contains
             call move_alloc(nb%start, old_start)
             call move_alloc(nb%partner, old_partner)
             call move_alloc(nb%pref, old_pref)
-            call store_pairs_history(cs, old_xi)
+            call store_pairs_release(cs, old_slot, old_hist)
+        else                                     ! (nothing to carry: from stays zero)
+            allocate(old_hist(n_pair_history, 1))
+            call acc_data(old_hist, acc_create)
         end if
         call neighbors_free(nb)
         allocate(nb%start(n_own + 1), nb%wstart(n_own + 1), nb%x_ref(3, n_own))
@@ -316,33 +320,35 @@ contains
         nb%acc = 0
         call acc_data(nb%pair, acc_create)
         call acc_data(nb%acc, acc_enter)
-        allocate(xi(n_pair_history, max(1, nb%n_pairs)))
-        call acc_data(xi, acc_create)
+        allocate(from(max(1, nb%n_pairs)))
+        call acc_data(from, acc_create)
         call number_pairs(n_own, n_entries, nb%n_pairs, nb%start, nb%list, nb%mirror, pstart, &
-                          nb%pref, nb%pair, xi)
+                          nb%pref, nb%pair, from)
         call acc_data(pstart, acc_exit)
         if (keep_history) then
             if (present(old_index)) then
                 call carry_history(n_own, size(old_start, kind=ip), n_entries, nb%n_pairs, &
-                                   size(old_partner, kind=ip), size(old_xi, 2, kind=ip), &
-                                   old_index, nb%start, nb%partner, nb%pref, xi, &
-                                   old_start, old_partner, old_pref, old_xi)
+                                   size(old_partner, kind=ip), size(old_slot, kind=ip), &
+                                   old_index, nb%start, nb%partner, nb%pref, from, &
+                                   old_start, old_partner, old_pref, old_slot)
             else                                 ! the particles kept their places
                 allocate(same(n_own))
                 call acc_data(same, acc_create)
                 call fill_range(n_own, same, 1, 1)
                 call carry_history(n_own, size(old_start, kind=ip), n_entries, nb%n_pairs, &
-                                   size(old_partner, kind=ip), size(old_xi, 2, kind=ip), &
-                                   same, nb%start, nb%partner, nb%pref, xi, &
-                                   old_start, old_partner, old_pref, old_xi)
+                                   size(old_partner, kind=ip), size(old_slot, kind=ip), &
+                                   same, nb%start, nb%partner, nb%pref, from, &
+                                   old_start, old_partner, old_pref, old_slot)
                 call acc_data(same, acc_exit)
             end if
             call acc_data(old_start, acc_exit)
             call acc_data(old_partner, acc_exit)
             call acc_data(old_pref, acc_exit)
-            call acc_data(old_xi, acc_exit)
+            call acc_data(old_slot, acc_exit)
         end if
-        call store_pairs_take(cs, xi)          ! (the pairs with history are in contact)
+        call store_pairs_from(cs, nb%n_pairs, from, old_hist)
+        call acc_data(from, acc_exit)
+        call acc_data(old_hist, acc_exit)
         call acc_data(cnt, acc_exit)
         call acc_data(gstart, acc_exit)
         call acc_data(gitem, acc_exit)
@@ -594,14 +600,14 @@ contains
 
     !> The pairs of the rows, numbered from pstart(i) in row i, each once: pair(:, p) = (i, j)
     !> for the entries row i evaluates, pref = p there and -p in the partner's entry of the
-    !> same pair (each entry has one writer); no history yet.
+    !> same pair (each entry has one writer); no history yet (from = 0: carry_history).
     subroutine number_pairs(n_own, n_entries, n_pairs, start, list, mirror, pstart, pref, &
-                            pair, xi)
+                            pair, from)
         integer(ip), intent(in) :: n_own, n_entries, n_pairs
         integer(ip), intent(in) :: start(n_own + 1), list(n_entries), mirror(n_entries), &
                                    pstart(n_own + 1)
         integer(ip), intent(inout) :: pref(n_entries), pair(2, max(1, n_pairs))
-        real(wp), intent(inout) :: xi(n_pair_history, max(1, n_pairs))
+        integer(ip), intent(inout) :: from(max(1, n_pairs))
         integer(ip) :: i, k, p
         !$acc parallel loop gang vector default(present) private(k, p)
         do i = 1, n_own
@@ -612,7 +618,7 @@ contains
                 if (mirror(k) > 0) pref(mirror(k)) = -p
                 pair(1, p) = i
                 pair(2, p) = list(k)
-                xi(:, p) = 0.0_wp
+                from(p) = 0
                 p = p + 1
             end do
         end do
@@ -946,19 +952,17 @@ contains
         integer(ip), intent(in) :: order(:)      !! the owned particles by increasing id
         integer(i8), allocatable, intent(out) :: pair(:, :)  !! (2, pairs)
         real(wp), allocatable, intent(out) :: xi(:, :)       !! (n_pair_history, pairs) [m]
-        real(wp), allocatable :: pxi(:, :)
         integer(ip) :: a, i, k, m, pass, nh
         real(wp) :: h(max_pair_history)
         nh = n_pair_history
-        call store_pairs_history(cs, pxi)                    ! each pair's, on the host too
-        call acc_data(pxi, acc_to_host)
         do pass = 1, 2
             m = 0
             do a = 1, n_own
                 i = order(a)
                 do k = nb%start(i), nb%start(i + 1) - 1
-                    call side_history(size(nb%pref, kind=ip), size(pxi, 2, kind=ip), k, &
-                                      nb%pref, pxi, h(1:nh))
+                    call entry_history(size(nb%pref, kind=ip), size(cs%slot, kind=ip), &
+                                       size(cs%hist, 2, kind=ip), k, nb%pref, cs%slot, &
+                                       cs%hist, h(1:nh))
                     if (all(h(1:nh) == 0.0_wp)) cycle
                     if (nb%partner(k) < gid(i) .and. nb%mirror(k) /= 0) cycle
                     m = m + 1
@@ -974,7 +978,6 @@ contains
             end do
             if (pass == 1) allocate(pair(2, m), xi(n_pair_history, m))
         end do
-        call acc_data(pxi, acc_exit)
     end subroutine neighbors_history
 
     !> The tangential history each owned particle holds, seen from its own side, as rows
@@ -992,15 +995,14 @@ contains
         integer(i8), allocatable, intent(out) :: hpartner(:)
         real(wp), allocatable, intent(out) :: hxi(:, :)
         integer(ip), allocatable :: cnt(:)
-        real(wp), allocatable :: pxi(:, :)
         integer(ip) :: n_h
         allocate(hstart(n_own + 1), cnt(max(1, n_own)))
         call acc_data(hstart, acc_create)
         call acc_data(cnt, acc_create)
         if (allocated(nb%start)) then
-            call store_pairs_history(cs, pxi)
-            call history_counts(n_own, size(nb%partner, kind=ip), size(pxi, 2, kind=ip), &
-                                nb%start, nb%pref, pxi, cnt)
+            call history_counts(n_own, size(nb%partner, kind=ip), size(cs%slot, kind=ip), &
+                                size(cs%hist, 2, kind=ip), nb%start, nb%pref, cs%slot, &
+                                cs%hist, cnt)
         else
             call fill_range(n_own, cnt, 0, 0)
         end if
@@ -1011,9 +1013,9 @@ contains
         call acc_data(hpartner, acc_create)
         call acc_data(hxi, acc_create)
         if (n_h > 0) call history_fill(n_own, size(nb%partner, kind=ip), &
-                                       size(pxi, 2, kind=ip), nb%start, nb%partner, &
-                                       nb%pref, pxi, hstart, n_h, hpartner, hxi)
-        if (allocated(pxi)) call acc_data(pxi, acc_exit)
+                                       size(cs%slot, kind=ip), size(cs%hist, 2, kind=ip), &
+                                       nb%start, nb%partner, nb%pref, cs%slot, cs%hist, &
+                                       hstart, n_h, hpartner, hxi)
         call acc_data(cnt, acc_exit)
     end subroutine neighbors_row_history
 
@@ -1023,12 +1025,8 @@ contains
         type(contact_store_t), intent(in) :: cs
         integer(ip), intent(in) :: k
         real(wp) :: h(n_pair_history)
-        integer(ip) :: s
-        h = 0.0_wp
-        s = abs(cs%slot(abs(nb%pref(k))))
-        if (s == 0) return
-        h = cs%hist(:, s)
-        if (nb%pref(k) < 0) h = -h
+        call entry_history(size(nb%pref, kind=ip), size(cs%slot, kind=ip), &
+                           size(cs%hist, 2, kind=ip), k, nb%pref, cs%slot, cs%hist, h)
     end function neighbors_entry_history
 
     !> Make rows of history (as neighbors_row_history gives them, on the device) the lists'

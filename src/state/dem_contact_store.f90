@@ -17,13 +17,12 @@ module dem_contact_store
     implicit none
     private
     public :: contact_store_t, n_pair_history, n_wall_history, max_wall_contacts, &
-              n_wall_pack_real, store_pairs_take, store_pairs_history, store_pairs_drop, &
-              store_pairs_data, store_pairs_forget_parted, store_walls_data, &
+              n_wall_pack_real, store_pairs_take, store_pairs_from, store_pairs_release, &
+              store_pairs_drop, store_pairs_data, store_pairs_forget_parted, store_walls_data, &
               store_init, store_walls_reserve, store_walls_reserve_on_device, store_walls_restore, &
               store_walls_permute, store_walls_pack, store_walls_unpack, store_unique_pairs, &
-              carry_history, history_counts, history_fill, &
-              side_history, sort_history_row, store_history_widths, max_pair_history, &
-              n_wall_columns
+              carry_history, history_counts, history_fill, entry_slot, entry_history, &
+              sort_history_row, store_history_widths, max_pair_history, n_wall_columns
 
     integer, parameter :: max_pair_history = 6   !< the most reals per contact
     !> reals per particle pair: xi [m], then the rolling spring's torque [N m] with EPSD2
@@ -69,64 +68,90 @@ contains
     end subroutine store_history_widths
 
     !> The history of the pairs, xi(:, p) for pair p (on the device; zero: none), becomes
-    !> the store's: the pairs with history take the first slots, in order (a pair in contact
-    !> at a list build is one with history); xi is freed.
+    !> the store's (store_pairs_from, each pair from its own column); xi is freed.
     subroutine store_pairs_take(cs, xi)
         type(contact_store_t), intent(inout) :: cs
         real(wp), allocatable, intent(inout) :: xi(:, :)
+        integer(ip), allocatable :: from(:)
         integer(ip) :: n
-        call store_pairs_drop(cs)
         n = size(xi, 2, kind=ip)
-        allocate(cs%slot(n), cs%hist(n_pair_history, n), cs%n_hist(1))
-        call acc_data(cs%slot, acc_create)
-        call acc_data(cs%hist, acc_create)
-        cs%n_hist = 0
-        call acc_data(cs%n_hist, acc_enter)
-        call number_slots(n, xi, cs%slot, cs%hist, cs%n_hist)
+        allocate(from(n))
+        call acc_data(from, acc_create)
+        call own_columns(n, from)
+        call store_pairs_from(cs, n, from, xi)
+        call acc_data(from, acc_exit)
         call acc_data(xi, acc_exit)
         deallocate(xi)
     end subroutine store_pairs_take
 
-    subroutine number_slots(n, xi, slot, hist, n_hist)
+    subroutine own_columns(n, from)
         integer(ip), intent(in) :: n
-        real(wp), intent(in) :: xi(n_pair_history, n)
-        integer(ip), intent(inout) :: slot(n), n_hist(1)
-        real(wp), intent(inout) :: hist(n_pair_history, n)
-        integer(ip) :: p, s
-        !$acc parallel loop gang vector default(present) private(s)
+        integer(ip), intent(inout) :: from(n)
+        integer(ip) :: p
+        !$acc parallel loop gang vector default(present)
         do p = 1, n
+            from(p) = p
+        end do
+    end subroutine own_columns
+
+    !> The store's history for n pairs from the columns of src (on the device, as from):
+    !> pair p's is src(:, from(p)), or -src(:, -from(p)) where from(p) < 0 (the other side's,
+    !> doc/theory.md section 13); none where from(p) = 0 or the column is zero. The pairs with
+    !> history take the first slots, in the order of the pairs. src is not the store's own.
+    subroutine store_pairs_from(cs, n, from, src)
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), intent(in) :: n
+        integer(ip), intent(in) :: from(:)
+        real(wp), intent(in) :: src(:, :)
+        call store_pairs_drop(cs)
+        allocate(cs%slot(max(1, n)), cs%hist(n_pair_history, max(1, n)), cs%n_hist(1))
+        call acc_data(cs%slot, acc_create)
+        call acc_data(cs%hist, acc_create)
+        cs%n_hist = 0
+        call acc_data(cs%n_hist, acc_enter)
+        call number_slots(n, size(src, 2, kind=ip), from, src, cs%slot, cs%hist, cs%n_hist)
+    end subroutine store_pairs_from
+
+    subroutine number_slots(n, n_src, from, src, slot, hist, n_hist)
+        integer(ip), intent(in) :: n, n_src
+        integer(ip), intent(in) :: from(n)
+        real(wp), intent(in) :: src(n_pair_history, n_src)
+        integer(ip), intent(inout) :: slot(max(1, n)), n_hist(1)
+        real(wp), intent(inout) :: hist(n_pair_history, max(1, n))
+        integer(ip) :: p, s, nh
+        real(wp) :: h(max_pair_history)          ! (of fixed size: private on a device)
+        nh = n_pair_history
+        !$acc parallel loop gang vector default(present) private(s, h)
+        do p = 1, max(1, n)                      ! (the one slot of no pairs empty too)
             slot(p) = 0
-            if (all(xi(:, p) == 0.0_wp)) cycle
+            if (p > n) cycle
+            if (from(p) == 0) cycle
+            if (from(p) > 0) then
+                h(1:nh) = src(:, from(p))
+            else
+                h(1:nh) = -src(:, -from(p))
+            end if
+            if (all(h(1:nh) == 0.0_wp)) cycle
             !$acc atomic capture
             n_hist(1) = n_hist(1) + 1
             s = n_hist(1)
             !$acc end atomic
             slot(p) = s
-            hist(:, s) = xi(:, p)
+            hist(:, s) = h(1:nh)
         end do
     end subroutine number_slots
 
-    !> The history of the store's pairs as xi(:, p) for pair p (zero: none), on the device.
-    subroutine store_pairs_history(cs, xi)
-        type(contact_store_t), intent(in) :: cs
-        real(wp), allocatable, intent(out) :: xi(:, :)
-        allocate(xi(n_pair_history, size(cs%slot)))
-        call acc_data(xi, acc_create)
-        call slots_history(size(cs%slot, kind=ip), cs%slot, cs%hist, xi)
-    end subroutine store_pairs_history
-
-    subroutine slots_history(n, slot, hist, xi)
-        integer(ip), intent(in) :: n
-        integer(ip), intent(in) :: slot(n)
-        real(wp), intent(in) :: hist(n_pair_history, n)
-        real(wp), intent(inout) :: xi(n_pair_history, n)
-        integer(ip) :: p
-        !$acc parallel loop gang vector default(present)
-        do p = 1, n
-            xi(:, p) = 0.0_wp
-            if (slot(p) /= 0) xi(:, p) = hist(:, abs(slot(p)))
-        end do
-    end subroutine slots_history
+    !> The store's pair history handed over (slot, hist and their device copies; the store
+    !> is left empty), for a list build to carry from (carry_history, store_pairs_from).
+    subroutine store_pairs_release(cs, slot, hist)
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), allocatable, intent(out) :: slot(:)
+        real(wp), allocatable, intent(out) :: hist(:, :)
+        call move_alloc(cs%slot, slot)
+        call move_alloc(cs%hist, hist)
+        call acc_data(cs%n_hist, acc_exit)
+        deallocate(cs%n_hist)
+    end subroutine store_pairs_release
 
     !> The pair history off the device and freed.
     subroutine store_pairs_drop(cs)
@@ -275,19 +300,18 @@ contains
         end do
     end subroutine unpack_walls
 
-    !> Copy the history of the partners a new row shares with the particle's old row
-    !> (old_row(i)) into the pairs the new row evaluates; both rows are ordered by partner
-    !> id, so one merge pass finds them. The old entries' history is seen from the old row's
-    !> side (side_history).
+    !> Where the pairs of the new rows find the history of the partners they share with the
+    !> particle's old row (old_row(i)): from(p) of a pair the new row evaluates is the old
+    !> entry's slot seen from the old row's side (entry_slot); both rows are ordered by
+    !> partner id, so one merge pass finds them. from is left as it is where nothing matched.
     subroutine carry_history(n_own, n_old_rows, n_entries, n_pairs, n_old, n_old_pairs, &
-                             old_row, start, partner, pref, xi, old_start, old_partner, &
-                             old_pref, old_xi)
+                             old_row, start, partner, pref, from, old_start, old_partner, &
+                             old_pref, old_slot)
         integer(ip), intent(in) :: n_own, n_old_rows, n_entries, n_pairs, n_old, n_old_pairs
         integer(ip), intent(in) :: old_row(n_own), start(n_own + 1), old_start(n_old_rows)
         integer(i8), intent(in) :: partner(n_entries), old_partner(n_old)
-        integer(ip), intent(in) :: pref(n_entries), old_pref(n_old)
-        real(wp), intent(inout) :: xi(n_pair_history, max(1, n_pairs))
-        real(wp), intent(in) :: old_xi(n_pair_history, n_old_pairs)
+        integer(ip), intent(in) :: pref(n_entries), old_pref(n_old), old_slot(n_old_pairs)
+        integer(ip), intent(inout) :: from(max(1, n_pairs))
         integer(ip) :: i, a, b, b_end
         !$acc parallel loop gang vector default(present) private(a, b, b_end)
         do i = 1, n_own
@@ -300,7 +324,7 @@ contains
                 end do
                 if (b > b_end) exit
                 if (old_partner(b) == partner(a) .and. pref(a) > 0) &
-                    call side_history(n_old, n_old_pairs, b, old_pref, old_xi, xi(:, pref(a)))
+                    from(pref(a)) = entry_slot(n_old, n_old_pairs, b, old_pref, old_slot)
             end do
         end do
     end subroutine carry_history
@@ -323,11 +347,11 @@ contains
         end do
     end subroutine forget_parted
 
-    !> cnt(i) = the entries of row i with history (side_history nonzero).
-    subroutine history_counts(n_own, n_entries, n_pairs, start, pref, xi, cnt)
-        integer(ip), intent(in) :: n_own, n_entries, n_pairs
-        integer(ip), intent(in) :: start(n_own + 1), pref(n_entries)
-        real(wp), intent(in) :: xi(n_pair_history, n_pairs)
+    !> cnt(i) = the entries of row i with history (entry_history nonzero).
+    subroutine history_counts(n_own, n_entries, n_pairs, n_slots, start, pref, slot, hist, cnt)
+        integer(ip), intent(in) :: n_own, n_entries, n_pairs, n_slots
+        integer(ip), intent(in) :: start(n_own + 1), pref(n_entries), slot(n_pairs)
+        real(wp), intent(in) :: hist(n_pair_history, n_slots)
         integer(ip), intent(inout) :: cnt(n_own)
         integer(ip) :: i, k, m, nh
         real(wp) :: h(max_pair_history)          ! (of fixed size: private on a device)
@@ -336,7 +360,7 @@ contains
         do i = 1, n_own
             m = 0
             do k = start(i), start(i + 1) - 1
-                call side_history(n_entries, n_pairs, k, pref, xi, h(1:nh))
+                call entry_history(n_entries, n_pairs, n_slots, k, pref, slot, hist, h(1:nh))
                 if (any(h(1:nh) /= 0.0_wp)) m = m + 1
             end do
             cnt(i) = m
@@ -344,12 +368,13 @@ contains
     end subroutine history_counts
 
     !> The entries with history of each row i into hpartner/hxi from hstart(i), in order.
-    subroutine history_fill(n_own, n_entries, n_pairs, start, partner, pref, xi, hstart, n_h, &
-                            hpartner, hxi)
-        integer(ip), intent(in) :: n_own, n_entries, n_pairs, n_h
-        integer(ip), intent(in) :: start(n_own + 1), pref(n_entries), hstart(n_own + 1)
+    subroutine history_fill(n_own, n_entries, n_pairs, n_slots, start, partner, pref, slot, &
+                            hist, hstart, n_h, hpartner, hxi)
+        integer(ip), intent(in) :: n_own, n_entries, n_pairs, n_slots, n_h
+        integer(ip), intent(in) :: start(n_own + 1), pref(n_entries), slot(n_pairs), &
+                                   hstart(n_own + 1)
         integer(i8), intent(in) :: partner(n_entries)
-        real(wp), intent(in) :: xi(n_pair_history, n_pairs)
+        real(wp), intent(in) :: hist(n_pair_history, n_slots)
         integer(i8), intent(inout) :: hpartner(n_h)
         real(wp), intent(inout) :: hxi(n_pair_history, n_h)
         integer(ip) :: i, k, m, nh
@@ -359,7 +384,7 @@ contains
         do i = 1, n_own
             m = hstart(i)
             do k = start(i), start(i + 1) - 1
-                call side_history(n_entries, n_pairs, k, pref, xi, h(1:nh))
+                call entry_history(n_entries, n_pairs, n_slots, k, pref, slot, hist, h(1:nh))
                 if (all(h(1:nh) == 0.0_wp)) cycle
                 hpartner(m) = partner(k)
                 hxi(:, m) = h(1:nh)
@@ -368,23 +393,37 @@ contains
         end do
     end subroutine history_fill
 
-    !> The displacement of entry k seen from its row's particle: its pair's, or, when the
-    !> partner evaluates the pair (pref < 0), its pair's negated (the two sides are exact
-    !> negatives, doc/theory.md section 13).
-    pure subroutine side_history(n_entries, n_pairs, k, pref, xi, h)
+    !> The slot of entry k's history seen from its row's particle: the slot of its pair (in
+    !> contact or not), negated when the partner evaluates the pair (pref < 0); 0: none.
+    pure integer(ip) function entry_slot(n_entries, n_pairs, k, pref, slot) result(s)
         !$acc routine seq
         integer(ip), intent(in) :: n_entries, n_pairs, k
-        integer(ip), intent(in) :: pref(n_entries)
-        real(wp), intent(in) :: xi(n_pair_history, n_pairs)
+        integer(ip), intent(in) :: pref(n_entries), slot(n_pairs)
+        s = abs(slot(abs(pref(k))))
+        if (pref(k) < 0) s = -s
+    end function entry_slot
+
+    !> The history of entry k seen from its row's particle: that of the slot entry_slot
+    !> names, negated for a negative one (the two sides are exact negatives, doc/theory.md
+    !> section 13); zero: none.
+    pure subroutine entry_history(n_entries, n_pairs, n_slots, k, pref, slot, hist, h)
+        !$acc routine seq
+        integer(ip), intent(in) :: n_entries, n_pairs, n_slots, k
+        integer(ip), intent(in) :: pref(n_entries), slot(n_pairs)
+        real(wp), intent(in) :: hist(n_pair_history, n_slots)
         real(wp), intent(out) :: h(n_pair_history)
-        if (pref(k) < 0) then          ! (the rows beyond 3 only in a case that has them)
-            h(1:3) = -xi(1:3, -pref(k))
-            if (n_pair_history > 3) h(4:) = -xi(4:, -pref(k))
+        integer(ip) :: s
+        s = entry_slot(n_entries, n_pairs, k, pref, slot)
+        if (s > 0) then                ! (the rows beyond 3 only in a case that has them)
+            h(1:3) = hist(1:3, s)
+            if (n_pair_history > 3) h(4:) = hist(4:, s)
+        else if (s < 0) then
+            h(1:3) = -hist(1:3, -s)
+            if (n_pair_history > 3) h(4:) = -hist(4:, -s)
         else
-            h(1:3) = xi(1:3, pref(k))
-            if (n_pair_history > 3) h(4:) = xi(4:, pref(k))
+            h = 0.0_wp
         end if
-    end subroutine side_history
+    end subroutine entry_history
 
     !> The pairs ordered by (lower id, higher id), each once (copies from two ranks are
     !> equal: the two sides of a contact are exact negatives, doc/theory.md section 13).
