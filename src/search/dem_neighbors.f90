@@ -943,7 +943,8 @@ contains
     !> (lower id, higher id) and the displacement of the lower id's side; `order` lists the
     !> owned particles by id. A pair is taken from the row of its lower id, or, when that is
     !> a ghost, from the higher id's row, negated (the two sides are exact negatives). Without
-    !> ghosts the pairs come out ordered by the two ids.
+    !> ghosts the pairs come out ordered by the two ids. Reads the host's copies of the lists
+    !> and the store (dem_frames brings them there).
     subroutine neighbors_history(nb, cs, n_own, gid, order, pair, xi)
         type(neighbors_t), intent(in) :: nb
         type(contact_store_t), intent(in) :: cs

@@ -40,8 +40,8 @@ module dem_contact_store
         !> pair in contact slot(p) > 0 and its history is hist(:, slot(p)); for a pair out of
         !> contact whose history is kept (until the next list build, as LIGGGHTS 3.8.0 does),
         !> slot(p) < 0 and hist(:, -slot(p)); 0: no history. At a list build the pairs with
-        !> history take the first slots, in the order of the pairs; a contact that begins
-        !> later takes the next one (n_hist(1) are in use; a pair keeps its slot until the
+        !> history take the first slots (on the host in the order of the pairs; on a GPU as
+        !> its atomics hand them out); a contact that begins later takes the next one (n_hist(1) are in use; a pair keeps its slot until the
         !> next build, so there are never more than pairs). The contact kernel so reads and
         !> writes the history of the pairs in contact only. After a migration or a restart,
         !> until the next list build, the history of rows of entries (dem_neighbors'
@@ -97,7 +97,8 @@ contains
     !> The store's history for n pairs from the columns of src (on the device, as from):
     !> pair p's is src(:, from(p)), or -src(:, -from(p)) where from(p) < 0 (the other side's,
     !> doc/theory.md section 13); none where from(p) = 0 or the column is zero. The pairs with
-    !> history take the first slots, in the order of the pairs. src is not the store's own.
+    !> history take the first slots (in the order of the pairs on the host; on a GPU as its
+    !> atomics hand them out: the slots' order changes no value). src is not the store's own.
     subroutine store_pairs_from(cs, n, from, src)
         type(contact_store_t), intent(inout) :: cs
         integer(ip), intent(in) :: n

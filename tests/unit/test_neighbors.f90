@@ -3,12 +3,14 @@
 !> rows and no other, rows ordered by partner id; the wall list holds exactly the triangles
 !> within R_i + skin, found with far fewer tests than particles x triangles, each with a
 !> slack that the particle can move towards it without touching it; the tangential
-!> history of pairs still listed survives a rebuild and a spatial re-sort of the particles;
-!> the rebuild criterion is skin/2. The rows of history a migrating particle takes along
-!> hold each of its pairs with history once, seen from its side (the lower id's value, negated
-!> in the higher id's row, never the stale entry of the side that does not evaluate), ordered
-!> by partner id, and a build from them gives both sides of each pair their values back. No
-!> point of a turning, moving wall moves farther than neighbors_check says (nb%wall_moved).
+!> history of pairs still listed survives a rebuild and a spatial re-sort of the particles
+!> (that of contacts that have ended too; a zero history is none), the pairs with history
+!> holding the slots 1 .. n_hist after a build; the rebuild criterion is skin/2. The rows
+!> of history a migrating particle takes along hold each of its pairs with history once,
+!> seen from its side (the lower id's value, negated in the higher id's row, never the
+!> stale entry of the side that does not evaluate), ordered by partner id, and a build from
+!> them gives both sides of each pair their values back. No point of a turning, moving wall
+!> moves farther than neighbors_check says (nb%wall_moved).
 program test_neighbors
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t, mesh_add_plane, mesh_set_motion, mesh_move
@@ -28,7 +30,8 @@ program test_neighbors
     type(contact_store_t) :: cs2
     real(wp) :: dmove, bary(3)
     real(wp) :: x(3, n), r(n), u, ratio, q(3), hk(3), gap, xm(3)
-    integer(i8) :: gid(n)
+    integer(i8) :: gid(n), gz(2)
+    integer(ip), allocatable :: used(:)
     integer(ip) :: i, j, k, found, case_no, t, feature, order(n)
     integer(ip), allocatable :: expected(:), kept(:)
     real(wp) :: xk(3, n), rk(n)
@@ -101,6 +104,14 @@ program test_neighbors
         call acc_data(pxi, acc_enter)
         call store_pairs_take(cs, pxi)
         call assert_true(nb%n_pairs == size(nb%list) / 2, 'each pair is stored once')
+        ! every other contact has ended and kept its history (a negative slot), and one
+        ! pair's history is zero: the rebuild carries the first and gives the second no slot
+        cs%slot(1:nb%n_pairs:2) = -cs%slot(1:nb%n_pairs:2)
+        gz = -1                                ! (the sparsest case may have a pair or none)
+        if (nb%n_pairs >= 2) then
+            gz = gid(nb%pair(:, 2))
+            cs%hist(:, abs(cs%slot(2))) = 0.0_wp
+        end if
         call assert_true(.not. stale_now(nb, x, m), 'fresh lists are not stale')
         x(1, 7) = x(1, 7) + 0.45_wp * nb%skin
         call assert_true(.not. stale_now(nb, x, m), 'moved less than skin/2')
@@ -118,6 +129,20 @@ program test_neighbors
             end do
         end do
         call assert_true(ok, 'history follows its pair through a rebuild')
+        ok = .true.
+        do k = 1, nb%n_pairs
+            if (all(gid(nb%pair(:, k)) == gz) .or. all(gid(nb%pair(:, k)) == gz([2, 1]))) &
+                ok = ok .and. cs%slot(k) == 0
+        end do
+        call assert_true(ok, 'a pair whose history is zero has no slot after a build')
+        used = [(0_ip, k = 1, nb%n_pairs)]
+        do k = 1, nb%n_pairs
+            if (cs%slot(k) < 0 .or. cs%slot(k) > nb%n_pairs) ok = .false.
+            if (cs%slot(k) > 0) used(cs%slot(k)) = used(cs%slot(k)) + 1
+        end do
+        call assert_true(ok .and. all(used(1:cs%n_hist(1)) == 1) .and. &
+                         all(used(cs%n_hist(1) + 1:) == 0), 'after a build the pairs with &
+                         &history hold the slots 1 .. n_hist, one each, in contact')
         call assert_true(count(cs%slot(1:nb%n_pairs) /= 0) >= nb%n_pairs - 2 * n / 10, &
                          'most pairs kept their history')
 
