@@ -11,8 +11,8 @@ module dem_rebuild
     use dem_run_state, only: solver_t, release_gone, particle_data
     use dem_particles, only: particles_permute, particles_find, particles_add, &
                              particles_reserve_on_device
-    use dem_domain, only: domain_init, domain_data, domain_balance, domain_imbalance, &
-                          domain_migrate, domain_ghosts, domain_update
+    use dem_domain, only: domain_init, domain_data, domain_loads, domain_balance, &
+                          domain_imbalance, domain_migrate, domain_ghosts, domain_update
     use dem_neighbors, only: neighbors_build, neighbors_check, neighbors_spatial_order, &
                              neighbors_row_history, neighbors_set_rows
     use dem_contact_store, only: store_walls_permute, store_pairs_forget_parted, &
@@ -279,10 +279,12 @@ contains
 
     !> Give the particles that stay in the run (with `outlets`, the parked ones are removed)
     !> and their contact history to the ranks of their blocks, rebalancing first when the
-    !> load ratio exceeds the limit times the ratio the last partition achieved (blocks may
-    !> not allow better, and a draining silo's last particles would be repartitioned at every
-    !> rebuild). The pair history travels in rows, each particle's from its own side
-    !> (neighbors_row_history: from the lists, or after a restart from the checkpoint's
+    !> load ratio (the particles' loads, domain_loads: their contacts included) exceeds the
+    !> limit times the ratio the last partition achieved (blocks may not allow better, and a
+    !> draining silo's last particles would be repartitioned at every rebuild), or when the
+    !> last partition knew no contacts (a run's first, from a state without history) and
+    !> there are some now. The pair history travels in rows, each particle's from its own
+    !> side (neighbors_row_history: from the lists, or after a restart from the checkpoint's
     !> pairs), and is left for the next neighbors_build. The particle count and the momentum
     !> are checked to be the same after the move (to round-off); a failed partition or
     !> migration sets err on every rank.
@@ -290,32 +292,44 @@ contains
         type(solver_t), intent(inout) :: s
         logical, intent(in) :: outlets
         type(error_t), intent(inout) :: err
-        integer(ip), allocatable :: kept(:), owned(:), hstart(:)
+        integer(ip), allocatable :: kept(:), owned(:), hstart(:), w(:)
         integer(i8), allocatable :: hpartner(:)
         real(wp), allocatable :: hxi(:, :)
         real(wp) :: imbalance, before(5), after(5)
+        integer(i8) :: load, contacts(1)
         integer(ip) :: m, n
         integer :: status
         logical :: balance
         call kept_particles(s, outlets, kept, m)
         call neighbors_row_history(s%nb, s%cs, s%p%n_own, hstart, hpartner, hxi)
-        imbalance = domain_imbalance(s%comm, m)
-        balance = .not. s%distributed .or. imbalance > s%imbalance_limit * s%balanced
+        call domain_loads(m, kept, s%cs%wall_tri, hstart, w, load)
+        imbalance = domain_imbalance(s%comm, load)
+        contacts = hstart(s%p%n_own + 1) - 1            ! (the rows' count is on the host)
+        call comm_sum(s%comm, contacts)
+        balance = .not. s%distributed .or. imbalance > s%imbalance_limit * s%balanced &
+                  .or. (s%balanced_blind .and. contacts(1) > 0)
         if (balance) then
-            call domain_balance(s%dom, s%comm, m, kept, s%p%x, s%p%radius, s%cs%wall_tri, status)
+            call domain_balance(s%dom, s%comm, m, kept, s%p%x, s%p%radius, w, status)
             if (comm_any(s%comm, status /= 1)) then
+                call acc_data(w, acc_exit)
                 call acc_data(kept, acc_exit)
                 call set_error(err, dem_err_runtime, 'METIS could not partition the blocks ' // &
                                'of space between the ranks')
                 return
             end if
         end if
+        call acc_data(w, acc_exit)
         before = momentum_sums(s%comm, m, kept, s%p%mass, s%p%v)
         call domain_migrate(s%dom, s%comm, s%p, s%cs, m, kept, hstart, hpartner, hxi)
         call acc_data(kept, acc_exit)
         s%distributed = .true.
-        if (balance) s%balanced = domain_imbalance(s%comm, s%p%n_own)
         call kept_particles(s, .false., owned, n)
+        if (balance) then                        ! what the partition achieved
+            call domain_loads(n, owned, s%cs%wall_tri, hstart, w, load)
+            call acc_data(w, acc_exit)
+            s%balanced = domain_imbalance(s%comm, load)
+            s%balanced_blind = contacts(1) == 0
+        end if
         after = momentum_sums(s%comm, n, owned, s%p%mass, s%p%v)
         call acc_data(owned, acc_exit)
         if (nint(after(1)) /= nint(before(1)) .or. any(abs(after(2:4) - before(2:4)) > &

@@ -81,6 +81,7 @@ module dem_run_state
         real(wp) :: imbalance_limit = 1.0_wp  !< repartition above this load ratio ...
         real(wp) :: balanced = 1.0_wp  !< ... times the ratio the last partition achieved
         logical :: distributed = .false.  !< each rank holds only its own particles
+        logical :: balanced_blind = .false.  !< the last partition knew no contacts
         real(wp) :: time0 = 0.0_wp     !< time of step step0; time = time0 + (step - step0) dt
         integer(i8) :: step0 = 0
         integer(i8) :: rng_state = 0   !< the case's random generator

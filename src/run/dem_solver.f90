@@ -332,7 +332,8 @@ contains
         call comm_sum(s%comm, sums)
         store = real(size(s%p%gid), wp)
         call comm_max(s%comm, store)
-        stats = [domain_imbalance(s%comm, s%p%n_own), real(sums(2), wp) / max(1_i8, sums(1)), &
+        stats = [domain_imbalance(s%comm, int(s%p%n_own, i8)), &
+                 real(sums(2), wp) / max(1_i8, sums(1)), &
                  real(sums(3), wp) / max(1_i8, s%steps_run), real(s%dom%balances, wp), &
                  store(1) / max(1_i8, sums(1))]
     end function solver_parallel_stats

@@ -1,6 +1,6 @@
 !> Domain decomposition of an MPI run (doc/user/parallel.md; doc/theory.md, section 13). Space is
 !> cut into cubic blocks over the case's bounding box (the outer layers of blocks reach to
-!> infinity); METIS assigns the blocks to ranks, weighted by the particles and wall contacts
+!> infinity); METIS assigns the blocks to ranks, weighted by the particles and their contacts
 !> in them and by the particles near each face they share. A rank owns the particles whose
 !> centres lie in its blocks, decided at each neighbour-list rebuild, when particles that
 !> changed blocks migrate with their contact history; it holds ghost copies of the other
@@ -24,8 +24,8 @@ module dem_domain
                                  store_walls_reserve_on_device
     implicit none
     private
-    public :: domain_t, domain_init, domain_balance, domain_imbalance, domain_migrate, &
-              domain_ghosts, domain_update, domain_data, sorted_by_rank
+    public :: domain_t, domain_init, domain_loads, domain_balance, domain_imbalance, &
+              domain_migrate, domain_ghosts, domain_update, domain_data, sorted_by_rank
 
     integer, parameter :: blocks_per_rank = 64   !< target in the particles' box
     integer, parameter :: max_blocks_per_rank = 512  !< in the whole box (walls included)
@@ -83,20 +83,47 @@ contains
         d%recv_counts = 0
     end subroutine domain_init
 
-    !> Assign the blocks to ranks with METIS: vertex weight = 1 + s (particles + wall
-    !> contacts) in a block, with s as large as 32-bit weights allow, up to 1024 (empty
-    !> space costs almost nothing; METIS balances badly with weights of zero), edge weight =
-    !> 1 + particles within reach of the shared face. The particles are kept(1:m); their loads
-    !> are counted by a kernel (integer atomics: the sums do not depend on the order), and
-    !> every rank computes the same partition from the same sums. `status` is METIS's (1:
-    !> done).
-    subroutine domain_balance(d, comm, m, kept, x, radius, wall_tri, status)
+    !> Each particle's load, w(a) for particle kept(a) (on the device, as kept, wall_tri and
+    !> hstart): 1 + its wall contacts + its pair contacts with history (the entries of its
+    !> row of history, hstart as neighbors_row_history gives it), what its step costs
+    !> beyond its own (doc/theory.md section 13); total = their sum. w is made here.
+    subroutine domain_loads(m, kept, wall_tri, hstart, w, total)
+        integer(ip), intent(in) :: m
+        integer(ip), intent(in) :: kept(:)           !! the particles in the run (m of them)
+        integer(ip), intent(in) :: wall_tri(:, :)    !! wall-contact slots (0: free)
+        integer(ip), intent(in) :: hstart(:)         !! rows of pair history of the owned
+        integer(ip), allocatable, intent(out) :: w(:)
+        integer(i8), intent(out) :: total
+        integer(ip) :: a, i, j, c
+        allocate(w(max(1, m)))
+        call acc_data(w, acc_create)
+        total = 0
+        !$acc parallel loop gang vector default(present) private(i, j, c) reduction(+:total)
+        do a = 1, m
+            i = kept(a)
+            c = 1 + hstart(i + 1) - hstart(i)
+            do j = 1, size(wall_tri, 1)
+                if (wall_tri(j, i) > 0) c = c + 1
+            end do
+            w(a) = c
+            total = total + c
+        end do
+    end subroutine domain_loads
+
+    !> Assign the blocks to ranks with METIS: vertex weight = 1 + s (the loads of the
+    !> particles in a block, domain_loads), with s as large as 32-bit weights allow, up to
+    !> 1024 (empty space costs almost nothing; METIS balances badly with weights of zero),
+    !> edge weight = 1 + particles within reach of the shared face. The particles are
+    !> kept(1:m), with loads w; the blocks' sums are counted by a kernel (integer atomics: the
+    !> sums do not depend on the order), and every rank computes the same partition from the
+    !> same sums. `status` is METIS's (1: done).
+    subroutine domain_balance(d, comm, m, kept, x, radius, w, status)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         integer(ip), intent(in) :: m
         integer(ip), intent(in) :: kept(:)           !! the particles in the run (m of them)
         real(wp), intent(in) :: x(:, :), radius(:)   !! [m]
-        integer(ip), intent(in) :: wall_tri(:, :)    !! wall-contact slots (0: free)
+        integer(ip), intent(in) :: w(:)              !! their loads (domain_loads)
         integer, intent(out) :: status
         integer(ip), allocatable :: load(:), near(:)
         integer(i8), allocatable :: weight(:), face(:)      ! face(6 (b - 1) + f): face f of b
@@ -109,8 +136,8 @@ contains
         call acc_data(near, acc_create)
         r = largest_radius(m, kept, radius)
         call comm_max(comm, r)
-        call block_loads(m, kept, nb, d%origin, d%h, d%n, r(1), d%skin, x, radius, wall_tri, &
-                         load, near)
+        call block_loads(m, kept, nb, d%origin, d%h, d%n, r(1), d%skin, x, radius, w, load, &
+                         near)
         call acc_data(load, acc_to_host)
         call acc_data(near, acc_to_host)
         call acc_data(near, acc_exit)
@@ -157,16 +184,15 @@ contains
         end do
     end function largest_radius
 
-    !> load(b) = particles and wall contacts of the particles kept(1:m) in block b, near(6 (b
-    !> - 1) + f) = those of them within R_i + r_max + skin of face f of b (faces -x, +x, -y,
-    !> +y, -z, +z), by integer atomics.
-    subroutine block_loads(m, kept, nb, origin, h, nblk, r_max, skin, x, radius, wall_tri, &
-                           load, near)
+    !> load(b) = the loads w of the particles kept(1:m) in block b, near(6 (b - 1) + f) =
+    !> those of them within R_i + r_max + skin of face f of b (faces -x, +x, -y, +y, -z, +z),
+    !> by integer atomics.
+    subroutine block_loads(m, kept, nb, origin, h, nblk, r_max, skin, x, radius, w, load, near)
         integer(ip), intent(in) :: m, nb, nblk(3)
-        integer(ip), intent(in) :: kept(:), wall_tri(:, :)
+        integer(ip), intent(in) :: kept(:), w(:)
         real(wp), intent(in) :: origin(3), h, r_max, skin, x(:, :), radius(:)
         integer(ip), intent(inout) :: load(nb), near(6 * nb)
-        integer(ip) :: a, i, b, c(3), k, f, j, w
+        integer(ip) :: a, i, b, c(3), k, f
         real(wp) :: reach
         !$acc parallel loop gang vector default(present)
         do b = 1, nb
@@ -174,17 +200,13 @@ contains
             near(6 * b - 5:6 * b) = 0
         end do
         !$acc parallel loop gang vector default(present) copyin(origin, nblk) &
-        !$acc private(i, b, c, k, f, j, w, reach)
+        !$acc private(i, b, c, k, f, reach)
         do a = 1, m
             i = kept(a)
             c = cell_coords(x(:, i), origin, h, nblk)
             b = cell_number(c, nblk)
-            w = 1
-            do j = 1, size(wall_tri, 1)
-                if (wall_tri(j, i) > 0) w = w + 1
-            end do
             !$acc atomic update
-            load(b) = load(b) + w
+            load(b) = load(b) + w(a)
             reach = radius(i) + r_max + skin
             do k = 1, 3
                 f = 6 * (b - 1) + 2 * k - 1                  ! the lower face along k
@@ -200,14 +222,14 @@ contains
         end do
     end subroutine block_loads
 
-    !> Largest particle count of a rank over the mean (1: balanced).
-    real(wp) function domain_imbalance(comm, n_own) result(imbalance)
+    !> Largest amount of a rank (its particles, or their loads) over the mean (1: balanced).
+    real(wp) function domain_imbalance(comm, amount) result(imbalance)
         type(comm_t), intent(in) :: comm
-        integer(ip), intent(in) :: n_own
+        integer(i8), intent(in) :: amount
         real(wp) :: most(1)
         integer(i8) :: total(1)
-        most = real(n_own, wp)
-        total = n_own
+        most = real(amount, wp)
+        total = amount
         call comm_max(comm, most)
         call comm_sum(comm, total)
         imbalance = 1.0_wp
