@@ -85,13 +85,14 @@ contains
 
     !> Each particle's load, w(a) for particle kept(a) (on the device, as kept, wall_tri and
     !> hstart): 1 + its wall contacts + its pair contacts with history (the entries of its
-    !> row of history, hstart as neighbors_row_history gives it), what its step costs
-    !> beyond its own (doc/theory.md section 13); total = their sum. w is made here.
+    !> row of history, hstart as neighbors_row_history gives it): the contacts are most of
+    !> what a particle's step costs (doc/theory.md section 13). total = their sum; w is made
+    !> here.
     subroutine domain_loads(m, kept, wall_tri, hstart, w, total)
         integer(ip), intent(in) :: m
         integer(ip), intent(in) :: kept(:)           !! the particles in the run (m of them)
         integer(ip), intent(in) :: wall_tri(:, :)    !! wall-contact slots (0: free)
-        integer(ip), intent(in) :: hstart(:)         !! rows of pair history of the owned
+        integer(ip), intent(in) :: hstart(:)         !! the owned particles' rows of history
         integer(ip), allocatable, intent(out) :: w(:)
         integer(i8), intent(out) :: total
         integer(ip) :: a, i, j, c

@@ -41,11 +41,11 @@ module dem_contact_store
         !> contact whose history is kept (until the next list build, as LIGGGHTS 3.8.0 does),
         !> slot(p) < 0 and hist(:, -slot(p)); 0: no history. At a list build the pairs with
         !> history take the first slots (on the host in the order of the pairs; on a GPU as
-        !> its atomics hand them out); a contact that begins later takes the next one (n_hist(1) are in use; a pair keeps its slot until the
-        !> next build, so there are never more than pairs). The contact kernel so reads and
-        !> writes the history of the pairs in contact only. After a migration or a restart,
-        !> until the next list build, the history of rows of entries (dem_neighbors'
-        !> set_rows), numbered as the entries.
+        !> its atomics hand them out); a contact that begins later takes the next one
+        !> (n_hist(1) are in use; a pair keeps its slot until the next build, so there are
+        !> never more than pairs). The contact kernel so reads and writes the history of the
+        !> pairs in contact only. After a migration or a restart, until the next list build,
+        !> the history of rows of entries (dem_neighbors' set_rows), numbered as the entries.
         integer(ip), allocatable :: slot(:)
         real(wp), allocatable :: hist(:, :)      !< (n_pair_history, slot)
         integer(ip), allocatable :: n_hist(:)    !< (1)
