@@ -2,14 +2,15 @@
 !> (grow to 5/4 of the need when it is short, shrink to that when the store is more than
 !> 3/2 of the need; doc/user/parallel.md), the reallocation of arrays whose last index is the
 !> particle, keeping the first rows, their reordering, and the packing of some particles'
-!> columns into a buffer for another rank and back (kernels, on the device when the arrays
-!> are there, otherwise on the host's copies).
+!> columns into a buffer for another rank and back, and index ranges (kernels, on the device
+!> when the arrays are there, otherwise on the host's copies).
 module dem_storage
     use dem_kinds, only: wp, ip, i8
     implicit none
     private
     public :: storage_capacity, storage_resize, permute_real, permute_int, permute_i8, &
-              gather_real, scatter_real, gather_int, scatter_int, gather_i8, scatter_i8
+              gather_real, scatter_real, gather_int, scatter_int, gather_i8, scatter_i8, &
+              fill_range
 
     !> storage_resize(a, n_keep, capacity): a reallocated with `capacity` entries along its
     !> last dimension; entries 1..n_keep keep their values, the others are zero.
@@ -19,6 +20,17 @@ module dem_storage
     end interface storage_resize
 
 contains
+
+    !> a(i) = first + step (i - 1), i = 1..n.
+    subroutine fill_range(n, a, first, step)
+        integer(ip), intent(in) :: n, first, step
+        integer(ip), intent(inout) :: a(n)
+        integer(ip) :: i
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n
+            a(i) = first + step * (i - 1)
+        end do
+    end subroutine fill_range
 
     !> The capacity for `need` particles of a store that holds `capacity` now: unchanged
     !> while need <= capacity <= 3/2 need, otherwise need + need/4 (+ 16, so that small

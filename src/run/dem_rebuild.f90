@@ -17,7 +17,8 @@ module dem_rebuild
                              neighbors_row_history, neighbors_set_rows
     use dem_contact_store, only: store_walls_permute, store_pairs_forget_parted, &
                                  store_walls_reserve_on_device
-    use dem_cells, only: fill_range, kept_indices
+    use dem_cells, only: kept_indices
+    use dem_storage, only: fill_range
     use dem_periodic, only: periodic_wrap
     use dem_contacts_pp, only: pp_scales
     use dem_diagnostics, only: momentum_sums

@@ -8,7 +8,7 @@ module dem_cells
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host
     implicit none
     private
-    public :: prefix_sum, bin_items, cell_number, cell_coords, fill_range, kept_indices, &
+    public :: prefix_sum, bin_items, cell_number, cell_coords, kept_indices, &
               sort_segment, gather_items, axes_by_extent
 
     integer(ip), parameter :: chunk = 256    !< counts summed by one thread in prefix_sum
@@ -123,17 +123,6 @@ contains
             order(k) = items(item(k))
         end do
     end subroutine gather_items
-
-    !> a(i) = first + step (i - 1), i = 1..n.
-    subroutine fill_range(n, a, first, step)
-        integer(ip), intent(in) :: n, first, step
-        integer(ip), intent(inout) :: a(n)
-        integer(ip) :: i
-        !$acc parallel loop gang vector default(present)
-        do i = 1, n
-            a(i) = first + step * (i - 1)
-        end do
-    end subroutine fill_range
 
     !> The indices i = 1..n with drop(i) false, in increasing order, into kept(1:m).
     subroutine kept_indices(n, drop, kept, m)

@@ -9,8 +9,9 @@
 module dem_neighbors
     use dem_kinds, only: wp, ip, i8
     use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host
-    use dem_cells, only: prefix_sum, bin_items, cell_coords, cell_number, fill_range, &
-                         sort_segment, gather_items, axes_by_extent
+    use dem_cells, only: prefix_sum, bin_items, cell_coords, cell_number, sort_segment, &
+                         gather_items, axes_by_extent
+    use dem_storage, only: fill_range
     use dem_particles, only: index_of_id
     use dem_mesh, only: mesh_t, closest_point_triangle
     use dem_contact_store, only: contact_store_t, n_pair_history, max_pair_history, &

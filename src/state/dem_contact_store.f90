@@ -11,7 +11,8 @@
 !> keep their constant length). store_history_widths sets both once per case.
 module dem_contact_store
     use dem_kinds, only: wp, ip, i8
-    use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int
+    use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int, &
+                           fill_range
     use dem_particles, only: order_by_id
     use dem_acc, only: acc_data, acc_to_host, acc_exit, acc_enter, acc_create
     implicit none
@@ -77,22 +78,12 @@ contains
         n = size(xi, 2, kind=ip)
         allocate(from(n))
         call acc_data(from, acc_create)
-        call own_columns(n, from)
+        call fill_range(n, from, 1, 1)
         call store_pairs_from(cs, n, from, xi)
         call acc_data(from, acc_exit)
         call acc_data(xi, acc_exit)
         deallocate(xi)
     end subroutine store_pairs_take
-
-    subroutine own_columns(n, from)
-        integer(ip), intent(in) :: n
-        integer(ip), intent(inout) :: from(n)
-        integer(ip) :: p
-        !$acc parallel loop gang vector default(present)
-        do p = 1, n
-            from(p) = p
-        end do
-    end subroutine own_columns
 
     !> The store's history for n pairs from the columns of src (on the device, as from):
     !> pair p's is src(:, from(p)), or -src(:, -from(p)) where from(p) < 0 (the other side's,
