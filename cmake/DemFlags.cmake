@@ -8,9 +8,13 @@
 #   DEM_SIMD: auto (the default): the widest of avx512 and avx2 that the build machine's
 #            processor has, else none; none: x86-64 (SSE2), a binary for any x86-64;
 #            avx2: -march=x86-64-v3 (AVX2; Intel since 2013, AMD since 2015); avx512:
-#            -march=x86-64-v4 (AVX-512; AMD since Zen 4, Intel server processors); native:
-#            -march=native. A program built for avx2 or avx512 stops with a message on a
-#            processor without them (src/app/dem_cpu_check.c).
+#            -march=x86-64-v4 (AVX-512; AMD since Zen 4, Intel server processors) with
+#            -mprefer-vector-width=256: AVX-512's instructions on 256-bit registers, as GCC's
+#            own tunings for Intel's AVX-512 processors choose, since 512-bit ones lower the
+#            clock of many of them (the whole step 8 % slower here: doc/results/
+#            performance.md, eleventh step); native: -march=native. A program built for avx2
+#            or avx512 stops with a message on a processor without them
+#            (src/app/dem_cpu_check.c).
 #   Debug:   -O0 -g and run-time checks (gfortran: -fcheck=all -ffpe-trap=... -Wall)
 #   gfortran, both: -ffpe-summary=invalid,zero,overflow: a run reports on stop only the
 #            floating-point flags that mean trouble, not the underflows of tiny forces
@@ -80,7 +84,11 @@ else()
   endif()
   if(_march)
     list(APPEND DEM_FORTRAN_FLAGS_RELEASE -march=${_march} -ffp-contract=off)
-    message(STATUS "dem: Release builds with -march=${_march} -ffp-contract=off (DEM_SIMD=${DEM_SIMD})")
+    if(_march STREQUAL "x86-64-v4")
+      list(APPEND DEM_FORTRAN_FLAGS_RELEASE -mprefer-vector-width=256)
+    endif()
+    list(JOIN DEM_FORTRAN_FLAGS_RELEASE " " _shown)
+    message(STATUS "dem: Release builds with ${_shown} (DEM_SIMD=${DEM_SIMD})")
   else()
     message(STATUS "dem: Release builds without -march, for any processor of the architecture (DEM_SIMD=${DEM_SIMD})")
   endif()
