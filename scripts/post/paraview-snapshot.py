@@ -287,6 +287,11 @@ def with_vtk(a, t, names):
     text.SetDisplayPosition(10, a.size[1] - 24)
     ren.AddViewProp(text)
     window = vtk.vtkRenderWindow()
+    if window.GetClassName() == "vtkXOpenGLRenderWindow" and not os.environ.get("DISPLAY"):
+        sys.exit(f"paraview-snapshot: the vtk module of {sys.executable} renders through an "
+                 "X server, and there is no display (DISPLAY is not set): run it under "
+                 "xvfb-run -a -s \"-screen 0 1280x1024x24\", or with a vtk that renders "
+                 "off-screen (pip install vtk)")
     window.SetOffScreenRendering(1)
     window.AddRenderer(ren)
     window.SetSize(*a.size)

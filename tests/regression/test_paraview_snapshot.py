@@ -1,7 +1,8 @@
 """scripts/post/paraview-snapshot.py on a small run (60 spheres falling into a box), with each
 backend that is installed: ParaView's pvpython (with an Xvfb server when there is no
 display) and each Python with a vtk module (this Python, .venv's, /usr/bin/python3; with
---backend vtk; tried without a display first); each must write a PNG of the size asked for
+--backend vtk; tried without a display first; a vtk that renders through X, with no display
+and no Xvfb, must stop with a clear error instead); each must write a PNG of the size asked for
 that is not blank (more than 50 colours; more than 2 % of the pixels neither the white
 background nor one flat colour) and say how many particles it drew. Also the XDMF index's
 material table: its Information element names the materials of the snapshot's
@@ -148,6 +149,14 @@ for k, (name, cmd, fallback) in enumerate(found):
         if r.returncode != 0:           # (a loaded machine: the new server not ready yet)
             time.sleep(2.0)
             r = draw(fallback, png, display.get())
+    if cmd is not None and r.returncode != 0 and not fallback:
+        # a vtk that renders through X (Debian's), no display and no Xvfb: the script must
+        # say so and stop, not crash
+        check(r.returncode == 1 and "renders through an X server" in r.stderr,
+              f"{name}: without a display, a clear error (exit {r.returncode}): "
+              f"{r.stdout[-1500:]}{r.stderr[-1500:]}")
+        print(f"{name}: needs an X server; no display and no Xvfb here: not drawn")
+        continue
     check(r.returncode == 0 and os.path.exists(png),
           f"{name}: exit {r.returncode}, {png} written: {r.stdout[-1500:]}{r.stderr[-1500:]}")
     if r.returncode != 0 or not os.path.exists(png):
