@@ -632,14 +632,16 @@ contains
         integer(ip) :: i, c0(3), w(3), t, u, k, code
         integer :: q, skip
         real(wp) :: xs(3), reach
-        logical :: seen
+        logical :: seen, periodic
+        periodic = any(axis)
         !$acc parallel loop gang vector default(present) copyin(origin, nblk, axis, plo, length) &
-        !$acc private(c0, w, t, u, k, q, seen, code, xs, reach, skip)
+        !$acc private(c0, w, t, u, k, q, seen, code, xs, reach, skip) firstprivate(periodic)
         do i = 1, n
             reach = radius(i) + rmax_all + skin
             k = 0
             do code = 0, n_images - 1
                 if (code /= no_image) then
+                    if (.not. periodic) cycle               ! (no periodic axis: no image)
                     if (.not. image_possible(code, axis, plo, length, x(:, i), reach)) cycle
                     xs = x(:, i) + image_shift(code, length)
                     skip = -1
