@@ -102,8 +102,9 @@ contains
     end subroutine resize_wp_3
 
     !> Reorder the columns of a(rows, capacity): column k becomes the one at order(k),
-    !> k = 1..n; the columns after n are zeroed. On the device if a and order are there
-    !> (present or copied: a stays where it is).
+    !> k = 1..n (the columns with order(k) = k are not touched: a migration moves few); the
+    !> columns after n are zeroed. On the device if a and order are there (present or
+    !> copied: a stays where it is).
     subroutine permute_real(rows, capacity, n, order, a)
         integer(ip), intent(in) :: rows, capacity, n
         integer(ip), intent(in) :: order(n)
@@ -114,14 +115,14 @@ contains
         !$acc data copyin(order) copy(a) create(work)
         !$acc parallel loop gang vector
         do k = 1, n
-            work(:, k) = a(:, order(k))
+            if (order(k) /= k) work(:, k) = a(:, order(k))
         end do
         !$acc parallel loop gang vector
         do k = 1, capacity
-            if (k <= n) then
-                a(:, k) = work(:, k)
-            else
+            if (k > n) then
                 a(:, k) = 0.0_wp
+            else if (order(k) /= k) then
+                a(:, k) = work(:, k)
             end if
         end do
         !$acc end data
@@ -138,14 +139,14 @@ contains
         !$acc data copyin(order) copy(a) create(work)
         !$acc parallel loop gang vector
         do k = 1, n
-            work(:, k) = a(:, order(k))
+            if (order(k) /= k) work(:, k) = a(:, order(k))
         end do
         !$acc parallel loop gang vector
         do k = 1, capacity
-            if (k <= n) then
-                a(:, k) = work(:, k)
-            else
+            if (k > n) then
                 a(:, k) = 0
+            else if (order(k) /= k) then
+                a(:, k) = work(:, k)
             end if
         end do
         !$acc end data
@@ -162,14 +163,14 @@ contains
         !$acc data copyin(order) copy(a) create(work)
         !$acc parallel loop gang vector
         do k = 1, n
-            work(k) = a(order(k))
+            if (order(k) /= k) work(k) = a(order(k))
         end do
         !$acc parallel loop gang vector
         do k = 1, capacity
-            if (k <= n) then
-                a(k) = work(k)
-            else
+            if (k > n) then
                 a(k) = 0
+            else if (order(k) /= k) then
+                a(k) = work(k)
             end if
         end do
         !$acc end data

@@ -12,12 +12,14 @@ module dem_rebuild
     use dem_particles, only: particles_permute, particles_find, particles_add, &
                              particles_reserve_on_device
     use dem_domain, only: domain_init, domain_data, domain_loads, domain_balance, &
-                          domain_imbalance, domain_migrate, domain_ghosts, domain_update
+                          domain_imbalance, domain_destinations, domain_migrate, domain_ghosts, &
+                          domain_update
     use dem_neighbors, only: neighbors_build, neighbors_check, neighbors_spatial_order, &
-                             neighbors_row_history, neighbors_set_rows
+                             neighbors_row_history, neighbors_history_counts, &
+                             neighbors_append_rows, neighbors_empty_rows
     use dem_contact_store, only: store_walls_permute, store_pairs_forget_parted, &
                                  store_walls_reserve_on_device
-    use dem_cells, only: kept_indices
+    use dem_cells, only: kept_indices, gather_items
     use dem_storage, only: fill_range
     use dem_periodic, only: periodic_wrap
     use dem_contacts_pp, only: pp_scales
@@ -114,7 +116,7 @@ contains
         type(error_t), intent(inout) :: err      !! a failed partition or migration
         type(new_particles_t), intent(in), optional :: added  !! particles that join (none
                                                  !! parked: not with outlets)
-        integer(ip), allocatable :: order(:), kept(:)
+        integer(ip), allocatable :: order(:), kept(:), row_of(:), old_row(:)
         integer(ip) :: m
         real(wp), allocatable :: pose(:, :, :)
         logical :: replay
@@ -129,7 +131,7 @@ contains
                                                                s%p%x)
         if (s%halo .and. s%lists_on_device) call domain_data(s%dom, acc_exit)
         if (s%comm%size > 1) then
-            call distribute(s, outlets, err)
+            call distribute(s, outlets, row_of, err)
             if (err%failed()) return
         end if
         call kept_particles(s, outlets .and. s%comm%size == 1, kept, m)
@@ -149,6 +151,14 @@ contains
             if (s%dom%pb%on) call domain_update(s%dom, s%comm, s%p)   ! the images' positions
         end if
         if (s%trace_id /= 0) s%trace = particles_find(s%p%n_own, s%p%gid, s%trace_id)
+        if (allocated(row_of)) then              ! (a migration: the rows of the old places)
+            allocate(old_row(max(1, m)))
+            call acc_data(old_row, acc_create)
+            call gather_items(m, row_of, order, old_row)
+            call acc_data(order, acc_exit)
+            call acc_data(row_of, acc_exit)
+            call move_alloc(old_row, order)
+        end if
         call neighbors_build(s%nb, s%cs, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
                              s%p%radius, s%mesh, old_index=order)
         if (replay) call pose_now(s, pose)
@@ -226,25 +236,16 @@ contains
     end subroutine swap_columns
 
     !> Append `a` to the owned particles, at rest of forces and without contact history:
-    !> the ghosts are dropped (the rebuild makes them anew) and the lists' pair history
-    !> becomes rows (neighbors_row_history), empty ones for the new particles, for the
-    !> rebuild to carry as after a migration. The store goes through the host.
+    !> the ghosts are dropped (the rebuild makes them anew) and the lists get empty rows for
+    !> the new particles (neighbors_empty_rows), for the rebuild to carry from. The store
+    !> goes through the host.
     subroutine add_particles(s, a)
         type(solver_t), intent(inout) :: s
         type(new_particles_t), intent(in) :: a
-        integer(ip), allocatable :: hstart(:), rows(:)
-        integer(i8), allocatable :: hpartner(:)
-        real(wp), allocatable :: hxi(:, :)
         integer(ip) :: n_old, n, k
         n_old = s%p%n_own
         n = n_old + size(a%gid, kind=ip)
-        call neighbors_row_history(s%nb, s%cs, n_old, hstart, hpartner, hxi)
-        call acc_data(hstart, acc_to_host)
-        rows = [hstart, spread(hstart(n_old + 1), 1, n - n_old)]
-        call acc_data(hstart, acc_exit)
-        call move_alloc(rows, hstart)
-        call acc_data(hstart, acc_enter)
-        call neighbors_set_rows(s%nb, s%cs, hstart, hpartner, hxi)
+        call neighbors_empty_rows(s%nb, s%cs, n_old, n - n_old)
         call particle_data(s, acc_to_host)
         s%p%n_ghost = 0
         call particles_reserve_on_device(s%p, n)
@@ -284,28 +285,33 @@ contains
     !> limit times the ratio the last partition achieved (blocks may not allow better, and a
     !> draining silo's last particles would be repartitioned at every rebuild), or when the
     !> last partition knew no contacts (a run's first, from a state without history) and
-    !> there are some now. The pair history travels in rows, each particle's from its own
-    !> side (neighbors_row_history: from the lists, or after a restart from the checkpoint's
-    !> pairs), and is left for the next neighbors_build. The particle count and the momentum
-    !> are checked to be the same after the move (to round-off); a failed partition or
-    !> migration sets err on every rank.
-    subroutine distribute(s, outlets, err)
+    !> there are some now. The pair history of the particles that leave travels in rows, each
+    !> particle's from its own side (neighbors_row_history); the rows received are appended
+    !> to the lists (neighbors_append_rows), and the next neighbors_build carries the history
+    !> of the particles that stayed from their rows of the lists as they are: row_of(k) is the
+    !> row of owned particle k. The particle count and the momentum are checked to be the
+    !> same after the move (to round-off); a failed partition or migration sets err on every
+    !> rank.
+    subroutine distribute(s, outlets, row_of, err)
         type(solver_t), intent(inout) :: s
         logical, intent(in) :: outlets
+        integer(ip), allocatable, intent(out) :: row_of(:)    !! on the device
         type(error_t), intent(inout) :: err
-        integer(ip), allocatable :: kept(:), owned(:), hstart(:), w(:)
+        integer(ip), allocatable :: kept(:), owned(:), hstart(:), w(:), cnt(:), bin(:), &
+                                    stay(:), now(:)
         integer(i8), allocatable :: hpartner(:)
         real(wp), allocatable :: hxi(:, :)
+        logical, allocatable :: drop(:)
         real(wp) :: imbalance, before(5), after(5)
         integer(i8) :: load, contacts(1)
-        integer(ip) :: m, n
+        integer(ip) :: m, n, n_rows, n_stay
         integer :: status
         logical :: balance
         call kept_particles(s, outlets, kept, m)
-        call neighbors_row_history(s%nb, s%cs, s%p%n_own, hstart, hpartner, hxi)
-        call domain_loads(m, kept, s%cs%wall_tri, hstart, w, load)
+        n_rows = s%p%n_own
+        call neighbors_history_counts(s%nb, s%cs, n_rows, cnt, contacts(1))
+        call domain_loads(m, kept, s%cs%wall_tri, cnt, w, load)
         imbalance = domain_imbalance(s%comm, load)
-        contacts = hstart(s%p%n_own + 1) - 1            ! (the rows' count is on the host)
         call comm_sum(s%comm, contacts)
         balance = .not. s%distributed .or. imbalance > s%imbalance_limit * s%balanced &
                   .or. (s%balanced_blind .and. contacts(1) > 0)
@@ -313,6 +319,7 @@ contains
             call domain_balance(s%dom, s%comm, m, kept, s%p%x, s%p%radius, w, status)
             if (comm_any(s%comm, status /= 1)) then
                 call acc_data(w, acc_exit)
+                call acc_data(cnt, acc_exit)
                 call acc_data(kept, acc_exit)
                 call set_error(err, dem_err_runtime, 'METIS could not partition the blocks ' // &
                                'of space between the ranks')
@@ -320,17 +327,35 @@ contains
             end if
         end if
         call acc_data(w, acc_exit)
+        call domain_destinations(s%dom, s%comm, n_rows, m, kept, s%p%x, bin, drop)
+        call neighbors_row_history(s%nb, s%cs, n_rows, cnt, bin, hstart, hpartner, hxi)
         before = momentum_sums(s%comm, m, kept, s%p%mass, s%p%v)
-        call domain_migrate(s%dom, s%comm, s%p, s%cs, m, kept, hstart, hpartner, hxi)
+        call domain_migrate(s%dom, s%comm, s%p, s%cs, bin, drop, hstart, hpartner, hxi, stay, &
+                            n_stay)
+        call acc_data(drop, acc_exit)
+        call acc_data(bin, acc_exit)
         call acc_data(kept, acc_exit)
         s%distributed = .true.
+        n = s%p%n_own
+        allocate(row_of(max(1, n)))
+        call acc_data(row_of, acc_create)
+        call rows_after_move(n, n_stay, n_rows, stay, row_of)
+        call acc_data(stay, acc_exit)
+        call neighbors_append_rows(s%nb, s%cs, n_rows, hstart, hpartner, hxi)
         call kept_particles(s, .false., owned, n)
         if (balance) then                        ! what the partition achieved
-            call domain_loads(n, owned, s%cs%wall_tri, hstart, w, load)
+            allocate(now(max(1, n)))
+            call acc_data(now, acc_create)
+            call acc_data(cnt, acc_exit)
+            call neighbors_history_counts(s%nb, s%cs, n_rows + n - n_stay, cnt, load)
+            call gather_items(n, cnt, row_of, now)
+            call domain_loads(n, owned, s%cs%wall_tri, now, w, load)
             call acc_data(w, acc_exit)
+            call acc_data(now, acc_exit)
             s%balanced = domain_imbalance(s%comm, load)
             s%balanced_blind = contacts(1) == 0
         end if
+        call acc_data(cnt, acc_exit)
         after = momentum_sums(s%comm, n, owned, s%p%mass, s%p%v)
         call acc_data(owned, acc_exit)
         if (nint(after(1)) /= nint(before(1)) .or. any(abs(after(2:4) - before(2:4)) > &
@@ -339,8 +364,25 @@ contains
                            'conserve the particles or their momentum')
             return
         end if
-        call neighbors_set_rows(s%nb, s%cs, hstart, hpartner, hxi)
     end subroutine distribute
+
+    !> row_of(k) = the row of the lists that holds owned particle k's history after a
+    !> migration: that of the place stay(k) it held for the n_stay that stayed, the n_rows +
+    !> (k - n_stay)-th (appended) for those received. On the device.
+    subroutine rows_after_move(n, n_stay, n_rows, stay, row_of)
+        integer(ip), intent(in) :: n, n_stay, n_rows
+        integer(ip), intent(in) :: stay(:)
+        integer(ip), intent(inout) :: row_of(:)
+        integer(ip) :: k
+        !$acc parallel loop gang vector default(present)
+        do k = 1, n
+            if (k <= n_stay) then
+                row_of(k) = stay(k)
+            else
+                row_of(k) = n_rows + k - n_stay
+            end if
+        end do
+    end subroutine rows_after_move
 
     !> Remove the parked particles now (a rebuild), if there are any: before an output, and
     !> at the end of an advance; collective.

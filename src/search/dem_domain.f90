@@ -14,6 +14,7 @@ module dem_domain
     use dem_cells, only: cell_coords, cell_number, prefix_sum, bin_items, gather_items, &
                          kept_indices
     use dem_metis, only: metis_partition
+    use dem_storage, only: fill_range
     use dem_periodic, only: periodic_t, image_shift, image_possible, no_image, n_images
     use dem_neighbors, only: fit_grid
     use dem_particles, only: particles_t, particles_pack, particles_unpack, particles_permute, &
@@ -25,7 +26,8 @@ module dem_domain
     implicit none
     private
     public :: domain_t, domain_init, domain_loads, domain_balance, domain_imbalance, &
-              domain_migrate, domain_ghosts, domain_update, domain_data, sorted_by_rank
+              domain_destinations, domain_migrate, domain_ghosts, domain_update, domain_data, &
+              sorted_by_rank
 
     integer, parameter :: blocks_per_rank = 64   !< target in the particles' box
     integer, parameter :: max_blocks_per_rank = 512  !< in the whole box (walls included)
@@ -84,15 +86,14 @@ contains
     end subroutine domain_init
 
     !> Each particle's load, w(a) for particle kept(a) (on the device, as kept, wall_tri and
-    !> hstart): 1 + its wall contacts + its pair contacts with history (the entries of its
-    !> row of history, hstart as neighbors_row_history gives it): the contacts are most of
-    !> what a particle's step costs (doc/theory.md section 13). total = their sum; w is made
-    !> here.
-    subroutine domain_loads(m, kept, wall_tri, hstart, w, total)
+    !> contacts): 1 + its wall contacts + its pair contacts (contacts(i), those with history:
+    !> neighbors_history_counts): the contacts are most of what a particle's step costs
+    !> (doc/theory.md section 13). total = their sum; w is made here.
+    subroutine domain_loads(m, kept, wall_tri, contacts, w, total)
         integer(ip), intent(in) :: m
         integer(ip), intent(in) :: kept(:)           !! the particles in the run (m of them)
         integer(ip), intent(in) :: wall_tri(:, :)    !! wall-contact slots (0: free)
-        integer(ip), intent(in) :: hstart(:)         !! the owned particles' rows of history
+        integer(ip), intent(in) :: contacts(:)       !! the owned particles' pair contacts
         integer(ip), allocatable, intent(out) :: w(:)
         integer(i8), intent(out) :: total
         integer(ip) :: a, i, j, c
@@ -102,7 +103,7 @@ contains
         !$acc parallel loop gang vector default(present) private(i, j, c) reduction(+:total)
         do a = 1, m
             i = kept(a)
-            c = 1 + hstart(i + 1) - hstart(i)
+            c = 1 + contacts(i)
             do j = 1, size(wall_tri, 1)
                 if (wall_tri(j, i) > 0) c = c + 1
             end do
@@ -237,46 +238,62 @@ contains
         if (total(1) > 0) imbalance = most(1) * comm%size / real(total(1), wp)
     end function domain_imbalance
 
-    !> Give the particles kept(1:m) (the other owned particles are removed) to the ranks of
-    !> their blocks, with their wall-contact history and their rows of pair history (hstart,
-    !> hpartner, hxi: neighbors_row_history's rows, replaced by those of the particles owned
-    !> after the move). The particles that stay keep their order; those received follow, by
-    !> sending rank, each rank's in the order it held them. Ghosts are dropped; the stores
-    !> follow the rank's share (particles_reserve_on_device). Kernels, on the device where
-    !> the particles are: the host sees the counts and the packed particles, for MPI.
-    subroutine domain_migrate(d, comm, p, cs, m, kept, hstart, hpartner, hxi)
+    !> Where the owned particles go: bin(i) = 1 + the rank of particle i's block if that is
+    !> another rank's and i is one of kept(1:m) (the particles in the run), else 0; drop(i)
+    !> unless i is kept and its block is this rank's. Made here, on the device.
+    subroutine domain_destinations(d, comm, n, m, kept, x, bin, drop)
+        type(domain_t), intent(inout) :: d
+        type(comm_t), intent(in) :: comm
+        integer(ip), intent(in) :: n, m          !! owned particles; those kept
+        integer(ip), intent(in) :: kept(:)
+        real(wp), intent(in) :: x(:, :)          !! [m]
+        integer(ip), allocatable, intent(out) :: bin(:)
+        logical, allocatable, intent(out) :: drop(:)
+        allocate(bin(max(1, n)), drop(max(1, n)))
+        call acc_data(bin, acc_create)
+        call acc_data(drop, acc_create)
+        call acc_data(d%owner, acc_enter)
+        call destinations(n, m, kept, product(d%n), d%origin, d%h, d%n, d%owner, comm%rank, &
+                          x, bin, drop)
+        call acc_data(d%owner, acc_exit)
+    end subroutine domain_destinations
+
+    !> Give the owned particles to the ranks domain_destinations names (bin, drop: those
+    !> dropped are removed), with their wall-contact history and their rows of pair history
+    !> (hstart, hpartner, hxi: neighbors_row_history's rows of the particles that leave,
+    !> replaced by the rows of those received: row k is that of particle n_stay + k). The
+    !> particles that stay come first, stay(k) the place particle k held (stay_places: most
+    !> keep their places); those received follow, by sending rank, each rank's in the order
+    !> it held them. Ghosts are dropped; the stores follow the rank's share
+    !> (particles_reserve_on_device). Kernels, on the device where the particles are: the
+    !> host sees the counts and the packed particles, for MPI.
+    subroutine domain_migrate(d, comm, p, cs, bin, drop, hstart, hpartner, hxi, stay, n_stay)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         type(particles_t), intent(inout) :: p
         type(contact_store_t), intent(inout) :: cs   !! its wall-contact history moves
-        integer(ip), intent(in) :: m
-        integer(ip), intent(in) :: kept(:)
+        integer(ip), intent(in) :: bin(:)
+        logical, intent(in) :: drop(:)
         integer(ip), allocatable, intent(inout) :: hstart(:)
         integer(i8), allocatable, intent(inout) :: hpartner(:)
         real(wp), allocatable, intent(inout) :: hxi(:, :)
-        integer(ip), allocatable :: bin(:), stay(:), item(:), start(:), cnt(:), hlen(:), &
-                                    hpos(:), nlen(:), nstart(:)
-        logical, allocatable :: drop(:)
+        integer(ip), allocatable, intent(out) :: stay(:)
+        integer(ip), intent(out) :: n_stay
+        integer(ip), allocatable :: item(:), start(:), cnt(:), hlen(:), hpos(:), rlen(:), &
+                                    rstart(:)
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :), pbuf(:, :), precv(:, :), &
-                                    npartner(:)
-        real(wp), allocatable :: rbuf(:, :), rrecv(:, :), xbuf(:, :), xrecv(:, :), nxi(:, :)
+                                    rpartner(:)
+        real(wp), allocatable :: rbuf(:, :), rrecv(:, :), xbuf(:, :), xrecv(:, :), rxi(:, :)
         integer, allocatable :: counts(:), recv_counts(:), hcounts(:), hrecv_counts(:)
-        integer(ip) :: n, n_stay, n_send, nr, n_out, n_in, n_h, rows, last(1)
+        integer(ip) :: n, n_send, nr, n_out, n_in, rows
         integer :: nreal
         n = p%n_own
-        allocate(bin(max(1, n)), drop(max(1, n)), stay(max(1, n)), item(max(1, n)), &
-                 start(comm%size + 1), cnt(comm%size))
-        call acc_data(bin, acc_create)
-        call acc_data(drop, acc_create)
+        allocate(stay(max(1, n)), item(max(1, n)), start(comm%size + 1), cnt(comm%size))
         call acc_data(stay, acc_create)
         call acc_data(item, acc_create)
         call acc_data(start, acc_create)
         call acc_data(cnt, acc_create)
-        call acc_data(d%owner, acc_enter)
-        call destinations(n, m, kept, product(d%n), d%origin, d%h, d%n, d%owner, comm%rank, &
-                          p%x, bin, drop)
-        call acc_data(d%owner, acc_exit)
-        call kept_indices(n, drop, stay, n_stay)
+        call stay_places(n, drop, stay, n_stay)
         call bin_items(n, comm%size, bin, start, item, cnt)
         call acc_data(start, acc_to_host)
         counts = int(start(2:) - start(:comm%size))
@@ -319,7 +336,7 @@ contains
         call comm_exchange(comm, xbuf, hcounts, xrecv, hrecv_counts)
         d%bytes = d%bytes + 8 * (size(ibuf) + size(rbuf) + size(pbuf) + size(xbuf))
 
-        ! what stays, then what arrived
+        ! what stays, then what arrived, with the rows of the particles received
         call particles_permute(p, stay(1:n_stay))
         call store_walls_permute(cs, stay(1:n_stay))
         p%n_ghost = 0
@@ -332,27 +349,22 @@ contains
         call particles_unpack(p, n_stay + 1, nr, irecv, rrecv)
         call store_walls_unpack(cs, n_stay + 1, nr, nreal, rrecv)
         p%n_own = n_stay + nr
-        allocate(nlen(max(1, p%n_own)), nstart(p%n_own + 1))
-        call acc_data(nlen, acc_create)
-        call acc_data(nstart, acc_create)
-        call kept_row_lengths(n_stay, nr, stay, hstart, rows, rrecv, nlen)
-        call prefix_sum(p%n_own, nlen, nstart)
-        call acc_data(nstart(p%n_own + 1:p%n_own + 1), acc_to_host)
-        last = nstart(p%n_own + 1:p%n_own + 1)
-        n_h = last(1) - 1
-        allocate(npartner(max(1, n_h)), nxi(n_pair_history, max(1, n_h)))
-        call acc_data(npartner, acc_create)
-        call acc_data(nxi, acc_create)
-        ! the rows of the particles that stayed, then those received, in their order
-        call gather_rows(n_stay, stay, hstart, hpartner, hxi, nstart, n_h, npartner, nxi)
-        call place_received(n_in, precv, xrecv, n_h - n_in + 1, npartner, nxi)
+        allocate(rlen(max(1, nr)), rstart(nr + 1), rpartner(max(1, n_in)), &
+                 rxi(n_pair_history, max(1, n_in)))
+        call acc_data(rlen, acc_create)
+        call acc_data(rstart, acc_create)
+        call acc_data(rpartner, acc_create)
+        call acc_data(rxi, acc_create)
+        call received_row_lengths(nr, rows, rrecv, rlen)
+        call prefix_sum(nr, rlen, rstart)
+        call place_received(n_in, precv, xrecv, rpartner, rxi)
         call acc_data(hxi, acc_exit)
         call acc_data(hpartner, acc_exit)
         call acc_data(hstart, acc_exit)
-        call move_alloc(nstart, hstart)
-        call move_alloc(npartner, hpartner)
-        call move_alloc(nxi, hxi)
-        call acc_data(nlen, acc_exit)
+        call move_alloc(rstart, hstart)
+        call move_alloc(rpartner, hpartner)
+        call move_alloc(rxi, hxi)
+        call acc_data(rlen, acc_exit)
         call acc_data(xrecv, acc_exit)
         call acc_data(precv, acc_exit)
         call acc_data(rrecv, acc_exit)
@@ -366,10 +378,41 @@ contains
         call acc_data(cnt, acc_exit)
         call acc_data(start, acc_exit)
         call acc_data(item, acc_exit)
-        call acc_data(stay, acc_exit)
-        call acc_data(drop, acc_exit)
-        call acc_data(bin, acc_exit)
     end subroutine domain_migrate
+
+    !> The places of the n_stay particles that stay (drop false): stay(k) = the particle put
+    !> at place k. Those at places 1..n_stay keep them, and the places that the others leave
+    !> there take, in order, those beyond n_stay: a migration moves few particles (the
+    !> permutations of dem_storage do not touch a column that keeps its place). On the
+    !> device, as drop and stay.
+    subroutine stay_places(n, drop, stay, n_stay)
+        integer(ip), intent(in) :: n
+        logical, intent(in) :: drop(:)
+        integer(ip), intent(inout) :: stay(:)
+        integer(ip), intent(out) :: n_stay
+        integer(ip), allocatable :: inc(:), hole(:)
+        logical, allocatable :: filled(:)
+        integer(ip) :: n_move, k
+        allocate(inc(max(1, n)))
+        call acc_data(inc, acc_create)
+        call kept_indices(n, drop, inc, n_stay)            ! in increasing order
+        allocate(filled(max(1, n_stay)), hole(max(1, n_stay)))
+        call acc_data(filled, acc_create)
+        call acc_data(hole, acc_create)
+        !$acc parallel loop gang vector default(present)
+        do k = 1, n_stay
+            filled(k) = .not. drop(k)
+        end do
+        call kept_indices(n_stay, filled, hole, n_move)    ! the places left: drop(k)
+        call fill_range(n_stay, stay, 1, 1)
+        !$acc parallel loop gang vector default(present)
+        do k = 1, n_move              ! (the last n_move of inc are those beyond n_stay)
+            stay(hole(k)) = inc(n_stay - n_move + k)
+        end do
+        call acc_data(hole, acc_exit)
+        call acc_data(filled, acc_exit)
+        call acc_data(inc, acc_exit)
+    end subroutine stay_places
 
     !> Where each owned particle i (1..n) goes: drop(i) unless it is one of kept(1:m) and its
     !> block is this rank's; bin(i) = 1 + the rank of its block if that is another rank's
@@ -436,37 +479,34 @@ contains
         end do
     end subroutine gather_rows
 
-    !> nlen(k) = the length of the history row of the k-th particle owned after the move:
-    !> particle stay(k)'s for k <= n_stay, then those received (last row of rrecv).
-    subroutine kept_row_lengths(n_stay, nr, stay, hstart, rows, rrecv, nlen)
-        integer(ip), intent(in) :: n_stay, nr, rows
-        integer(ip), intent(in) :: stay(:), hstart(:)
+    !> rlen(k) = the length of the history row of the k-th particle received (the last row
+    !> of rrecv).
+    subroutine received_row_lengths(nr, rows, rrecv, rlen)
+        integer(ip), intent(in) :: nr, rows
         real(wp), intent(in) :: rrecv(rows, nr)
-        integer(ip), intent(inout) :: nlen(:)
+        integer(ip), intent(inout) :: rlen(:)
         integer(ip) :: k
         !$acc parallel loop gang vector default(present)
-        do k = 1, n_stay + nr
-            if (k <= n_stay) then
-                nlen(k) = hstart(stay(k) + 1) - hstart(stay(k))
-            else
-                nlen(k) = nint(rrecv(rows, k - n_stay), ip)
-            end if
+        do k = 1, nr
+            rlen(k) = nint(rrecv(rows, k), ip)
         end do
-    end subroutine kept_row_lengths
+    end subroutine received_row_lengths
 
     !> The n_in received history entries (precv: partner ids, as an array of shape (1, n_in);
-    !> xrecv: displacements) into npartner, nxi from first on.
-    subroutine place_received(n_in, precv, xrecv, first, npartner, nxi)
-        integer(ip), intent(in) :: n_in, first
+    !> xrecv: displacements) into rpartner, rxi.
+    subroutine place_received(n_in, precv, xrecv, rpartner, rxi)
+        integer(ip), intent(in) :: n_in
         integer(i8), intent(in) :: precv(n_in)
         real(wp), intent(in) :: xrecv(n_pair_history, n_in)
-        integer(i8), intent(inout) :: npartner(:)
-        real(wp), intent(inout) :: nxi(:, :)
-        integer(ip) :: j
+        integer(i8), intent(inout) :: rpartner(:)
+        real(wp), intent(inout) :: rxi(:, :)
+        integer(ip) :: j, k
         !$acc parallel loop gang vector default(present)
         do j = 1, n_in
-            npartner(first + j - 1) = precv(j)
-            nxi(:, first + j - 1) = xrecv(:, j)
+            rpartner(j) = precv(j)
+            do k = 1, n_pair_history
+                rxi(k, j) = xrecv(k, j)
+            end do
         end do
     end subroutine place_received
 

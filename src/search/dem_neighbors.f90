@@ -8,7 +8,7 @@
 !> wall triangles, which are entered in every cell their reach covers.
 module dem_neighbors
     use dem_kinds, only: wp, ip, i8
-    use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host
+    use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host, acc_to_device
     use dem_cells, only: prefix_sum, bin_items, cell_coords, cell_number, sort_segment, &
                          gather_items, axes_by_extent
     use dem_storage, only: fill_range
@@ -22,6 +22,7 @@ module dem_neighbors
     private
     public :: neighbors_t, neighbors_build, neighbors_check, neighbors_spatial_order, &
               neighbors_history, neighbors_set_history, neighbors_row_history, &
+              neighbors_history_counts, neighbors_append_rows, neighbors_empty_rows, &
               neighbors_set_rows, fit_grid, neighbors_data, &
               neighbors_free, neighbors_moved, grid_t, grid_shape, grid_fill, cell_of, &
               neighbors_entry_history
@@ -982,33 +983,57 @@ contains
         end do
     end subroutine neighbors_history
 
-    !> The tangential history each owned particle holds, seen from its own side, as rows
-    !> ordered by partner id: row i is hpartner(hstart(i):hstart(i + 1) - 1), with the
-    !> displacements hxi(:, ...) of particle i's side; what a particle takes to another rank.
-    !> Pairs without history (xi = 0) are left out; without rows (no lists yet), all rows are
-    !> empty. The lists, when there are any, are those of the n_own particles (built for
-    !> them; outlets park particles without removing them). Kernels; the rows are left on
-    !> the device.
-    subroutine neighbors_row_history(nb, cs, n_own, hstart, hpartner, hxi)
+    !> cnt(i) = the entries of row i = 1..n_rows of the lists that have history (a particle's
+    !> pair contacts), and their total; all 0 without lists. On the device (cnt is made
+    !> there).
+    subroutine neighbors_history_counts(nb, cs, n_rows, cnt, total)
         type(neighbors_t), intent(in) :: nb
         type(contact_store_t), intent(in) :: cs
-        integer(ip), intent(in) :: n_own
-        integer(ip), allocatable, intent(out) :: hstart(:)
-        integer(i8), allocatable, intent(out) :: hpartner(:)
-        real(wp), allocatable, intent(out) :: hxi(:, :)
-        integer(ip), allocatable :: cnt(:)
-        integer(ip) :: n_h
-        allocate(hstart(n_own + 1), cnt(max(1, n_own)))
-        call acc_data(hstart, acc_create)
+        integer(ip), intent(in) :: n_rows
+        integer(ip), allocatable, intent(out) :: cnt(:)
+        integer(i8), intent(out) :: total
+        integer(ip) :: i
+        allocate(cnt(max(1, n_rows)))
         call acc_data(cnt, acc_create)
         if (allocated(nb%start)) then
-            call history_counts(n_own, size(nb%partner, kind=ip), size(cs%slot, kind=ip), &
+            call history_counts(n_rows, size(nb%partner, kind=ip), size(cs%slot, kind=ip), &
                                 size(cs%hist, 2, kind=ip), nb%start, nb%pref, cs%slot, &
                                 cs%hist, cnt)
         else
-            call fill_range(n_own, cnt, 0, 0)
+            call fill_range(n_rows, cnt, 0, 0)
         end if
-        call prefix_sum(n_own, cnt, hstart)
+        total = 0
+        !$acc parallel loop gang vector default(present) reduction(+:total)
+        do i = 1, n_rows
+            total = total + cnt(i)
+        end do
+    end subroutine neighbors_history_counts
+
+    !> The tangential history of the owned particles i with leaves(i) > 0 (those that go to
+    !> another rank), seen from their own side, as rows ordered by partner id: row i is
+    !> hpartner(hstart(i):hstart(i + 1) - 1), with the displacements hxi(:, ...) of particle
+    !> i's side; the other rows are empty. cnt: neighbors_history_counts' (pairs without
+    !> history, xi = 0, are left out; without lists all rows are empty). The lists, when
+    !> there are any, are those of the n_own particles (built for them; outlets park
+    !> particles without removing them). Kernels; the rows are left on the device.
+    subroutine neighbors_row_history(nb, cs, n_own, cnt, leaves, hstart, hpartner, hxi)
+        type(neighbors_t), intent(in) :: nb
+        type(contact_store_t), intent(in) :: cs
+        integer(ip), intent(in) :: n_own
+        integer(ip), intent(in) :: cnt(:), leaves(:)
+        integer(ip), allocatable, intent(out) :: hstart(:)
+        integer(i8), allocatable, intent(out) :: hpartner(:)
+        real(wp), allocatable, intent(out) :: hxi(:, :)
+        integer(ip), allocatable :: length(:)
+        integer(ip) :: n_h, i
+        allocate(hstart(n_own + 1), length(max(1, n_own)))
+        call acc_data(hstart, acc_create)
+        call acc_data(length, acc_create)
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n_own
+            length(i) = merge(cnt(i), 0, leaves(i) > 0)
+        end do
+        call prefix_sum(n_own, length, hstart)
         call acc_data(hstart(n_own + 1:n_own + 1), acc_to_host)
         n_h = hstart(n_own + 1) - 1
         allocate(hpartner(max(1, n_h)), hxi(n_pair_history, max(1, n_h)))
@@ -1018,7 +1043,7 @@ contains
                                        size(cs%slot, kind=ip), size(cs%hist, 2, kind=ip), &
                                        nb%start, nb%partner, nb%pref, cs%slot, cs%hist, &
                                        hstart, n_h, hpartner, hxi)
-        call acc_data(cnt, acc_exit)
+        call acc_data(length, acc_exit)
     end subroutine neighbors_row_history
 
     !> The tangential displacement of entry k of the lists seen from its row's particle.
@@ -1051,6 +1076,147 @@ contains
         call fill_range(size(nb%mirror, kind=ip), nb%mirror, 0, 0)
         call fill_range(size(nb%pref, kind=ip), nb%pref, 1, 1)
     end subroutine neighbors_set_rows
+
+    !> Rows of history (as neighbors_row_history gives them, on the device; freed here) after
+    !> the lists' first n_rows rows (empty ones where there are no lists), each entry a pair
+    !> of its own, for the next neighbors_build to carry from: row n_rows + k is the k-th
+    !> given (a migration's received particles; the lists' rows of those that stayed are
+    !> carried from as they are). Until that build only the rows (start, partner), their
+    !> pairs (pref) and the store's pair history are meaningful, as after neighbors_set_rows.
+    subroutine neighbors_append_rows(nb, cs, n_rows, rstart, rpartner, rxi)
+        type(neighbors_t), intent(inout) :: nb
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), intent(in) :: n_rows
+        integer(ip), allocatable, intent(inout) :: rstart(:)
+        integer(i8), allocatable, intent(inout) :: rpartner(:)
+        real(wp), allocatable, intent(inout) :: rxi(:, :)
+        integer(ip), allocatable :: start(:), pref(:), slot(:)
+        integer(i8), allocatable :: partner(:)
+        real(wp), allocatable :: hist(:, :)
+        integer(ip) :: nr, n_e, n_h, n_p, n_s, last(1)
+        if (.not. allocated(nb%start)) call empty_rows(nb, cs, n_rows)
+        nr = size(rstart, kind=ip) - 1
+        call acc_data(rstart(nr + 1:nr + 1), acc_to_host)
+        n_h = rstart(nr + 1) - 1
+        call acc_data(nb%start(n_rows + 1:n_rows + 1), acc_to_host)
+        last = nb%start(n_rows + 1:n_rows + 1)
+        n_e = last(1) - 1
+        call acc_data(cs%n_hist, acc_to_host)
+        n_s = cs%n_hist(1)                       ! (the slots in use)
+        n_p = size(cs%slot, kind=ip)
+        allocate(start(n_rows + nr + 1), partner(max(1, n_e + n_h)), &
+                 pref(max(1, n_e + n_h)), slot(n_p + n_h), hist(n_pair_history, max(1, n_s + n_h)))
+        call acc_data(start, acc_create)
+        call acc_data(partner, acc_create)
+        call acc_data(pref, acc_create)
+        call acc_data(slot, acc_create)
+        call acc_data(hist, acc_create)
+        call join_rows(n_rows, nr, n_e, n_h, n_p, n_s, nb%start, nb%partner, nb%pref, cs%slot, &
+                       cs%hist, rstart, rpartner, rxi, start, partner, pref, slot, hist)
+        call acc_data(nb%start, acc_exit)
+        call acc_data(nb%partner, acc_exit)
+        call acc_data(nb%pref, acc_exit)
+        call acc_data(cs%slot, acc_exit)
+        call acc_data(cs%hist, acc_exit)
+        call move_alloc(start, nb%start)         ! (their device copies go with them)
+        call move_alloc(partner, nb%partner)
+        call move_alloc(pref, nb%pref)
+        call move_alloc(slot, cs%slot)
+        call move_alloc(hist, cs%hist)
+        cs%n_hist = n_s + n_h
+        call acc_data(cs%n_hist, acc_to_device)
+        call acc_data(rxi, acc_exit)
+        call acc_data(rpartner, acc_exit)
+        call acc_data(rstart, acc_exit)
+        deallocate(rstart, rpartner, rxi)
+    end subroutine neighbors_append_rows
+
+    !> n_new empty rows after the lists' first n_rows (neighbors_append_rows): the particles
+    !> that join a run.
+    subroutine neighbors_empty_rows(nb, cs, n_rows, n_new)
+        type(neighbors_t), intent(inout) :: nb
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), intent(in) :: n_rows, n_new
+        integer(ip), allocatable :: start(:)
+        integer(i8), allocatable :: partner(:)
+        real(wp), allocatable :: xi(:, :)
+        call no_history(n_new, start, partner, xi)
+        call neighbors_append_rows(nb, cs, n_rows, start, partner, xi)
+    end subroutine neighbors_empty_rows
+
+    !> Lists of n_rows empty rows (neighbors_set_rows), where there are none.
+    subroutine empty_rows(nb, cs, n_rows)
+        type(neighbors_t), intent(inout) :: nb
+        type(contact_store_t), intent(inout) :: cs
+        integer(ip), intent(in) :: n_rows
+        integer(ip), allocatable :: start(:)
+        integer(i8), allocatable :: partner(:)
+        real(wp), allocatable :: xi(:, :)
+        call no_history(n_rows, start, partner, xi)
+        call neighbors_set_rows(nb, cs, start, partner, xi)
+    end subroutine empty_rows
+
+    !> n empty rows of history, on the device.
+    subroutine no_history(n, start, partner, xi)
+        integer(ip), intent(in) :: n
+        integer(ip), allocatable, intent(out) :: start(:)
+        integer(i8), allocatable, intent(out) :: partner(:)
+        real(wp), allocatable, intent(out) :: xi(:, :)
+        allocate(start(n + 1), partner(1), xi(n_pair_history, 1))
+        start = 1
+        partner = 0
+        xi = 0.0_wp
+        call acc_data(start, acc_enter)
+        call acc_data(partner, acc_enter)
+        call acc_data(xi, acc_enter)
+    end subroutine no_history
+
+    !> The kernel of neighbors_append_rows: the lists' n_rows rows (n_e entries, n_p pairs,
+    !> n_s slots of history in use) followed by nr rows of n_h entries, each its own pair
+    !> with its own slot.
+    subroutine join_rows(n_rows, nr, n_e, n_h, n_p, n_s, o_start, o_partner, o_pref, o_slot, &
+                         o_hist, r_start, r_partner, r_xi, start, partner, pref, slot, hist)
+        integer(ip), intent(in) :: n_rows, nr, n_e, n_h, n_p, n_s
+        integer(ip), intent(in) :: o_start(:), o_pref(:), o_slot(:), r_start(:)
+        integer(i8), intent(in) :: o_partner(:), r_partner(:)
+        real(wp), intent(in) :: o_hist(:, :), r_xi(:, :)
+        integer(ip), intent(inout) :: start(:), pref(:), slot(:)
+        integer(i8), intent(inout) :: partner(:)
+        real(wp), intent(inout) :: hist(:, :)
+        integer(ip) :: i, k, j
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n_rows + nr + 1
+            if (i <= n_rows + 1) then
+                start(i) = o_start(i)
+            else
+                start(i) = o_start(n_rows + 1) + r_start(i - n_rows) - 1
+            end if
+        end do
+        !$acc parallel loop gang vector default(present)
+        do k = 1, n_e + n_h
+            if (k <= n_e) then
+                partner(k) = o_partner(k)
+                pref(k) = o_pref(k)
+            else
+                partner(k) = r_partner(k - n_e)
+                pref(k) = n_p + k - n_e
+            end if
+        end do
+        !$acc parallel loop gang vector default(present)
+        do k = 1, n_p + n_h
+            slot(k) = merge(o_slot(min(k, n_p)), n_s + k - n_p, k <= n_p)
+        end do
+        !$acc parallel loop gang vector default(present)
+        do k = 1, n_s + n_h
+            do j = 1, n_pair_history
+                if (k <= n_s) then
+                    hist(j, k) = o_hist(j, k)
+                else
+                    hist(j, k) = r_xi(j, k - n_s)
+                end if
+            end do
+        end do
+    end subroutine join_rows
 
     !> Rows of history for particles 1..n_own from pairs as neighbors_history gives them
     !> (ordered by ids), on the device (neighbors_set_rows): a pair goes to the row of each

@@ -345,21 +345,21 @@ contains
         integer(ip), intent(in) :: start(n_own + 1), pref(n_entries), slot(n_pairs)
         real(wp), intent(in) :: hist(n_pair_history, n_slots)
         integer(ip), intent(inout) :: cnt(n_own)
-        integer(ip) :: i, k, m, nh
-        real(wp) :: h(max_pair_history)          ! (of fixed size: private on a device)
-        nh = n_pair_history
-        !$acc parallel loop gang vector default(present) private(k, m, h)
+        integer(ip) :: i, k, m, s
+        !$acc parallel loop gang vector default(present) private(k, m, s)
         do i = 1, n_own
             m = 0
             do k = start(i), start(i + 1) - 1
-                call entry_history(n_entries, n_pairs, n_slots, k, pref, slot, hist, h(1:nh))
-                if (any(h(1:nh) /= 0.0_wp)) m = m + 1
+                s = abs(entry_slot(n_entries, n_pairs, k, pref, slot))
+                if (s == 0) cycle                ! (the sign does not make history zero)
+                if (any(hist(:, s) /= 0.0_wp)) m = m + 1
             end do
             cnt(i) = m
         end do
     end subroutine history_counts
 
-    !> The entries with history of each row i into hpartner/hxi from hstart(i), in order.
+    !> The entries with history of each row i into hpartner/hxi from hstart(i), in order;
+    !> the rows that hstart gives no room (length 0) are left out.
     subroutine history_fill(n_own, n_entries, n_pairs, n_slots, start, partner, pref, slot, &
                             hist, hstart, n_h, hpartner, hxi)
         integer(ip), intent(in) :: n_own, n_entries, n_pairs, n_slots, n_h
@@ -375,6 +375,7 @@ contains
         !$acc parallel loop gang vector default(present) private(k, m, h)
         do i = 1, n_own
             m = hstart(i)
+            if (hstart(i + 1) == m) cycle
             do k = start(i), start(i + 1) - 1
                 call entry_history(n_entries, n_pairs, n_slots, k, pref, slot, hist, h(1:nh))
                 if (all(h(1:nh) == 0.0_wp)) cycle

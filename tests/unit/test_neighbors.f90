@@ -16,7 +16,8 @@ program test_neighbors
     use dem_mesh, only: mesh_t, mesh_add_plane, mesh_set_motion, mesh_move
     use dem_neighbors, only: neighbors_t, neighbors_build, neighbors_check, &
                              neighbors_spatial_order, neighbors_row_history, neighbors_set_rows, &
-                             neighbors_entry_history
+                             neighbors_entry_history, neighbors_history_counts, &
+                             neighbors_append_rows
     use dem_contact_store, only: contact_store_t, store_init, store_pairs_take, n_pair_history
     use dem_acc, only: acc_data, acc_enter
     use dem_mesh, only: closest_point_triangle
@@ -37,9 +38,12 @@ program test_neighbors
     real(wp) :: xk(3, n), rk(n)
     integer(i8) :: gk(n)
     integer(ip) :: nk, a
-    integer(ip), allocatable :: hstart(:)
+    integer(ip), allocatable :: hstart(:), cnt(:), leaves(:), moved(:), row_of(:), rstart(:)
     integer(i8), allocatable :: hpartner(:), want(:)
     real(wp), allocatable :: hxi(:, :), pxi(:, :)
+    real(wp) :: xm2(3, n), rm(n)
+    integer(i8) :: gm(n), total
+    integer(ip) :: nleave
     real(wp), parameter :: ratios(4) = [1.0_wp, 2.0_wp, 10.0_wp, 20.0_wp]
     logical :: ok
 
@@ -207,11 +211,20 @@ program test_neighbors
     end do
     call acc_data(pxi, acc_enter)
     call store_pairs_take(cs, pxi)
-    call neighbors_row_history(nb, cs, n, hstart, hpartner, hxi)
+    call neighbors_history_counts(nb, cs, n, cnt, total)
+    ok = .true.
+    do i = 1, n
+        want = nb%partner(nb%start(i):nb%start(i + 1) - 1)
+        ok = ok .and. cnt(i) == count([(touching(gid(i), want(k)), k = 1, size(want))])
+    end do
+    call assert_true(ok .and. total == sum(cnt(1:n)), 'pair contacts with history per row')
+    leaves = [(merge(1, 0, mod(i, 3) == 0), i = 1, n)]     ! every third particle leaves
+    call neighbors_row_history(nb, cs, n, cnt, leaves, hstart, hpartner, hxi)
     ok = .true.
     do i = 1, n
         want = nb%partner(nb%start(i):nb%start(i + 1) - 1)
         want = pack(want, [(touching(gid(i), want(k)), k = 1, size(want))])
+        if (leaves(i) == 0) want = want(1:0)
         ok = ok .and. hstart(i + 1) - hstart(i) == size(want)
         if (.not. ok) exit
         do k = 1, size(want)
@@ -219,16 +232,53 @@ program test_neighbors
             ok = ok .and. hpartner(a) == want(k) .and. all(hxi(:, a) == side_xi(gid(i), want(k)))
         end do
     end do
-    call assert_true(ok, 'rows of history: each pair with history, from its own side, by id')
-    call neighbors_set_rows(nb, cs, hstart, hpartner, hxi)
-    call neighbors_build(nb, cs, n, n, gid, x, r, m)
+    call assert_true(ok, 'rows of history of the particles that leave: each pair with ' // &
+                     'history, from its own side, by id; none for the others')
+
+    ! a migration on one rank: the rows of those that leave appended after the lists' rows,
+    ! and those particles last (row_of: where each finds its history), the others in reverse
+    ! order; the build gives both sides of each pair their values
+    nleave = count(leaves == 1)
+    moved = [(i, i = n, 1, -1)]
+    moved = [pack(moved, leaves(moved) == 0), pack([(i, i = 1, n)], leaves == 1)]
+    row_of = [pack(moved(1:n - nleave), .true.), n + [(i, i = 1, nleave)]]
+    rstart = [1, pack(hstart(2:n + 1), leaves == 1)]    ! (the other rows are empty)
+    call acc_data(rstart, acc_enter)
+    call neighbors_append_rows(nb, cs, n, rstart, hpartner, hxi)
+    xm2 = x(:, moved)
+    rm = r(moved)
+    gm = gid(moved)
+    call acc_data(row_of, acc_enter)
+    call neighbors_build(nb, cs, n, n, gm, xm2, rm, m, old_index=row_of)
     ok = .true.
     do i = 1, n
         do k = nb%start(i), nb%start(i + 1) - 1
             j = nb%list(k)
             hk = neighbors_entry_history(nb, cs, k)
-            if (touching(gid(i), gid(j))) then
-                ok = ok .and. all(hk == side_xi(gid(i), gid(j)))
+            if (touching(gm(i), gm(j))) then
+                ok = ok .and. all(hk == side_xi(gm(i), gm(j)))
+            else
+                ok = ok .and. all(hk == 0.0_wp)
+            end if
+        end do
+    end do
+    call assert_true(ok, 'a build from the lists with rows appended gives both sides ' // &
+                     'their values')
+    call assert_true(nleave > 0 .and. nleave < n, 'some particles left, not all')
+
+    ! all rows from neighbors_set_rows
+    leaves = 1
+    call neighbors_history_counts(nb, cs, n, cnt, total)
+    call neighbors_row_history(nb, cs, n, cnt, leaves, hstart, hpartner, hxi)
+    call neighbors_set_rows(nb, cs, hstart, hpartner, hxi)
+    call neighbors_build(nb, cs, n, n, gm, xm2, rm, m)
+    ok = .true.
+    do i = 1, n
+        do k = nb%start(i), nb%start(i + 1) - 1
+            j = nb%list(k)
+            hk = neighbors_entry_history(nb, cs, k)
+            if (touching(gm(i), gm(j))) then
+                ok = ok .and. all(hk == side_xi(gm(i), gm(j)))
             else
                 ok = ok .and. all(hk == 0.0_wp)
             end if
