@@ -552,6 +552,7 @@ contains
         type(particles_t), intent(inout) :: p
         integer(ip), allocatable :: per(:), first(:), to(:), from(:), img(:), by_rank(:), &
                                     start(:), cnt(:)
+        logical, allocatable :: inner(:)
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :)
         real(wp), allocatable :: rbuf(:, :), rrecv(:, :)
         integer(ip) :: n, m, nr, nb, last(1)
@@ -568,7 +569,11 @@ contains
         call comm_max(comm, d%rmax)
         call acc_data(d%rmax, acc_to_device)
         rmax_all = maxval(d%rmax)
-        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, comm%rank, d%skin, &
+        allocate(inner(nb))
+        call acc_data(inner, acc_create)
+        call inner_blocks(nb, d%n, d%owner, d%rmax, comm%rank, d%h, d%skin, rmax_all, &
+                          d%pb%axis, d%pb%length, inner)
+        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, inner, comm%rank, d%skin, &
                          rmax_all, d%pb%axis, d%pb%lo, d%pb%length, p%x, p%radius, per, first, &
                          0, per, per, per)
         call prefix_sum(n, per, first)
@@ -581,9 +586,10 @@ contains
         call acc_data(to, acc_create)
         call acc_data(from, acc_create)
         call acc_data(img, acc_create)
-        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, comm%rank, d%skin, &
+        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, inner, comm%rank, d%skin, &
                          rmax_all, d%pb%axis, d%pb%lo, d%pb%length, p%x, p%radius, per, first, &
                          max(1, m), to, from, img)
+        call acc_data(inner, acc_exit)
         call acc_data(by_rank, acc_create)
         call acc_data(start, acc_create)
         call acc_data(cnt, acc_create)
@@ -652,19 +658,56 @@ contains
         end do
     end subroutine block_radii
 
+    !> inner(b): no particle of block b (of radius at most rmax(b)) can be a ghost or an
+    !> image: the blocks within k = ceiling((rmax(b) + rmax_all + skin) / h) blocks of it, all
+    !> that a particle of b reaches (as its coordinates are clamped to the grid, those of a
+    !> particle beyond an outer block too), are this rank's, and along periodic axes within
+    !> the period (the grid starts at its low face there: no image is within reach). On the
+    !> device.
+    subroutine inner_blocks(nb, nblk, owner, rmax, rank, h, skin, rmax_all, axis, length, &
+                            inner)
+        integer(ip), intent(in) :: nb, nblk(3)
+        integer, intent(in) :: owner(nb), rank
+        real(wp), intent(in) :: rmax(nb), h, skin, rmax_all
+        logical, intent(in) :: axis(3)           !! periodic axes
+        real(wp), intent(in) :: length(3)        !! their periods [m]
+        logical, intent(inout) :: inner(nb)
+        integer(ip) :: b, c(3), lo(3), hi(3), k, i1, i2, i3
+        logical :: in
+        !$acc parallel loop gang vector default(present) copyin(nblk, axis, length) &
+        !$acc private(c, lo, hi, k, in)
+        do b = 1, nb
+            c = [mod(b - 1, nblk(1)), mod((b - 1) / nblk(1), nblk(2)), &
+                 (b - 1) / (nblk(1) * nblk(2))]
+            k = ceiling((rmax(b) + rmax_all + skin) / h)
+            lo = max(c - k, 0)
+            hi = min(c + k, nblk - 1)
+            in = .not. any(axis .and. (c - k < 0 .or. (c + k + 1) * h > length))
+            do i3 = lo(3), hi(3)
+                do i2 = lo(2), hi(2)
+                    do i1 = lo(1), hi(1)
+                        if (owner(cell_number([i1, i2, i3], nblk)) /= rank) in = .false.
+                    end do
+                end do
+            end do
+            inner(b) = in
+        end do
+    end subroutine inner_blocks
+
     !> The ranks that particle i (1..n) goes to as a ghost, and as which image (dem_periodic):
     !> for each of its images within reach of the periodic box (itself only, without
     !> periodic axes), the owners of the blocks b within radius(i) + rmax(b) + skin of the
     !> image, each once per image (the first block of a rank in the scan counts), `rank`
-    !> itself only for a shifted image. With list_len = 0, per(i) = how many; otherwise the
-    !> ranks, plus one (for bin_items), and i and the image go to to(k), from(k), img(k), k =
-    !> first(i), first(i) + 1, ...
-    subroutine ghost_ranks(n, nb, origin, h, nblk, owner, rmax, rank, skin, rmax_all, axis, &
-                           plo, length, x, radius, per, first, list_len, to, from, img)
+    !> itself only for a shifted image; none for a particle of an inner block (inner_blocks).
+    !> With list_len = 0, per(i) = how many; otherwise the ranks, plus one (for bin_items), and
+    !> i and the image go to to(k), from(k), img(k), k = first(i), first(i) + 1, ...
+    subroutine ghost_ranks(n, nb, origin, h, nblk, owner, rmax, inner, rank, skin, rmax_all, &
+                           axis, plo, length, x, radius, per, first, list_len, to, from, img)
         integer(ip), intent(in) :: n, nb, nblk(3), list_len
         real(wp), intent(in) :: origin(3), h, skin, rmax_all, x(:, :), radius(:)
         integer, intent(in) :: owner(nb), rank
         real(wp), intent(in) :: rmax(nb)
+        logical, intent(in) :: inner(nb)
         logical, intent(in) :: axis(3)           !! periodic axes
         real(wp), intent(in) :: plo(3), length(3)   !! their low faces and periods [m]
         integer(ip), intent(inout) :: per(:), first(n + 1), to(list_len), from(list_len), &
@@ -677,8 +720,12 @@ contains
         !$acc parallel loop gang vector default(present) copyin(origin, nblk, axis, plo, length) &
         !$acc private(c0, w, t, u, k, q, seen, code, xs, reach, skip) firstprivate(periodic)
         do i = 1, n
-            reach = radius(i) + rmax_all + skin
             k = 0
+            if (inner(cell_number(cell_coords(x(:, i), origin, h, nblk), nblk))) then
+                if (list_len == 0) per(i) = 0
+                cycle
+            end if
+            reach = radius(i) + rmax_all + skin
             do code = 0, n_images - 1
                 if (code /= no_image) then
                     if (.not. periodic) cycle               ! (no periodic axis: no image)
