@@ -5,11 +5,13 @@
 !> slack that the particle can move towards it without touching it; the tangential
 !> history of pairs still listed survives a rebuild and a spatial re-sort of the particles
 !> (that of contacts that have ended too; a zero history is none), the pairs with history
-!> holding the slots 1 .. n_hist after a build; the rebuild criterion is skin/2. The rows
-!> of history a migrating particle takes along hold each of its pairs with history once,
-!> seen from its side (the lower id's value, negated in the higher id's row, never the
-!> stale entry of the side that does not evaluate), ordered by partner id, and a build from
-!> them gives both sides of each pair their values back. No point of a turning, moving wall
+!> holding the slots 1 .. n_hist after a build; the rebuild criterion is skin/2. Each row's
+!> count of pairs with history is that of the pairs in contact; the rows of history a
+!> migrating particle takes along hold each of its pairs with history once, seen from its
+!> side (the lower id's value, negated in the higher id's row, never the stale entry of the
+!> side that does not evaluate), ordered by partner id, the particles that stay none; a
+!> build from the lists with those rows appended (the particles reordered, the leaving ones
+!> last), and one from rows alone, give both sides of each pair their values back. No point of a turning, moving wall
 !> moves farther than neighbors_check says (nb%wall_moved).
 program test_neighbors
     use dem_kinds, only: wp, ip, i8
@@ -241,7 +243,7 @@ program test_neighbors
     nleave = count(leaves == 1)
     moved = [(i, i = n, 1, -1)]
     moved = [pack(moved, leaves(moved) == 0), pack([(i, i = 1, n)], leaves == 1)]
-    row_of = [pack(moved(1:n - nleave), .true.), n + [(i, i = 1, nleave)]]
+    row_of = [moved(1:n - nleave), n + [(i, i = 1, nleave)]]
     rstart = [1, pack(hstart(2:n + 1), leaves == 1)]    ! (the other rows are empty)
     call acc_data(rstart, acc_enter)
     call neighbors_append_rows(nb, cs, n, rstart, hpartner, hxi)
@@ -250,20 +252,8 @@ program test_neighbors
     gm = gid(moved)
     call acc_data(row_of, acc_enter)
     call neighbors_build(nb, cs, n, n, gm, xm2, rm, m, old_index=row_of)
-    ok = .true.
-    do i = 1, n
-        do k = nb%start(i), nb%start(i + 1) - 1
-            j = nb%list(k)
-            hk = neighbors_entry_history(nb, cs, k)
-            if (touching(gm(i), gm(j))) then
-                ok = ok .and. all(hk == side_xi(gm(i), gm(j)))
-            else
-                ok = ok .and. all(hk == 0.0_wp)
-            end if
-        end do
-    end do
-    call assert_true(ok, 'a build from the lists with rows appended gives both sides ' // &
-                     'their values')
+    call assert_true(both_sides(nb, cs, gm), 'a build from the lists with rows appended ' // &
+                     'gives both sides their values')
     call assert_true(nleave > 0 .and. nleave < n, 'some particles left, not all')
 
     ! all rows from neighbors_set_rows
@@ -272,19 +262,8 @@ program test_neighbors
     call neighbors_row_history(nb, cs, n, cnt, leaves, hstart, hpartner, hxi)
     call neighbors_set_rows(nb, cs, hstart, hpartner, hxi)
     call neighbors_build(nb, cs, n, n, gm, xm2, rm, m)
-    ok = .true.
-    do i = 1, n
-        do k = nb%start(i), nb%start(i + 1) - 1
-            j = nb%list(k)
-            hk = neighbors_entry_history(nb, cs, k)
-            if (touching(gm(i), gm(j))) then
-                ok = ok .and. all(hk == side_xi(gm(i), gm(j)))
-            else
-                ok = ok .and. all(hk == 0.0_wp)
-            end if
-        end do
-    end do
-    call assert_true(ok, 'a build from rows of history gives both sides their values')
+    call assert_true(both_sides(nb, cs, gm), 'a build from rows of history gives both ' // &
+                     'sides their values')
 
     ! a wall that turns and moves: since the build no point of its triangles has moved
     ! farther than nb%wall_moved, the bound the slack is compared with
@@ -336,6 +315,28 @@ contains
         v = 1.0e-6_wp * real([min(a_, b_), max(a_, b_), max(a_, b_) - 2 * min(a_, b_)], wp)
         if (a_ > b_) v = -v
     end function side_xi
+
+    !> Whether every entry of the lists nb_ (of the particles of ids id_) holds the history
+    !> side_xi of a pair in contact, seen from its row, and none for the others.
+    logical function both_sides(nb_, cs_, id_)
+        type(neighbors_t), intent(in) :: nb_
+        type(contact_store_t), intent(in) :: cs_
+        integer(i8), intent(in) :: id_(:)
+        integer(ip) :: i_, k_, j_
+        real(wp) :: h_(3)
+        both_sides = .true.
+        do i_ = 1, n
+            do k_ = nb_%start(i_), nb_%start(i_ + 1) - 1
+                j_ = nb_%list(k_)
+                h_ = neighbors_entry_history(nb_, cs_, k_)
+                if (touching(id_(i_), id_(j_))) then
+                    both_sides = both_sides .and. all(h_ == side_xi(id_(i_), id_(j_)))
+                else
+                    both_sides = both_sides .and. all(h_ == 0.0_wp)
+                end if
+            end do
+        end do
+    end function both_sides
 
     logical function near(t_, i_)
         integer(ip), intent(in) :: t_, i_
