@@ -500,11 +500,12 @@ contains
         real(wp), intent(in) :: xrecv(n_pair_history, n_in)
         integer(i8), intent(inout) :: rpartner(:)
         real(wp), intent(inout) :: rxi(:, :)
-        integer(ip) :: j, k
+        integer(ip) :: j, k, nh
+        nh = n_pair_history
         !$acc parallel loop gang vector default(present)
         do j = 1, n_in
             rpartner(j) = precv(j)
-            do k = 1, n_pair_history
+            do k = 1, nh
                 rxi(k, j) = xrecv(k, j)
             end do
         end do

@@ -1104,8 +1104,8 @@ contains
         call acc_data(cs%n_hist, acc_to_host)
         n_s = cs%n_hist(1)                       ! (the slots in use)
         n_p = size(cs%slot, kind=ip)
-        allocate(start(n_rows + nr + 1), partner(max(1, n_e + n_h)), &
-                 pref(max(1, n_e + n_h)), slot(n_p + n_h), hist(n_pair_history, max(1, n_s + n_h)))
+        allocate(start(n_rows + nr + 1), partner(max(1, n_e + n_h)), pref(max(1, n_e + n_h)), &
+                 slot(n_p + n_h), hist(n_pair_history, max(1, n_s + n_h)))
         call acc_data(start, acc_create)
         call acc_data(partner, acc_create)
         call acc_data(pref, acc_create)
@@ -1183,7 +1183,8 @@ contains
         integer(ip), intent(inout) :: start(:), pref(:), slot(:)
         integer(i8), intent(inout) :: partner(:)
         real(wp), intent(inout) :: hist(:, :)
-        integer(ip) :: i, k, j
+        integer(ip) :: i, k, j, nh
+        nh = n_pair_history
         !$acc parallel loop gang vector default(present)
         do i = 1, n_rows + nr + 1
             if (i <= n_rows + 1) then
@@ -1208,7 +1209,7 @@ contains
         end do
         !$acc parallel loop gang vector default(present)
         do k = 1, n_s + n_h
-            do j = 1, n_pair_history
+            do j = 1, nh
                 if (k <= n_s) then
                     hist(j, k) = o_hist(j, k)
                 else
