@@ -303,7 +303,7 @@ contains
         real(wp), allocatable :: hxi(:, :)
         logical, allocatable :: drop(:)
         real(wp) :: imbalance, before(5), after(5)
-        integer(i8) :: load, contacts(1)
+        integer(i8) :: load, contacts(1), in_rows
         integer(ip) :: m, n, n_rows, n_stay
         integer :: status
         logical :: balance
@@ -347,7 +347,7 @@ contains
             allocate(now(max(1, n)))
             call acc_data(now, acc_create)
             call acc_data(cnt, acc_exit)
-            call neighbors_history_counts(s%nb, s%cs, n_rows + n - n_stay, cnt, load)
+            call neighbors_history_counts(s%nb, s%cs, n_rows + n - n_stay, cnt, in_rows)
             call gather_items(n, cnt, row_of, now)
             call domain_loads(n, owned, s%cs%wall_tri, now, w, load)
             call acc_data(w, acc_exit)
