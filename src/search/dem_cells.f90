@@ -8,7 +8,7 @@ module dem_cells
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host
     implicit none
     private
-    public :: prefix_sum, bin_items, cell_number, cell_coords, kept_indices, &
+    public :: prefix_sum, bin_items, cell_number, cell_of_number, cell_coords, kept_indices, &
               sort_segment, gather_items, axes_by_extent
 
     integer(ip), parameter :: chunk = 256    !< counts summed by one thread in prefix_sum
@@ -168,6 +168,14 @@ contains
         integer(ip), intent(in) :: c(3), n(3)
         cell = 1 + c(1) + n(1) * (c(2) + n(2) * c(3))
     end function cell_number
+
+    !> Coordinates (0-based) of cell number `cell` (cell_number's inverse).
+    pure function cell_of_number(cell, n) result(c)
+        !$acc routine seq
+        integer(ip), intent(in) :: cell, n(3)
+        integer(ip) :: c(3)
+        c = [mod(cell - 1, n(1)), mod((cell - 1) / n(1), n(2)), (cell - 1) / (n(1) * n(2))]
+    end function cell_of_number
 
     !> The axes of a grid of n cells, from the one with the fewest cells to the one with the
     !> most (ties in axis order): cells numbered along them (cell_number of the coordinates

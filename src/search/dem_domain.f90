@@ -11,8 +11,8 @@ module dem_domain
     use dem_comm, only: comm_t, comm_exchange, comm_counts, comm_sum, &
                         comm_max
     use dem_acc, only: acc_data, acc_to_host, acc_to_device, acc_enter, acc_exit, acc_create
-    use dem_cells, only: cell_coords, cell_number, prefix_sum, bin_items, gather_items, &
-                         kept_indices
+    use dem_cells, only: cell_coords, cell_number, cell_of_number, prefix_sum, bin_items, &
+                         gather_items, kept_indices
     use dem_metis, only: metis_partition
     use dem_storage, only: fill_range
     use dem_periodic, only: periodic_t, image_shift, image_possible, no_image, n_images
@@ -153,7 +153,7 @@ contains
         xadj(1) = 0
         n_adj = 0
         do b = 1, nb
-            c = [mod(b - 1, d%n(1)), mod((b - 1) / d%n(1), d%n(2)), (b - 1) / (d%n(1) * d%n(2))]
+            c = cell_of_number(b, d%n)
             do f = 1, 6
                 k = (f + 1) / 2
                 side = merge(-1, 1, mod(f, 2) == 1)
@@ -678,8 +678,7 @@ contains
         !$acc parallel loop gang vector default(present) copyin(nblk, axis, length) &
         !$acc private(c, lo, hi, k, in)
         do b = 1, nb
-            c = [mod(b - 1, nblk(1)), mod((b - 1) / nblk(1), nblk(2)), &
-                 (b - 1) / (nblk(1) * nblk(2))]
+            c = cell_of_number(b, nblk)
             k = ceiling((rmax(b) + rmax_all + skin) / h)
             lo = max(c - k, 0)
             hi = min(c + k, nblk - 1)
@@ -773,7 +772,7 @@ contains
         integer, intent(in) :: owner(nb), skip
         integer(ip) :: c(3), b
         real(wp) :: lo(3), hi(3)
-        c = c0 + [mod(t, w(1)), mod(t / w(1), w(2)), t / (w(1) * w(2))]
+        c = c0 + cell_of_number(t + 1, w)
         b = cell_number(c, nblk)
         q = -1
         if (owner(b) == skip .or. rmax(b) == 0.0_wp) return
