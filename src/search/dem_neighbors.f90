@@ -1094,7 +1094,10 @@ contains
         integer(i8), allocatable :: partner(:)
         real(wp), allocatable :: hist(:, :)
         integer(ip) :: nr, n_e, n_h, n_p, n_s, last(1)
-        if (.not. allocated(nb%start)) call empty_rows(nb, cs, n_rows)
+        if (.not. allocated(nb%start)) then      ! (no lists yet: n_rows empty rows)
+            call no_history(n_rows, start, partner, hist)
+            call neighbors_set_rows(nb, cs, start, partner, hist)
+        end if
         nr = size(rstart, kind=ip) - 1
         call acc_data(rstart(nr + 1:nr + 1), acc_to_host)
         n_h = rstart(nr + 1) - 1
@@ -1143,18 +1146,6 @@ contains
         call no_history(n_new, start, partner, xi)
         call neighbors_append_rows(nb, cs, n_rows, start, partner, xi)
     end subroutine neighbors_empty_rows
-
-    !> Lists of n_rows empty rows (neighbors_set_rows), where there are none.
-    subroutine empty_rows(nb, cs, n_rows)
-        type(neighbors_t), intent(inout) :: nb
-        type(contact_store_t), intent(inout) :: cs
-        integer(ip), intent(in) :: n_rows
-        integer(ip), allocatable :: start(:)
-        integer(i8), allocatable :: partner(:)
-        real(wp), allocatable :: xi(:, :)
-        call no_history(n_rows, start, partner, xi)
-        call neighbors_set_rows(nb, cs, start, partner, xi)
-    end subroutine empty_rows
 
     !> n empty rows of history, on the device.
     subroutine no_history(n, start, partner, xi)
