@@ -8,7 +8,10 @@
 !> atomics.
 module dem_contacts_pp
     use dem_kinds, only: wp, ip, i8
-    use dem_contact_hm, only: hm_lanes, max_lanes
+    use dem_contact_hm, only: hm_lanes, max_lanes, lane_rows, law_columns, lane_ov, lane_n1, &
+                              lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
+                              lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
+                              lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
     use dem_contact_extra, only: rolling_torque, sjkr_area_pair
     use dem_materials, only: rolling_none, rolling_epsd2
     use dem_contact_store, only: n_pair_history
@@ -23,6 +26,12 @@ module dem_contacts_pp
 
     !> pairs per tile of the contact kernel (its overlapping pairs go to hm_lanes together)
     integer(ip), parameter :: tile = max_lanes
+
+    !> the kernel's own columns of its block of lanes, after the law's (dem_contact_hm): the
+    !> vector between the pair's centres [m] and its squared length [m^2]
+    integer, parameter :: lane_d1 = law_columns + 1, lane_d2 = law_columns + 2, &
+                          lane_d3 = law_columns + 3, lane_dd = law_columns + 4
+    integer, parameter :: pp_columns = law_columns + 4
 
 contains
 
@@ -88,11 +97,9 @@ contains
         logical :: over
         integer(i8) :: kf(3), kc(3)
         real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, g, sv, &
-                    st_, ri, rj, rsum, msum, wr(3), hr(3), tr(3)
+                    st_, ri, rj, rsum, msum, wr(3), hr(3), tr(3), n1, n2, n3, fn, f1, f2, f3
         logical :: shifted_v, shifted_t, extra_
-        real(wp), dimension(tile + 1) :: e1, e2, e3, e4
-        real(wp), dimension(tile) :: ov, n1, n2, n3, v1, v2, v3, rs, ms, kn, st, gn, &
-                                     gt, mu, x1, x2, x3, fn, f1, f2, f3
+        real(wp) :: lane(lane_rows, pp_columns)   ! the tile's pairs in contact (one spare)
 
         sv = shift_v
         st_ = shift_t
@@ -104,9 +111,8 @@ contains
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, s) &
         !$acc private(over, side, a, b, rsum, msum) &
         !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g, ri, rj) &
-        !$acc firstprivate(sv, st_, shifted_v, shifted_t, extra_) private(wr, hr, tr) &
-        !$acc private(e1, e2, e3, e4, ov, n1, n2, n3, v1, v2, v3, rs, ms, kn, st, gn, gt, mu) &
-        !$acc private(x1, x2, x3, fn, f1, f2, f3)
+        !$acc firstprivate(sv, st_, shifted_v, shifted_t, extra_) private(wr, hr, tr, lane) &
+        !$acc private(n1, n2, n3, fn, f1, f2, f3)
         do p0 = 0, n_pairs - 1, tile
             ! the pairs of the tile that overlap, as lanes 1..m (every pair is written to lane
             ! m + 1, and kept by counting it: no branch on the overlap, which a branch predictor
@@ -120,10 +126,10 @@ contains
                 d3 = x(3, j) - x(3, i)
                 dist2 = d1**2 + d2**2 + d3**2
                 lp(m + 1) = p
-                e1(m + 1) = d1
-                e2(m + 1) = d2
-                e3(m + 1) = d3
-                e4(m + 1) = dist2
+                lane(m + 1, lane_d1) = d1
+                lane(m + 1, lane_d2) = d2
+                lane(m + 1, lane_d3) = d3
+                lane(m + 1, lane_dd) = dist2
                 over = .not. (dist2 >= (radius(i) + radius(j))**2)
                 m = m + merge(1, 0, over)
                 s = slot(p)
@@ -148,53 +154,58 @@ contains
                 p = lp(l)
                 i = pair(1, p)
                 j = pair(2, p)
-                dist = sqrt(e4(l))
+                dist = sqrt(lane(l, lane_dd))
                 rsum = radius(i) + radius(j)
                 msum = mass(i) + mass(j)
                 g = 1.0_wp / (dist * (rsum * msum))      ! one division for 1/dist, R*, m*
                 inv = (rsum * msum) * g
-                n1(l) = e1(l) * inv
-                n2(l) = e2(l) * inv
-                n3(l) = e3(l) * inv
-                ov(l) = rsum - dist
+                n1 = lane(l, lane_d1) * inv
+                n2 = lane(l, lane_d2) * inv
+                n3 = lane(l, lane_d3) * inv
+                lane(l, lane_n1) = n1
+                lane(l, lane_n2) = n2
+                lane(l, lane_n3) = n3
+                lane(l, lane_ov) = rsum - dist
                 ws1 = radius(i) * w(1, i) + radius(j) * w(1, j)
                 ws2 = radius(i) * w(2, i) + radius(j) * w(2, j)
                 ws3 = radius(i) * w(3, i) + radius(j) * w(3, j)
-                v1(l) = v(1, i) - v(1, j) + (ws2 * n3(l) - ws3 * n2(l))
-                v2(l) = v(2, i) - v(2, j) + (ws3 * n1(l) - ws1 * n3(l))
-                v3(l) = v(3, i) - v(3, j) + (ws1 * n2(l) - ws2 * n1(l))
+                lane(l, lane_v1) = v(1, i) - v(1, j) + (ws2 * n3 - ws3 * n2)
+                lane(l, lane_v2) = v(2, i) - v(2, j) + (ws3 * n1 - ws1 * n3)
+                lane(l, lane_v3) = v(3, i) - v(3, j) + (ws1 * n2 - ws2 * n1)
                 a = mat(i)
                 b = mat(j)
                 g = dist * g
-                rs(l) = radius(i) * radius(j) * msum * g
-                ms(l) = mass(i) * mass(j) * rsum * g
-                kn(l) = kn_ab(a, b)
-                st(l) = st_ab(a, b)
-                gn(l) = gn_ab(a, b)
-                gt(l) = gt_ab(a, b)
-                mu(l) = mu_ab(a, b)
+                lane(l, lane_rs) = radius(i) * radius(j) * msum * g
+                lane(l, lane_ms) = mass(i) * mass(j) * rsum * g
+                lane(l, lane_kn) = kn_ab(a, b)
+                lane(l, lane_st) = st_ab(a, b)
+                lane(l, lane_gn) = gn_ab(a, b)
+                lane(l, lane_gt) = gt_ab(a, b)
+                lane(l, lane_mu) = mu_ab(a, b)
                 s = slot(p)
-                x1(l) = hist(1, s)
-                x2(l) = hist(2, s)
-                x3(l) = hist(3, s)
+                lane(l, lane_x1) = hist(1, s)
+                lane(l, lane_x2) = hist(2, s)
+                lane(l, lane_x3) = hist(3, s)
             end do
             if (shifted_v) then     ! the relative velocities again, with levers R - shift_v d
                 do l = 1, m
                     p = lp(l)
                     i = pair(1, p)
                     j = pair(2, p)
-                    ri = radius(i) - sv * ov(l)
-                    rj = radius(j) - sv * ov(l)
+                    ri = radius(i) - sv * lane(l, lane_ov)
+                    rj = radius(j) - sv * lane(l, lane_ov)
                     ws1 = ri * w(1, i) + rj * w(1, j)
                     ws2 = ri * w(2, i) + rj * w(2, j)
                     ws3 = ri * w(3, i) + rj * w(3, j)
-                    v1(l) = v(1, i) - v(1, j) + (ws2 * n3(l) - ws3 * n2(l))
-                    v2(l) = v(2, i) - v(2, j) + (ws3 * n1(l) - ws1 * n3(l))
-                    v3(l) = v(3, i) - v(3, j) + (ws1 * n2(l) - ws2 * n1(l))
+                    n1 = lane(l, lane_n1)
+                    n2 = lane(l, lane_n2)
+                    n3 = lane(l, lane_n3)
+                    lane(l, lane_v1) = v(1, i) - v(1, j) + (ws2 * n3 - ws3 * n2)
+                    lane(l, lane_v2) = v(2, i) - v(2, j) + (ws3 * n1 - ws1 * n3)
+                    lane(l, lane_v3) = v(3, i) - v(3, j) + (ws1 * n2 - ws2 * n1)
                 end do
             end if
-            call hm_lanes(m, ov, n1, n2, n3, v1, v2, v3, rs, ms, kn, st, gn, gt, mu, &
-                          clamp_normal, keep_length, dt, x1, x2, x3, fn, f1, f2, f3)
+            call hm_lanes(m, clamp_normal, keep_length, dt, lane(:, 1:law_columns))
             if (extra_) then        ! rolling resistance, cohesion: the torques into the sums
                 do l = 1, m         ! (over R, as n x F_t), the cohesion into fn
                     p = lp(l)
@@ -206,8 +217,10 @@ contains
                         hr = 0.0_wp
                         if (rmodel_ab(a, b) == rolling_epsd2) hr = hist(4:6, slot(p))
                         wr = w(:, i) - w(:, j)
-                        call rolling_torque(rmodel_ab(a, b), mur_ab(a, b), rs(l), kn(l), st(l), &
-                                            ov(l), fn(l), [n1(l), n2(l), n3(l)], wr, dt, hr, tr)
+                        call rolling_torque(rmodel_ab(a, b), mur_ab(a, b), lane(l, lane_rs), &
+                                            lane(l, lane_kn), lane(l, lane_st), &
+                                            lane(l, lane_ov), lane(l, lane_fn), &
+                                            lane(l, lane_n1:lane_n3), wr, dt, hr, tr)
                         if (rmodel_ab(a, b) == rolling_epsd2) hist(4:6, slot(p)) = hr
                         do c = 1, 3
                             kc(c) = to_fixed(tr(c) / radius(i) * scale(i))
@@ -222,8 +235,9 @@ contains
                             end do
                         end if
                     end if
-                    if (kcoh_ab(a, b) > 0.0_wp) fn(l) = fn(l) - kcoh_ab(a, b) &
-                        * sjkr_area_pair(radius(i), radius(j), sqrt(e4(l)))
+                    if (kcoh_ab(a, b) > 0.0_wp) lane(l, lane_fn) = lane(l, lane_fn) &
+                        - kcoh_ab(a, b) * sjkr_area_pair(radius(i), radius(j), &
+                                                         sqrt(lane(l, lane_dd)))
                 end do
             end if
             ! the history back, and F and n x F_t into both particles' sums
@@ -232,15 +246,22 @@ contains
                 i = pair(1, p)
                 j = pair(2, p)
                 s = slot(p)
-                hist(1, s) = x1(l)
-                hist(2, s) = x2(l)
-                hist(3, s) = x3(l)
-                fp(1) = -fn(l) * n1(l) + f1(l)
-                fp(2) = -fn(l) * n2(l) + f2(l)
-                fp(3) = -fn(l) * n3(l) + f3(l)
-                cp(1) = n2(l) * f3(l) - n3(l) * f2(l)
-                cp(2) = n3(l) * f1(l) - n1(l) * f3(l)
-                cp(3) = n1(l) * f2(l) - n2(l) * f1(l)
+                hist(1, s) = lane(l, lane_x1)
+                hist(2, s) = lane(l, lane_x2)
+                hist(3, s) = lane(l, lane_x3)
+                n1 = lane(l, lane_n1)
+                n2 = lane(l, lane_n2)
+                n3 = lane(l, lane_n3)
+                fn = lane(l, lane_fn)
+                f1 = lane(l, lane_f1)
+                f2 = lane(l, lane_f2)
+                f3 = lane(l, lane_f3)
+                fp(1) = -fn * n1 + f1
+                fp(2) = -fn * n2 + f2
+                fp(3) = -fn * n3 + f3
+                cp(1) = n2 * f3 - n3 * f2
+                cp(2) = n3 * f1 - n1 * f3
+                cp(3) = n1 * f2 - n2 * f1
                 si = scale(i)
                 do c = 1, 3
                     kf(c) = to_fixed(fp(c) * si)
@@ -268,13 +289,19 @@ contains
             if (shifted_t) then     ! levers R - shift_t d: each torque word replaced by that
                 do l = 1, m         ! of n x F_t (R - shift_t d) / R (the sums are over R)
                     p = lp(l)
-                    cp(1) = n2(l) * f3(l) - n3(l) * f2(l)
-                    cp(2) = n3(l) * f1(l) - n1(l) * f3(l)
-                    cp(3) = n1(l) * f2(l) - n2(l) * f1(l)
+                    n1 = lane(l, lane_n1)
+                    n2 = lane(l, lane_n2)
+                    n3 = lane(l, lane_n3)
+                    f1 = lane(l, lane_f1)
+                    f2 = lane(l, lane_f2)
+                    f3 = lane(l, lane_f3)
+                    cp(1) = n2 * f3 - n3 * f2
+                    cp(2) = n3 * f1 - n1 * f3
+                    cp(3) = n1 * f2 - n2 * f1
                     do side = 1, 2                ! i, then j where this rank owns it
                         i = pair(side, p)
                         if (side == 2 .and. i > n_own) exit
-                        g = 1.0_wp - st_ * ov(l) / radius(i)
+                        g = 1.0_wp - st_ * lane(l, lane_ov) / radius(i)
                         do c = 1, 3
                             kc(c) = lever_word(cp(c), g, scale(i))
                             !$acc atomic update

@@ -5,7 +5,10 @@
 !> and follows a contact onto the neighbouring triangle of the same wall.
 module dem_contacts_pw
     use dem_kinds, only: wp, ip
-    use dem_contact_hm, only: hm_lanes, max_lanes
+    use dem_contact_hm, only: hm_lanes, max_lanes, lane_rows, law_columns, lane_ov, lane_n1, &
+                              lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
+                              lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
+                              lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
     use dem_contact_extra, only: rolling_torque, sjkr_area_wall
     use dem_materials, only: rolling_none
     use dem_mesh, only: closest_point_triangle, feature_face
@@ -22,6 +25,9 @@ module dem_contacts_pw
     !> together, and the law runs over all their contacts at once (at most max_lanes)
     integer(ip), parameter :: rows_per_block = max_lanes / max_wall_contacts
     integer(ip), parameter :: wall_lanes = rows_per_block * max_wall_contacts
+    !> the kernel's own column of its block of lanes, after the law's (dem_contact_hm): the
+    !> distance of the contact point from the centre [m]
+    integer, parameter :: lane_ld = law_columns + 1
 
 contains
 
@@ -242,8 +248,7 @@ contains
         logical :: idle(rows_per_block)
         integer(ip), dimension(wall_lanes) :: ltri, lslot
         real(wp) :: lq(3, wall_lanes)
-        real(wp), dimension(wall_lanes) :: ld, ov, n1, n2, n3, v1, v2, v3, rs, ms, kn_l, st_l, &
-                                          gn_l, gt_l, mu_l, x1, x2, x3, fn, f1, f2, f3
+        real(wp) :: lane(lane_rows, lane_ld)
         real(wp), volatile :: lines
 
         overflow = 0
@@ -251,9 +256,7 @@ contains
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
         !$acc private(kr, k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk, l, m) &
         !$acc private(new_xi, nrm, vrel, ft, fi, ti, dist, r, tol, moved, keep, n_block) &
-        !$acc private(slot, lines, first, last, idle, ltri, lslot, lq, ld, ov, n1, n2, n3) &
-        !$acc private(v1, v2, v3, rs, ms, kn_l, st_l, gn_l, gt_l, mu_l, x1, x2, x3, fn, f1) &
-        !$acc private(f2, f3) &
+        !$acc private(slot, lines, first, last, idle, ltri, lslot, lq, lane) &
         !$acc private(many, over, i, wl, ws, d, lever, tr, xr, new_xr) firstprivate(spring)
         do k0 = 0, n_row - 1, rows_per_block
             n_block = min(rows_per_block, n_row - k0)
@@ -320,14 +323,8 @@ contains
                     ltri(m) = tri
                     lslot(m) = slot(c)
                     lq(:, m) = q(:, c)
-                    x1(m) = 0.0_wp
-                    x2(m) = 0.0_wp
-                    x3(m) = 0.0_wp
-                    if (slot(c) > 0) then
-                        x1(m) = wxi(1, slot(c), i)
-                        x2(m) = wxi(2, slot(c), i)
-                        x3(m) = wxi(3, slot(c), i)
-                    end if
+                    lane(m, lane_x1:lane_x3) = 0.0_wp
+                    if (slot(c) > 0) lane(m, lane_x1:lane_x3) = wxi(:, slot(c), i)
                     dist = sqrt(sum((q(:, c) - x(:, i))**2))
                     nrm = (q(:, c) - x(:, i)) / dist
                     ! minus the wall's velocity at the contact point
@@ -342,27 +339,22 @@ contains
                     vrel(3) = v(3, i) + (ws(1) * nrm(2) - ws(2) * nrm(1)) - wall_v(3, wl) &
                               - (wall_w(1, wl) * d(2) - wall_w(2, wl) * d(1))
                     b = tmat(tri)
-                    ld(m) = dist
-                    ov(m) = r - dist
-                    n1(m) = nrm(1)
-                    n2(m) = nrm(2)
-                    n3(m) = nrm(3)
-                    v1(m) = vrel(1)
-                    v2(m) = vrel(2)
-                    v3(m) = vrel(3)
-                    rs(m) = r
-                    ms(m) = mass(i)
-                    kn_l(m) = kn(a, b)
-                    st_l(m) = st(a, b)
-                    gn_l(m) = gn(a, b)
-                    gt_l(m) = gt(a, b)
-                    mu_l(m) = mu(a, b)
+                    lane(m, lane_ld) = dist
+                    lane(m, lane_ov) = r - dist
+                    lane(m, lane_n1:lane_n3) = nrm
+                    lane(m, lane_v1:lane_v3) = vrel
+                    lane(m, lane_rs) = r
+                    lane(m, lane_ms) = mass(i)
+                    lane(m, lane_kn) = kn(a, b)
+                    lane(m, lane_st) = st(a, b)
+                    lane(m, lane_gn) = gn(a, b)
+                    lane(m, lane_gt) = gt(a, b)
+                    lane(m, lane_mu) = mu(a, b)
                 end do
                 last(kr) = m
             end do
             ! the law over the block's contacts at once (R* = R and m* = m against a wall)
-            call hm_lanes(m, ov, n1, n2, n3, v1, v2, v3, rs, ms, kn_l, st_l, gn_l, gt_l, mu_l, &
-                          clamp_normal, keep_length, dt, x1, x2, x3, fn, f1, f2, f3)
+            call hm_lanes(m, clamp_normal, keep_length, dt, lane(:, 1:law_columns))
             ! each row's forces, torques and slots from its lanes
             do kr = 1, n_block
                 if (idle(kr)) cycle
@@ -374,9 +366,9 @@ contains
                 ns = 0
                 do l = first(kr), last(kr)
                     tri = ltri(l)
-                    nrm = [n1(l), n2(l), n3(l)]
-                    ft = [f1(l), f2(l), f3(l)]
-                    dist = ld(l)
+                    nrm = lane(l, lane_n1:lane_n3)
+                    ft = lane(l, lane_f1:lane_f3)
+                    dist = lane(l, lane_ld)
                     if (extra) then          ! rolling resistance, cohesion
                         wl = twall(tri)
                         b = tmat(tri)
@@ -384,22 +376,22 @@ contains
                         if (spring .and. lslot(l) > 0) xr = wxi(:, max_wall_contacts + lslot(l), i)
                         if (rmodel(a, b) /= rolling_none) then
                             call rolling_torque(rmodel(a, b), mur(a, b), r, kn(a, b), &
-                                                st(a, b), r - dist, fn(l), nrm, &
+                                                st(a, b), r - dist, lane(l, lane_fn), nrm, &
                                                 w(:, i) - wall_w(:, wl), dt, xr, tr)
                             ti = ti + tr
                         end if
                         new_xr(:, ns + 1) = xr
-                        if (kcoh(a, b) > 0.0_wp) fn(l) = fn(l) - kcoh(a, b) &
-                                                         * sjkr_area_wall(r, dist)
+                        if (kcoh(a, b) > 0.0_wp) lane(l, lane_fn) = lane(l, lane_fn) &
+                                                 - kcoh(a, b) * sjkr_area_wall(r, dist)
                     end if
                     ns = ns + 1
                     new_tri(ns) = tri
-                    new_xi(:, ns) = [x1(l), x2(l), x3(l)]
+                    new_xi(:, ns) = lane(l, lane_x1:lane_x3)
                     if (record) then
-                        wload(1:3, ns, i) = ft - fn(l) * nrm
+                        wload(1:3, ns, i) = ft - lane(l, lane_fn) * nrm
                         wload(4:6, ns, i) = lq(:, l)
                     end if
-                    fi = fi - fn(l) * nrm + ft
+                    fi = fi - lane(l, lane_fn) * nrm + ft
                     lever = r - shift_t * (r - dist)
                     ti(1) = ti(1) + lever * (nrm(2) * ft(3) - nrm(3) * ft(2))
                     ti(2) = ti(2) + lever * (nrm(3) * ft(1) - nrm(1) * ft(3))
