@@ -1,8 +1,7 @@
 !> Whole-system quantities written to series.csv, the contact trace of one particle, and the
 !> checks that the state is finite and slower than the instability bound. Host-side and
 !> called at output times only (and every step for the trace, which is a diagnostic for
-!> single-contact tests), except count_unstable, a device kernel run every step, and
-!> momentum_sums, one run at each migration between ranks.
+!> single-contact tests), except momentum_sums, one run at each migration between ranks.
 module dem_diagnostics
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
@@ -14,8 +13,7 @@ module dem_diagnostics
     implicit none
     private
     public :: energies, elastic_energy, count_pp_sides, deep_overlap_id, deep_wall_id, &
-              first_nonfinite, &
-              count_unstable, contact_trace, momentum_sums
+              first_nonfinite, contact_trace, momentum_sums
 
 contains
 
@@ -264,24 +262,6 @@ contains
         end do
         bad = 0
     end function first_nonfinite
-
-    !> Number of owned particles whose speed or rim speed |w| R is not below `bound`, which
-    !> includes those with a non-finite velocity (doc/theory.md, section 6).
-    integer(ip) function count_unstable(n, bound, radius, v, w) result(n_bad)
-        integer(ip), intent(in) :: n
-        real(wp), intent(in) :: bound            !! [m/s]
-        real(wp), intent(in) :: radius(n), v(3, n), w(3, n)
-        real(wp) :: b2
-        integer(ip) :: i
-        b2 = bound**2
-        n_bad = 0
-        !$acc parallel loop default(present) reduction(+:n_bad)
-        do i = 1, n
-            if (.not. (v(1, i)**2 + v(2, i)**2 + v(3, i)**2 < b2 .and. &
-                       (w(1, i)**2 + w(2, i)**2 + w(3, i)**2) * radius(i)**2 < b2)) &
-                n_bad = n_bad + 1
-        end do
-    end function count_unstable
 
     !> The contact of particle i with its nearest partner (particle or triangle): signed
     !> overlap (negative: gap), and the normal and tangential parts of the contact force,

@@ -56,15 +56,20 @@ contains
         real(wp), intent(in) :: x(3, n), a(3), b(3)
         logical, intent(inout) :: gone(n)
         integer(ip) :: i
-        !$acc parallel loop present(x, gone) copyin(a, b)
-        do i = 1, n
-            if (kind == outlet_plane) then
-                gone(i) = gone(i) .or. (x(1, i) - a(1)) * b(1) + (x(2, i) - a(2)) * b(2) &
-                                       + (x(3, i) - a(3)) * b(3) > 0.0_wp
-            else
+        ! (a loop for each kind; the plane's with merge(): a test of the kind in the loop, or
+        ! .or., would branch it and keep it off vector registers)
+        if (kind == outlet_plane) then
+            !$acc parallel loop present(x, gone) copyin(a, b)
+            do i = 1, n
+                gone(i) = merge(.true., gone(i), (x(1, i) - a(1)) * b(1) &
+                                + (x(2, i) - a(2)) * b(2) + (x(3, i) - a(3)) * b(3) > 0.0_wp)
+            end do
+        else
+            !$acc parallel loop present(x, gone) copyin(a, b)
+            do i = 1, n
                 gone(i) = gone(i) .or. x(1, i) < a(1) .or. x(2, i) < a(2) .or. x(3, i) < a(3) &
                           .or. x(1, i) > b(1) .or. x(2, i) > b(2) .or. x(3, i) > b(3)
-            end if
-        end do
+            end do
+        end if
     end subroutine mark
 end module dem_outlets

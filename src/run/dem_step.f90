@@ -20,7 +20,6 @@ module dem_step
     use dem_outlets, only: outlets_mark
     use dem_particles, only: particles_park
     use dem_neighbors, only: neighbors_moved
-    use dem_diagnostics, only: count_unstable
     use dem_run_output, only: write_series, write_trace, write_snapshot, write_checkpoint
     use dem_run_control, only: run_control, progress, energy_guard, unstable
     use dem_timers, only: timer_stop, phase_neighbors, phase_contacts_pp, phase_contacts_pw, &
@@ -48,8 +47,7 @@ contains
         s%loads_due = s%load_probes .and. row_due(s, s%step + 1)    ! (wall-load probes)
         if (verlet) call verlet_first_half(s, c)               ! v(t + dt/2), x(t + dt)
         call forces(s, c, time_of(s, c, merge(s%step + 1, s%step, verlet)), err)
-        if (.not. err%failed()) call integrate(s, c, verlet, err, bad)     ! and the trace
-        if (.not. err%failed()) bad = bad .or. speeds_unstable(s, c)      ! the guard
+        if (.not. err%failed()) call integrate(s, c, verlet, err, bad)  ! the trace, the guard
         if (failed_anywhere(s, err, bad)) then
             if (.not. err%failed()) then                       ! unstable on some rank
                 s%step = s%step + 1
@@ -89,8 +87,10 @@ contains
     subroutine verlet_first_half(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
+        integer(i8) :: n_fast
         associate (p => s%p, n => s%p%n_own)
-            call kick(n, 0.5_wp * c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
+            call kick(n, 0.5_wp * c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%radius, &
+                      c%max_speed, p%v, p%w, n_fast)      ! (the guard after the second half)
             call drift(n, c%dt, p%v, p%x)
         end associate
         call timer_stop(s%timers, phase_integrate)
@@ -98,26 +98,31 @@ contains
 
     !> The rest of the step from the forces just computed, and the traced particle's row at
     !> the time of the state it shows: symplectic Euler writes the row at t, then
-    !> v += F dt / m, x += v dt; velocity Verlet v += F dt / 2m, then the row at t + dt.
+    !> v += F dt / m, x += v dt; velocity Verlet v += F dt / 2m, then the row at t + dt. The
+    !> speed guard (a particle above the case's max_speed, or not finite) in the kick.
     subroutine integrate(s, c, verlet, err, bad)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         logical, intent(in) :: verlet
         type(error_t), intent(inout) :: err
-        logical, intent(inout) :: bad      !! the traced particle is not finite
+        logical, intent(inout) :: bad      !! the traced particle is not finite, or the guard
+        integer(i8) :: n_fast
         associate (p => s%p, n => s%p%n_own)
             if (.not. verlet) then
                 call write_trace(s, c, s%run%out, time_of(s, c, s%step), err, bad)
                 call timer_stop(s%timers, phase_output)
-                call kick(n, c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
+                call kick(n, c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%radius, c%max_speed, &
+                          p%v, p%w, n_fast)
                 call drift(n, c%dt, p%v, p%x)
                 call timer_stop(s%timers, phase_integrate)
             else
-                call kick(n, 0.5_wp * c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%v, p%w)
+                call kick(n, 0.5_wp * c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%radius, &
+                          c%max_speed, p%v, p%w, n_fast)
                 call timer_stop(s%timers, phase_integrate)
                 call write_trace(s, c, s%run%out, time_of(s, c, s%step + 1), err, bad)
             end if
         end associate
+        bad = bad .or. n_fast > 0
     end subroutine integrate
 
     !> The walls to their pose at `time`, on the device too.
@@ -188,13 +193,6 @@ contains
         if (overflow > 0) call set_error(err, dem_err_runtime, 'a particle has more separate ' &
             // 'wall contacts than the contact store holds; walls overlap or cross there')
     end subroutine wall_contacts
-
-    !> The speed guard: a particle above the case's max_speed, or not finite.
-    logical function speeds_unstable(s, c) result(bad)
-        type(solver_t), intent(in) :: s
-        type(case_t), intent(in) :: c
-        bad = count_unstable(s%p%n_own, c%max_speed, s%p%radius, s%p%v, s%p%w) > 0
-    end function speeds_unstable
 
     !> The step done: counted, with the particles in it.
     subroutine count_step(s)
