@@ -92,8 +92,9 @@ contains
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
                                                      !! (zero between calls)
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m]
-        integer(ip) :: i, j, p, p0, c, l, m, side, a, b, s
-        integer(ip) :: lp(tile + 1)
+        integer(ip) :: c, side, a, b
+        integer(i8) :: i, j, p, p0, s, l, m     ! (64-bit: addresses without sign extensions)
+        integer(i8) :: lp(tile + 1)
         logical :: over
         integer(i8) :: kf(3), kc(3)
         real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, g, sv, &
@@ -118,7 +119,7 @@ contains
             ! m + 1, and kept by counting it: no branch on the overlap, which a branch predictor
             ! cannot foresee; only a contact that begins or ends, rarely, branches)
             m = 0
-            do p = p0 + 1, min(p0 + tile, n_pairs)
+            do p = p0 + 1, min(p0 + tile, int(n_pairs, i8))
                 i = pair(1, p)
                 j = pair(2, p)
                 d1 = x(1, j) - x(1, i)
@@ -131,7 +132,7 @@ contains
                 lane(m + 1, lane_d3) = d3
                 lane(m + 1, lane_dd) = dist2
                 over = .not. (dist2 >= (radius(i) + radius(j))**2)
-                m = m + merge(1, 0, over)
+                m = m + merge(1_i8, 0_i8, over)
                 s = slot(p)
                 ! (this form, measured: with s == 0 tested first, gfortran 12's code took 13-42 %
                 ! longer for the particle contacts; doc/results/performance.md, tenth step)
@@ -146,7 +147,7 @@ contains
                         hist(:, s) = 0.0_wp                ! the next slot, cleared
                         s = -s
                     end if
-                    slot(p) = -s                           ! (begins again: its slot back)
+                    slot(p) = int(-s, ip)                  ! (begins again: its slot back)
                 end if
             end do
             ! their normals, overlaps, relative velocities, constants and history
@@ -205,7 +206,7 @@ contains
                     lane(l, lane_v3) = v(3, i) - v(3, j) + (ws1 * n2 - ws2 * n1)
                 end do
             end if
-            call hm_lanes(m, clamp_normal, keep_length, dt, lane(:, 1:law_columns))
+            call hm_lanes(int(m, ip), clamp_normal, keep_length, dt, lane(:, 1:law_columns))
             if (extra_) then        ! rolling resistance, cohesion: the torques into the sums
                 do l = 1, m         ! (over R, as n x F_t), the cohesion into fn
                     p = lp(l)
