@@ -63,7 +63,7 @@ contains
     !> cohere), the rolling torque and the sJKR force (dem_contact_extra) of the pair's model
     !> follow the contact law; the EPSD2 spring is hist(4:6, slot).
     subroutine pp_forces(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
-                         kn_ab, st_ab, gn_ab, gt_ab, mu_ab, clamp_normal, keep_length, &
+                         reach2, kn_ab, st_ab, gn_ab, gt_ab, mu_ab, clamp_normal, keep_length, &
                          shift_v, shift_t, reset, extra, rmodel_ab, mur_ab, kcoh_ab, dt, slot, &
                          hist, n_hist, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
@@ -74,6 +74,7 @@ contains
         integer(ip), intent(in) :: mat(n_all)
         real(wp), intent(in) :: scale(n_all)      !! fixed-point scales (pp_scales)
         integer(ip), intent(in) :: pair(2, n_pairs)  !! the two particles of a pair
+        real(wp), intent(in) :: reach2(n_pairs)      !! (R_i + R_j)^2 of a pair [m^2]
         real(wp), intent(in) :: kn_ab(nm, nm), st_ab(nm, nm), mu_ab(nm, nm)  !! [Pa], [-]
         real(wp), intent(in) :: gn_ab(nm, nm), gt_ab(nm, nm)  !! damping factors [Pa^(1/2)]
         logical, intent(in) :: clamp_normal, keep_length   !! (hm_lanes)
@@ -131,7 +132,7 @@ contains
                 lane(m + 1, lane_d2) = d2
                 lane(m + 1, lane_d3) = d3
                 lane(m + 1, lane_dd) = dist2
-                over = .not. (dist2 >= (radius(i) + radius(j))**2)
+                over = .not. (dist2 >= reach2(p))
                 m = m + merge(1_i8, 0_i8, over)
                 s = slot(p)
                 ! (this form, measured: with s == 0 tested first, gfortran 12's code took 13-42 %

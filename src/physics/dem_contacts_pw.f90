@@ -47,8 +47,8 @@ contains
         logical, intent(out) :: keep(nc)
         integer(ip) :: k, m
 
-        keep = .true.
         do k = 1, nc
+            keep(k) = .true.
             if (feature(k) == feature_face) cycle
             do m = 1, nc
                 if (m == k) cycle

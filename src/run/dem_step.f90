@@ -149,8 +149,8 @@ contains
         type(case_t), intent(in) :: c
         associate (p => s%p, nb => s%nb, pc => s%pc, o => s%pc%opts, n => s%p%n_own)
             call pp_forces(n, n + p%n_ghost, nb%n_pairs, c%mats%n, p%x, p%v, p%w, p%radius, &
-                           p%mass, p%mat, nb%scale, nb%pair, pc%kn, pc%st, pc%gn, pc%gt, pc%mu, &
-                           o%clamp_normal, o%keep_length, o%shift_v, o%shift_t, &
+                           p%mass, p%mat, nb%scale, nb%pair, nb%reach2, pc%kn, pc%st, pc%gn, &
+                           pc%gt, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, o%shift_t, &
                            o%reset_pair_history, pc%rolling .or. pc%cohesion, pc%rmodel, &
                            pc%mur, pc%kcoh, c%dt, s%cs%slot, s%cs%hist, s%cs%n_hist, nb%acc, p%f, &
                            p%t)

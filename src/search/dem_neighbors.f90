@@ -46,6 +46,8 @@ module dem_neighbors
         integer(ip) :: n_pairs = 0            !< pairs evaluated here, each once
         integer(ip), allocatable :: pair(:, :) !< (first, second) particle of each pair; the
                                               !< first is the row's particle that evaluates it
+        real(wp), allocatable :: reach2(:)    !< (R_i + R_j)^2 of each pair: it touches below
+                                              !< that squared distance [m^2]
         real(wp), allocatable :: scale(:)     !< fixed-point scale of each particle (same)
         integer(i8), allocatable :: acc(:, :) !< work space of the contact kernel: the owned
                                               !< particles' sums, zero between steps
@@ -318,14 +320,16 @@ contains
         call prefix_sum(n_own, cnt, pstart)
         call acc_data(pstart(n_own + 1:n_own + 1), acc_to_host)
         nb%n_pairs = pstart(n_own + 1) - 1
-        allocate(nb%pair(2, max(1, nb%n_pairs)), nb%acc(6, max(1, n_own)))
+        allocate(nb%pair(2, max(1, nb%n_pairs)), nb%reach2(max(1, nb%n_pairs)), &
+                 nb%acc(6, max(1, n_own)))
         nb%acc = 0
         call acc_data(nb%pair, acc_create)
+        call acc_data(nb%reach2, acc_create)
         call acc_data(nb%acc, acc_enter)
         allocate(from(max(1, nb%n_pairs)))
         call acc_data(from, acc_create)
-        call number_pairs(n_own, n_entries, nb%n_pairs, nb%start, nb%list, nb%mirror, pstart, &
-                          nb%pref, nb%pair, from)
+        call number_pairs(n_own, n_all, n_entries, nb%n_pairs, nb%start, nb%list, nb%mirror, &
+                          pstart, radius, nb%pref, nb%pair, nb%reach2, from)
         call acc_data(pstart, acc_exit)
         if (keep_history) then
             if (present(old_index)) then
@@ -601,14 +605,17 @@ contains
     end subroutine evaluated_counts
 
     !> The pairs of the rows, numbered from pstart(i) in row i, each once: pair(:, p) = (i, j)
-    !> for the entries row i evaluates, pref = p there and -p in the partner's entry of the
-    !> same pair (each entry has one writer); no history yet (from = 0: carry_history).
-    subroutine number_pairs(n_own, n_entries, n_pairs, start, list, mirror, pstart, pref, &
-                            pair, from)
-        integer(ip), intent(in) :: n_own, n_entries, n_pairs
+    !> and reach2(p) = (R_i + R_j)^2 for the entries row i evaluates, pref = p there and -p in
+    !> the partner's entry of the same pair (each entry has one writer); no history yet
+    !> (from = 0: carry_history).
+    subroutine number_pairs(n_own, n_all, n_entries, n_pairs, start, list, mirror, pstart, &
+                            radius, pref, pair, reach2, from)
+        integer(ip), intent(in) :: n_own, n_all, n_entries, n_pairs
         integer(ip), intent(in) :: start(n_own + 1), list(n_entries), mirror(n_entries), &
                                    pstart(n_own + 1)
+        real(wp), intent(in) :: radius(n_all)      !! [m]
         integer(ip), intent(inout) :: pref(n_entries), pair(2, max(1, n_pairs))
+        real(wp), intent(inout) :: reach2(max(1, n_pairs))   !! [m^2]
         integer(ip), intent(inout) :: from(max(1, n_pairs))
         integer(ip) :: i, k, p
         !$acc parallel loop gang vector default(present) private(k, p)
@@ -620,6 +627,7 @@ contains
                 if (mirror(k) > 0) pref(mirror(k)) = -p
                 pair(1, p) = i
                 pair(2, p) = list(k)
+                reach2(p) = (radius(i) + radius(list(k)))**2
                 from(p) = 0
                 p = p + 1
             end do
@@ -928,6 +936,7 @@ contains
         if (allocated(nb%wslack)) call acc_data(nb%wslack, op)
         if (allocated(nb%wrow)) call acc_data(nb%wrow, op)
         if (allocated(nb%pair)) call acc_data(nb%pair, op)
+        if (allocated(nb%reach2)) call acc_data(nb%reach2, op)
         if (allocated(nb%scale)) call acc_data(nb%scale, op)
         if (allocated(nb%acc)) call acc_data(nb%acc, op)
         if (allocated(nb%x_ref)) call acc_data(nb%x_ref, op)

@@ -63,7 +63,7 @@ program test_contact_extra
             slot = 0
             n_hist = 0
             call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
-                           kn, st, zero, zero, mu, .false., .true., 0.0_wp, 0.0_wp, &
+                           [sum(r)**2], kn, st, zero, zero, mu, .false., .true., 0.0_wp, 0.0_wp, &
                            .true., .true., none, zero, kc, dt, slot, xi3, n_hist, acc, f, t)
             call assert_close(-f(1, 1), hertz - kcoh * pi * a2, 1.0e-9_wp, &
                               'sJKR pair: Hertz less k pi a^2')
@@ -113,9 +113,9 @@ program test_contact_extra
     xi3 = 0.0_wp
     slot = 0
     n_hist = 0
-    call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, kn, &
-                   st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, .true., .true., &
-                   model, mur, zero, dt, slot, xi3, n_hist, acc, f, t)
+    call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
+                   [sum(r)**2], kn, st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, &
+                   .true., .true., model, mur, zero, dt, slot, xi3, n_hist, acc, f, t)
     call assert_close(t(2, 1), -0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: on the turning one')
     call assert_close(t(2, 2), 0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: the opposite')
     call assert_true(all(t([1, 3], :) == 0.0_wp), 'CDT pair: about y only')
@@ -140,9 +140,9 @@ program test_contact_extra
     do s = 1, 1000
         f = 0.0_wp
         t = 0.0_wp
-        call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, kn, &
-                       st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, .true., &
-                       .true., model, mur, zero, dt, slot, xi6, n_hist, acc, f, t)
+        call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
+                       [sum(r)**2], kn, st, zero, zero, zero, .false., .true., 0.0_wp, &
+                       0.0_wp, .true., .true., model, mur, zero, dt, slot, xi6, n_hist, acc, f, t)
         expect = min(s * kr * 2.0_wp * dt, lim)
         if (mod(s, 50) == 0) then
             call assert_close(xi6(5, 1), expect, 1.0e-9_wp, 'EPSD2: k_r w t, then the limit')

@@ -69,8 +69,8 @@ program test_contacts_pp
             f = 0.0_wp
             t = 0.0_wp
             call pp_forces(n, n, nb%n_pairs, 1_ip, x(:, order), v(:, order), w(:, order), &
-                           r(order), m(order), mat, nb%scale, nb%pair, kn, st, cn * sqrt(sn), &
-                           cn * sqrt(st), mu, &
+                           r(order), m(order), mat, nb%scale, nb%pair, nb%reach2, kn, st, &
+                           cn * sqrt(sn), cn * sqrt(st), mu, &
                            .false., .true., shift, shift, .true., .false., none, cn, cn, dt, &
                            cs%slot, cs%hist, cs%n_hist, nb%acc, f, t)
             back(order) = [(i, i = 1, n)]
