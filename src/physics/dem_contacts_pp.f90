@@ -99,7 +99,7 @@ contains
         logical :: over
         integer(i8) :: kf(3), kc(3)
         real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, g, sv, &
-                    st_, ri, rj, rsum, msum, wr(3), hr(3), tr(3), n1, n2, n3, fn, f1, f2, f3
+                    st_, ri, rj, rsum, msum, wr(3), hr(3), tr(3), n1, n2, n3
         logical :: shifted_v, shifted_t, extra_
         real(wp) :: lane(lane_rows, pp_columns)   ! the tile's pairs in contact (one spare)
 
@@ -114,7 +114,7 @@ contains
         !$acc private(over, side, a, b, rsum, msum) &
         !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g, ri, rj) &
         !$acc firstprivate(sv, st_, shifted_v, shifted_t, extra_) private(wr, hr, tr, lane) &
-        !$acc private(n1, n2, n3, fn, f1, f2, f3)
+        !$acc private(n1, n2, n3)
         do p0 = 0, n_pairs - 1, tile
             ! the pairs of the tile that overlap, as lanes 1..m (every pair is written to lane
             ! m + 1, and kept by counting it: no branch on the overlap, which a branch predictor
@@ -251,19 +251,8 @@ contains
                 hist(1, s) = lane(l, lane_x1)
                 hist(2, s) = lane(l, lane_x2)
                 hist(3, s) = lane(l, lane_x3)
-                n1 = lane(l, lane_n1)
-                n2 = lane(l, lane_n2)
-                n3 = lane(l, lane_n3)
-                fn = lane(l, lane_fn)
-                f1 = lane(l, lane_f1)
-                f2 = lane(l, lane_f2)
-                f3 = lane(l, lane_f3)
-                fp(1) = -fn * n1 + f1
-                fp(2) = -fn * n2 + f2
-                fp(3) = -fn * n3 + f3
-                cp(1) = n2 * f3 - n3 * f2
-                cp(2) = n3 * f1 - n1 * f3
-                cp(3) = n1 * f2 - n2 * f1
+                fp = -lane(l, lane_fn) * lane(l, lane_n1:lane_n3) + lane(l, lane_f1:lane_f3)
+                cp = normal_cross_ft(lane, l)
                 si = scale(i)
                 do c = 1, 3
                     kf(c) = to_fixed(fp(c) * si)
@@ -291,15 +280,7 @@ contains
             if (shifted_t) then     ! levers R - shift_t d: each torque word replaced by that
                 do l = 1, m         ! of n x F_t (R - shift_t d) / R (the sums are over R)
                     p = lp(l)
-                    n1 = lane(l, lane_n1)
-                    n2 = lane(l, lane_n2)
-                    n3 = lane(l, lane_n3)
-                    f1 = lane(l, lane_f1)
-                    f2 = lane(l, lane_f2)
-                    f3 = lane(l, lane_f3)
-                    cp(1) = n2 * f3 - n3 * f2
-                    cp(2) = n3 * f1 - n1 * f3
-                    cp(3) = n1 * f2 - n2 * f1
+                    cp = normal_cross_ft(lane, l)
                     do side = 1, 2                ! i, then j where this rank owns it
                         i = pair(side, p)
                         if (side == 2 .and. i > n_own) exit
@@ -325,6 +306,18 @@ contains
             acc(:, i) = 0
         end do
     end subroutine pp_forces
+
+    !> n x F_t of lane l: the normal and the tangential force of a contact of the kernel's
+    !> block (the torque on either particle over its lever).
+    pure function normal_cross_ft(lane, l) result(cp)
+        !$acc routine seq
+        real(wp), intent(in) :: lane(lane_rows, pp_columns)
+        integer(i8), intent(in) :: l
+        real(wp) :: cp(3)
+        cp(1) = lane(l, lane_n2) * lane(l, lane_f3) - lane(l, lane_n3) * lane(l, lane_f2)
+        cp(2) = lane(l, lane_n3) * lane(l, lane_f1) - lane(l, lane_n1) * lane(l, lane_f3)
+        cp(3) = lane(l, lane_n1) * lane(l, lane_f2) - lane(l, lane_n2) * lane(l, lane_f1)
+    end function normal_cross_ft
 
     !> The scale 2^(57 - e) of one-word fixed point for terms and sums within bound < 2^e:
     !> to_fixed(t scale) is t to 2^-57 of the bound, and the sum of such words, converted back
