@@ -31,6 +31,9 @@ module dem_domain
 
     integer, parameter :: blocks_per_rank = 64   !< target in the particles' box
     integer, parameter :: max_blocks_per_rank = 512  !< in the whole box (walls included)
+    !> the ranks a particle's image goes to that ghost_ranks remembers (a particle near more
+    !> ranks has the blocks before scanned again for each further one)
+    integer, parameter :: max_got = 27
 
     !> The blocks, their ranks, and the ghost exchange of the current lists.
     type :: domain_t
@@ -662,7 +665,8 @@ contains
     !> inner(b): no particle of block b (of radius at most rmax(b)) can be a ghost or an
     !> image: the blocks within k = ceiling((rmax(b) + rmax_all + skin) / h) blocks of it, all
     !> that a particle of b reaches (as its coordinates are clamped to the grid, those of a
-    !> particle beyond an outer block too), are this rank's, and along periodic axes within
+    !> particle beyond an outer block too), are this rank's or empty (rmax 0: no particle
+    !> there for a ghost to touch, as ghost_owner), and along periodic axes within
     !> the period (the grid starts at its low face there: no image is within reach). On the
     !> device.
     subroutine inner_blocks(nb, nblk, owner, rmax, rank, h, skin, rmax_all, axis, length, &
@@ -673,10 +677,10 @@ contains
         logical, intent(in) :: axis(3)           !! periodic axes
         real(wp), intent(in) :: length(3)        !! their periods [m]
         logical, intent(inout) :: inner(nb)
-        integer(ip) :: b, c(3), lo(3), hi(3), k, i1, i2, i3
+        integer(ip) :: b, c(3), lo(3), hi(3), k, i1, i2, i3, t
         logical :: in
         !$acc parallel loop gang vector default(present) copyin(nblk, axis, length) &
-        !$acc private(c, lo, hi, k, in)
+        !$acc private(c, lo, hi, k, in, t)
         do b = 1, nb
             c = cell_of_number(b, nblk)
             k = ceiling((rmax(b) + rmax_all + skin) / h)
@@ -686,7 +690,8 @@ contains
             do i3 = lo(3), hi(3)
                 do i2 = lo(2), hi(2)
                     do i1 = lo(1), hi(1)
-                        if (owner(cell_number([i1, i2, i3], nblk)) /= rank) in = .false.
+                        t = cell_number([i1, i2, i3], nblk)
+                        if (owner(t) /= rank .and. rmax(t) > 0.0_wp) in = .false.
                     end do
                 end do
             end do
@@ -712,13 +717,14 @@ contains
         real(wp), intent(in) :: plo(3), length(3)   !! their low faces and periods [m]
         integer(ip), intent(inout) :: per(:), first(n + 1), to(list_len), from(list_len), &
                                       img(list_len)
-        integer(ip) :: i, c0(3), w(3), t, u, k, code
-        integer :: q, skip
+        integer(ip) :: i, c0(3), c1(3), t, u, k, code, n_got, i1, i2, i3
+        integer :: q, skip, got(max_got)
         real(wp) :: xs(3), reach
         logical :: seen, periodic
         periodic = any(axis)
         !$acc parallel loop gang vector default(present) copyin(origin, nblk, axis, plo, length) &
-        !$acc private(c0, w, t, u, k, q, seen, code, xs, reach, skip) firstprivate(periodic)
+        !$acc private(c0, c1, t, u, k, q, seen, code, xs, reach, skip, n_got, got) &
+        !$acc firstprivate(periodic)
         do i = 1, n
             k = 0
             if (inner(cell_number(cell_coords(x(:, i), origin, h, nblk), nblk))) then
@@ -737,42 +743,54 @@ contains
                     skip = rank
                 end if
                 c0 = cell_coords(xs - reach, origin, h, nblk)
-                w = cell_coords(xs + reach, origin, h, nblk) - c0 + 1
-                do t = 0, product(w) - 1
-                    q = ghost_owner(t, c0, w, xs, radius(i), skin, origin, h, nblk, axis, &
-                                    nb, owner, rmax, skip)
-                    if (q < 0) cycle
-                    seen = .false.
-                    do u = 0, t - 1
-                        if (ghost_owner(u, c0, w, xs, radius(i), skin, origin, h, nblk, axis, &
-                                        nb, owner, rmax, skip) == q) seen = .true.
+                c1 = cell_coords(xs + reach, origin, h, nblk)
+                n_got = 0
+                t = 0
+                do i3 = c0(3), c1(3)           ! (the blocks in the order of their numbers)
+                    do i2 = c0(2), c1(2)
+                        do i1 = c0(1), c1(1)
+                            t = t + 1
+                            q = ghost_owner([i1, i2, i3], xs, radius(i), skin, origin, h, &
+                                            nblk, axis, nb, owner, rmax, skip)
+                            if (q < 0) cycle
+                            if (any(got(1:min(n_got, max_got)) == q)) cycle
+                            if (n_got > max_got) then    ! (more ranks than got holds: the
+                                seen = .false.           ! blocks before scanned again)
+                                do u = 1, t - 1
+                                    if (ghost_owner(c0 + cell_of_number(u, c1 - c0 + 1), xs, &
+                                                    radius(i), skin, origin, h, nblk, axis, &
+                                                    nb, owner, rmax, skip) == q) seen = .true.
+                                end do
+                                if (seen) cycle
+                            end if
+                            n_got = n_got + 1
+                            if (n_got <= max_got) got(n_got) = q
+                            if (list_len > 0) then
+                                to(first(i) + k) = q + 1
+                                from(first(i) + k) = i
+                                img(first(i) + k) = code
+                            end if
+                            k = k + 1
+                        end do
                     end do
-                    if (seen) cycle
-                    if (list_len > 0) then
-                        to(first(i) + k) = q + 1
-                        from(first(i) + k) = i
-                        img(first(i) + k) = code
-                    end if
-                    k = k + 1
                 end do
             end do
             if (list_len == 0) per(i) = k
         end do
     end subroutine ghost_ranks
 
-    !> The owner of block t (from 0, x fastest) of the box of w blocks from c0 if a sphere at
-    !> x of radius r is within r + R_b + skin of it (R_b its largest radius) and the owner is
-    !> not `skip`, else -1. The outer blocks reach to infinity, but along periodic axes.
-    pure integer function ghost_owner(t, c0, w, x, r, skin, origin, h, nblk, axis, nb, owner, &
-                                      rmax, skip) result(q)
+    !> The owner of the block of coordinates c if a sphere at x of radius r is within
+    !> r + R_b + skin of it (R_b its largest radius) and the owner is not `skip`, else -1.
+    !> The outer blocks reach to infinity, but along periodic axes.
+    pure integer function ghost_owner(c, x, r, skin, origin, h, nblk, axis, nb, owner, rmax, &
+                                      skip) result(q)
         !$acc routine seq
-        integer(ip), intent(in) :: t, c0(3), w(3), nblk(3), nb
+        integer(ip), intent(in) :: c(3), nblk(3), nb
         real(wp), intent(in) :: x(3), r, skin, origin(3), h, rmax(nb)
         logical, intent(in) :: axis(3)
         integer, intent(in) :: owner(nb), skip
-        integer(ip) :: c(3), b
+        integer(ip) :: b
         real(wp) :: lo(3), hi(3)
-        c = c0 + cell_of_number(t + 1, w)
         b = cell_number(c, nblk)
         q = -1
         if (owner(b) == skip .or. rmax(b) == 0.0_wp) return
