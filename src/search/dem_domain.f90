@@ -558,7 +558,7 @@ contains
                                     start(:), cnt(:)
         logical, allocatable :: inner(:)
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :)
-        real(wp), allocatable :: rbuf(:, :), rrecv(:, :)
+        real(wp), allocatable :: rbuf(:, :), rrecv(:, :), rnear(:)
         integer(ip) :: n, m, nr, nb, last(1)
         real(wp) :: rmax_all
         n = p%n_own
@@ -573,13 +573,14 @@ contains
         call comm_max(comm, d%rmax)
         call acc_data(d%rmax, acc_to_device)
         rmax_all = maxval(d%rmax)
-        allocate(inner(nb))
+        allocate(inner(nb), rnear(nb))
         call acc_data(inner, acc_create)
+        call acc_data(rnear, acc_create)
         call inner_blocks(nb, d%n, d%owner, d%rmax, comm%rank, d%h, d%skin, rmax_all, &
-                          d%pb%axis, d%pb%length, inner)
-        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, inner, comm%rank, d%skin, &
-                         rmax_all, d%pb%axis, d%pb%lo, d%pb%length, p%x, p%radius, per, first, &
-                         0, per, per, per)
+                          d%pb%axis, d%pb%length, inner, rnear)
+        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, inner, rnear, comm%rank, &
+                         d%skin, rmax_all, d%pb%axis, d%pb%lo, d%pb%length, p%x, p%radius, per, &
+                         first, 0, per, per, per)
         call prefix_sum(n, per, first)
         call acc_data(first(n + 1:n + 1), acc_to_host)
         last = first(n + 1:n + 1)
@@ -590,9 +591,10 @@ contains
         call acc_data(to, acc_create)
         call acc_data(from, acc_create)
         call acc_data(img, acc_create)
-        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, inner, comm%rank, d%skin, &
-                         rmax_all, d%pb%axis, d%pb%lo, d%pb%length, p%x, p%radius, per, first, &
-                         max(1, m), to, from, img)
+        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, inner, rnear, comm%rank, &
+                         d%skin, rmax_all, d%pb%axis, d%pb%lo, d%pb%length, p%x, p%radius, per, &
+                         first, max(1, m), to, from, img)
+        call acc_data(rnear, acc_exit)
         call acc_data(inner, acc_exit)
         call acc_data(by_rank, acc_create)
         call acc_data(start, acc_create)
@@ -667,35 +669,42 @@ contains
     !> that a particle of b reaches (as its coordinates are clamped to the grid, those of a
     !> particle beyond an outer block too), are this rank's or empty (rmax 0: no particle
     !> there for a ghost to touch, as ghost_owner), and along periodic axes within
-    !> the period (the grid starts at its low face there: no image is within reach). On the
-    !> device.
+    !> the period (the grid starts at its low face there: no image is within reach).
+    !> rnear(b): the largest radius in those blocks, which a particle of b can meet: a
+    !> block within R_i + rnear(b) + skin of it is among them (as R_i + rnear(b) + skin is
+    !> at most k h), and no block beyond is within reach. On the device.
     subroutine inner_blocks(nb, nblk, owner, rmax, rank, h, skin, rmax_all, axis, length, &
-                            inner)
+                            inner, rnear)
         integer(ip), intent(in) :: nb, nblk(3)
         integer, intent(in) :: owner(nb), rank
         real(wp), intent(in) :: rmax(nb), h, skin, rmax_all
         logical, intent(in) :: axis(3)           !! periodic axes
         real(wp), intent(in) :: length(3)        !! their periods [m]
         logical, intent(inout) :: inner(nb)
+        real(wp), intent(inout) :: rnear(nb)     !! [m]
         integer(ip) :: b, c(3), lo(3), hi(3), k, i1, i2, i3, t
         logical :: in
+        real(wp) :: r
         !$acc parallel loop gang vector default(present) copyin(nblk, axis, length) &
-        !$acc private(c, lo, hi, k, in, t)
+        !$acc private(c, lo, hi, k, in, t, r)
         do b = 1, nb
             c = cell_of_number(b, nblk)
             k = ceiling((rmax(b) + rmax_all + skin) / h)
             lo = max(c - k, 0)
             hi = min(c + k, nblk - 1)
             in = .not. any(axis .and. (c - k < 0 .or. (c + k + 1) * h > length))
+            r = 0.0_wp
             do i3 = lo(3), hi(3)
                 do i2 = lo(2), hi(2)
                     do i1 = lo(1), hi(1)
                         t = cell_number([i1, i2, i3], nblk)
                         if (owner(t) /= rank .and. rmax(t) > 0.0_wp) in = .false.
+                        r = max(r, rmax(t))
                     end do
                 end do
             end do
             inner(b) = in
+            rnear(b) = r
         end do
     end subroutine inner_blocks
 
@@ -704,41 +713,46 @@ contains
     !> periodic axes), the owners of the blocks b within radius(i) + rmax(b) + skin of the
     !> image, each once per image (the first block of a rank in the scan counts), `rank`
     !> itself only for a shifted image; none for a particle of an inner block (inner_blocks).
+    !> The blocks scanned: those within radius(i) + rnear(b) + skin of particle i of block b
+    !> (inner_blocks), of an image within radius(i) + rmax_all + skin.
     !> With list_len = 0, per(i) = how many; otherwise the ranks, plus one (for bin_items), and
     !> i and the image go to to(k), from(k), img(k), k = first(i), first(i) + 1, ...
-    subroutine ghost_ranks(n, nb, origin, h, nblk, owner, rmax, inner, rank, skin, rmax_all, &
-                           axis, plo, length, x, radius, per, first, list_len, to, from, img)
+    subroutine ghost_ranks(n, nb, origin, h, nblk, owner, rmax, inner, rnear, rank, skin, &
+                           rmax_all, axis, plo, length, x, radius, per, first, list_len, to, &
+                           from, img)
         integer(ip), intent(in) :: n, nb, nblk(3), list_len
         real(wp), intent(in) :: origin(3), h, skin, rmax_all, x(:, :), radius(:)
         integer, intent(in) :: owner(nb), rank
-        real(wp), intent(in) :: rmax(nb)
+        real(wp), intent(in) :: rmax(nb), rnear(nb)
         logical, intent(in) :: inner(nb)
         logical, intent(in) :: axis(3)           !! periodic axes
         real(wp), intent(in) :: plo(3), length(3)   !! their low faces and periods [m]
         integer(ip), intent(inout) :: per(:), first(n + 1), to(list_len), from(list_len), &
                                       img(list_len)
-        integer(ip) :: i, c0(3), c1(3), t, u, k, code, n_got, i1, i2, i3
+        integer(ip) :: i, c0(3), c1(3), t, u, k, code, n_got, i1, i2, i3, b
         integer :: q, skip, got(max_got)
         real(wp) :: xs(3), reach
         logical :: seen, periodic
         periodic = any(axis)
         !$acc parallel loop gang vector default(present) copyin(origin, nblk, axis, plo, length) &
-        !$acc private(c0, c1, t, u, k, q, seen, code, xs, reach, skip, n_got, got) &
+        !$acc private(c0, c1, t, u, k, q, seen, code, xs, reach, skip, n_got, got, b) &
         !$acc firstprivate(periodic)
         do i = 1, n
             k = 0
-            if (inner(cell_number(cell_coords(x(:, i), origin, h, nblk), nblk))) then
+            b = cell_number(cell_coords(x(:, i), origin, h, nblk), nblk)
+            if (inner(b)) then
                 if (list_len == 0) per(i) = 0
                 cycle
             end if
-            reach = radius(i) + rmax_all + skin
             do code = 0, n_images - 1
                 if (code /= no_image) then
                     if (.not. periodic) cycle               ! (no periodic axis: no image)
+                    reach = radius(i) + rmax_all + skin
                     if (.not. image_possible(code, axis, plo, length, x(:, i), reach)) cycle
                     xs = x(:, i) + image_shift(code, length)
                     skip = -1
                 else
+                    reach = radius(i) + rnear(b) + skin
                     xs = x(:, i)
                     skip = rank
                 end if
