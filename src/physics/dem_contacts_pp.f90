@@ -48,9 +48,11 @@ contains
         end do
     end subroutine pp_scales
 
-    !> Add the contact force and torque of every overlapping pair to the owned particles
-    !> (the pair's constants, doc/theory.md section 1, from the material pair's table and the
-    !> two particles' radii and masses, when it touches: 1/r, R* and m* from one division).
+    !> Set the owned particles' forces to gravity's, m g, plus the contact forces of their
+    !> overlapping pairs, and their torques to the contacts' (gravity in the pass that turns
+    !> the sums into forces: not a pass over the particles of its own). The pair's constants
+    !> (doc/theory.md section 1) come from the material pair's table and the two particles'
+    !> radii and masses, when it touches: 1/r, R* and m* from one division.
     !> The pairs are taken in tiles of `tile`: the overlapping pairs of a tile are gathered
     !> into lanes and the contact law runs over those lanes at once (hm_lanes). The lever of a
     !> particle's rotation in the relative velocity is R - shift_v d, in the torque
@@ -64,8 +66,8 @@ contains
     !> follow the contact law; the EPSD2 spring is hist(4:6, slot).
     subroutine pp_forces(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
                          reach2, kn_ab, st_ab, gn_ab, gt_ab, mu_ab, clamp_normal, keep_length, &
-                         shift_v, shift_t, reset, extra, rmodel_ab, mur_ab, kcoh_ab, dt, slot, &
-                         hist, n_hist, acc, f, t)
+                         shift_v, shift_t, reset, extra, rmodel_ab, mur_ab, kcoh_ab, dt, gravity, &
+                         slot, hist, n_hist, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
         integer(ip), intent(in) :: nm             !! materials
@@ -85,6 +87,7 @@ contains
         real(wp), intent(in) :: mur_ab(nm, nm)       !! rolling friction [-]
         real(wp), intent(in) :: kcoh_ab(nm, nm)      !! cohesion energy density [J/m^3]
         real(wp), intent(in) :: dt                   !! [s]
+        real(wp), intent(in) :: gravity(3)           !! [m/s^2]
         integer(ip), intent(inout) :: slot(n_pairs)  !! > 0: in contact, history in that
                                                      !! slot; < 0: history kept there; 0: none
         real(wp), intent(inout) :: hist(n_pair_history, n_pairs)  !! history of the first:
@@ -92,7 +95,7 @@ contains
         integer(ip), intent(inout) :: n_hist(1)      !! slots in use
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
                                                      !! (zero between calls)
-        real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m]
+        real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m] (the owned set)
         integer(ip) :: c, side, a, b
         integer(i8) :: i, j, p, p0, s, l, m     ! (64-bit: addresses without sign extensions)
         integer(i8) :: lp(tile + 1)
@@ -295,13 +298,14 @@ contains
             end if
         end do
 
-        ! the sums into the forces and torques, and cleared for the next call
-        !$acc parallel loop gang vector default(present) private(c, inv)
+        ! gravity and the sums into the forces, the sums into the torques, and the sums
+        ! cleared for the next call
+        !$acc parallel loop gang vector default(present) copyin(gravity) private(c, inv)
         do i = 1, n_own
             inv = 1.0_wp / scale(i)
             do c = 1, 3
-                f(c, i) = f(c, i) + real(acc(c, i), wp) * inv
-                t(c, i) = t(c, i) + radius(i) * (real(acc(c + 3, i), wp) * inv)
+                f(c, i) = mass(i) * gravity(c) + real(acc(c, i), wp) * inv
+                t(c, i) = radius(i) * (real(acc(c + 3, i), wp) * inv)
             end do
             acc(:, i) = 0
         end do

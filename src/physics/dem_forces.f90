@@ -1,33 +1,13 @@
-!> Body forces: every step starts from gravity, with no torque; a coupled run adds the
-!> fluid's forces (doc/theory.md, section 14).
+!> The forces a coupled fluid sets (doc/theory.md, section 14), added after gravity and the
+!> particle contacts (pp_forces, which start every step's forces from gravity).
 module dem_forces
     use dem_kinds, only: wp, ip
     use dem_particles, only: n_ext, ext_force, ext_torque, ext_beta, ext_fluid_v, ext_impulse
     implicit none
     private
-    public :: body_forces, external_forces
+    public :: external_forces
 
 contains
-
-    !> f = m g and t = 0 for the owned particles.
-    subroutine body_forces(n, mass, gravity, f, t)
-        integer(ip), intent(in) :: n
-        real(wp), intent(in) :: mass(n)        !! [kg]
-        real(wp), intent(in) :: gravity(3)     !! [m/s^2]
-        real(wp), intent(out) :: f(3, n), t(3, n)  !! [N], [N m]
-        integer(ip) :: i
-        real(wp) :: g1, g2, g3
-        g1 = gravity(1)
-        g2 = gravity(2)
-        g3 = gravity(3)
-        !$acc parallel loop default(present)
-        do i = 1, n
-            f(1, i) = mass(i) * g1
-            f(2, i) = mass(i) * g2
-            f(3, i) = mass(i) * g3
-            t(:, i) = 0.0_wp
-        end do
-    end subroutine body_forces
 
     !> Add a coupled fluid's force and torque, and the drag beta (u_f - v), to the owned
     !> particles, and add the impulse of force and drag over this step, dt times them (the

@@ -12,7 +12,7 @@ module dem_step
     use dem_run_state, only: solver_t, time_of, failed_anywhere, wall_motion_data, stop_end
     use dem_rebuild, only: lists_refresh, settle_outlets
     use dem_inflow, only: insert_inflow, inflow_to_come
-    use dem_forces, only: body_forces, external_forces
+    use dem_forces, only: external_forces
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: pw_forces
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
@@ -65,7 +65,8 @@ contains
     end subroutine time_step
 
     !> The forces and torques at `time` (the time of the positions): walls to their pose,
-    !> lists and migration (or the halo), body forces, particle contacts, wall contacts.
+    !> lists and migration (or the halo), gravity and the particle contacts, a coupled
+    !> fluid's forces, wall contacts.
     subroutine forces(s, c, time, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -75,8 +76,9 @@ contains
         call lists_refresh(s, err)
         call timer_stop(s%timers, phase_neighbors)
         if (err%failed()) return
-        call body(s, c)
         call particle_contacts(s, c)
+        if (allocated(s%p%ext)) call external_forces(s%p%n_own, c%dt, s%p%v, s%p%ext, s%p%f, &
+                                                     s%p%t)
         call timer_stop(s%timers, phase_contacts_pp)
         if (s%mesh%n_tri == 0) return
         call wall_contacts(s, c, err)
@@ -133,17 +135,7 @@ contains
         call wall_motion_data(s%mesh, acc_to_device)
     end subroutine walls_move
 
-    !> Gravity, and the coupling's forces where a fluid code sets them.
-    subroutine body(s, c)
-        type(solver_t), intent(inout) :: s
-        type(case_t), intent(in) :: c
-        associate (p => s%p, n => s%p%n_own)
-            call body_forces(n, p%mass, c%gravity, p%f, p%t)
-            if (allocated(p%ext)) call external_forces(n, c%dt, p%v, p%ext, p%f, p%t)
-        end associate
-    end subroutine body
-
-    !> The particle-particle contacts of the lists.
+    !> Gravity and the particle-particle contacts of the lists (the forces and torques set).
     subroutine particle_contacts(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -152,8 +144,8 @@ contains
                            p%mass, p%mat, nb%scale, nb%pair, nb%reach2, pc%kn, pc%st, pc%gn, &
                            pc%gt, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, o%shift_t, &
                            o%reset_pair_history, pc%rolling .or. pc%cohesion, pc%rmodel, &
-                           pc%mur, pc%kcoh, c%dt, s%cs%slot, s%cs%hist, s%cs%n_hist, nb%acc, p%f, &
-                           p%t)
+                           pc%mur, pc%kcoh, c%dt, c%gravity, s%cs%slot, s%cs%hist, s%cs%n_hist, &
+                           nb%acc, p%f, p%t)
         end associate
     end subroutine particle_contacts
 

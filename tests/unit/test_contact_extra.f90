@@ -22,6 +22,7 @@ program test_contact_extra
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp), estar = 1.0e8_wp, kcoh = 3.0e5_wp
     real(wp), parameter :: dt = 1.0e-6_wp
+    real(wp), parameter :: no_g(3) = 0.0_wp        ! no gravity [m/s^2]
     real(wp) :: kn(1, 1), st(1, 1), zero(1, 1), mu(1, 1), kc(1, 1), mur(1, 1)
     integer(ip) :: none(1, 1), model(1, 1)
     real(wp) :: x(3, 2), v(3, 2), w(3, 2), r(2), m(2), f(3, 2), t(3, 2), scale(2)
@@ -64,7 +65,7 @@ program test_contact_extra
             n_hist = 0
             call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
                            [sum(r)**2], kn, st, zero, zero, mu, .false., .true., 0.0_wp, 0.0_wp, &
-                           .true., .true., none, zero, kc, dt, slot, xi3, n_hist, acc, f, t)
+                           .true., .true., none, zero, kc, dt, no_g, slot, xi3, n_hist, acc, f, t)
             call assert_close(-f(1, 1), hertz - kcoh * pi * a2, 1.0e-9_wp, &
                               'sJKR pair: Hertz less k pi a^2')
             call assert_close(f(1, 2), -f(1, 1), 1.0e-12_wp, 'sJKR pair: opposite forces')
@@ -115,7 +116,7 @@ program test_contact_extra
     n_hist = 0
     call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
                    [sum(r)**2], kn, st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, &
-                   .true., .true., model, mur, zero, dt, slot, xi3, n_hist, acc, f, t)
+                   .true., .true., model, mur, zero, dt, no_g, slot, xi3, n_hist, acc, f, t)
     call assert_close(t(2, 1), -0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: on the turning one')
     call assert_close(t(2, 2), 0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: the opposite')
     call assert_true(all(t([1, 3], :) == 0.0_wp), 'CDT pair: about y only')
@@ -142,7 +143,8 @@ program test_contact_extra
         t = 0.0_wp
         call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
                        [sum(r)**2], kn, st, zero, zero, zero, .false., .true., 0.0_wp, &
-                       0.0_wp, .true., .true., model, mur, zero, dt, slot, xi6, n_hist, acc, f, t)
+                       0.0_wp, .true., .true., model, mur, zero, dt, no_g, slot, xi6, n_hist, &
+                       acc, f, t)
         expect = min(s * kr * 2.0_wp * dt, lim)
         if (mod(s, 50) == 0) then
             call assert_close(xi6(5, 1), expect, 1.0e-9_wp, 'EPSD2: k_r w t, then the limit')

@@ -4,7 +4,9 @@
 !> unit of its last place per contact) and of the floating-point sums; bit for bit the same
 !> forces whatever order the particles are stored in; and Newton's third law (the contact
 !> forces sum to zero, to the fixed point's rounding). Both levers of the rotation: the radius,
-!> and R - d/2 (the contact point at mid-overlap, LIGGGHTS's).
+!> and R - d/2 (the contact point at mid-overlap, LIGGGHTS's). Under gravity g the kernel sets
+!> each force to m g plus the same contact force (one rounding: bit for bit m g + F) and each
+!> torque to the same contact torque, whatever the arrays held before.
 program test_contacts_pp
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t
@@ -18,7 +20,8 @@ program test_contacts_pp
     integer(ip), parameter :: n = 80
     real(wp), parameter :: e_star = 1.0e7_wp, dt = 1.0e-6_wp, accel_bound = 1.0e5_wp
     real(wp) :: x(3, n), v(3, n), w(3, n), r(n), m(n), f(3, n), t(3, n), fb(3, n), tb(3, n)
-    real(wp) :: f1(3, n), t1(3, n), tol_f(n), tol_t(n), big(n), quantum(n)
+    real(wp) :: f1(3, n), t1(3, n), tol_f(n), tol_t(n), big(n), quantum(n), g(3)
+    real(wp), parameter :: gravity(3) = [0.3_wp, -1.2_wp, -9.81_wp]   ! [m/s^2]
     integer(ip) :: contacts(n), back(n)
     real(wp) :: bound
     logical :: ok
@@ -57,25 +60,33 @@ program test_contacts_pp
         tol_f = contacts * (quantum + 4.0_wp * epsilon(1.0_wp) * big)
         tol_t = r * tol_f
 
-        do trial = 1, 3
-            ! store the particles in another order each time
+        do trial = 1, 4
+            ! store the particles in another order each time (the fourth: the first's, under
+            ! gravity, the forces and torques holding rubbish before)
             order = [(i, i = 1, n)]
             if (trial == 2) order = [(n + 1 - i, i = 1, n)]
             if (trial == 3) order = [(mod(37 * i, n) + 1, i = 1, n)]
+            g = merge(gravity, 0.0_wp, trial == 4)
             nb = neighbors_t(skin=0.001_wp)
             call neighbors_build(nb, cs, n, n, gid(order), x(:, order), r(order), no_walls)
             allocate(nb%scale(n))
             call pp_scales(n, m(order), accel_bound, nb%scale)
-            f = 0.0_wp
-            t = 0.0_wp
+            f = merge(1.0e30_wp, 0.0_wp, trial == 4)
+            t = f
             call pp_forces(n, n, nb%n_pairs, 1_ip, x(:, order), v(:, order), w(:, order), &
                            r(order), m(order), mat, nb%scale, nb%pair, nb%reach2, kn, st, &
                            cn * sqrt(sn), cn * sqrt(st), mu, &
                            .false., .true., shift, shift, .true., .false., none, cn, cn, dt, &
-                           cs%slot, cs%hist, cs%n_hist, nb%acc, f, t)
+                           g, cs%slot, cs%hist, cs%n_hist, nb%acc, f, t)
             back(order) = [(i, i = 1, n)]
             f = f(:, back)                     ! back in the order of the brute force
             t = t(:, back)
+            if (trial == 4) then
+                call assert_true(all(f == spread(m, 1, 3) * spread(g, 2, n) + f1) .and. &
+                                 all(t == t1), 'under gravity: m g + F and the same torques')
+                deallocate(nb%scale)
+                cycle
+            end if
             call assert_true(all(abs(f - fb) <= spread(tol_f, 1, 3)) .and. &
                              all(abs(t - tb) <= spread(tol_t, 1, 3)), &
                              'one pass equals both-sides brute force to the roundings')
