@@ -15,7 +15,7 @@ module dem_step
     use dem_forces, only: external_forces
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: pw_forces
-    use dem_integrate, only: integrator_euler, integrator_verlet, kick, drift
+    use dem_integrate, only: integrator_euler, integrator_verlet, kick, kick_drift
     use dem_mesh, only: mesh_move
     use dem_outlets, only: outlets_mark
     use dem_particles, only: particles_park
@@ -91,9 +91,9 @@ contains
         type(case_t), intent(in) :: c
         integer(i8) :: n_fast
         associate (p => s%p, n => s%p%n_own)
-            call kick(n, 0.5_wp * c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%radius, &
-                      c%max_speed, p%v, p%w, n_fast)      ! (the guard after the second half)
-            call drift(n, c%dt, p%v, p%x)
+            ! (the guard's count: after the second half)
+            call kick_drift(n, 0.5_wp * c%dt, c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, &
+                            p%radius, c%max_speed, p%v, p%w, p%x, n_fast)
         end associate
         call timer_stop(s%timers, phase_integrate)
     end subroutine verlet_first_half
@@ -113,9 +113,8 @@ contains
             if (.not. verlet) then
                 call write_trace(s, c, s%run%out, time_of(s, c, s%step), err, bad)
                 call timer_stop(s%timers, phase_output)
-                call kick(n, c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%radius, c%max_speed, &
-                          p%v, p%w, n_fast)
-                call drift(n, c%dt, p%v, p%x)
+                call kick_drift(n, c%dt, c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%radius, &
+                                c%max_speed, p%v, p%w, p%x, n_fast)
                 call timer_stop(s%timers, phase_integrate)
             else
                 call kick(n, 0.5_wp * c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%radius, &

@@ -1,11 +1,12 @@
 !> The integrators under a constant force, against closed forms: symplectic Euler gives
 !> x_n = x_0 + n h v_0 + h^2 a n (n + 1) / 2; velocity Verlet is exact for constant force.
-!> The kick's speed guard against particles set above and below the bound.
+!> The speed guard of the kick (and of the kick and drift) against particles set above and
+!> below the bound.
 program test_integrate
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use, intrinsic :: ieee_exceptions, only: ieee_set_halting_mode, ieee_set_flag, ieee_invalid
     use dem_kinds, only: wp, ip, i8
-    use dem_integrate, only: kick, drift
+    use dem_integrate, only: kick, kick_drift
     use dem_assert, only: assert_close, assert_true, assert_finish
     implicit none
     real(wp), parameter :: h = 1.0e-3_wp, m = 2.0_wp, inertia = 0.5_wp, r = 0.1_wp, &
@@ -21,8 +22,8 @@ program test_integrate
 
     call reset()
     do step = 1, n
-        call kick(1_ip, h, [1.0_wp / m], [1.0_wp / inertia], f, t, [r], bound, v, w, n_fast)
-        call drift(1_ip, h, v, x)
+        call kick_drift(1_ip, h, h, [1.0_wp / m], [1.0_wp / inertia], f, t, [r], bound, v, w, &
+                        x, n_fast)
     end do
     call assert_true(n_fast == 0, 'guard: a particle below the bound is not counted')
     call check('symplectic Euler', [1.0_wp, 0.5_wp, -1.0_wp] + n * h * [0.1_wp, 0.2_wp, 0.3_wp] &
@@ -30,9 +31,8 @@ program test_integrate
 
     call reset()
     do step = 1, n
-        call kick(1_ip, 0.5_wp * h, [1.0_wp / m], [1.0_wp / inertia], f, t, [r], bound, v, w, &
-                  n_fast)
-        call drift(1_ip, h, v, x)
+        call kick_drift(1_ip, 0.5_wp * h, h, [1.0_wp / m], [1.0_wp / inertia], f, t, [r], bound, &
+                        v, w, x, n_fast)
         call kick(1_ip, 0.5_wp * h, [1.0_wp / m], [1.0_wp / inertia], f, t, [r], bound, v, w, &
                   n_fast)
     end do
@@ -47,7 +47,7 @@ contains
     !> Six particles without force: speed and rim speed |w| R just below the bound (not
     !> counted), one of them at the bound, one above, one with a NaN (counted: 3).
     subroutine guard()
-        real(wp) :: v6(3, 6), w6(3, 6), nan
+        real(wp) :: v6(3, 6), w6(3, 6), x6(3, 6), nan
         real(wp), parameter :: below = 0.999_wp * bound
         integer(i8) :: n_bad
         call ieee_set_halting_mode(ieee_invalid, .false.)   ! (the Debug build traps)
@@ -65,6 +65,12 @@ contains
                   spread([0.0_wp, 0.0_wp, 0.0_wp], 2, 6), spread([0.0_wp, 0.0_wp, 0.0_wp], 2, 6), &
                   [(r, step = 1, 6)], bound, v6, w6, n_bad)
         call assert_true(n_bad == 3, 'guard: the particles at or above the bound, and the NaN')
+        x6 = 0.0_wp
+        call kick_drift(6_ip, h, h, [(1.0_wp, step = 1, 6)], [(1.0_wp, step = 1, 6)], &
+                        spread([0.0_wp, 0.0_wp, 0.0_wp], 2, 6), &
+                        spread([0.0_wp, 0.0_wp, 0.0_wp], 2, 6), [(r, step = 1, 6)], bound, v6, &
+                        w6, x6, n_bad)
+        call assert_true(n_bad == 3, 'guard in the kick and drift: the same three')
         call ieee_set_flag(ieee_invalid, .false.)
     end subroutine guard
 
