@@ -151,26 +151,28 @@ contains
         real(wp), intent(in) :: vert(3, 3, n_tri)            !! [m]
         integer(ip), intent(in) :: twall(n_tri)
         integer(ip), intent(out) :: slot(nc)
-        logical :: claimed(max_wall_contacts)
-        integer(ip) :: c, s, fs
+        integer :: claimed             ! bit s - 1: slot s claimed (max_wall_contacts <= 32)
+        integer(ip) :: c, s, fs, found
         real(wp) :: qs(3), d2, best
-        claimed = .false.
+        claimed = 0
         do c = 1, nc
-            slot(c) = 0
-            if (.not. keep(c)) cycle
-            do s = 1, max_wall_contacts
-                if (stri(s) == ctri(c)) then
-                    slot(c) = s
-                    claimed(s) = .true.
-                    exit
-                end if
-            end do
+            found = 0
+            if (keep(c)) then
+                do s = 1, max_wall_contacts
+                    if (stri(s) == ctri(c)) then
+                        found = s
+                        claimed = ibset(claimed, s - 1)
+                        exit
+                    end if
+                end do
+            end if
+            slot(c) = found              ! (one store: a loop of stores of 0 would be a call)
         end do
         do c = 1, nc
             if (.not. keep(c) .or. slot(c) > 0) cycle
             best = huge(1.0_wp)
             do s = 1, max_wall_contacts
-                if (claimed(s) .or. stri(s) == 0) cycle
+                if (btest(claimed, s - 1) .or. stri(s) == 0) cycle
                 if (twall(stri(s)) /= twall(ctri(c))) cycle
                 call closest_point_triangle(q(:, c), vert(:, 1, stri(s)), vert(:, 2, stri(s)), &
                                             vert(:, 3, stri(s)), qs, fs)
@@ -180,7 +182,7 @@ contains
                     slot(c) = s
                 end if
             end do
-            if (slot(c) > 0) claimed(slot(c)) = .true.
+            if (slot(c) > 0) claimed = ibset(claimed, slot(c) - 1)
         end do
     end subroutine history_slots
 
@@ -300,16 +302,20 @@ contains
                 end do
                 idle(kr) = nc == 0 .and. wtri(1, i) == 0       ! no contact, none ended
                 if (idle(kr)) cycle
-                tol = 1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
-                if (many) then                 ! many triangles meet here: the kept ones only
-                    call wall_contacts_streamed(x(:, i), r, wstart(i), wstart(i + 1) - 1, &
-                                                n_cand, wlist, n_tri, vert, tol, &
-                                                max_wall_candidates, nc, q, feat, ctri, over)
-                    if (over) overflow = overflow + 1
-                    keep(1:nc) = .true.
-                else
-                    call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), ctri(1:nc), n_tri, &
-                                             vert, tol, keep(1:nc))
+                keep(1:nc) = .true.                ! (one touching triangle: its contact)
+                if (many .or. nc > 1) then
+                    tol = 1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
+                    if (many) then             ! many triangles meet here: the kept ones only
+                        call wall_contacts_streamed(x(:, i), r, wstart(i), wstart(i + 1) - 1, &
+                                                    n_cand, wlist, n_tri, vert, tol, &
+                                                    max_wall_candidates, nc, q, feat, ctri, &
+                                                    over)
+                        if (over) overflow = overflow + 1
+                        keep(1:nc) = .true.
+                    else
+                        call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), ctri(1:nc), &
+                                                 n_tri, vert, tol, keep(1:nc))
+                    end if
                 end if
                 call history_slots(nc, keep(1:nc), ctri(1:nc), q(:, 1:nc), wtri(:, i), n_tri, &
                                    vert, twall, slot(1:nc))
