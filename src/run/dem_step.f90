@@ -1,9 +1,9 @@
 !> One time step (doc/theory.md, section 5): `time_step` and `forces` read as the design
 !> does, each line a step and a call into the module named for it (integration:
-!> dem_integrate; walls: dem_mesh; lists, migration and the halo: dem_rebuild; body forces:
-!> dem_forces; particle and wall contacts: dem_contacts_pp, dem_contacts_pw; the guard and
-!> run control: dem_run_control; outlets: dem_outlets; inflow: dem_inflow; outputs:
-!> dem_run_output).
+!> dem_integrate; walls: dem_mesh; lists, migration and the halo: dem_rebuild; gravity and
+!> particle contacts: dem_contacts_pp; a coupled fluid's forces: dem_forces; wall contacts:
+!> dem_contacts_pw; the guard and run control: dem_run_control; outlets: dem_outlets;
+!> inflow: dem_inflow; outputs: dem_run_output).
 module dem_step
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
