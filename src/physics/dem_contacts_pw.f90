@@ -302,8 +302,8 @@ contains
                 end do
                 idle(kr) = nc == 0 .and. wtri(1, i) == 0       ! no contact, none ended
                 if (idle(kr)) cycle
-                keep(1:nc) = .true.                ! (one touching triangle: its contact)
-                if (many .or. nc > 1) then
+                keep(1:nc) = .true.                ! (one touching triangle, or those that
+                if (many .or. nc > 1) then         ! wall_contacts_streamed keeps: contacts)
                     tol = 1.0e-10_wp * max(r, abs(x(1, i)), abs(x(2, i)), abs(x(3, i)))
                     if (many) then             ! many triangles meet here: the kept ones only
                         call wall_contacts_streamed(x(:, i), r, wstart(i), wstart(i + 1) - 1, &
@@ -311,7 +311,6 @@ contains
                                                     max_wall_candidates, nc, q, feat, ctri, &
                                                     over)
                         if (over) overflow = overflow + 1
-                        keep(1:nc) = .true.
                     else
                         call wall_contact_select(nc, q(:, 1:nc), feat(1:nc), ctri(1:nc), &
                                                  n_tri, vert, tol, keep(1:nc))
