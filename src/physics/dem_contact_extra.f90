@@ -53,12 +53,17 @@ contains
     end subroutine rolling_torque
 
     !> The sJKR contact area of two spheres (radii ri, rj, centres dist apart): pi a^2, a
-    !> the radius of the circle in which their surfaces cross [m^2].
+    !> the radius of the circle in which their surfaces cross [m^2]. Evaluated with the
+    !> smaller radius first, so that (i, j) and (j, i) give the same bits (the two ranks of
+    !> a pair split between them evaluate it from either side).
     pure real(wp) function sjkr_area_pair(ri, rj, dist) result(area)
         !$acc routine seq
         real(wp), intent(in) :: ri, rj, dist   !! [m]
-        area = -0.25_wp * pi * ((dist - ri - rj) * (dist + ri - rj) * (dist - ri + rj) &
-               * (dist + ri + rj)) / dist**2
+        real(wp) :: r1, r2
+        r1 = min(ri, rj)
+        r2 = max(ri, rj)
+        area = -0.25_wp * pi * ((dist - r1 - r2) * (dist + r1 - r2) * (dist - r1 + r2) &
+               * (dist + r1 + r2)) / dist**2
     end function sjkr_area_pair
 
     !> The sJKR contact area of a sphere (radius r) and a plane at distance dist from its

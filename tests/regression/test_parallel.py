@@ -21,7 +21,8 @@ checkpoints' particles and contact history, for
    naming the file and the ids (the smallest pair when several), and leave no output;
 7. a case started from a CSV particle file and from the HDF5 snapshot of its first step (each
    rank reading its block of the file) on 1, 2 and 3 ranks: the same final.csv; and a case
-   whose materials lack the snapshot's stops on every rank count with the same message.
+   whose materials lack the snapshot's stops on every rank count with the same message;
+8. a polydisperse bed with sJKR cohesion (radii 1 to 2 mm) on 1, 2 and 3 ranks.
 
 The runs are independent: each rank count decomposes space differently (METIS on blocks),
 so equality means that the forces do not depend on the decomposition, that particles
@@ -273,6 +274,24 @@ for ranks in (1, 2, 3):
     r = run(case, ranks, code=2)
     check("particle 1 is of material 'M1', which the case does not define" in r.stderr,
           f"snapshot of undefined materials on {ranks} ranks: {r.stderr.strip()[-500:]}")
+
+# 8. a polydisperse cohesive bed (radii 1 to 2 mm, sJKR between the particles and with the
+# walls): a pair split between two ranks is evaluated from both sides, so its contact area
+# must not depend on which radius comes first
+COHESIVE = ("&insert n = 300, material = 'soft', radius_min = 0.001, radius_max = 0.002, "
+            "region = 'box', box_min = -0.045, -0.045, 0.005, box_max = 0.045, 0.045, 0.06, "
+            "seed = 11, velocity = 0.1, 0, -0.2 /\n")
+cu.write_box_case(os.path.join(work, "cohesive.nml"), "@OUT@", t_end=0.08, n=300,
+                  particles=COHESIVE, output=", checkpoint_interval = 0.04")
+with open(os.path.join(work, "cohesive.nml")) as f:
+    text = f.read().replace(os.path.abspath("@OUT@"), "@OUT@").replace(
+        "restitution = 0.3, friction = 0.3 /",
+        "restitution = 0.3, friction = 0.3, cohesion_energy_density = 2e5 /")
+with open(os.path.join(work, "cohesive.nml"), "w") as f:
+    f.write(text)
+outs = compare("cohesive", [1, 2, 3], ("final.csv", "series.csv"))
+s = np.genfromtxt(os.path.join(outs[1], "series.csv"), delimiter=",", names=True)
+check(s["contacts_pp"][-1] > 50, f"cohesive: the bed has {s['contacts_pp'][-1]:.0f} contacts")
 
 # tracing is for one rank: on two, --check and the run both refuse it as bad input (exit 2,
 # naming &output's trace_id), where the run used to stop at its start with exit 3
