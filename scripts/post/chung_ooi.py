@@ -1,7 +1,9 @@
 """Analytical expectations for the Chung & Ooi (2011) tests 1-4 and the quantities measured
 from the solver's outputs. Used by the test suite, the figure script and the dt sweep.
 Nothing here comes from the solver: the formulas are Hertz theory (Johnson, Contact
-Mechanics, 1985, section 11.1) and the rigid-body impulse limits of Chung & Ooi."""
+Mechanics, 1985, section 11.1) and the rigid-body impulse limits of Chung & Ooi: while a
+contact slides throughout an impact, the tangential impulse is mu times the normal impulse
+m* (1 + e) v_n (doc/theory.md, section 7)."""
 import csv
 import math
 
@@ -14,6 +16,15 @@ TEST3 = dict(E=380e9, nu=0.23, rho=4000.0, R=2.5e-3, v=3.9, mu=0.0,
              restitutions=[0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0])
 TEST4 = dict(E=70e9, nu=0.33, rho=2700.0, R=2.5e-3, v=3.9, mu=0.092, e=0.98,
              angles=list(range(5, 86)))
+# Chung & Ooi (2011), tests 5-8 (cases/verification/make_cases.py)
+TEST5 = dict(E=2.08e11, nu=0.3, rho=7850.0, R=1e-5, v=5.0, mu=0.3, e=1.0,
+             tangential=[0.1, 0.3, 0.45, 0.6, 0.9, 1.2, 1.5, 1.8, 2.25, 2.7, 3.0, 3.75, 4.5,
+                         5.25, 6.0, 7.5, 9.0, 12.0, 15.0, 18.0, 21.0])
+SPINS = [0.175, 0.3, 0.42, 0.6, 0.8, 1.0, 1.2, 1.5, 2.0, 2.4, 2.8, 3.0, 3.5, 4.0, 6.0, 8.0,
+         10.0, 12.0, 14.0, 21.0]
+TEST6 = dict(E=70e9, nu=0.33, rho=2700.0, R=0.1, v=0.2, mu=0.4, e=0.5, spins=SPINS)
+TEST7 = TEST6
+TEST8 = dict(TEST6, R2=0.5, rho2=2.7e6)
 
 
 def sphere_mass(rho, r):
@@ -121,8 +132,49 @@ def oblique_results(final_csv):
     return et, spin, rebound, f["vz"] / vn
 
 
+def test5_results(final_csv):
+    """Test 5, per sphere: the normalised incident angle v_t / (mu v_n), the normalised spin
+    R w' / (mu v_n) and rebound angle v_ct' / (mu v_n') (v_ct' = v_x' - R w_y', the contact
+    point's tangential velocity), and their gross-sliding values 5 (1 + e) / 2 and
+    (v_t / (mu v_n) - 3.5 (1 + e)) / e, which hold when v_t / (mu v_n) > 3.5 (1 + e)."""
+    p = TEST5
+    f = read_csv(final_csv)
+    vt = np.asarray(p["tangential"])
+    mu, e, v, r = p["mu"], p["e"], p["v"], p["R"]
+    incident = vt / (mu * v)
+    spin = r * f["wy"] / (mu * v)
+    rebound = (f["vx"] - r * f["wy"]) / (mu * f["vz"])
+    sliding = incident > 3.5 * (1.0 + e)
+    spin_limit = np.full(len(vt), 2.5 * (1.0 + e))
+    rebound_limit = (incident - 3.5 * (1.0 + e)) / e
+    return incident, spin, spin_limit, rebound, rebound_limit, sliding
+
+
+def spin_results(stem, final_csv):
+    """Tests 6-8, per spinning sphere (ids 1.. in test 6; 1, 3, 5, ... in tests 7 and 8):
+    the initial spin w0, the change of spin w' + w0 (friction slows it), its gross-sliding
+    value 5 mu (1 + e) v_n m* / (2 R m) (m* / m = 1 against the plane; 1/2 and v_n = 2 v in
+    test 7, whose spheres meet at 2 v; m2 / (m1 + m2) in test 8), and whether the contact
+    slides throughout: R w0 above 3.5 mu (1 + e) v (the contact point's slip, and in test 7
+    both surfaces', stops at that change)."""
+    p = TEST6
+    f = read_csv(final_csv)
+    w0 = np.asarray(p["spins"])
+    rows = slice(None) if stem == "test6_spin_wall" else slice(0, None, 2)
+    change = f["wy"][rows] + w0
+    ratio = 1.0
+    if stem == "test8_spin_large":
+        m1 = sphere_mass(p["rho"], p["R"])
+        m2 = sphere_mass(TEST8["rho2"], TEST8["R2"])
+        ratio = m2 / (m1 + m2)
+    limit = 2.5 * p["mu"] * (1.0 + p["e"]) * p["v"] * ratio / p["R"] * np.ones(len(w0))
+    sliding = p["R"] * w0 > 3.5 * p["mu"] * (1.0 + p["e"]) * p["v"]
+    return w0, change, limit, sliding
+
+
 CHUNG_OOI_CASES = ("test1_sphere_sphere", "test2_sphere_wall", "test3_restitution",
                    "test4_oblique")
+SLIDING_CASES = ("test5_tangential", "test6_spin_wall", "test7_spin_pair", "test8_spin_large")
 
 
 def summary(stem, out):

@@ -2,13 +2,14 @@
 !> from it (the quantities `dem --check` prints and the stability bound on dt).
 module dem_case
     use dem_kinds, only: wp, ip, i8
-    use dem_materials, only: materials_t, contact_options_t, effective_moduli, damping_ratio
+    use dem_materials, only: materials_t, contact_options_t
     use dem_mesh, only: mesh_t, mesh_speed_bound
     use dem_outlets, only: outlet_t
     use dem_probes, only: probe_t
     use dem_insert, only: region_t, size_dist_t, region_bounds
-    use dem_timestep, only: rayleigh_time, hertz_contact_time, hertz_critical_dt, &
-                            tangential_critical_dt, squeeze_critical_dt
+    use dem_timestep, only: rayleigh_time
+    use dem_contact_model, only: contact_model_t, contact_model_build, pair_contact_time, &
+                                 pair_critical_dt, pair_squeeze_dt
     use dem_comm, only: comm_t, comm_sum, comm_max
     use dem_periodic, only: periodic_t
     implicit none
@@ -278,9 +279,10 @@ contains
         type(case_t), intent(in) :: c
         type(time_scales_t), intent(out) :: ts
         real(wp), parameter :: pi = acos(-1.0_wp)
-        real(wp) :: rmin(c%mats%n), rmax(c%mats%n), tr, estar, gstar, ma, mb, mh, mstar, rstar
+        real(wp) :: rmin(c%mats%n), rmax(c%mats%n), tr, ma, mb, mh, mstar, rstar
         logical :: wall_mat(c%mats%n)
         integer(ip) :: a, b
+        type(contact_model_t) :: cm
 
         rmin = c%summary%rmin
         rmax = c%summary%rmax
@@ -298,24 +300,22 @@ contains
         if (c%mesh%n_tri > 0) wall_mat(c%mesh%mat(1:c%mesh%n_tri)) = .true.
 
         if (ts%speed > 0.0_wp) then
+            call contact_model_build(c%mats, c%opts, cm)
             do a = 1, c%mats%n
                 if (rmin(a) == huge(1.0_wp)) cycle
                 ma = 4.0_wp / 3.0_wp * pi * rmin(a)**3 * c%mats%density(a)
                 do b = 1, c%mats%n
                     if (rmin(b) < huge(1.0_wp) .and. c%mats%pair_defined(a, b)) then
-                        call effective_moduli(c%mats, a, b, estar, gstar)
                         mb = 4.0_wp / 3.0_wp * pi * rmin(b)**3 * c%mats%density(b)
                         mstar = ma * mb / (ma + mb)
                         rstar = rmin(a) * rmin(b) / (rmin(a) + rmin(b))
-                        call update(a, b, mstar, rstar, estar, gstar, 2.0_wp * ts%speed)
+                        call update(a, b, mstar, rstar, 2.0_wp * ts%speed)
                         mh = 4.0_wp / 3.0_wp * pi * rmax(b)**3 * c%mats%density(b)
-                        if (mh > ma) call squeeze(a, b, ma, mh, rmin(a) * rmax(b) &
-                                                  / (rmin(a) + rmax(b)), estar, gstar)
+                        if (mh > ma) ts%critical = min(ts%critical, pair_squeeze_dt(cm, a, b, &
+                            ma, mh, rmin(a) * rmax(b) / (rmin(a) + rmax(b)), ts%speed))
                     end if
-                    if (wall_mat(b) .and. c%mats%pair_defined(a, b)) then
-                        call effective_moduli(c%mats, a, b, estar, gstar)
-                        call update(a, b, ma, rmin(a), estar, gstar, ts%speed)
-                    end if
+                    if (wall_mat(b) .and. c%mats%pair_defined(a, b)) &
+                        call update(a, b, ma, rmin(a), ts%speed)
                 end do
             end do
         end if
@@ -325,41 +325,16 @@ contains
         if (ts%rayleigh <= ts%critical) then
             ts%bound_name = 'the Rayleigh time of the smallest particle'
         else
-            ts%bound_name = 'the step limit of the stiffest Hertz contact at the expected speed'
+            ts%bound_name = 'the step limit of the stiffest contact at the expected speed'
         end if
     contains
-        !> Contact time and step limits of material pair (a_, b_); the tangential mode counts
-        !> only where there is friction.
-        subroutine update(a_, b_, mstar_, rstar_, estar_, gstar_, speed_)
+        !> Contact time and step limits of material pair (a_, b_).
+        subroutine update(a_, b_, mstar_, rstar_, speed_)
             integer(ip), intent(in) :: a_, b_
-            real(wp), intent(in) :: mstar_, rstar_, estar_, gstar_, speed_
-            real(wp) :: zeta
-            zeta = sqrt(5.0_wp / 6.0_wp) * abs(damping_ratio(c%mats%restitution(a_, b_)))
-            ts%contact = min(ts%contact, hertz_contact_time(mstar_, rstar_, estar_, speed_))
-            ts%critical = min(ts%critical, hertz_critical_dt(mstar_, rstar_, estar_, speed_, zeta))
-            if (c%mats%friction(a_, b_) > 0.0_wp) then
-                if (.not. c%opts%tangential_damping) zeta = 0.0_wp
-                ts%critical = min(ts%critical, tangential_critical_dt(mstar_, rstar_, estar_, &
-                    8.0_wp * gstar_ * c%opts%tangential_stiffness_factor, speed_, &
-                    zeta * sqrt(3.5_wp)))
-            end if
+            real(wp), intent(in) :: mstar_, rstar_, speed_
+            ts%contact = min(ts%contact, pair_contact_time(cm, a_, b_, mstar_, rstar_, speed_))
+            ts%critical = min(ts%critical, pair_critical_dt(cm, a_, b_, mstar_, rstar_, speed_))
         end subroutine update
-
-        !> Step limits of a sphere of material a_ (mass m_) squeezed by one of material b_
-        !> (mass mh_) at the expected speed; the damping ratios of the squeezed sphere's
-        !> modes, sqrt(2) and sqrt(5) times the pair's (doc/theory.md, section 6).
-        subroutine squeeze(a_, b_, m_, mh_, rstar_, estar_, gstar_)
-            integer(ip), intent(in) :: a_, b_
-            real(wp), intent(in) :: m_, mh_, rstar_, estar_, gstar_
-            real(wp) :: zeta, st
-            zeta = sqrt(5.0_wp / 6.0_wp) * abs(damping_ratio(c%mats%restitution(a_, b_)))
-            st = 0.0_wp
-            if (c%mats%friction(a_, b_) > 0.0_wp) &
-                st = 8.0_wp * gstar_ * c%opts%tangential_stiffness_factor
-            ts%critical = min(ts%critical, squeeze_critical_dt(m_, mh_, rstar_, estar_, st, &
-                ts%speed, sqrt(2.0_wp) * zeta, &
-                merge(sqrt(5.0_wp) * zeta, 0.0_wp, c%opts%tangential_damping)))
-        end subroutine squeeze
     end subroutine case_time_scales
 
     !> Append particles to the case's: those held here, of n_rows of all ranks.

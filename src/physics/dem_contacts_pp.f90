@@ -8,10 +8,11 @@
 !> atomics.
 module dem_contacts_pp
     use dem_kinds, only: wp, ip, i8
-    use dem_contact_hm, only: hm_lanes, max_lanes, lane_rows, law_columns, lane_ov, lane_n1, &
+    use dem_contact_hm, only: max_lanes, lane_rows, law_columns, lane_ov, lane_n1, &
                               lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
                               lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
                               lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
+    use dem_contact_model, only: law_lanes
     use dem_contact_extra, only: rolling_torque, sjkr_area_pair
     use dem_materials, only: rolling_none, rolling_epsd2
     use dem_contact_store, only: n_pair_history
@@ -24,7 +25,7 @@ module dem_contacts_pp
     integer, parameter :: fixed_bits = 57
     real(wp), parameter :: fixed_limit = 2.0_wp**61
 
-    !> pairs per tile of the contact kernel (its overlapping pairs go to hm_lanes together)
+    !> pairs per tile of the contact kernel (its overlapping pairs go to law_lanes together)
     integer(ip), parameter :: tile = max_lanes
 
     !> the kernel's own columns of its block of lanes, after the law's (dem_contact_hm): the
@@ -54,7 +55,7 @@ contains
     !> (doc/theory.md section 1) come from the material pair's table and the two particles'
     !> radii and masses, when it touches: 1/r, R* and m* from one division.
     !> The pairs are taken in tiles of `tile`: the overlapping pairs of a tile are gathered
-    !> into lanes and the contact law runs over those lanes at once (hm_lanes). The lever of a
+    !> into lanes and the contact law runs over those lanes at once (law_lanes). The lever of a
     !> particle's rotation in the relative velocity is R - shift_v d, in the torque
     !> R - shift_t d (0: the radius; 1/2: the contact point at mid-overlap, as LIGGGHTS).
     !> A pair's history is in the slot of the store (dem_contact_store) that slot(p) names:
@@ -65,7 +66,8 @@ contains
     !> cohere), the rolling torque and the sJKR force (dem_contact_extra) of the pair's model
     !> follow the contact law; the EPSD2 spring is hist(4:6, slot).
     subroutine pp_forces(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
-                         reach2, kn_ab, st_ab, gn_ab, gt_ab, mu_ab, clamp_normal, keep_length, &
+                         reach2, normal, tangential, kn_ab, st_ab, gn_ab, gt_ab, mu_ab, &
+                         clamp_normal, keep_length, &
                          shift_v, shift_t, reset, extra, rmodel_ab, mur_ab, kcoh_ab, dt, gravity, &
                          slot, hist, n_hist, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
@@ -77,9 +79,10 @@ contains
         real(wp), intent(in) :: scale(n_all)      !! fixed-point scales (pp_scales)
         integer(ip), intent(in) :: pair(2, n_pairs)  !! the two particles of a pair
         real(wp), intent(in) :: reach2(n_pairs)      !! (R_i + R_j)^2 of a pair [m^2]
-        real(wp), intent(in) :: kn_ab(nm, nm), st_ab(nm, nm), mu_ab(nm, nm)  !! [Pa], [-]
-        real(wp), intent(in) :: gn_ab(nm, nm), gt_ab(nm, nm)  !! damping factors [Pa^(1/2)]
-        logical, intent(in) :: clamp_normal, keep_length   !! (hm_lanes)
+        integer(ip), intent(in) :: normal, tangential   !! the sub-models (dem_contact_model)
+        real(wp), intent(in) :: kn_ab(nm, nm), st_ab(nm, nm), mu_ab(nm, nm)  !! stiffnesses, [-]
+        real(wp), intent(in) :: gn_ab(nm, nm), gt_ab(nm, nm)  !! damping factors
+        logical, intent(in) :: clamp_normal, keep_length   !! (law_lanes)
         real(wp), intent(in) :: shift_v, shift_t     !! levers R - shift d [-]
         logical, intent(in) :: reset                 !! the history cleared when a contact ends
         logical, intent(in) :: extra                 !! some pair resists rolling or coheres
@@ -210,7 +213,8 @@ contains
                     lane(l, lane_v3) = v(3, i) - v(3, j) + (ws1 * n2 - ws2 * n1)
                 end do
             end if
-            call hm_lanes(int(m, ip), clamp_normal, keep_length, dt, lane(:, 1:law_columns))
+            call law_lanes(int(m, ip), normal, tangential, clamp_normal, keep_length, dt, &
+                           lane(:, 1:law_columns))
             if (extra_) then        ! rolling resistance, cohesion: the torques into the sums
                 do l = 1, m         ! (over R, as n x F_t), the cohesion into fn
                     p = lp(l)

@@ -5,10 +5,11 @@
 !> and follows a contact onto the neighbouring triangle of the same wall.
 module dem_contacts_pw
     use dem_kinds, only: wp, ip
-    use dem_contact_hm, only: hm_lanes, max_lanes, lane_rows, law_columns, lane_ov, lane_n1, &
+    use dem_contact_hm, only: max_lanes, lane_rows, law_columns, lane_ov, lane_n1, &
                               lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
                               lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
                               lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
+    use dem_contact_model, only: law_lanes
     use dem_contact_extra, only: rolling_torque, sjkr_area_wall
     use dem_materials, only: rolling_none
     use dem_mesh, only: closest_point_triangle, feature_face
@@ -199,7 +200,7 @@ contains
     !> are loaded together before the block's rows are computed (doc/theory.md, section 9).
     subroutine pw_forces(n_own, n_row, row, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, &
                          mat, wstart, wlist, x_ref, wslack, wmove, vert, tmat, twall, wall_v, &
-                         wall_w, wall_c, kn, st, &
+                         wall_w, wall_c, normal, tangential, kn, st, &
                          gn, gt, mu, clamp_normal, keep_length, shift_v, shift_t, extra, &
                          rmodel, mur, kcoh, dt, wtri, wxi, record, n_load, wload, f, t, overflow)
         integer(ip), intent(in) :: n_own, n_cand, n_tri, n_wall, nm
@@ -218,9 +219,10 @@ contains
         real(wp), intent(in) :: wall_v(3, n_wall)   !! translation velocity of each wall [m/s]
         real(wp), intent(in) :: wall_w(3, n_wall)   !! angular velocity of each wall [rad/s]
         real(wp), intent(in) :: wall_c(3, n_wall)   !! a point of its rotation axis [m]
-        real(wp), intent(in) :: kn(nm, nm), st(nm, nm), mu(nm, nm)   !! [Pa], [-]
-        real(wp), intent(in) :: gn(nm, nm), gt(nm, nm)   !! damping factors [Pa^(1/2)]
-        logical, intent(in) :: clamp_normal, keep_length              !! (hm_lanes)
+        integer(ip), intent(in) :: normal, tangential   !! the sub-models (dem_contact_model)
+        real(wp), intent(in) :: kn(nm, nm), st(nm, nm), mu(nm, nm)   !! stiffnesses, [-]
+        real(wp), intent(in) :: gn(nm, nm), gt(nm, nm)   !! damping factors
+        logical, intent(in) :: clamp_normal, keep_length              !! (law_lanes)
         real(wp), intent(in) :: shift_v, shift_t                      !! [-]
         logical, intent(in) :: extra              !! some pair resists rolling or coheres
         integer(ip), intent(in) :: rmodel(nm, nm) !! rolling model (dem_materials)
@@ -245,7 +247,7 @@ contains
                     lever, tr(3), xr(3), new_xr(3, max_wall_contacts)
         logical :: keep(max_wall_candidates), many, over, spring
         ! the block's rows: their lanes first(kr)..last(kr) (none if `idle`: no contact, none
-        ! ended); the lanes: the contacts' law (hm_lanes) and what follows it
+        ! ended); the lanes: the contacts' law (law_lanes) and what follows it
         integer(ip), dimension(rows_per_block) :: first, last
         logical :: idle(rows_per_block)
         integer(ip), dimension(wall_lanes) :: ltri, lslot
@@ -361,7 +363,8 @@ contains
                 last(kr) = m
             end do
             ! the law over the block's contacts at once (R* = R and m* = m against a wall)
-            call hm_lanes(m, clamp_normal, keep_length, dt, lane(:, 1:law_columns))
+            call law_lanes(m, normal, tangential, clamp_normal, keep_length, dt, &
+                           lane(:, 1:law_columns))
             ! each row's forces, torques and slots from its lanes
             do kr = 1, n_block
                 if (idle(kr)) cycle

@@ -8,6 +8,7 @@ module dem_diagnostics
     use dem_mesh, only: mesh_t, closest_point_triangle
     use dem_comm, only: comm_t, comm_max, comm_sum
     use dem_contact_store, only: max_wall_contacts
+    use dem_contact_model, only: normal_energy
     use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total, &
                              fixed_split, fixed_sum_add_words
     implicit none
@@ -59,12 +60,13 @@ contains
     !> point now; summed in fixed point, the same on any number of ranks; collective. The
     !> kernels run where the arrays are (on the device in a run of an OpenACC build).
     real(wp) function elastic_energy(comm, n_own, n_all, n_entries, x, radius, mat, start, &
-                                     list, nm, kn, wall_tri, mesh) result(energy)
+                                     list, nm, normal, kn, wall_tri, mesh) result(energy)
         type(comm_t), intent(in) :: comm
         integer(ip), intent(in) :: n_own, n_all, n_entries, nm
+        integer(ip), intent(in) :: normal                    !! the normal model
         real(wp), intent(in) :: x(3, n_all), radius(n_all)   !! [m]
         integer(ip), intent(in) :: mat(n_all), start(n_own + 1), list(n_entries)
-        real(wp), intent(in) :: kn(nm, nm)                   !! (4/3) E* [Pa]
+        real(wp), intent(in) :: kn(nm, nm)                   !! normal stiffness
         integer(ip), intent(in) :: wall_tri(max_wall_contacts, n_own)
         type(mesh_t), intent(in) :: mesh
         type(fixed_sum_t) :: fixed
@@ -85,8 +87,8 @@ contains
             hi = 0
             lo = 0
             call pair_elastic_terms(n_own, n_all, n_entries, x, radius, mat, start, list, nm, &
-                                    kn, scale, scale2, top, terms, hi, lo)
-            if (mesh%n_tri > 0) call wall_elastic_terms(n_own, x, radius, mat, nm, kn, &
+                                    normal, kn, scale, scale2, top, terms, hi, lo)
+            if (mesh%n_tri > 0) call wall_elastic_terms(n_own, x, radius, mat, nm, normal, kn, &
                 wall_tri, mesh%n_tri, mesh%vert, mesh%mat, scale, scale2, top, terms, hi, lo)
         end subroutine terms_of_all
     end function elastic_energy
@@ -95,8 +97,8 @@ contains
     !> sums of their two fixed-point words at (scale, scale2) (fixed_split). Reductions, on
     !> the device.
     subroutine pair_elastic_terms(n_own, n_all, n_entries, x, radius, mat, start, list, nm, &
-                                  kn, scale, scale2, top, terms, hi, lo)
-        integer(ip), intent(in) :: n_own, n_all, n_entries, nm
+                                  normal, kn, scale, scale2, top, terms, hi, lo)
+        integer(ip), intent(in) :: n_own, n_all, n_entries, nm, normal
         real(wp), intent(in) :: x(3, n_all), radius(n_all)   !! [m]
         integer(ip), intent(in) :: mat(n_all), start(n_own + 1), list(n_entries)
         real(wp), intent(in) :: kn(nm, nm)                   !! [Pa]
@@ -114,7 +116,7 @@ contains
                 d = radius(i) + radius(j) - sqrt((x(1, j) - x(1, i))**2 + &
                     (x(2, j) - x(2, i))**2 + (x(3, j) - x(3, i))**2)
                 if (.not. d > 0.0_wp) cycle
-                e = 0.5_wp * hertz_energy(kn(mat(i), mat(j)), &
+                e = 0.5_wp * normal_energy(normal, kn(mat(i), mat(j)), &
                                           radius(i) * radius(j) / (radius(i) + radius(j)), d)
                 call fixed_split(e, scale, scale2, kw, rw)
                 top = max(top, e)
@@ -126,9 +128,9 @@ contains
     end subroutine pair_elastic_terms
 
     !> The wall contacts' terms of elastic_energy, added to as in pair_elastic_terms.
-    subroutine wall_elastic_terms(n_own, x, radius, mat, nm, kn, wall_tri, n_tri, vert, tmat, &
-                                  scale, scale2, top, terms, hi, lo)
-        integer(ip), intent(in) :: n_own, nm, n_tri
+    subroutine wall_elastic_terms(n_own, x, radius, mat, nm, normal, kn, wall_tri, n_tri, vert, &
+                                  tmat, scale, scale2, top, terms, hi, lo)
+        integer(ip), intent(in) :: n_own, nm, n_tri, normal
         real(wp), intent(in) :: x(3, n_own), radius(n_own)   !! [m]
         integer(ip), intent(in) :: mat(n_own)
         real(wp), intent(in) :: kn(nm, nm)                   !! [Pa]
@@ -152,7 +154,7 @@ contains
                 d = radius(i) - sqrt((q(1) - x(1, i))**2 + (q(2) - x(2, i))**2 + &
                                      (q(3) - x(3, i))**2)
                 if (.not. d > 0.0_wp) cycle
-                e = hertz_energy(kn(mat(i), tmat(tri)), radius(i), d)
+                e = normal_energy(normal, kn(mat(i), tmat(tri)), radius(i), d)
                 call fixed_split(e, scale, scale2, kw, rw)
                 top = max(top, e)
                 terms = terms + 1
@@ -161,14 +163,6 @@ contains
             end do
         end do
     end subroutine wall_elastic_terms
-
-    !> The energy of a Hertz spring at overlap d, the work of F = kn sqrt(R*) d^(3/2):
-    !> (2/5) kn sqrt(R*) d^(5/2) [J].
-    pure real(wp) function hertz_energy(kn, rstar, d) result(e)
-        !$acc routine seq
-        real(wp), intent(in) :: kn, rstar, d   !! [Pa], [m], [m]
-        e = 0.4_wp * kn * sqrt(rstar) * d**2 * sqrt(d)
-    end function hertz_energy
 
     !> Of the pairs in the owned particles' list entries that overlap by more than half the
     !> smaller radius (deeper than any contact of a sound state: bad input), the smallest

@@ -9,7 +9,7 @@ module dem_run_state
     use dem_case, only: case_t, time_scales_t
     use dem_particles, only: particles_t, particles_data
     use dem_domain, only: domain_t, domain_data
-    use dem_materials, only: pair_constants_t
+    use dem_contact_model, only: contact_model_t
     use dem_neighbors, only: neighbors_t, neighbors_free
     use dem_contact_store, only: contact_store_t, store_pairs_drop, store_walls_data
     use dem_mesh, only: mesh_t
@@ -55,7 +55,7 @@ module dem_run_state
         type(particles_t) :: p
         type(neighbors_t) :: nb
         type(contact_store_t) :: cs   !< the contacts' history
-        type(pair_constants_t) :: pc
+        type(contact_model_t) :: pc   !< the contact model
         type(mesh_t) :: mesh           !< the walls, in their pose at the last force evaluation
         integer(i8) :: step = 0        !< steps done; the time is step * dt
         integer(i8) :: trace_id = 0    !< global id of the traced particle, 0: none

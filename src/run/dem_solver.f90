@@ -8,7 +8,7 @@ module dem_solver
     use dem_case, only: case_t, case_time_scales, case_particle_materials, case_speed_bound
     use dem_particles, only: particles_init, particles_add, order_by_id
     use dem_domain, only: domain_imbalance, sorted_by_rank
-    use dem_materials, only: pair_constants_build
+    use dem_contact_model, only: contact_model_build
     use dem_contact_store, only: store_init, max_wall_contacts, store_history_widths
     use dem_integrate, only: integrator_verlet
     use dem_diagnostics, only: deep_overlap_id, deep_wall_id
@@ -53,7 +53,7 @@ contains
             if (c%gid(i) == c%trace_id) s%trace = s%p%n_own
         end do
         s%trace_id = c%trace_id
-        call pair_constants_build(c%mats, c%opts, s%pc)
+        call contact_model_build(c%mats, c%opts, s%pc)
         s%mesh = c%mesh
         ! the widths of the contact history (3 reals, 6 with EPSD2), process-wide: set again
         ! at each entry into the run (solver_start, _advance, _finish), so that several runs

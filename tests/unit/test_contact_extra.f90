@@ -16,10 +16,12 @@ program test_contact_extra
     use dem_contacts_pp, only: pp_forces, pp_scales
     use dem_contacts_pw, only: pw_forces
     use dem_contact_store, only: max_wall_contacts, store_history_widths
-    use dem_materials, only: rolling_none, rolling_cdt, rolling_epsd2
+    use dem_materials, only: rolling_none, rolling_cdt, rolling_epsd2, normal_hertz, &
+                             tangential_mindlin
     use dem_mesh, only: mesh_t, mesh_add_plane
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
+    integer, parameter :: hz = normal_hertz, mdl = tangential_mindlin  ! the sub-models
     real(wp), parameter :: pi = acos(-1.0_wp), estar = 1.0e8_wp, kcoh = 3.0e5_wp
     real(wp), parameter :: dt = 1.0e-6_wp
     real(wp), parameter :: no_g(3) = 0.0_wp        ! no gravity [m/s^2]
@@ -64,7 +66,7 @@ program test_contact_extra
             slot = 0
             n_hist = 0
             call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
-                           [sum(r)**2], kn, st, zero, zero, mu, .false., .true., 0.0_wp, 0.0_wp, &
+                           [sum(r)**2], hz, mdl, kn, st, zero, zero, mu, .false., .true., 0.0_wp, 0.0_wp, &
                            .true., .true., none, zero, kc, dt, no_g, slot, xi3, n_hist, acc, f, t)
             call assert_close(-f(1, 1), hertz - kcoh * pi * a2, 1.0e-9_wp, &
                               'sJKR pair: Hertz less k pi a^2')
@@ -115,7 +117,7 @@ program test_contact_extra
     slot = 0
     n_hist = 0
     call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
-                   [sum(r)**2], kn, st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, &
+                   [sum(r)**2], hz, mdl, kn, st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, &
                    .true., .true., model, mur, zero, dt, no_g, slot, xi3, n_hist, acc, f, t)
     call assert_close(t(2, 1), -0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: on the turning one')
     call assert_close(t(2, 2), 0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: the opposite')
@@ -142,7 +144,7 @@ program test_contact_extra
         f = 0.0_wp
         t = 0.0_wp
         call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
-                       [sum(r)**2], kn, st, zero, zero, zero, .false., .true., 0.0_wp, &
+                       [sum(r)**2], hz, mdl, kn, st, zero, zero, zero, .false., .true., 0.0_wp, &
                        0.0_wp, .true., .true., model, mur, zero, dt, no_g, slot, xi6, n_hist, &
                        acc, f, t)
         expect = min(s * kr * 2.0_wp * dt, lim)
@@ -174,7 +176,7 @@ contains
                        m(1:1), [1_ip], [1_ip, plane%n_tri + 1], wlist, &
                        reshape([0.0_wp, 0.0_wp, z], [3, 1]), spread(-1.0_wp, 1, plane%n_tri), &
                        0.0_wp, plane%vert, plane%mat, &
-                       plane%wall, plane%wall_v, plane%wall_w, plane%wall_c, kn, st, zero, &
+                       plane%wall, plane%wall_v, plane%wall_w, plane%wall_c, hz, mdl, kn, st, zero, &
                        zero, mu, .false., .true., 0.0_wp, 0.0_wp, .true., none, zero, kc, dt, &
                        wtri, wxi, .false., 1_ip, load, ff, tt, overflow)
         fw = ff(:, 1)

@@ -6,16 +6,24 @@
 !> forces sum to zero, to the fixed point's rounding). Both levers of the rotation: the radius,
 !> and R - d/2 (the contact point at mid-overlap, LIGGGHTS's). Under gravity g the kernel sets
 !> each force to m g plus the same contact force (one rounding: bit for bit m g + F) and each
-!> torque to the same contact torque, whatever the arrays held before.
+!> torque to the same contact torque, whatever the arrays held before. Every law evaluated
+!> from both sides: random polydisperse pairs given as (i, j) and as (j, i), with every
+!> normal and tangential model, sJKR cohesion, EPSD2 rolling resistance and both levers,
+!> give the same forces and torques bit for bit and exactly negated histories (a pair split
+!> between two ranks is evaluated from either side).
 program test_contacts_pp
     use dem_kinds, only: wp, ip, i8
     use dem_mesh, only: mesh_t
     use dem_neighbors, only: neighbors_t, neighbors_build
-    use dem_contact_store, only: contact_store_t
+    use dem_contact_store, only: contact_store_t, store_history_widths
+    use dem_contact_hooke, only: hooke_constants
+    use dem_materials, only: damping_ratio, normal_hooke, tangential_coulomb, rolling_epsd2
+    use dem_random, only: rng_t, rng_seed, rng_uniform
     use dem_contacts_pp, only: pp_forces, pp_scales, fixed_scale
-    use dem_contact_hm, only: hm_force
+    use dem_contact_model, only: law_force
     use dem_vector, only: cross
     use dem_assert, only: assert_true, assert_close, assert_finish
+    use dem_materials, only: normal_hertz, tangential_mindlin
     implicit none
     integer(ip), parameter :: n = 80
     real(wp), parameter :: e_star = 1.0e7_wp, dt = 1.0e-6_wp, accel_bound = 1.0e5_wp
@@ -74,7 +82,8 @@ program test_contacts_pp
             f = merge(1.0e30_wp, 0.0_wp, trial == 4)
             t = f
             call pp_forces(n, n, nb%n_pairs, 1_ip, x(:, order), v(:, order), w(:, order), &
-                           r(order), m(order), mat, nb%scale, nb%pair, nb%reach2, kn, st, &
+                           r(order), m(order), mat, nb%scale, nb%pair, nb%reach2, normal_hertz, &
+                           tangential_mindlin, kn, st, &
                            cn * sqrt(sn), cn * sqrt(st), mu, &
                            .false., .true., shift, shift, .true., .false., none, cn, cn, dt, &
                            g, cs%slot, cs%hist, cs%n_hist, nb%acc, f, t)
@@ -116,9 +125,88 @@ program test_contacts_pp
              bound * fixed_scale(bound) < 2.0_wp**57 .and. bound * fixed_scale(bound) >= 2.0_wp**56
     end do
     call assert_true(ok, 'fixed-point scales from the bound')
+    call both_sides()
     call assert_finish()
 
 contains
+
+    !> Random polydisperse pairs, each with every law, evaluated as (1, 2) and as (2, 1)
+    !> from a history and its negation: the same forces and torques, negated histories.
+    subroutine both_sides()
+        real(wp), parameter :: rho = 2500.0_wp, k_hooke = 2.0e4_wp
+        real(wp) :: xs(3, 2), vs(3, 2), ws(3, 2), rs(2), ms(2), sc(2), u(3), h(6)
+        real(wp) :: fa(3, 2), ta(3, 2), fc(3, 2), tc(3, 2), ha(6, 1), hc(6, 1)
+        real(wp) :: k1(1, 1), s1(1, 1), gn1(1, 1), gt1(1, 1), mu1(1, 1), mur1(1, 1), kc1(1, 1)
+        real(wp) :: lever
+        integer(ip) :: rm(1, 1), law, k, c, slot1(1), nh(1), normal, tangential
+        integer(i8) :: ac(6, 2)
+        logical :: same
+        type(rng_t) :: rng
+        call store_history_widths(.true.)
+        rng = rng_seed(12345_i8)
+        rm = rolling_epsd2
+        mu1 = 0.4_wp
+        mur1 = 0.1_wp
+        kc1 = 1.0e5_wp
+        same = .true.
+        do k = 1, 100
+            rs = 5.0e-4_wp + 1.5e-3_wp * [rng_uniform(rng), rng_uniform(rng)]
+            ms = rho * 4.0_wp / 3.0_wp * pi3() * rs**3
+            call pp_scales(2_ip, ms, accel_bound, sc)
+            u = [rng_uniform(rng), rng_uniform(rng), rng_uniform(rng)] - 0.5_wp
+            u = u / norm2(u)
+            xs(:, 1) = [rng_uniform(rng), rng_uniform(rng), rng_uniform(rng)] * 0.01_wp
+            xs(:, 2) = xs(:, 1) + (rs(1) + rs(2)) * (1.0_wp - 0.05_wp * rng_uniform(rng)) * u
+            do c = 1, 2
+                vs(:, c) = [rng_uniform(rng), rng_uniform(rng), rng_uniform(rng)] - 0.5_wp
+                ws(:, c) = 100.0_wp * ([rng_uniform(rng), rng_uniform(rng), rng_uniform(rng)] &
+                                       - 0.5_wp)
+            end do
+            h = 1.0e-6_wp * ([(rng_uniform(rng), c = 1, 6)] - 0.5_wp)
+            h(4:6) = h(4:6) * 1.0e3_wp
+            do law = 0, 7
+                normal = merge(normal_hooke, normal_hertz, btest(law, 0))
+                tangential = merge(tangential_coulomb, tangential_mindlin, btest(law, 1))
+                lever = merge(0.5_wp, 0.0_wp, btest(law, 2))
+                if (normal == normal_hooke) then
+                    call hooke_constants(k_hooke, damping_ratio(0.5_wp), 1.0_wp, .true., &
+                                         k1(1, 1), s1(1, 1), gn1(1, 1), gt1(1, 1))
+                else
+                    k1 = kn
+                    s1 = st
+                    gn1 = cn * sqrt(sn)
+                    gt1 = cn * sqrt(st)
+                end if
+                ha(:, 1) = h
+                hc(:, 1) = -h
+                do c = 1, 2                       ! (1, 2), then (2, 1)
+                    slot1 = 1
+                    nh = 1
+                    ac = 0
+                    if (c == 1) then
+                        call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, xs, vs, ws, rs, ms, [1_ip, 1_ip], &
+                                       sc, reshape([1_ip, 2_ip], [2, 1]), [sum(rs)**2], normal, &
+                                       tangential, k1, s1, gn1, gt1, mu1, .false., .true., lever, &
+                                       lever, .true., .true., rm, mur1, kc1, dt, [0.0_wp, 0.0_wp, &
+                                       0.0_wp], slot1, ha, nh, ac, fa, ta)
+                    else
+                        call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, xs, vs, ws, rs, ms, [1_ip, 1_ip], &
+                                       sc, reshape([2_ip, 1_ip], [2, 1]), [sum(rs)**2], normal, &
+                                       tangential, k1, s1, gn1, gt1, mu1, .false., .true., lever, &
+                                       lever, .true., .true., rm, mur1, kc1, dt, [0.0_wp, 0.0_wp, &
+                                       0.0_wp], slot1, hc, nh, ac, fc, tc)
+                    end if
+                end do
+                same = same .and. all(fa == fc) .and. all(ta == tc) .and. all(ha == -hc)
+            end do
+        end do
+        call assert_true(same, 'every law from both sides: the same forces and torques, '// &
+                         'negated histories (100 polydisperse pairs, 8 laws each)')
+    end subroutine both_sides
+
+    pure real(wp) function pi3()
+        pi3 = acos(-1.0_wp)
+    end function pi3
 
     !> Every contact evaluated from both sides, summed in the order of the partners' ids;
     !> the contacts of each particle and its largest contact force.
@@ -143,10 +231,11 @@ contains
                 vrel = v(:, a) - v(:, b) + cross((r(a) - shift * ov) * w(:, a) &
                                                  + (r(b) - shift * ov) * w(:, b), nrm)
                 xi = 0.0_wp
-                call hm_force(ov, nrm, vrel, r(a) * r(b) / (r(a) + r(b)), &
-                              m(a) * m(b) / (m(a) + m(b)), kn(1, 1), st(1, 1), &
-                              cn(1, 1) * sqrt(sn(1, 1)), cn(1, 1) * sqrt(st(1, 1)), mu(1, 1), &
-                              .false., .true., dt, xi, fn, ft)
+                call law_force(normal_hertz, tangential_mindlin, ov, nrm, vrel, &
+                               r(a) * r(b) / (r(a) + r(b)), m(a) * m(b) / (m(a) + m(b)), &
+                               kn(1, 1), st(1, 1), cn(1, 1) * sqrt(sn(1, 1)), &
+                               cn(1, 1) * sqrt(st(1, 1)), mu(1, 1), .false., .true., dt, xi, &
+                               fn, ft)
                 fo(:, a) = fo(:, a) + (-fn * nrm + ft)
                 contacts(a) = contacts(a) + 1
                 big(a) = max(big(a), maxval(abs(-fn * nrm + ft)))

@@ -14,6 +14,7 @@ program test_contacts_pw
     use dem_contact_store, only: contact_store_t, max_wall_contacts, store_init, &
                                  store_walls_pack, store_walls_unpack, n_wall_pack_real
     use dem_assert, only: assert_true, assert_close, assert_finish
+    use dem_materials, only: normal_hertz, tangential_mindlin
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp), r = 0.01_wp, d = 1.0e-5_wp, estar = 1.0e10_wp
     real(wp), parameter :: h = 0.01_wp   ! side of the squares of the wall
@@ -181,7 +182,7 @@ contains
                        [1.0e-3_wp], &
                        [1_ip], [1_ip, mm%n_tri + 1], wlist, x, spread(-1.0_wp, 1, mm%n_tri), &
                        0.0_wp, mm%vert, mm%mat, mm%wall, &
-                       mm%wall_v, mm%wall_w, mm%wall_c, kn, st, zero, zero, mu, .false., &
+                       mm%wall_v, mm%wall_w, mm%wall_c, normal_hertz, tangential_mindlin, kn, st, zero, zero, mu, .false., &
                        .true., 0.0_wp, &
                        0.0_wp, .false., reshape([0_ip, 0_ip, 0_ip, 0_ip], [2, 2]), zero, &
                        zero, 1.0e-3_wp, stri, sxi, .true., 1_ip, load, fo, to, overflow)

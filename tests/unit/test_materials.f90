@@ -1,15 +1,15 @@
 !> Effective moduli and damping ratios against the table of the benchmark's materials
 !> (MercuryDPM's OSBenchmark values, as listed in the project's case definitions), and the
-!> kernel constants built from them.
+!> Hertz-Mindlin kernel constants the contact model builds from them (dem_contact_model).
 program test_materials
     use dem_kinds, only: wp, ip
-    use dem_materials, only: materials_t, contact_options_t, pair_constants_t, &
-                             effective_moduli, damping_ratio, pair_constants_build
+    use dem_materials, only: materials_t, contact_options_t, effective_moduli, damping_ratio
+    use dem_contact_model, only: contact_model_t, contact_model_build
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     type(materials_t) :: m
     type(contact_options_t) :: opts
-    type(pair_constants_t) :: pc
+    type(contact_model_t) :: pc
     real(wp) :: estar, gstar, cn
 
     ! M1, M2, steel, and a rigid material
@@ -50,7 +50,7 @@ program test_materials
     m%pair_defined = .true.
     m%pair_defined(2, 4) = .false.
     m%pair_defined(4, 2) = .false.
-    call pair_constants_build(m, opts, pc)
+    call contact_model_build(m, opts, pc)
     call effective_moduli(m, 1_ip, 2_ip, estar, gstar)
     call assert_close(pc%kn(1, 2), 4.0_wp / 3.0_wp * estar, 1e-15_wp, 'kn = 4/3 E*')
     call assert_close(pc%st(2, 1), 8.0_wp * gstar, 1e-15_wp, 'st = 8 G*')
@@ -63,7 +63,7 @@ program test_materials
                      'no constants for undefined or rigid-rigid pairs')
     opts%tangential_stiffness_factor = 2.0_wp / 3.0_wp
     opts%tangential_damping = .false.
-    call pair_constants_build(m, opts, pc)
+    call contact_model_build(m, opts, pc)
     call assert_close(pc%st(1, 2), 16.0_wp / 3.0_wp * gstar, 1e-15_wp, &
                       'MercuryDPM stiffness (16/3) G*')
     call assert_true(pc%gt(1, 2) == 0.0_wp, 'MercuryDPM: no tangential damping (ct = 0, gt = 0)')

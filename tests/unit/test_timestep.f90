@@ -5,9 +5,9 @@
 !> overlap from the energy balance by bisection, the stiffness by a central difference).
 program test_timestep
     use dem_kinds, only: wp
-    use dem_timestep, only: rayleigh_time, hertz_max_overlap, hertz_max_force, &
-                            hertz_contact_time, hertz_critical_dt, squeeze_critical_dt, &
-                            step_limit
+    use dem_timestep, only: rayleigh_time, step_limit
+    use dem_contact_hm, only: hertz_max_overlap, hertz_max_force, hertz_contact_time, &
+                              hertz_critical_dt, squeeze_critical_dt
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp)
