@@ -5,7 +5,6 @@
 !> case is refused. A checkpoint is also a snapshot, and both can seed a new case as
 !> particle files. Files are written under a temporary name and renamed once complete.
 module dem_checkpoint
-    use, intrinsic :: iso_c_binding, only: c_int
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_version, only: dem_version_string
@@ -95,13 +94,6 @@ module dem_checkpoint
         procedure :: ids => read_ids, ints => read_ints, reals => read_reals, &
                      vectors => read_vectors
     end type frame_reader_t
-
-    interface
-        integer(c_int) function c_sleep(seconds) bind(C, name='sleep')
-            import :: c_int
-            integer(c_int), value :: seconds
-        end function c_sleep
-    end interface
 
 contains
 
@@ -352,10 +344,7 @@ contains
                                                      [3, mesh%n_tri]), err)
         call h5_write(h, '/walls/wall', [(mesh%wall(k), k = 1, mesh%n_tri)], err)
         call h5_write(h, '/walls/material', [(mesh%mat(k), k = 1, mesh%n_tri)], err)
-        if (checkpoint) then
-            call write_state(h)
-            call pause_for_tests()
-        end if
+        if (checkpoint) call write_state(h)
         call h5_close(h, err)
         call comm_barrier(comm)
         if (comm%rank == 0 .and. .not. err%failed()) call file_rename(part, path, err)
@@ -484,17 +473,6 @@ contains
                            merge(1.0_wp, 0.0_wp, c%mats%rigid(k))]
         end do
     end function material_properties
-
-    !> With DEM_CHECKPOINT_PAUSE=s in the environment, sleep s seconds in the middle of every
-    !> checkpoint write: the test of what a kill during the write leaves uses it.
-    subroutine pause_for_tests()
-        character(len=16) :: value
-        integer :: n, status, seconds
-        call get_environment_variable('DEM_CHECKPOINT_PAUSE', value, n, status)
-        if (status /= 0 .or. n == 0) return
-        read(value, *, iostat=status) seconds
-        if (status == 0 .and. seconds > 0) n = c_sleep(int(seconds, c_int))
-    end subroutine pause_for_tests
 
     !> Read checkpoint `path` and check that it belongs to case `c` (same materials, walls
     !> and their motion, initial particle count); the errors name the file and what differs,
