@@ -1,4 +1,4 @@
-!> frame_spread of dem_checkpoint on any number of ranks (run with 1, 2 and 3): N particles
+!> frame_spread of dem_frame on any number of ranks (run with 1, 2 and 3): N particles
 !> with ids 3k + 1 (gaps between them) are dealt to the ranks in a scrambled order, rank 1
 !> holding none, every field that frames hold (dem_particles' particles_fields) a function
 !> of the id; the pairs of the contact history are
@@ -7,10 +7,10 @@
 !> must hold exactly the ids at positions r N / P + 1 ... (r + 1) N / P of the sorted list,
 !> in order, with their own fields, and the pairs whose lower id it holds, once each, sorted
 !> by the two ids, with their own history.
-program test_checkpoint
+program test_frame
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_init, comm_free
-    use dem_checkpoint, only: frame_t, frame_spread
+    use dem_frame, only: frame_t, frame_spread
     use dem_contact_store, only: max_wall_contacts
     use dem_particles, only: particles_init
     use dem_assert, only: assert_true, assert_finish
@@ -129,4 +129,4 @@ contains
         call assert_true(all([(all(f%pair_xi(:, k) == history(f%pair(:, k))), &
                                k = 1, size(f%pair, 2))]), what // ': pair history')
     end subroutine check
-end program test_checkpoint
+end program test_frame
