@@ -17,14 +17,13 @@ module dem_checkpoint
     use dem_frame, only: frame_t, frame_particles, frame_spread_pairs
     use dem_case, only: case_t
     use dem_mesh, only: mesh_t, mesh_move
-    use dem_text, only: itoa, step_file
+    use dem_text, only: itoa
     use dem_files, only: file_rename
     use dem_h5, only: h5_file_t, h5_create, h5_open, h5_close, h5_group, h5_write, h5_read, &
                       h5_dims, h5_text_length, h5_exists
     implicit none
     private
-    public :: frame_write, checkpoint_read, snapshot_read_particles, checkpoint_file, &
-              checkpoint_latest, checkpoint_kept
+    public :: frame_write, checkpoint_read, checkpoint_kept, snapshot_read_particles
 
     character(len=*), parameter :: checkpoint_format = 'dem checkpoint 1'
     character(len=*), parameter :: snapshot_format = 'dem snapshot 1'
@@ -159,47 +158,6 @@ contains
             v = reshape(mesh%vert, [3, 3 * mesh%n_tri])
         end if
     end function corners
-
-    !> The checkpoint file of a step, relative to the output directory.
-    function checkpoint_file(step) result(name)
-        integer(i8), intent(in) :: step
-        character(len=:), allocatable :: name
-        name = step_file('checkpoints/checkpoint_', step)
-    end function checkpoint_file
-
-    !> The newest checkpoint of an output directory (named by checkpoints/latest); '' if
-    !> there is no latest. With err, a latest that names nothing (empty, unreadable) or a
-    !> file that is not there is an error: the folder was damaged, a fresh start would
-    !> silently redo the run.
-    function checkpoint_latest(dir, err) result(path)
-        character(len=*), intent(in) :: dir
-        type(error_t), intent(inout), optional :: err
-        character(len=:), allocatable :: path
-        character(len=512) :: name
-        character(len=*), parameter :: fix = ': dem --restart CHECKPOINT CASE continues ' // &
-            'from a checkpoint of that folder; removing the folder starts the run afresh'
-        integer :: u, ios
-        logical :: there
-        path = ''
-        inquire(file=dir // '/checkpoints/latest', exist=there)
-        if (.not. there) return
-        name = ''
-        open(newunit=u, file=dir // '/checkpoints/latest', status='old', action='read', &
-             iostat=ios)
-        if (ios == 0) then
-            read(u, '(a)', iostat=ios) name
-            close(u)
-        end if
-        if (ios /= 0 .or. len_trim(name) == 0) then
-            if (present(err)) call set_error(err, dem_err_input, dir // &
-                '/checkpoints/latest: empty or unreadable, so it names no checkpoint' // fix)
-            return
-        end if
-        path = dir // '/' // trim(name)
-        inquire(file=path, exist=there)
-        if (.not. there .and. present(err)) call set_error(err, dem_err_input, dir // &
-            '/checkpoints/latest: names ' // trim(name) // ', which is not there' // fix)
-    end function checkpoint_latest
 
     !> The steps of the checkpoints that were kept when checkpoint `path` was written (it
     !> last); none if the file cannot be read.

@@ -15,7 +15,7 @@ module dem_run_control
     use dem_diagnostics, only: energies, elastic_energy, first_nonfinite
     use dem_output, only: output_t
     use dem_frame, only: frame_t, frame_spread
-    use dem_checkpoint, only: checkpoint_file
+    use dem_folder, only: checkpoint_file
     use dem_signals, only: signal_received
     use dem_text, only: itoa, real_text, duration_text
     use dem_timers, only: wall_seconds, timer_seconds
