@@ -14,7 +14,7 @@ module dem_checkpoint
                              frame_force, frame_restart
     use dem_contact_store, only: max_wall_contacts, n_pair_history, n_wall_history, &
                                  n_wall_columns
-    use dem_frame, only: frame_t, frame_particles, frame_spread_pairs
+    use dem_frame, only: frame_t, frame_particles, frame_spread_pairs, frame_block
     use dem_case, only: case_t
     use dem_mesh, only: mesh_t, mesh_move
     use dem_text, only: itoa
@@ -291,7 +291,7 @@ contains
             call h5_close(h, err)
             return
         end if
-        call share(dims(1), first, n)               ! this rank's block of particles (by id)
+        call frame_block(comm, dims(1), first, n)   ! this rank's block of particles (by id)
         fr%n = int(n, ip)
         call frame_particles(fr%p, fr%n)
         allocate(fr%wall_tri(max_wall_contacts, n), fr%wall_xi(n_wall_history, n_wall_columns, n))
@@ -314,7 +314,7 @@ contains
         end if
         call h5_dims(h, '/state/pair', dims, err, 2)
         if (.not. err%failed()) then
-            call share(dims(2), first, n)           ! this rank's part of the pairs
+            call frame_block(comm, dims(2), first, n)   ! this rank's part of the pairs
             allocate(fr%pair(2, n), fr%pair_xi(n_pair_history, n))
             call h5_read(h, '/state/pair', fr%pair, err, first)
             call h5_read(h, '/state/pair_history', fr%pair_xi, err, first)
@@ -378,15 +378,6 @@ contains
             last = max(0_i8, maxval(lasts(1:comm%rank)))
         end function ids_before
 
-        !> Rank r's part of m rows: rows first + 1 ... first + count, first = r m / P (as
-        !> the blocks of frame_spread).
-        subroutine share(m, first, count)
-            integer(i8), intent(in) :: m
-            integer(i8), intent(out) :: first, count
-            first = comm%rank * m / comm%size
-            count = (comm%rank + 1) * m / comm%size - first
-        end subroutine share
-
         subroutine differs(what)
             character(len=*), intent(in) :: what
             if (err%failed()) return
@@ -446,10 +437,7 @@ contains
         n_rows = int(dims(1), ip)
         first = 0
         n = dims(1)
-        if (present(comm)) then
-            first = comm%rank * dims(1) / comm%size
-            n = (comm%rank + 1) * dims(1) / comm%size - first
-        end if
+        if (present(comm)) call frame_block(comm, dims(1), first, n)
         deallocate(gid, mat, radius, x, v, w)
         allocate(gid(n), mat(n), radius(n), x(3, n), v(3, n), w(3, n))
         if (present(comm)) then

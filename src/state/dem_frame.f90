@@ -13,7 +13,7 @@ module dem_frame
                                  store_unique_pairs
     implicit none
     private
-    public :: frame_t, frame_particles, frame_spread, frame_spread_pairs
+    public :: frame_t, frame_particles, frame_spread, frame_spread_pairs, frame_block
 
     !> The state of a run at one step, particles ordered by id.
     type :: frame_t
@@ -135,6 +135,16 @@ contains
             b = b(:, order)
         end function moved_int
     end subroutine frame_spread
+
+    !> This rank's block of m rows in id order (rank r: rows r m / P + 1 ... (r + 1) m / P,
+    !> the blocks of frame_spread): rows first + 1 ... first + count.
+    subroutine frame_block(comm, m, first, count)
+        type(comm_t), intent(in) :: comm
+        integer(i8), intent(in) :: m
+        integer(i8), intent(out) :: first, count
+        first = comm%rank * m / comm%size
+        count = (comm%rank + 1) * m / comm%size - first
+    end subroutine frame_block
 
     !> Room for n particles in a frame (particles 1..n, the fields zero).
     subroutine frame_particles(p, n)
