@@ -1,17 +1,19 @@
-!> An output folder belongs to one run (doc/user/running.md): a fresh run writes its case text to
-!> input.nml there first. A folder that holds the outputs of a run of another case (its
-!> input.nml differs, or it has outputs and no input.nml) is refused unless `overwrite`; a
-!> folder of the same case, or one overwritten, is cleared of the old run's outputs first,
-!> so that no later snapshot, checkpoint or row of the old run is left beside the new one.
+!> An output folder: the names of its checkpoints (checkpoints/checkpoint_<step>.h5, and
+!> checkpoints/latest, which names the newest), and that it belongs to one run
+!> (doc/user/running.md): a fresh run writes its case text to input.nml there first. A
+!> folder that holds the outputs of a run of another case (its input.nml differs, or it has
+!> outputs and no input.nml) is refused unless `overwrite`; a folder of the same case, or
+!> one overwritten, is cleared of the old run's outputs first, so that no later snapshot,
+!> checkpoint or row of the old run is left beside the new one.
 module dem_folder
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_io
     use dem_files, only: file_exists, file_remove, file_rename, make_directory
-    use dem_text, only: read_line
-    use dem_checkpoint, only: checkpoint_latest, checkpoint_kept, checkpoint_file
+    use dem_text, only: read_line, step_file
+    use dem_checkpoint, only: checkpoint_kept
     use dem_kinds, only: i8
     implicit none
     private
-    public :: folder_claim, folder_conflict
+    public :: folder_claim, folder_conflict, checkpoint_file, checkpoint_latest
 
     !> The name of the case text in the folder.
     character(len=*), parameter :: marker = 'input.nml'
@@ -20,6 +22,47 @@ module dem_folder
         'probes.csv', 'contact.csv', 'final.csv', 'final.csv.part', 'snapshots.xmf']
 
 contains
+
+    !> The checkpoint file of a step, relative to the output directory.
+    function checkpoint_file(step) result(name)
+        integer(i8), intent(in) :: step
+        character(len=:), allocatable :: name
+        name = step_file('checkpoints/checkpoint_', step)
+    end function checkpoint_file
+
+    !> The newest checkpoint of an output directory (named by checkpoints/latest); '' if
+    !> there is no latest. With err, a latest that names nothing (empty, unreadable) or a
+    !> file that is not there is an error: the folder was damaged, a fresh start would
+    !> silently redo the run.
+    function checkpoint_latest(dir, err) result(path)
+        character(len=*), intent(in) :: dir
+        type(error_t), intent(inout), optional :: err
+        character(len=:), allocatable :: path
+        character(len=512) :: name
+        character(len=*), parameter :: fix = ': dem --restart CHECKPOINT CASE continues ' // &
+            'from a checkpoint of that folder; removing the folder starts the run afresh'
+        integer :: u, ios
+        logical :: there
+        path = ''
+        inquire(file=dir // '/checkpoints/latest', exist=there)
+        if (.not. there) return
+        name = ''
+        open(newunit=u, file=dir // '/checkpoints/latest', status='old', action='read', &
+             iostat=ios)
+        if (ios == 0) then
+            read(u, '(a)', iostat=ios) name
+            close(u)
+        end if
+        if (ios /= 0 .or. len_trim(name) == 0) then
+            if (present(err)) call set_error(err, dem_err_input, dir // &
+                '/checkpoints/latest: empty or unreadable, so it names no checkpoint' // fix)
+            return
+        end if
+        path = dir // '/' // trim(name)
+        inquire(file=path, exist=there)
+        if (.not. there .and. present(err)) call set_error(err, dem_err_input, dir // &
+            '/checkpoints/latest: names ' // trim(name) // ', which is not there' // fix)
+    end function checkpoint_latest
 
     !> Claim folder `dir` for a fresh run of the case `source` whose text is `text` (rank 0).
     subroutine folder_claim(dir, source, text, overwrite, err)

@@ -12,7 +12,9 @@ module dem
                           solver_particles, solver_particle_steps, solver_parallel_stats, &
                           stop_end, stop_settled, stop_wall_time, stop_signal, stop_emptied, &
                           solver_time
-    use dem_checkpoint, only: frame_t, checkpoint_read, checkpoint_file, checkpoint_latest
+    use dem_frame, only: frame_t
+    use dem_checkpoint, only: checkpoint_read
+    use dem_folder, only: checkpoint_file, checkpoint_latest
     use dem_timers, only: n_phases, phase_names, timer_seconds, wall_seconds
     implicit none
     private

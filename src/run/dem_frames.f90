@@ -10,7 +10,9 @@ module dem_frames
     use dem_neighbors, only: neighbors_history, neighbors_set_history, neighbors_data
     use dem_contact_store, only: store_walls_restore, store_pairs_data
     use dem_mesh, only: mesh_t, mesh_move
-    use dem_checkpoint, only: frame_t, frame_spread, checkpoint_latest, checkpoint_kept
+    use dem_frame, only: frame_t, frame_spread
+    use dem_checkpoint, only: checkpoint_kept
+    use dem_folder, only: checkpoint_latest
     use dem_output, only: output_t, output_sizes
     use dem_acc, only: acc_data, acc_to_host
     implicit none

@@ -14,7 +14,8 @@ module dem_run_control
     use dem_domain, only: domain_update
     use dem_diagnostics, only: energies, elastic_energy, first_nonfinite
     use dem_output, only: output_t
-    use dem_checkpoint, only: frame_t, frame_spread, checkpoint_file
+    use dem_frame, only: frame_t, frame_spread
+    use dem_folder, only: checkpoint_file
     use dem_signals, only: signal_received
     use dem_text, only: itoa, real_text, duration_text
     use dem_timers, only: wall_seconds, timer_seconds

@@ -15,7 +15,9 @@ module dem_run_output
     use dem_output, only: output_t, output_series, output_contact, output_sizes, &
                           output_probes, output_histogram
     use dem_probes, only: probe_values, probe_histogram_counts, probe_histogram, probe_wall_load
-    use dem_checkpoint, only: frame_t, frame_write, checkpoint_file
+    use dem_frame, only: frame_t
+    use dem_checkpoint, only: frame_write
+    use dem_folder, only: checkpoint_file
     use dem_xdmf, only: xdmf_write, snapshot_file
     use dem_files, only: make_directory, file_remove, file_rename
     use dem_timers, only: wall_seconds

@@ -14,7 +14,7 @@ module dem_run_state
     use dem_contact_store, only: contact_store_t, store_pairs_drop, store_walls_data
     use dem_mesh, only: mesh_t
     use dem_output, only: output_t
-    use dem_checkpoint, only: frame_t
+    use dem_frame, only: frame_t
     use dem_timers, only: timers_t
     use dem_text, only: itoa
     use dem_acc, only: acc_data, acc_exit

@@ -14,7 +14,7 @@ module dem_solver
     use dem_diagnostics, only: deep_overlap_id, deep_wall_id
     use dem_output, only: output_open, output_final, output_close
     use dem_probes, only: probe_header, probe_wall_load
-    use dem_checkpoint, only: frame_t
+    use dem_frame, only: frame_t
     use dem_folder, only: folder_claim
     use dem_text, only: itoa
     use dem_acc, only: acc_enter, acc_exit, acc_select_device

@@ -25,7 +25,7 @@ module dem_particles
     integer, parameter :: n_ext = 13
 
     ! what the frames (snapshots, checkpoints, the final state, the instability guard's last
-    ! good state: dem_frames, dem_checkpoint) hold of a field (particles_fields)
+    ! good state: dem_frame, dem_frames, dem_checkpoint) hold of a field (particles_fields)
     integer, parameter :: frame_none = 0     !< not held: derived from the radius and the
                                              !< material (particles_derive), or the run's own
     integer, parameter :: frame_state = 1    !< held, and in every snapshot

@@ -170,7 +170,6 @@ def start(args, workdir, log, env=None):
     returns the Popen object."""
     os.makedirs(workdir, exist_ok=True)
     full_env = dict(os.environ)
-    full_env.pop("DEM_CHECKPOINT_PAUSE", None)
     if env:
         full_env.update(env)
     out = open(log + ".out", "w")

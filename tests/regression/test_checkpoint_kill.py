@@ -2,10 +2,11 @@
 
 The case (written here) has 200 soft spheres falling in a box onto a rising, spinning STL
 floor, so the state has particle and wall contacts with tangential history and walls in
-motion; it writes a checkpoint every 2500 steps. With DEM_CHECKPOINT_PAUSE set, the solver
-sleeps in the middle of every checkpoint write (the particle data written, the file not yet
-closed). We wait until the .part file of the second checkpoint appears and kill the process
-there, which no handler can catch. Then:
+motion; it writes a checkpoint every 2500 steps. The run has checkpoint_pause.c (built by
+CMake, its path the third argument) preloaded, which sleeps in the middle of every
+checkpoint write (the particle data written, the file not yet closed): dem itself has no
+such hook. We wait until the .part file of the second checkpoint appears and kill the
+process there, which no handler can catch. Then:
 1. the interrupted checkpoint is left as an incomplete <name>.part (on one rank an empty
    one: the file is built in memory and written out at its close), never under its final
    name, and a restart from it is refused; checkpoints/latest still names the first
@@ -18,7 +19,7 @@ there, which no handler can catch. Then:
    run's: a restart repeats the same floating-point operations, so the comparison is exact;
 3. at the end only the last checkpoint_keep (default 2) checkpoints remain, with no .part
    file left over.
-usage: test_checkpoint_kill.py DEM WORKDIR"""
+usage: test_checkpoint_kill.py DEM WORKDIR PAUSE_LIBRARY"""
 import os
 import re
 import shutil
@@ -33,6 +34,7 @@ from regression_util import check, finish, run_dem
 import checkpoint_util as cu
 
 dem, work = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
+pause_library = os.path.abspath(sys.argv[3])
 os.makedirs(work, exist_ok=True)
 
 DT, T_END, EVERY = 2.0e-5, 0.2, 2500      # checkpoints at steps 2500, 5000, 7500, 10000
@@ -69,7 +71,8 @@ def later_part():
 
 
 log = os.path.join(work, "kill")
-p = cu.start([dem, case], work, log, env={"DEM_CHECKPOINT_PAUSE": str(PAUSE)})
+p = cu.start([dem, case], work, log,
+             env={"LD_PRELOAD": pause_library, "DEM_CHECKPOINT_PAUSE": str(PAUSE)})
 found = cu.wait_for(lambda: later_part() is not None or p.poll() is not None, timeout=120)
 alive = p.poll() is None
 part = later_part()

@@ -1,4 +1,4 @@
-!> frame_spread of dem_checkpoint on any number of ranks (run with 1, 2 and 3): N particles
+!> frame_spread of dem_frame on any number of ranks (run with 1, 2 and 3): N particles
 !> with ids 3k + 1 (gaps between them) are dealt to the ranks in a scrambled order, rank 1
 !> holding none, every field that frames hold (dem_particles' particles_fields) a function
 !> of the id; the pairs of the contact history are
@@ -6,11 +6,11 @@
 !> in order, as dem_neighbors captures them). After the spread, rank r
 !> must hold exactly the ids at positions r N / P + 1 ... (r + 1) N / P of the sorted list,
 !> in order, with their own fields, and the pairs whose lower id it holds, once each, sorted
-!> by the two ids, with their own history.
-program test_checkpoint
+!> by the two ids, with their own history; frame_block names that block.
+program test_frame
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_init, comm_free
-    use dem_checkpoint, only: frame_t, frame_spread
+    use dem_frame, only: frame_t, frame_spread, frame_block
     use dem_contact_store, only: max_wall_contacts
     use dem_particles, only: particles_init
     use dem_assert, only: assert_true, assert_finish
@@ -19,6 +19,7 @@ program test_checkpoint
     type(comm_t) :: comm
     type(frame_t) :: fr
     integer(i8) :: pairs(2, n_pairs)
+    integer(i8) :: first, rows
     integer :: k, m
 
     call comm_init(comm)
@@ -34,6 +35,9 @@ program test_checkpoint
     call dealt(fr)
     call frame_spread(fr, comm)
     call check(fr, comm%rank * n / comm%size, (comm%rank + 1) * n / comm%size, 'blocks')
+    call frame_block(comm, int(n, i8), first, rows)
+    call assert_true(first == comm%rank * n / comm%size .and. rows == fr%n, &
+                     'frame_block: the block of the spread')
     call comm_free(comm)
     call assert_finish()
 contains
@@ -129,4 +133,4 @@ contains
         call assert_true(all([(all(f%pair_xi(:, k) == history(f%pair(:, k))), &
                                k = 1, size(f%pair, 2))]), what // ': pair history')
     end subroutine check
-end program test_checkpoint
+end program test_frame
