@@ -1,13 +1,18 @@
 !> Reads a case from a namelist file and validates it. Every error names the file, the line
 !> of the group, the group and the key. The keys, their defaults, units and ranges are
-!> documented here, where they are declared, and in doc/user/input.md. What needs the
+!> documented here, where they are declared (each group's `namelist` statement, the one
+!> list of its keys: dem_input_group reads it), and in doc/user/input.md. What needs the
 !> particles of every rank (placing the &insert groups, the defaults and checks drawn from
 !> the particles, the ids the case names) is dem_setup's, after the reading.
 module dem_input
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
-    use dem_namelist_scan, only: nml_file_t, nml_block_t, nml_scan, nml_items, nml_location
+    use dem_namelist_scan, only: nml_file_t, nml_scan, nml_location
+    use dem_input_group, only: group_io_t, group_reading, group_count, group_at_most_once
+    use dem_input_values, only: unset, name_len, check_positive, check_nonnegative, in_range, &
+                                check_vector, check_direction, find_material, material_index, &
+                                relative_to
     use dem_case, only: case_t, insert_t, id_check_t, case_append_particles
     use dem_comm, only: comm_t
     use dem_materials, only: contact_options_t, rolling_cdt, rolling_epsd2
@@ -28,40 +33,12 @@ module dem_input
     private
     public :: read_case_file
 
-    real(wp), parameter :: unset = huge(1.0_wp)
-    integer, parameter :: name_len = 32
     integer, parameter :: max_table = 1000   !< points of a wall's velocity table
 
-    !> The groups a case file may hold, and the keys of each (doc/user/input.md).
-    character(len=*), parameter :: input_groups(13) = [character(len=400) :: &
-        'run: dt t_end integrator gravity expected_speed skin allow_unstable ' // &
-        'stop_kinetic_energy max_speed max_energy wall_time_limit progress_interval ' // &
-        'imbalance_limit gpu_aware_mpi', &
-        'output: dir interval trace_id snapshot_interval snapshot_force snapshot_contacts ' // &
-        'checkpoint_interval checkpoint_keep overwrite', &
-        'contact_model: variant tangential_stiffness_factor tangential_damping clamp_normal ' // &
-        'tangential_history lever_velocity lever_torque reset_pair_history', &
-        'material: name density youngs_modulus poisson_ratio rigid', &
-        'pair: materials restitution friction rolling_friction rolling_model ' // &
-        'cohesion_energy_density', &
-        'particle: id material radius position velocity angular_velocity', &
-        'particle_file: file', &
-        'insert: n material radius_distribution radius_min radius_max radius_mean radius_sd ' // &
-        'radii fractions fraction_by region box_min box_max face_center face_normal ' // &
-        'face_axis face_width cylinder_base cylinder_radius cylinder_height mesh_file ' // &
-        'mesh_scale velocity velocity_spread seed start end duration rate mass_rate ' // &
-        'insert_every', &
-        'outlet: region point normal box_min box_max', &
-        'probe: name kind region box_min box_max id time bins v_min v_max axis_point wall ' // &
-        'axis', &
-        'wall_plane: material point normal half_width divisions name', &
-        'periodic: axis low high', &
-        'wall_mesh: file scale material velocity velocity_start velocity_end rotation_axis ' // &
-        'rotation_point angular_velocity rotation_start rotation_end oscillation_amplitude ' // &
-        'oscillation_frequency oscillation_phase oscillation_start oscillation_end ' // &
-        'velocity_table_time velocity_table angular_velocity_table_time ' // &
-        'angular_velocity_table name']
-
+    !> The groups a case file may hold, in the order an unknown group's message lists them.
+    character(len=*), parameter :: input_groups(13) = [character(len=13) :: &
+        'run', 'output', 'contact_model', 'material', 'pair', 'particle', 'particle_file', &
+        'insert', 'outlet', 'probe', 'wall_plane', 'periodic', 'wall_mesh']
 
 contains
 
@@ -77,25 +54,20 @@ contains
         type(error_t), intent(inout) :: err
         type(comm_t), intent(in) :: comm
         type(nml_file_t) :: nf
-        integer :: k, g, share(2)
-        logical :: known
+        integer :: k, share(2)
 
         c%source = path
         call nml_scan(path, nf, err)
         if (err%failed()) return
         c%input_text = nf%text
         do k = 1, size(nf%blocks)
-            known = .false.
-            do g = 1, size(input_groups)
-                known = known .or. nf%blocks(k)%group == group_of(input_groups(g))
-            end do
-            if (.not. known) then
+            if (.not. any(input_groups == nf%blocks(k)%group)) then
                 call fail(nml_location(nf, nf%blocks(k)) // ': unknown namelist group ' // &
                           '(accepted: ' // accepted_groups() // ')')
                 return
             end if
         end do
-        if (count_blocks(nf, 'run') /= 1) then
+        if (group_count(nf, 'run') /= 1) then
             call fail(path // ': exactly one &run group is required (dt and t_end)')
             return
         end if
@@ -106,7 +78,7 @@ contains
         call read_contact_model(nf, c, err)
         if (err%failed()) return
         share = [comm%rank, comm%size]
-        if (count_blocks(nf, 'insert') > 0) share = [0, 1]
+        if (group_count(nf, 'insert') > 0) share = [0, 1]
         call read_particles(nf, share, c, err)
         if (err%failed()) return
         call read_particle_files(nf, share, comm, c, err)
@@ -174,10 +146,7 @@ contains
         namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable, &
             stop_kinetic_energy, max_speed, max_energy, wall_time_limit, progress_interval, &
             imbalance_limit, gpu_aware_mpi
-        type(nml_block_t) :: b
-        integer :: k_item, ios
-        character(len=512) :: msg
-        character(len=:), allocatable :: text
+        type(group_io_t) :: io
         character(len=:), allocatable :: at
 
         dt = unset
@@ -195,14 +164,11 @@ contains
         progress_interval = 10.0_wp
         imbalance_limit = 1.1_wp
         gpu_aware_mpi = .false.
-        b = nf%blocks(block_index(nf, 'run', 1))
-        do k_item = 0, block_item_count(b)
-            text = block_text(b, k_item)
-            read(text, nml=run, iostat=ios, iomsg=msg)
-            if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+        do while (group_reading(nf, 'run', 1, io, at, err))
+            if (io%unit == 0) read(io%text, nml=run, iostat=io%ios, iomsg=io%msg)
+            if (io%unit /= 0) write(io%unit, nml=run, iostat=io%ios, iomsg=io%msg)
         end do
         if (err%failed()) return
-        at = nml_location(nf, b)
         if (.not. check_positive(at, dt, 'dt', '[s]', err)) return
         if (.not. check_positive(at, t_end, 't_end', '[s]', err)) return
         select case (integrator)
@@ -270,10 +236,7 @@ contains
         logical :: overwrite             ! a fresh run replaces another run's outputs, default F
         namelist /output/ dir, interval, trace_id, snapshot_interval, snapshot_force, &
             snapshot_contacts, checkpoint_interval, checkpoint_keep, overwrite
-        type(nml_block_t) :: b
-        integer :: k_item, ios
-        character(len=512) :: msg
-        character(len=:), allocatable :: text
+        type(group_io_t) :: io
         character(len=:), allocatable :: at
 
         dir = 'output/' // file_stem(nf%path)
@@ -285,17 +248,13 @@ contains
         checkpoint_interval = 0.0_wp
         checkpoint_keep = 2
         overwrite = .false.
-        select case (count_blocks(nf, 'output'))
-        case (0)
-        case (1)
-            b = nf%blocks(block_index(nf, 'output', 1))
-            do k_item = 0, block_item_count(b)
-                text = block_text(b, k_item)
-                read(text, nml=output, iostat=ios, iomsg=msg)
-                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+        if (.not. group_at_most_once(nf, 'output', err)) return
+        if (group_count(nf, 'output') == 1) then
+            do while (group_reading(nf, 'output', 1, io, at, err))
+                if (io%unit == 0) read(io%text, nml=output, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=output, iostat=io%ios, iomsg=io%msg)
             end do
             if (err%failed()) return
-            at = nml_location(nf, b)
             if (.not. check_positive(at, interval, 'interval', '[s]', err)) return
             if (len_trim(dir) == 0) then
                 call set_error(err, dem_err_input, at // ": key 'dir': must not be empty")
@@ -316,10 +275,7 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'checkpoint_keep': must be >= 1")
                 return
             end if
-        case default
-            call set_error(err, dem_err_input, nf%path // ': more than one &output group')
-            return
-        end select
+        end if
         c%output_dir = trim(dir)
         c%output_interval = interval
         c%trace_id = trace_id
@@ -331,127 +287,6 @@ contains
         c%output_overwrite = overwrite
     end subroutine read_output
 
-    !> &contact_model: variants of Hertz-Mindlin that imitate other codes (doc/theory.md,
-    !> section 3). A named `variant` sets every other key (and the integrator &run takes if it
-    !> names none); keys given beside it override it.
-    subroutine read_contact_model(nf, c, err)
-        type(nml_file_t), intent(in) :: nf
-        type(case_t), intent(inout) :: c
-        type(error_t), intent(inout) :: err
-        character(len=name_len) :: variant  ! 'dem' (default) | 'liggghts' | 'mercurydpm' | 'yade'
-        real(wp) :: tangential_stiffness_factor  ! k_t = factor 8 G* sqrt(R* d), > 0, default 1
-                                                  ! (MercuryDPM: 2/3)
-        logical :: tangential_damping  ! damp the tangential spring, default T (MercuryDPM: F)
-        logical :: clamp_normal        ! no attractive normal force, default F (Yade: T)
-        character(len=name_len) :: tangential_history  ! 'keep_length' (default): turned into
-                                       ! the tangent plane keeping its length, then advanced;
-                                       ! 'project': advanced, then projected (LIGGGHTS)
-        character(len=name_len) :: lever_velocity  ! the rotation's lever in the relative
-                                       ! velocity: 'radius' (default) | 'mid_overlap' (R - d/2)
-        character(len=name_len) :: lever_torque    ! and in the torque: the same choices
-        logical :: reset_pair_history  ! a pair's tangential history is cleared when its
-                                       ! contact ends, default T; F: kept while the pair is in
-                                       ! the neighbour list, and continued by its next contact
-                                       ! (LIGGGHTS 3.8.0)
-        namelist /contact_model/ variant, tangential_stiffness_factor, tangential_damping, &
-            clamp_normal, tangential_history, lever_velocity, lever_torque, reset_pair_history
-        type(nml_block_t) :: b
-        integer :: k_item, ios
-        character(len=512) :: msg
-        character(len=:), allocatable :: text, at
-        integer, allocatable :: starts(:)
-        character(len=32), allocatable :: keys(:)
-        type(contact_options_t) :: o
-
-        if (count_blocks(nf, 'contact_model') == 0) return
-        if (count_blocks(nf, 'contact_model') > 1) then
-            call set_error(err, dem_err_input, nf%path // ': more than one &contact_model group')
-            return
-        end if
-        b = nf%blocks(block_index(nf, 'contact_model', 1))
-        at = nml_location(nf, b)
-        variant = 'dem'             ! (the other keys are used only where given)
-        do k_item = 0, block_item_count(b)
-            text = block_text(b, k_item)
-            read(text, nml=contact_model, iostat=ios, iomsg=msg)
-            if (block_read_done(nf, b, k_item, ios, msg, err)) exit
-        end do
-        if (err%failed()) return
-        ! what the variant sets, then the keys given beside it
-        select case (variant)
-        case ('dem')
-        case ('liggghts')                 ! LIGGGHTS 3.8, gran model hertz tangential history
-            o%keep_length = .false.
-            o%shift_v = 0.5_wp
-            o%shift_t = 0.5_wp
-            o%reset_pair_history = .false.
-            c%integrator = integrator_verlet
-        case ('mercurydpm')               ! MercuryDPM r5523, the benchmark's drivers
-            o%tangential_stiffness_factor = 2.0_wp / 3.0_wp
-            o%tangential_damping = .false.
-            o%keep_length = .false.
-            o%shift_v = 0.5_wp
-            o%shift_t = 0.5_wp
-            c%integrator = integrator_verlet
-        case ('yade')                     ! Yade 2023, Law2_ScGeom_MindlinPhys_Mindlin
-            o%clamp_normal = .true.
-            o%shift_t = 0.5_wp
-        case default
-            call set_error(err, dem_err_input, at // ": key 'variant': '" // trim(variant) // &
-                "' is not known (accepted: dem, liggghts, mercurydpm, yade)")
-            return
-        end select
-        o%variant = variant(1:len(o%variant))   ! (one of the names above)
-        call nml_items(b%text, starts, keys)
-        if (given('tangential_stiffness_factor')) then
-            if (.not. check_positive(at, tangential_stiffness_factor, &
-                                     'tangential_stiffness_factor', '[-]', err)) return
-            o%tangential_stiffness_factor = tangential_stiffness_factor
-        end if
-        if (given('tangential_damping')) o%tangential_damping = tangential_damping
-        if (given('clamp_normal')) o%clamp_normal = clamp_normal
-        if (given('tangential_history')) then
-            select case (tangential_history)
-            case ('keep_length', 'project')
-                o%keep_length = tangential_history == 'keep_length'
-            case default
-                call set_error(err, dem_err_input, at // ": key 'tangential_history': '" // &
-                    trim(tangential_history) // "' is not known (accepted: keep_length, project)")
-                return
-            end select
-        end if
-        if (given('lever_velocity')) then
-            if (.not. lever_shift(lever_velocity, 'lever_velocity', o%shift_v)) return
-        end if
-        if (given('lever_torque')) then
-            if (.not. lever_shift(lever_torque, 'lever_torque', o%shift_t)) return
-        end if
-        if (given('reset_pair_history')) o%reset_pair_history = reset_pair_history
-        c%opts = o
-    contains
-        logical function given(key)
-            character(len=*), intent(in) :: key
-            given = any(keys == key)
-        end function given
-
-        !> The shift of a lever R - shift d named by the key `key`.
-        logical function lever_shift(value, key, shift) result(ok)
-            character(len=*), intent(in) :: value, key
-            real(wp), intent(out) :: shift
-            ok = .true.
-            select case (value)
-            case ('radius')
-                shift = 0.0_wp
-            case ('mid_overlap')
-                shift = 0.5_wp
-            case default
-                ok = .false.
-                shift = 0.0_wp
-                call set_error(err, dem_err_input, at // ": key '" // key // "': '" // &
-                    trim(value) // "' is not known (accepted: radius, mid_overlap)")
-            end select
-        end function lever_shift
-    end subroutine read_contact_model
 
     !> &material (one per material).
     subroutine read_materials(nf, c, err)
@@ -464,14 +299,11 @@ contains
         real(wp) :: poisson_ratio   ! [-], in (-1, 0.5), required unless rigid
         logical :: rigid            ! infinitely stiff wall material, default F
         namelist /material/ name, density, youngs_modulus, poisson_ratio, rigid
-        type(nml_block_t) :: b
-        integer :: k_item, ios
-        character(len=512) :: msg
-        character(len=:), allocatable :: text
+        type(group_io_t) :: io
         character(len=:), allocatable :: at
         integer :: k, n
 
-        n = count_blocks(nf, 'material')
+        n = group_count(nf, 'material')
         if (n == 0) then
             call set_error(err, dem_err_input, nf%path // ': no &material group')
             return
@@ -493,14 +325,11 @@ contains
                 youngs_modulus = unset
                 poisson_ratio = unset
                 rigid = .false.
-                b = nf%blocks(block_index(nf, 'material', k))
-                do k_item = 0, block_item_count(b)
-                    text = block_text(b, k_item)
-                    read(text, nml=material, iostat=ios, iomsg=msg)
-                    if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+                do while (group_reading(nf, 'material', k, io, at, err))
+                    if (io%unit == 0) read(io%text, nml=material, iostat=io%ios, iomsg=io%msg)
+                    if (io%unit /= 0) write(io%unit, nml=material, iostat=io%ios, iomsg=io%msg)
                 end do
                 if (err%failed()) return
-                at = nml_location(nf, b)
                 if (len_trim(name) == 0) then
                     call set_error(err, dem_err_input, at // ": key 'name' is required")
                     return
@@ -550,28 +379,22 @@ contains
         real(wp) :: cohesion_energy_density  ! sJKR cohesion k, >= 0 [J/m^3] (default 0)
         namelist /pair/ materials, restitution, friction, rolling_friction, rolling_model, &
                         cohesion_energy_density
-        type(nml_block_t) :: b
-        integer :: k_item, ios
-        character(len=512) :: msg
-        character(len=:), allocatable :: text
+        type(group_io_t) :: io
         character(len=:), allocatable :: at
         integer :: k, ia, ib
 
-        do k = 1, count_blocks(nf, 'pair')
+        do k = 1, group_count(nf, 'pair')
             materials = ''
             restitution = unset
             friction = unset
             rolling_friction = 0.0_wp
             rolling_model = 'cdt'
             cohesion_energy_density = 0.0_wp
-            b = nf%blocks(block_index(nf, 'pair', k))
-            do k_item = 0, block_item_count(b)
-                text = block_text(b, k_item)
-                read(text, nml=pair, iostat=ios, iomsg=msg)
-                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            do while (group_reading(nf, 'pair', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=pair, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=pair, iostat=io%ios, iomsg=io%msg)
             end do
             if (err%failed()) return
-            at = nml_location(nf, b)
             ia = material_index(c, materials(1))
             ib = material_index(c, materials(2))
             if (ia == 0 .or. ib == 0) then
@@ -623,6 +446,124 @@ contains
         end do
     end subroutine read_pairs
 
+    !> &contact_model: variants of Hertz-Mindlin that imitate other codes (doc/theory.md,
+    !> section 3). A named `variant` sets every other key (and the integrator &run takes if it
+    !> names none); keys given beside it override it.
+    subroutine read_contact_model(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=name_len) :: variant  ! 'dem' (default) | 'liggghts' | 'mercurydpm' | 'yade'
+        real(wp) :: tangential_stiffness_factor  ! k_t = factor 8 G* sqrt(R* d), > 0, default 1
+                                                  ! (MercuryDPM: 2/3)
+        logical :: tangential_damping  ! damp the tangential spring, default T (MercuryDPM: F)
+        logical :: clamp_normal        ! no attractive normal force, default F (Yade: T)
+        character(len=name_len) :: tangential_history  ! 'keep_length' (default): turned into
+                                       ! the tangent plane keeping its length, then advanced;
+                                       ! 'project': advanced, then projected (LIGGGHTS)
+        character(len=name_len) :: lever_velocity  ! the rotation's lever in the relative
+                                       ! velocity: 'radius' (default) | 'mid_overlap' (R - d/2)
+        character(len=name_len) :: lever_torque    ! and in the torque: the same choices
+        logical :: reset_pair_history  ! a pair's tangential history is cleared when its
+                                       ! contact ends, default T; F: kept while the pair is in
+                                       ! the neighbour list, and continued by its next contact
+                                       ! (LIGGGHTS 3.8.0)
+        namelist /contact_model/ variant, tangential_stiffness_factor, tangential_damping, &
+            clamp_normal, tangential_history, lever_velocity, lever_torque, reset_pair_history
+        type(group_io_t) :: io
+        character(len=:), allocatable :: at
+        type(contact_options_t) :: o
+
+        if (.not. group_at_most_once(nf, 'contact_model', err)) return
+        if (group_count(nf, 'contact_model') == 0) return
+        variant = 'dem'             ! (the others, dem's, are used only where given)
+        tangential_stiffness_factor = 1.0_wp
+        tangential_damping = .true.
+        clamp_normal = .false.
+        tangential_history = 'keep_length'
+        lever_velocity = 'radius'
+        lever_torque = 'radius'
+        reset_pair_history = .true.
+        do while (group_reading(nf, 'contact_model', 1, io, at, err))
+            if (io%unit == 0) read(io%text, nml=contact_model, iostat=io%ios, iomsg=io%msg)
+            if (io%unit /= 0) write(io%unit, nml=contact_model, iostat=io%ios, iomsg=io%msg)
+        end do
+        if (err%failed()) return
+        ! what the variant sets, then the keys given beside it
+        select case (variant)
+        case ('dem')
+        case ('liggghts')                 ! LIGGGHTS 3.8, gran model hertz tangential history
+            o%keep_length = .false.
+            o%shift_v = 0.5_wp
+            o%shift_t = 0.5_wp
+            o%reset_pair_history = .false.
+            c%integrator = integrator_verlet
+        case ('mercurydpm')               ! MercuryDPM r5523, the benchmark's drivers
+            o%tangential_stiffness_factor = 2.0_wp / 3.0_wp
+            o%tangential_damping = .false.
+            o%keep_length = .false.
+            o%shift_v = 0.5_wp
+            o%shift_t = 0.5_wp
+            c%integrator = integrator_verlet
+        case ('yade')                     ! Yade 2023, Law2_ScGeom_MindlinPhys_Mindlin
+            o%clamp_normal = .true.
+            o%shift_t = 0.5_wp
+        case default
+            call set_error(err, dem_err_input, at // ": key 'variant': '" // trim(variant) // &
+                "' is not known (accepted: dem, liggghts, mercurydpm, yade)")
+            return
+        end select
+        o%variant = variant(1:len(o%variant))   ! (one of the names above)
+        if (given('tangential_stiffness_factor')) then
+            if (.not. check_positive(at, tangential_stiffness_factor, &
+                                     'tangential_stiffness_factor', '[-]', err)) return
+            o%tangential_stiffness_factor = tangential_stiffness_factor
+        end if
+        if (given('tangential_damping')) o%tangential_damping = tangential_damping
+        if (given('clamp_normal')) o%clamp_normal = clamp_normal
+        if (given('tangential_history')) then
+            select case (tangential_history)
+            case ('keep_length', 'project')
+                o%keep_length = tangential_history == 'keep_length'
+            case default
+                call set_error(err, dem_err_input, at // ": key 'tangential_history': '" // &
+                    trim(tangential_history) // "' is not known (accepted: keep_length, project)")
+                return
+            end select
+        end if
+        if (given('lever_velocity')) then
+            if (.not. lever_shift(lever_velocity, 'lever_velocity', o%shift_v)) return
+        end if
+        if (given('lever_torque')) then
+            if (.not. lever_shift(lever_torque, 'lever_torque', o%shift_t)) return
+        end if
+        if (given('reset_pair_history')) o%reset_pair_history = reset_pair_history
+        c%opts = o
+    contains
+        logical function given(key)
+            character(len=*), intent(in) :: key
+            given = any(io%keys == key)
+        end function given
+
+        !> The shift of a lever R - shift d named by the key `key`.
+        logical function lever_shift(value, key, shift) result(ok)
+            character(len=*), intent(in) :: value, key
+            real(wp), intent(out) :: shift
+            ok = .true.
+            select case (value)
+            case ('radius')
+                shift = 0.0_wp
+            case ('mid_overlap')
+                shift = 0.5_wp
+            case default
+                ok = .false.
+                shift = 0.0_wp
+                call set_error(err, dem_err_input, at // ": key '" // key // "': '" // &
+                    trim(value) // "' is not known (accepted: radius, mid_overlap)")
+            end select
+        end function lever_shift
+    end subroutine read_contact_model
+
     !> &particle (one per sphere): all checked, those of the share (rank, ranks) kept.
     subroutine read_particles(nf, share, c, err)
         type(nml_file_t), intent(in) :: nf
@@ -636,14 +577,11 @@ contains
         real(wp) :: velocity(3)            ! [m/s], default 0
         real(wp) :: angular_velocity(3)    ! [rad/s], default 0
         namelist /particle/ id, material, radius, position, velocity, angular_velocity
-        type(nml_block_t) :: b
-        integer :: k_item, ios
-        character(len=512) :: msg
-        character(len=:), allocatable :: text
+        type(group_io_t) :: io
         character(len=:), allocatable :: at
         integer :: k, n, im, i
 
-        n = count_blocks(nf, 'particle')
+        n = group_count(nf, 'particle')
         c%n_particles = n
         c%n_held = count([(mod(k - 1, share(2)) == share(1), k = 1, n)])
         allocate(c%gid(c%n_held), c%mat(c%n_held), c%radius(c%n_held), c%x(3, c%n_held), &
@@ -655,14 +593,11 @@ contains
             position = unset
             velocity = 0.0_wp
             angular_velocity = 0.0_wp
-            b = nf%blocks(block_index(nf, 'particle', k))
-            do k_item = 0, block_item_count(b)
-                text = block_text(b, k_item)
-                read(text, nml=particle, iostat=ios, iomsg=msg)
-                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            do while (group_reading(nf, 'particle', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=particle, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=particle, iostat=io%ios, iomsg=io%msg)
             end do
             if (err%failed()) return
-            at = nml_location(nf, b)
             im = find_material(c, material, at, err, particles=.true.)
             if (im == 0) return
             if (.not. check_positive(at, radius, 'radius', '[m]', err)) return
@@ -694,25 +629,21 @@ contains
         type(error_t), intent(inout) :: err
         character(len=512) :: file  ! CSV or HDF5 particle file, relative to the case file, required
         namelist /particle_file/ file
-        type(nml_block_t) :: b
-        integer :: k_item, ios, k
+        type(group_io_t) :: io
+        integer :: k
         integer(ip) :: n_rows
-        character(len=512) :: msg
-        character(len=:), allocatable :: text, at
+        character(len=:), allocatable :: at
         integer(i8), allocatable :: gid(:)
         integer(ip), allocatable :: mat(:)
         real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :)
 
-        do k = 1, count_blocks(nf, 'particle_file')
+        do k = 1, group_count(nf, 'particle_file')
             file = ''
-            b = nf%blocks(block_index(nf, 'particle_file', k))
-            do k_item = 0, block_item_count(b)
-                text = block_text(b, k_item)
-                read(text, nml=particle_file, iostat=ios, iomsg=msg)
-                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            do while (group_reading(nf, 'particle_file', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=particle_file, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=particle_file, iostat=io%ios, iomsg=io%msg)
             end do
             if (err%failed()) return
-            at = nml_location(nf, b)
             if (len_trim(file) == 0) then
                 call set_error(err, dem_err_input, at // ": key 'file' is required")
                 return
@@ -776,15 +707,14 @@ contains
             cylinder_height, mesh_file, mesh_scale, velocity, velocity_spread, seed, start, end, &
             duration, rate, mass_rate, insert_every
         type(insert_t) :: g
-        type(nml_block_t) :: b
-        integer :: k_item, ios, k, im
-        character(len=512) :: msg
-        character(len=:), allocatable :: text, at
+        type(group_io_t) :: io
+        integer :: k, im
+        character(len=:), allocatable :: at
         type(region_t) :: reg
         type(size_dist_t) :: dist
 
         allocate(c%inserts(0))
-        do k = 1, count_blocks(nf, 'insert')
+        do k = 1, group_count(nf, 'insert')
             n = 0
             material = ''
             radius_distribution = 'uniform'
@@ -816,14 +746,11 @@ contains
             end = unset
             duration = unset
             insert_every = 0
-            b = nf%blocks(block_index(nf, 'insert', k))
-            do k_item = 0, block_item_count(b)
-                text = block_text(b, k_item)
-                read(text, nml=insert, iostat=ios, iomsg=msg)
-                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            do while (group_reading(nf, 'insert', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=insert, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=insert, iostat=io%ios, iomsg=io%msg)
             end do
             if (err%failed()) return
-            at = nml_location(nf, b)
             g = insert_t()
             if (.not. inflow_of(g)) return
             if (n < 1 .and. .not. (g%inflow .and. n == 0)) then
@@ -1145,26 +1072,22 @@ contains
         real(wp) :: normal(3)              ! plane: points to the side where particles leave
         real(wp) :: box_min(3), box_max(3) ! box: corners of the box particles stay in [m]
         namelist /outlet/ region, point, normal, box_min, box_max
-        type(nml_block_t) :: b
-        integer :: k_item, ios, k
-        character(len=512) :: msg
-        character(len=:), allocatable :: text, at
+        type(group_io_t) :: io
+        integer :: k
+        character(len=:), allocatable :: at
 
-        allocate(c%outlets(count_blocks(nf, 'outlet')))
+        allocate(c%outlets(group_count(nf, 'outlet')))
         do k = 1, size(c%outlets)
             region = ''
             point = unset
             normal = unset
             box_min = unset
             box_max = unset
-            b = nf%blocks(block_index(nf, 'outlet', k))
-            do k_item = 0, block_item_count(b)
-                text = block_text(b, k_item)
-                read(text, nml=outlet, iostat=ios, iomsg=msg)
-                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            do while (group_reading(nf, 'outlet', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=outlet, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=outlet, iostat=io%ios, iomsg=io%msg)
             end do
             if (err%failed()) return
-            at = nml_location(nf, b)
             select case (region)
             case ('plane')
                 if (.not. check_vector(at, point, 'point', .true., err)) return
@@ -1210,13 +1133,12 @@ contains
                                            ! non-zero, default 0, 0, 1
         namelist /probe/ name, kind, region, box_min, box_max, id, time, bins, v_min, v_max, &
             axis_point, wall, axis
-        type(nml_block_t) :: b
-        integer :: k_item, ios, k
-        character(len=512) :: msg
-        character(len=:), allocatable :: text, at
+        type(group_io_t) :: io
+        integer :: k
+        character(len=:), allocatable :: at
         type(probe_t) :: p
 
-        allocate(c%probes(count_blocks(nf, 'probe')))
+        allocate(c%probes(group_count(nf, 'probe')))
         do k = 1, size(c%probes)
             name = ''
             kind = ''
@@ -1231,14 +1153,11 @@ contains
             axis_point = 0.0_wp
             wall = ''
             axis = [0.0_wp, 0.0_wp, 1.0_wp]
-            b = nf%blocks(block_index(nf, 'probe', k))
-            do k_item = 0, block_item_count(b)
-                text = block_text(b, k_item)
-                read(text, nml=probe, iostat=ios, iomsg=msg)
-                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            do while (group_reading(nf, 'probe', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=probe, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=probe, iostat=io%ios, iomsg=io%msg)
             end do
             if (err%failed()) return
-            at = nml_location(nf, b)
             p = probe_t()
             if (len_trim(name) == 0 .or. verify(trim(name), 'abcdefghijklmnopqrstuvwxyz' // &
                 'ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_') /= 0) then
@@ -1341,28 +1260,22 @@ contains
         integer :: divisions       ! squares along a side (2 triangles each), >= 1, default 1
         character(len=name_len) :: name  ! the wall's name (for probes), unique, default none
         namelist /wall_plane/ material, point, normal, half_width, divisions, name
-        type(nml_block_t) :: b
-        integer :: k_item, ios
-        character(len=512) :: msg
-        character(len=:), allocatable :: text
+        type(group_io_t) :: io
         character(len=:), allocatable :: at
         integer :: k, im
 
-        do k = 1, count_blocks(nf, 'wall_plane')
+        do k = 1, group_count(nf, 'wall_plane')
             material = ''
             point = unset
             normal = unset
             half_width = unset
             divisions = 1
             name = ''
-            b = nf%blocks(block_index(nf, 'wall_plane', k))
-            do k_item = 0, block_item_count(b)
-                text = block_text(b, k_item)
-                read(text, nml=wall_plane, iostat=ios, iomsg=msg)
-                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            do while (group_reading(nf, 'wall_plane', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=wall_plane, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=wall_plane, iostat=io%ios, iomsg=io%msg)
             end do
             if (err%failed()) return
-            at = nml_location(nf, b)
             im = find_material(c, material, at, err)
             if (im == 0) return
             if (.not. check_vector(at, point, 'point', .true., err)) return
@@ -1378,61 +1291,6 @@ contains
             c%mesh%name(c%mesh%n_wall) = name
         end do
     end subroutine read_walls
-
-    !> &periodic (one per periodic axis): space repeats along the axis between low and high
-    !> (dem_periodic; that the period holds the particles' reach is dem_setup's check).
-    subroutine read_periodic(nf, c, err)
-        type(nml_file_t), intent(in) :: nf
-        type(case_t), intent(inout) :: c
-        type(error_t), intent(inout) :: err
-        character(len=name_len) :: axis  ! 'x', 'y' or 'z', required, each axis once
-        real(wp) :: low, high            ! the faces [m], high > low, required
-        namelist /periodic/ axis, low, high
-        type(nml_block_t) :: b
-        integer :: k_item, ios, k, a
-        character(len=512) :: msg
-        character(len=:), allocatable :: text, at
-        logical :: on(3)
-        real(wp) :: lo(3), hi(3)
-        on = .false.
-        lo = 0.0_wp
-        hi = 0.0_wp
-        do k = 1, count_blocks(nf, 'periodic')
-            axis = ''
-            low = unset
-            high = unset
-            b = nf%blocks(block_index(nf, 'periodic', k))
-            do k_item = 0, block_item_count(b)
-                text = block_text(b, k_item)
-                read(text, nml=periodic, iostat=ios, iomsg=msg)
-                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
-            end do
-            if (err%failed()) return
-            at = nml_location(nf, b)
-            a = index('xyz', trim(axis))
-            if (len_trim(axis) /= 1 .or. a == 0) then
-                call set_error(err, dem_err_input, at // ": key 'axis': '" // trim(axis) // &
-                               "' is not known (accepted: x, y, z)")
-                return
-            end if
-            if (on(a)) then
-                call set_error(err, dem_err_input, at // ": key 'axis': axis " // trim(axis) // &
-                               ' is periodic in an earlier &periodic group already')
-                return
-            end if
-            if (.not. check_vector(at, [low], 'low', .true., err)) return
-            if (.not. check_vector(at, [high], 'high', .true., err)) return
-            if (.not. high > low) then
-                call set_error(err, dem_err_input, at // ": key 'high': must exceed low [m]")
-                return
-            end if
-            on(a) = .true.
-            lo(a) = low
-            hi(a) = high
-            c%periodic_at(a) = at
-        end do
-        c%periodic = periodic_set(on, lo, hi)
-    end subroutine read_periodic
 
     !> &wall_mesh (repeated): a wall read from an STL file, at rest or in rigid motion.
     subroutine read_meshes(nf, c, err)
@@ -1468,15 +1326,13 @@ contains
             oscillation_amplitude, oscillation_frequency, oscillation_phase, oscillation_start, &
             oscillation_end, velocity_table_time, velocity_table, angular_velocity_table_time, &
             angular_velocity_table, name
-        type(nml_block_t) :: b
-        integer :: k_item, ios
-        character(len=512) :: msg
-        character(len=:), allocatable :: text, at
+        type(group_io_t) :: io
+        character(len=:), allocatable :: at
         real(wp), allocatable :: vert(:, :, :), lin_time(:), lin_value(:, :), rot_time(:), &
                                  rot_value(:, :)
         integer :: k, im
 
-        do k = 1, count_blocks(nf, 'wall_mesh')
+        do k = 1, group_count(nf, 'wall_mesh')
             file = ''
             scale = 1.0_wp
             material = ''
@@ -1498,14 +1354,11 @@ contains
             angular_velocity_table_time = unset
             angular_velocity_table = unset
             name = ''
-            b = nf%blocks(block_index(nf, 'wall_mesh', k))
-            do k_item = 0, block_item_count(b)
-                text = block_text(b, k_item)
-                read(text, nml=wall_mesh, iostat=ios, iomsg=msg)
-                if (block_read_done(nf, b, k_item, ios, msg, err)) exit
+            do while (group_reading(nf, 'wall_mesh', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=wall_mesh, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=wall_mesh, iostat=io%ios, iomsg=io%msg)
             end do
             if (err%failed()) return
-            at = nml_location(nf, b)
             im = find_material(c, material, at, err)
             if (im == 0) return
             if (len_trim(file) == 0) then
@@ -1573,6 +1426,57 @@ contains
         end do
     end subroutine read_meshes
 
+    !> &periodic (one per periodic axis): space repeats along the axis between low and high
+    !> (dem_periodic; that the period holds the particles' reach is dem_setup's check).
+    subroutine read_periodic(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=name_len) :: axis  ! 'x', 'y' or 'z', required, each axis once
+        real(wp) :: low, high            ! the faces [m], high > low, required
+        namelist /periodic/ axis, low, high
+        type(group_io_t) :: io
+        integer :: k, a
+        character(len=:), allocatable :: at
+        logical :: on(3)
+        real(wp) :: lo(3), hi(3)
+        on = .false.
+        lo = 0.0_wp
+        hi = 0.0_wp
+        do k = 1, group_count(nf, 'periodic')
+            axis = ''
+            low = unset
+            high = unset
+            do while (group_reading(nf, 'periodic', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=periodic, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=periodic, iostat=io%ios, iomsg=io%msg)
+            end do
+            if (err%failed()) return
+            a = index('xyz', trim(axis))
+            if (len_trim(axis) /= 1 .or. a == 0) then
+                call set_error(err, dem_err_input, at // ": key 'axis': '" // trim(axis) // &
+                               "' is not known (accepted: x, y, z)")
+                return
+            end if
+            if (on(a)) then
+                call set_error(err, dem_err_input, at // ": key 'axis': axis " // trim(axis) // &
+                               ' is periodic in an earlier &periodic group already')
+                return
+            end if
+            if (.not. check_vector(at, [low], 'low', .true., err)) return
+            if (.not. check_vector(at, [high], 'high', .true., err)) return
+            if (.not. high > low) then
+                call set_error(err, dem_err_input, at // ": key 'high': must exceed low [m]")
+                return
+            end if
+            on(a) = .true.
+            lo(a) = low
+            hi(a) = high
+            c%periodic_at(a) = at
+        end do
+        c%periodic = periodic_set(on, lo, hi)
+    end subroutine read_periodic
+
     !> A wall's name, unless it names another wall too (an error then).
     logical function wall_name_free(c, at, name, err) result(ok)
         type(case_t), intent(in) :: c
@@ -1620,251 +1524,16 @@ contains
         end if
     end function read_table
 
-    !> Number of `key = value` items in a group.
-    integer function block_item_count(b) result(n)
-        type(nml_block_t), intent(in) :: b
-        integer, allocatable :: starts(:)
-        character(len=32), allocatable :: keys(:)
-        call nml_items(b%text, starts, keys)
-        n = size(keys)
-    end function block_item_count
-
-    !> Text to read for attempt k: the whole group (k = 0), or the group with item k alone.
-    function block_text(b, k) result(text)
-        type(nml_block_t), intent(in) :: b
-        integer, intent(in) :: k
-        character(len=:), allocatable :: text
-        integer, allocatable :: starts(:)
-        character(len=32), allocatable :: keys(:)
-        integer :: last
-        if (k == 0) then
-            text = b%text
-            return
-        end if
-        call nml_items(b%text, starts, keys)
-        if (k < size(keys)) then
-            last = starts(k + 1) - 1
-        else
-            last = len(b%text) - 1      ! before the closing '/'
-        end if
-        text = trim(b%text(starts(k):last))
-        if (text(len(text):len(text)) == ',') text = text(1:len(text) - 1)
-        text = '&' // b%group // ' ' // text // ' /'
-    end function block_text
-
-    !> After reading attempt k of a group (see block_text): true when reading is over, with
-    !> `err` set if it failed. A failed read of the whole group is explained by an unknown key,
-    !> or else by reading the items one at a time until the culprit fails.
-    logical function block_read_done(nf, b, k, ios, msg, err) result(done)
-        type(nml_file_t), intent(in) :: nf
-        type(nml_block_t), intent(in) :: b
-        integer, intent(in) :: k, ios
-        character(len=*), intent(in) :: msg
-        type(error_t), intent(inout) :: err
-        integer, allocatable :: starts(:)
-        character(len=32), allocatable :: keys(:)
-        character(len=:), allocatable :: at, accepted, item
-        integer :: j
-        done = .true.
-        if (k == 0 .and. ios == 0) return
-        at = nml_location(nf, b)
-        call nml_items(b%text, starts, keys)
-        if (k == 0) then
-            accepted = group_keys(b%group)
-            do j = 1, size(keys)
-                if (index(' ' // accepted // ' ', ' ' // trim(keys(j)) // ' ') == 0) then
-                    call set_error(err, dem_err_input, at // ": unknown key '" // &
-                                   trim(keys(j)) // "' (accepted: " // accepted // ')')
-                    return
-                end if
-            end do
-            done = size(keys) == 0
-        else if (ios /= 0) then
-            item = block_text(b, k)
-            item = item(len(b%group) + 3:len(item) - 2)
-            call set_error(err, dem_err_input, at // ": key '" // trim(keys(k)) // &
-                           "': cannot read '" // item // "' (" // trim(msg) // ')')
-            return
-        else
-            done = k == size(keys)
-        end if
-        if (done) call set_error(err, dem_err_input, at // ': cannot read the group (' // &
-                                 trim(msg) // ')')
-    end function block_read_done
-
-    !> The keys of a group, blank-separated.
-    function group_keys(group) result(keys)
-        character(len=*), intent(in) :: group
-        character(len=:), allocatable :: keys
-        integer :: g
-        keys = ''
-        do g = 1, size(input_groups)
-            if (group_of(input_groups(g)) == group) then
-                keys = trim(input_groups(g)(index(input_groups(g), ':') + 2:))
-            end if
-        end do
-    end function group_keys
-
-    pure function group_of(entry) result(group)
-        character(len=*), intent(in) :: entry
-        character(len=:), allocatable :: group
-        group = entry(1:index(entry, ':') - 1)
-    end function group_of
-
+    !> The groups a case file may hold, for messages: '&run, &output, ...'.
     function accepted_groups() result(s)
         character(len=:), allocatable :: s
         integer :: g
         s = ''
         do g = 1, size(input_groups)
             if (g > 1) s = s // ', '
-            s = s // '&' // group_of(input_groups(g))
+            s = s // '&' // trim(input_groups(g))
         end do
     end function accepted_groups
-
-    integer function count_blocks(nf, group) result(n)
-        type(nml_file_t), intent(in) :: nf
-        character(len=*), intent(in) :: group
-        integer :: k
-        n = 0
-        do k = 1, size(nf%blocks)
-            if (nf%blocks(k)%group == group) n = n + 1
-        end do
-    end function count_blocks
-
-    !> Index in nf%blocks of the k-th occurrence of a group.
-    integer function block_index(nf, group, k) result(idx)
-        type(nml_file_t), intent(in) :: nf
-        character(len=*), intent(in) :: group
-        integer, intent(in) :: k
-        integer :: seen
-        seen = 0
-        do idx = 1, size(nf%blocks)
-            if (nf%blocks(idx)%group == group) seen = seen + 1
-            if (seen == k) return
-        end do
-        idx = 0
-    end function block_index
-
-    !> Index of the material named by key 'material' of a group; 0, with an error, if there
-    !> is none, or if it is rigid and meant for particles.
-    integer function find_material(c, name, at, err, particles) result(idx)
-        type(case_t), intent(in) :: c
-        character(len=*), intent(in) :: name, at
-        type(error_t), intent(inout) :: err
-        logical, intent(in), optional :: particles
-        logical :: for_particles
-        for_particles = .false.
-        if (present(particles)) for_particles = particles
-        idx = material_index(c, name)
-        if (idx == 0) then
-            call set_error(err, dem_err_input, at // ": key 'material': '" // trim(name) // &
-                           "' is not a defined material")
-        else if (for_particles .and. c%mats%rigid(idx)) then
-            call set_error(err, dem_err_input, at // ": key 'material': '" // trim(name) // &
-                           "' is rigid (walls only)")
-            idx = 0
-        end if
-    end function find_material
-
-    integer function material_index(c, name) result(idx)
-        type(case_t), intent(in) :: c
-        character(len=*), intent(in) :: name
-        do idx = 1, c%mats%n
-            if (c%mats%name(idx) == name) return
-        end do
-        idx = 0
-    end function material_index
-
-    !> Check that a required real key was given and is > 0.
-    logical function check_positive(at, val, key, unit, err) result(ok)
-        character(len=*), intent(in) :: at, key, unit
-        real(wp), intent(in) :: val
-        type(error_t), intent(inout) :: err
-        ok = .false.
-        if (val == unset) then
-            call set_error(err, dem_err_input, at // ": key '" // key // "' is required " // unit)
-        else if (.not. in_range(val, 0.0_wp, unset, .false., .false.)) then
-            call set_error(err, dem_err_input, at // ": key '" // key // "': must be > 0 " // unit)
-        else
-            ok = .true.
-        end if
-    end function check_positive
-
-    !> Check that a key with a default is finite and >= 0 (unit: '[s]' and such, or '').
-    logical function check_nonnegative(at, val, key, unit, err) result(ok)
-        character(len=*), intent(in) :: at, key, unit
-        real(wp), intent(in) :: val
-        type(error_t), intent(inout) :: err
-        ok = in_range(val, 0.0_wp, unset, .true., .false.)
-        if (.not. ok) call set_error(err, dem_err_input, at // ": key '" // key // &
-                                     "': must be >= 0" // trim(' ' // unit))
-    end function check_nonnegative
-
-    !> True if val is finite and lies between lo and hi (each end closed or open). NaN is
-    !> tested first, so that no comparison with it traps in a Debug build.
-    logical function in_range(val, lo, hi, closed_lo, closed_hi)
-        real(wp), intent(in) :: val, lo, hi
-        logical, intent(in) :: closed_lo, closed_hi
-        in_range = .false.
-        if (.not. ieee_is_finite(val)) return
-        if (closed_lo) then
-            if (val < lo) return
-        else
-            if (val <= lo) return
-        end if
-        if (closed_hi) then
-            if (val > hi) return
-        else
-            if (val >= hi) return
-        end if
-        in_range = .true.
-    end function in_range
-
-    !> Check that a vector key is finite and, if required, was given.
-    logical function check_vector(at, val, key, required, err) result(ok)
-        character(len=*), intent(in) :: at, key
-        real(wp), intent(in) :: val(:)
-        logical, intent(in) :: required
-        type(error_t), intent(inout) :: err
-        ok = .false.
-        if (required .and. any(val == unset)) then
-            call set_error(err, dem_err_input, at // ": key '" // key // "' is required (" // &
-                           'three components)')
-        else if (.not. all(ieee_is_finite(val))) then
-            call set_error(err, dem_err_input, at // ": key '" // key // "': must be finite")
-        else if (any(abs(val) >= unset)) then
-            call set_error(err, dem_err_input, at // ": key '" // key // "': must be finite")
-        else
-            ok = .true.
-        end if
-    end function check_vector
-
-    !> A direction: `val` (finite) made a unit vector, scaled by its largest component first
-    !> so that no square underflows (1e-300, 0, 0 is the x axis); zero is refused.
-    logical function check_direction(at, val, key, err) result(ok)
-        character(len=*), intent(in) :: at, key
-        real(wp), intent(inout) :: val(3)
-        type(error_t), intent(inout) :: err
-        ok = any(val /= 0.0_wp)
-        if (.not. ok) then
-            call set_error(err, dem_err_input, at // ": key '" // key // "': a non-zero " // &
-                           'vector is required')
-            return
-        end if
-        val = val / maxval(abs(val))
-        val = val / norm2(val)
-    end function check_direction
-
-    !> A file named in a case: absolute, or relative to the case file's directory.
-    function relative_to(case_path, file) result(path)
-        character(len=*), intent(in) :: case_path, file
-        character(len=:), allocatable :: path
-        if (file(1:1) == '/') then
-            path = file
-        else
-            path = case_path(1:index(case_path, '/', back=.true.)) // file
-        end if
-    end function relative_to
 
     !> The file name without directory and extension.
     function file_stem(path) result(stem)
