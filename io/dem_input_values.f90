@@ -1,0 +1,152 @@
+! SPDX-License-Identifier: BSD-3-Clause
+!> The checks of a case file's values that the groups share (dem_input): a key given, in
+!> range, finite, a direction; a material or a file that a key names. Each check that fails
+!> sets an error that names the group's place, the key and what it accepts.
+module dem_input_values
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use dem_kinds, only: wp
+    use dem_error, only: error_t, set_error, dem_err_input
+    use dem_case, only: case_t
+    implicit none
+    private
+    public :: unset, name_len, check_positive, check_nonnegative, in_range, check_vector, &
+              check_direction, find_material, material_index, relative_to
+
+    !> The default of a key that has none: "not given".
+    real(wp), parameter :: unset = huge(1.0_wp)
+    !> The length of a name a key gives (a material, a variant, a region ...).
+    integer, parameter :: name_len = 32
+
+contains
+
+    !> Check that a required real key was given and is > 0.
+    logical function check_positive(at, val, key, unit, err) result(ok)
+        character(len=*), intent(in) :: at      !< the group's place ('file:line: &group')
+        character(len=*), intent(in) :: key     !< the key's name
+        character(len=*), intent(in) :: unit    !< its unit ('[s]' and such), for the message
+        real(wp), intent(in) :: val             !< its value, unset when not given
+        type(error_t), intent(inout) :: err     !< set when the check fails
+        ok = .false.
+        if (val == unset) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "' is required " // unit)
+        else if (.not. in_range(val, 0.0_wp, unset, .false., .false.)) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': must be > 0 " // unit)
+        else
+            ok = .true.
+        end if
+    end function check_positive
+
+    !> Check that a key with a default is finite and >= 0.
+    logical function check_nonnegative(at, val, key, unit, err) result(ok)
+        character(len=*), intent(in) :: at      !< the group's place ('file:line: &group')
+        character(len=*), intent(in) :: key     !< the key's name
+        character(len=*), intent(in) :: unit    !< its unit ('[s]' and such, or '')
+        real(wp), intent(in) :: val             !< its value
+        type(error_t), intent(inout) :: err     !< set when the check fails
+        ok = in_range(val, 0.0_wp, unset, .true., .false.)
+        if (.not. ok) call set_error(err, dem_err_input, at // ": key '" // key // &
+                                     "': must be >= 0" // trim(' ' // unit))
+    end function check_nonnegative
+
+    !> True if val is finite and lies between lo and hi (each end closed or open). NaN is
+    !> tested first, so that no comparison with it traps in a Debug build.
+    logical function in_range(val, lo, hi, closed_lo, closed_hi)
+        real(wp), intent(in) :: val             !< the value
+        real(wp), intent(in) :: lo, hi          !< the ends
+        logical, intent(in) :: closed_lo, closed_hi  !< whether each end belongs to the range
+        in_range = .false.
+        if (.not. ieee_is_finite(val)) return
+        if (closed_lo) then
+            if (val < lo) return
+        else
+            if (val <= lo) return
+        end if
+        if (closed_hi) then
+            if (val > hi) return
+        else
+            if (val >= hi) return
+        end if
+        in_range = .true.
+    end function in_range
+
+    !> Check that a vector key is finite and, if required, was given.
+    logical function check_vector(at, val, key, required, err) result(ok)
+        character(len=*), intent(in) :: at      !< the group's place ('file:line: &group')
+        character(len=*), intent(in) :: key     !< the key's name
+        real(wp), intent(in) :: val(:)          !< its value, unset components when not given
+        logical, intent(in) :: required         !< whether it must be given
+        type(error_t), intent(inout) :: err     !< set when the check fails
+        ok = .false.
+        if (required .and. any(val == unset)) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "' is required (" // &
+                           'three components)')
+        else if (.not. all(ieee_is_finite(val))) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': must be finite")
+        else if (any(abs(val) >= unset)) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': must be finite")
+        else
+            ok = .true.
+        end if
+    end function check_vector
+
+    !> A direction: `val` (finite) made a unit vector, scaled by its largest component first
+    !> so that no square underflows (1e-300, 0, 0 is the x axis); zero is refused.
+    logical function check_direction(at, val, key, err) result(ok)
+        character(len=*), intent(in) :: at      !< the group's place ('file:line: &group')
+        character(len=*), intent(in) :: key     !< the key's name
+        real(wp), intent(inout) :: val(3)       !< its value, made a unit vector
+        type(error_t), intent(inout) :: err     !< set when it is zero
+        ok = any(val /= 0.0_wp)
+        if (.not. ok) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': a non-zero " // &
+                           'vector is required')
+            return
+        end if
+        val = val / maxval(abs(val))
+        val = val / norm2(val)
+    end function check_direction
+
+    !> Index of the material named by key 'material' of a group; 0, with an error, if there
+    !> is none, or if it is rigid and meant for particles.
+    integer function find_material(c, name, at, err, particles) result(idx)
+        type(case_t), intent(in) :: c           !< the case, its materials read
+        character(len=*), intent(in) :: name    !< the key's value
+        character(len=*), intent(in) :: at      !< the group's place ('file:line: &group')
+        type(error_t), intent(inout) :: err     !< set when the material is not found or rigid
+        logical, intent(in), optional :: particles  !< for particles: a rigid one is refused
+        logical :: for_particles
+        for_particles = .false.
+        if (present(particles)) for_particles = particles
+        idx = material_index(c, name)
+        if (idx == 0) then
+            call set_error(err, dem_err_input, at // ": key 'material': '" // trim(name) // &
+                           "' is not a defined material")
+        else if (for_particles .and. c%mats%rigid(idx)) then
+            call set_error(err, dem_err_input, at // ": key 'material': '" // trim(name) // &
+                           "' is rigid (walls only)")
+            idx = 0
+        end if
+    end function find_material
+
+    !> Index of the material named `name`, 0 if there is none.
+    integer function material_index(c, name) result(idx)
+        type(case_t), intent(in) :: c           !< the case, its materials read
+        character(len=*), intent(in) :: name    !< the material's name
+        do idx = 1, c%mats%n
+            if (c%mats%name(idx) == name) return
+        end do
+        idx = 0
+    end function material_index
+
+    !> A file named in a case: absolute, or relative to the case file's directory.
+    function relative_to(case_path, file) result(path)
+        character(len=*), intent(in) :: case_path   !< the case file
+        character(len=*), intent(in) :: file        !< the file a key names
+        character(len=:), allocatable :: path
+        if (file(1:1) == '/') then
+            path = file
+        else
+            path = case_path(1:index(case_path, '/', back=.true.)) // file
+        end if
+    end function relative_to
+end module dem_input_values

@@ -1,0 +1,304 @@
+! SPDX-License-Identifier: BSD-3-Clause
+!> The groups of a case file that bound the particles' space (dem_input): &wall_plane (a
+!> flat square wall), &wall_mesh (a wall read from an STL file, at rest or in rigid motion)
+!> and &periodic (an axis along which space repeats). Each key is declared once, by its
+!> group's `namelist` statement, documented beside its variable (default, unit, range) and
+!> in doc/user/input.md.
+module dem_input_walls
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use dem_kinds, only: wp
+    use dem_error, only: error_t, set_error, dem_err_input
+    use dem_namelist_scan, only: nml_file_t
+    use dem_input_group, only: group_io_t, group_reading, group_count
+    use dem_input_values, only: unset, name_len, check_positive, in_range, check_vector, &
+                                check_direction, find_material, relative_to
+    use dem_case, only: case_t
+    use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion, mesh_set_oscillation, &
+                        mesh_set_tables
+    use dem_stl, only: stl_read
+    use dem_text, only: itoa
+    use dem_periodic, only: periodic_set
+    implicit none
+    private
+    public :: read_walls, read_meshes, read_periodic
+
+    integer, parameter :: max_table = 1000   !< points of a wall's velocity table
+
+contains
+
+    !> &wall_plane (one per flat square wall made of triangles).
+    subroutine read_walls(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=name_len) :: material  ! material name, required
+        real(wp) :: point(3)       ! centre of the square [m], required
+        real(wp) :: normal(3)      ! side the wall faces, non-zero, required
+        real(wp) :: half_width     ! half the side of the square [m], > 0, required
+        integer :: divisions       ! squares along a side (2 triangles each), >= 1, default 1
+        character(len=name_len) :: name  ! the wall's name (for probes), unique, default none
+        namelist /wall_plane/ material, point, normal, half_width, divisions, name
+        type(group_io_t) :: io
+        character(len=:), allocatable :: at
+        integer :: k, im
+
+        do k = 1, group_count(nf, 'wall_plane')
+            material = ''
+            point = unset
+            normal = unset
+            half_width = unset
+            divisions = 1
+            name = ''
+            do while (group_reading(nf, 'wall_plane', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=wall_plane, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=wall_plane, iostat=io%ios, iomsg=io%msg)
+            end do
+            if (err%failed()) return
+            im = find_material(c, material, at, err)
+            if (im == 0) return
+            if (.not. check_vector(at, point, 'point', .true., err)) return
+            if (.not. check_vector(at, normal, 'normal', .true., err)) return
+            if (.not. check_direction(at, normal, 'normal', err)) return
+            if (.not. check_positive(at, half_width, 'half_width', '[m]', err)) return
+            if (divisions < 1) then
+                call set_error(err, dem_err_input, at // ": key 'divisions': must be >= 1")
+                return
+            end if
+            if (.not. wall_name_free(c, at, name, err)) return
+            call mesh_add_plane(c%mesh, point, normal, half_width, divisions, im)
+            c%mesh%name(c%mesh%n_wall) = name
+        end do
+    end subroutine read_walls
+
+    !> &wall_mesh (repeated): a wall read from an STL file, at rest or in rigid motion.
+    subroutine read_meshes(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=512) :: file       ! STL file (ASCII or binary), relative to the case file
+        real(wp) :: scale                ! metres per STL unit, > 0, default 1
+        character(len=name_len) :: material  ! material name, required
+        real(wp) :: velocity(3)          ! translation velocity [m/s], default 0
+        real(wp) :: velocity_start       ! when the translation starts [s], default 0
+        real(wp) :: velocity_end         ! when it ends [s], default never
+        real(wp) :: rotation_axis(3)     ! direction of the rotation axis, default (0, 0, 1)
+        real(wp) :: rotation_point(3)    ! a point of the axis [m], default (0, 0, 0)
+        real(wp) :: angular_velocity     ! about the axis, right-handed [rad/s], default 0
+        real(wp) :: rotation_start       ! when the rotation starts [s], default 0
+        real(wp) :: rotation_end         ! when it ends [s], default never
+        real(wp) :: oscillation_amplitude(3)  ! amplitude vector of a sinusoidal oscillation of
+                                              ! the position [m], default 0 (none)
+        real(wp) :: oscillation_frequency     ! its frequency [Hz], > 0 with an amplitude
+        real(wp) :: oscillation_phase         ! its phase [rad], default 0
+        real(wp) :: oscillation_start         ! when it starts [s], default 0
+        real(wp) :: oscillation_end           ! when it ends [s], default never
+        real(wp) :: velocity_table_time(max_table)  ! times of a piecewise-linear translation
+                                                    ! velocity [s], increasing, default none
+        real(wp) :: velocity_table(3, max_table)    ! its velocities [m/s], 3 per time
+        real(wp) :: angular_velocity_table_time(max_table)  ! times of a piecewise-linear
+                                                            ! angular velocity [s], increasing
+        real(wp) :: angular_velocity_table(max_table)  ! its values about rotation_axis [rad/s]
+        character(len=name_len) :: name   ! the wall's name (for probes), unique, default none
+        namelist /wall_mesh/ file, scale, material, velocity, velocity_start, velocity_end, &
+            rotation_axis, rotation_point, angular_velocity, rotation_start, rotation_end, &
+            oscillation_amplitude, oscillation_frequency, oscillation_phase, oscillation_start, &
+            oscillation_end, velocity_table_time, velocity_table, angular_velocity_table_time, &
+            angular_velocity_table, name
+        type(group_io_t) :: io
+        character(len=:), allocatable :: at
+        real(wp), allocatable :: vert(:, :, :), lin_time(:), lin_value(:, :), rot_time(:), &
+                                 rot_value(:, :)
+        integer :: k, im
+
+        do k = 1, group_count(nf, 'wall_mesh')
+            file = ''
+            scale = 1.0_wp
+            material = ''
+            velocity = 0.0_wp
+            velocity_start = 0.0_wp
+            velocity_end = huge(1.0_wp)
+            rotation_axis = [0.0_wp, 0.0_wp, 1.0_wp]
+            rotation_point = 0.0_wp
+            angular_velocity = 0.0_wp
+            rotation_start = 0.0_wp
+            rotation_end = huge(1.0_wp)
+            oscillation_amplitude = 0.0_wp
+            oscillation_frequency = 0.0_wp
+            oscillation_phase = 0.0_wp
+            oscillation_start = 0.0_wp
+            oscillation_end = huge(1.0_wp)
+            velocity_table_time = unset
+            velocity_table = unset
+            angular_velocity_table_time = unset
+            angular_velocity_table = unset
+            name = ''
+            do while (group_reading(nf, 'wall_mesh', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=wall_mesh, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=wall_mesh, iostat=io%ios, iomsg=io%msg)
+            end do
+            if (err%failed()) return
+            im = find_material(c, material, at, err)
+            if (im == 0) return
+            if (len_trim(file) == 0) then
+                call set_error(err, dem_err_input, at // ": key 'file' is required")
+                return
+            end if
+            if (.not. check_positive(at, scale, 'scale', '[m per STL unit]', err)) return
+            if (.not. check_vector(at, velocity, 'velocity', .false., err)) return
+            if (.not. check_vector(at, rotation_point, 'rotation_point', .false., err)) return
+            if (.not. check_vector(at, rotation_axis, 'rotation_axis', .false., err)) return
+            if (.not. check_direction(at, rotation_axis, 'rotation_axis', err)) return
+            if (.not. in_range(angular_velocity, -unset, unset, .false., .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'angular_velocity': must be finite")
+                return
+            end if
+            if (.not. (velocity_end > velocity_start)) then
+                call set_error(err, dem_err_input, at // ": key 'velocity_end': must be later " // &
+                               'than velocity_start')
+                return
+            end if
+            if (.not. (rotation_end > rotation_start)) then
+                call set_error(err, dem_err_input, at // ": key 'rotation_end': must be later " // &
+                               'than rotation_start')
+                return
+            end if
+            if (.not. check_vector(at, oscillation_amplitude, 'oscillation_amplitude', .false., &
+                                   err)) return
+            if (.not. in_range(oscillation_frequency, 0.0_wp, unset, &
+                               all(oscillation_amplitude == 0.0_wp), .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'oscillation_frequency': " // &
+                               'must be finite, > 0 with an oscillation_amplitude [Hz]')
+                return
+            end if
+            if (.not. in_range(oscillation_phase, -unset, unset, .false., .false.)) then
+                call set_error(err, dem_err_input, at // ": key 'oscillation_phase': must be " // &
+                               'finite [rad]')
+                return
+            end if
+            if (.not. (oscillation_end > oscillation_start)) then
+                call set_error(err, dem_err_input, at // ": key 'oscillation_end': must be " // &
+                               'later than oscillation_start')
+                return
+            end if
+            if (.not. read_table(at, velocity_table_time, velocity_table, 'velocity_table', &
+                                 lin_time, lin_value, err)) return
+            if (.not. read_table(at, angular_velocity_table_time, &
+                                 reshape(angular_velocity_table, [1, max_table]), &
+                                 'angular_velocity_table', rot_time, rot_value, err)) return
+            if (.not. wall_name_free(c, at, name, err)) return
+            call stl_read(relative_to(nf%path, trim(file)), scale, vert, err)
+            if (err%failed()) then
+                err%message = at // ": key 'file': " // err%message
+                return
+            end if
+            call mesh_append(c%mesh, vert, im)
+            call mesh_set_motion(c%mesh, c%mesh%n_wall, velocity, [velocity_start, velocity_end], &
+                                 rotation_axis, rotation_point, angular_velocity, &
+                                 [rotation_start, rotation_end])
+            call mesh_set_oscillation(c%mesh, c%mesh%n_wall, oscillation_amplitude, &
+                                      oscillation_frequency, oscillation_phase, &
+                                      [oscillation_start, oscillation_end])
+            call mesh_set_tables(c%mesh, c%mesh%n_wall, lin_time, lin_value, rot_time, &
+                                 rot_value(1, :))
+            c%mesh%name(c%mesh%n_wall) = name
+        end do
+    end subroutine read_meshes
+
+    !> &periodic (one per periodic axis): space repeats along the axis between low and high
+    !> (dem_periodic; that the period holds the particles' reach is dem_setup's check).
+    subroutine read_periodic(nf, c, err)
+        type(nml_file_t), intent(in) :: nf
+        type(case_t), intent(inout) :: c
+        type(error_t), intent(inout) :: err
+        character(len=name_len) :: axis  ! 'x', 'y' or 'z', required, each axis once
+        real(wp) :: low, high            ! the faces [m], high > low, required
+        namelist /periodic/ axis, low, high
+        type(group_io_t) :: io
+        integer :: k, a
+        character(len=:), allocatable :: at
+        logical :: on(3)
+        real(wp) :: lo(3), hi(3)
+        on = .false.
+        lo = 0.0_wp
+        hi = 0.0_wp
+        do k = 1, group_count(nf, 'periodic')
+            axis = ''
+            low = unset
+            high = unset
+            do while (group_reading(nf, 'periodic', k, io, at, err))
+                if (io%unit == 0) read(io%text, nml=periodic, iostat=io%ios, iomsg=io%msg)
+                if (io%unit /= 0) write(io%unit, nml=periodic, iostat=io%ios, iomsg=io%msg)
+            end do
+            if (err%failed()) return
+            a = index('xyz', trim(axis))
+            if (len_trim(axis) /= 1 .or. a == 0) then
+                call set_error(err, dem_err_input, at // ": key 'axis': '" // trim(axis) // &
+                               "' is not known (accepted: x, y, z)")
+                return
+            end if
+            if (on(a)) then
+                call set_error(err, dem_err_input, at // ": key 'axis': axis " // trim(axis) // &
+                               ' is periodic in an earlier &periodic group already')
+                return
+            end if
+            if (.not. check_vector(at, [low], 'low', .true., err)) return
+            if (.not. check_vector(at, [high], 'high', .true., err)) return
+            if (.not. high > low) then
+                call set_error(err, dem_err_input, at // ": key 'high': must exceed low [m]")
+                return
+            end if
+            on(a) = .true.
+            lo(a) = low
+            hi(a) = high
+            c%periodic_at(a) = at
+        end do
+        c%periodic = periodic_set(on, lo, hi)
+    end subroutine read_periodic
+
+    !> A wall's name, unless it names another wall too (an error then).
+    logical function wall_name_free(c, at, name, err) result(ok)
+        type(case_t), intent(in) :: c
+        character(len=*), intent(in) :: at, name
+        type(error_t), intent(inout) :: err
+        ok = .true.
+        if (len_trim(name) == 0 .or. c%mesh%n_wall == 0) return
+        ok = .not. any(c%mesh%name == name)
+        if (.not. ok) call set_error(err, dem_err_input, at // ": key 'name': '" // trim(name) &
+                                     // "' names another wall too")
+    end function wall_name_free
+
+    !> A velocity table of a wall (keys `key`_time, `key`): the times given (unset after
+    !> them), at least two, finite and increasing, and as many values per time as `values`
+    !> has rows, all finite; none given: an empty table.
+    logical function read_table(at, times, values, key, t_out, v_out, err) result(ok)
+        character(len=*), intent(in) :: at, key
+        real(wp), intent(in) :: times(:), values(:, :)
+        real(wp), allocatable, intent(out) :: t_out(:), v_out(:, :)
+        type(error_t), intent(inout) :: err
+        integer :: n, n_values
+        ok = .false.
+        n = count(times /= unset)
+        n_values = count(values /= unset)
+        if (n == 0 .and. n_values > 0) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "_time': required " // &
+                           'with ' // key)
+        else if (n == 1 .or. any(times(n + 1:) /= unset)) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "_time': at least " // &
+                           'two times, one after another')
+        else if (.not. all(ieee_is_finite(times(1:n)))) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "_time': must be finite")
+        else if (any(times(2:n) <= times(1:n - 1))) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "_time': must increase")
+        else if (n_values /= n * size(values, 1) .or. any(values(:, n + 1:) /= unset)) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': " // &
+                           itoa(size(values, 1)) // ' value(s) per time of ' // key // &
+                           '_time are required')
+        else if (.not. all(ieee_is_finite(values(:, 1:n)))) then
+            call set_error(err, dem_err_input, at // ": key '" // key // "': must be finite")
+        else
+            ok = .true.
+            t_out = times(1:n)
+            v_out = values(:, 1:n)
+        end if
+    end function read_table
+end module dem_input_walls
