@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Writes the namelists of the benchmark paper's three case studies (Dosta et al. 2024) with
 the definitions of its Tables 4-5 and of the published drivers (materials M1, M2, steel;
 g = 9.81 m/s^2; spheres; no rolling resistance; the default contact law, the LIGGGHTS/MUSEN

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Writes the walls of the benchmark paper's three cases (Dosta et al. 2024) as binary STL
 files in the case folders silo/, drum/ and impact/, from the dimensions of the published
 wall files (inner surfaces only: a particle never reaches the outer skin of those 2 mm thick

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Compiler flags per build type, in one place: gfortran, and NVIDIA's nvfortran (NVHPC: not
 # tested here, see doc/user/gpu.md).
 #   Release: -O3, and (gfortran) the instruction set of DEM_SIMD with -ffp-contract=off:

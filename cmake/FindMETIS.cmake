@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Finds METIS 5 (C library) and provides the imported target METIS::METIS and
 # METIS_IDX_WIDTH (32 or 64, the width of idx_t in metis.h).
 find_path(METIS_INCLUDE_DIR metis.h PATH_SUFFIXES metis)

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Snapshots and checkpoints: the HDF5 files of frames, the state of a run at one step
 !> (dem_frame; layout in doc/user/output.md). A snapshot holds the particles and the walls in
 !> their pose; a checkpoint holds, in addition, everything else a run needs to continue bit

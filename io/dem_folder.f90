@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> An output folder: the names of its checkpoints (checkpoints/checkpoint_<step>.h5, and
 !> checkpoints/latest, which names the newest), and that it belongs to one run
 !> (doc/user/running.md): a fresh run writes its case text to input.nml there first. A

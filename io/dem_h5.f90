@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> HDF5 files through the parallel API: the MPI-IO driver, datasets created by every rank
 !> together and written with collective transfers. A dataset is either distributed (each
 !> rank writes its own rows, the last Fortran dimension, at its offset in rank order) or

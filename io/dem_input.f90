@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Reads a case from a namelist file and validates it. Every error names the file, the line
 !> of the group, the group and the key. Each group is read by a module of its family
 !> (dem_input_run, _materials, _particles, _inserts, _walls, _probes), where its keys are
@@ -64,9 +65,9 @@ contains
         end if
         call read_materials(nf, c, err)
         if (err%failed()) return
-        call read_pairs(nf, c, err)
-        if (err%failed()) return
         call read_contact_model(nf, c, err)
+        if (err%failed()) return
+        call read_pairs(nf, c, err)
         if (err%failed()) return
         share = [comm%rank, comm%size]
         if (group_count(nf, 'insert') > 0) share = [0, 1]

@@ -1,7 +1,8 @@
 ! SPDX-License-Identifier: BSD-3-Clause
 !> The groups of a case file that describe the contact law (dem_input): &material (one per
-!> material), &pair (one per material pair that can touch) and &contact_model (the variant of
-!> Hertz-Mindlin). Each key is declared once, by its group's `namelist` statement, documented
+!> material), &pair (one per material pair that can touch) and &contact_model (the normal and
+!> tangential laws and the variant of Hertz-Mindlin; read before &pair, whose keys depend on
+!> the normal law). Each key is declared once, by its group's `namelist` statement, documented
 !> beside its variable (default, unit, range) and in doc/user/input.md.
 module dem_input_materials
     use dem_kinds, only: wp
@@ -11,7 +12,8 @@ module dem_input_materials
     use dem_input_values, only: unset, name_len, check_positive, check_nonnegative, in_range, &
                                 material_index
     use dem_case, only: case_t
-    use dem_materials, only: contact_options_t, rolling_cdt, rolling_epsd2
+    use dem_materials, only: contact_options_t, rolling_cdt, rolling_epsd2, normal_hertz, &
+                             normal_hooke, tangential_mindlin, tangential_coulomb
     use dem_integrate, only: integrator_verlet
     implicit none
     private
@@ -43,7 +45,9 @@ contains
             m%n = n
             allocate(m%name(n), m%density(n), m%youngs(n), m%poisson(n), m%rigid(n))
             allocate(m%restitution(n, n), m%friction(n, n), m%pair_defined(n, n))
-            allocate(m%rolling_model(n, n), m%rolling_friction(n, n), m%cohesion(n, n))
+            allocate(m%rolling_model(n, n), m%rolling_friction(n, n), m%cohesion(n, n), &
+                     m%stiffness(n, n))
+            m%stiffness = 0.0_wp
             m%restitution = 0.0_wp
             m%friction = 0.0_wp
             m%pair_defined = .false.
@@ -108,8 +112,10 @@ contains
                                       ! no rolling resistance)
         character(len=name_len) :: rolling_model  ! 'cdt' (default) | 'epsd2'
         real(wp) :: cohesion_energy_density  ! sJKR cohesion k, >= 0 [J/m^3] (default 0)
+        real(wp) :: stiffness    ! the linear law's normal stiffness k_n, > 0 [N/m]: required
+                                 ! with &contact_model normal_model = 'hooke', else not given
         namelist /pair/ materials, restitution, friction, rolling_friction, rolling_model, &
-                        cohesion_energy_density
+                        cohesion_energy_density, stiffness
         type(group_io_t) :: io
         character(len=:), allocatable :: at
         integer :: k, ia, ib
@@ -121,6 +127,7 @@ contains
             rolling_friction = 0.0_wp
             rolling_model = 'cdt'
             cohesion_energy_density = 0.0_wp
+            stiffness = unset
             do while (group_reading(nf, 'pair', k, io, at, err))
                 if (io%unit == 0) read(io%text, nml=pair, iostat=io%ios, iomsg=io%msg)
                 if (io%unit /= 0) write(io%unit, nml=pair, iostat=io%ios, iomsg=io%msg)
@@ -161,6 +168,22 @@ contains
             end if
             if (.not. check_nonnegative(at, cohesion_energy_density, &
                                         'cohesion_energy_density', '', err)) return
+            if (c%opts%normal == normal_hooke) then
+                if (stiffness == unset) then
+                    call set_error(err, dem_err_input, at // ": key 'stiffness' is required " &
+                        // "with &contact_model normal_model = 'hooke' (the normal stiffness, " &
+                        // "N/m)")
+                    return
+                end if
+                if (.not. check_positive(at, stiffness, 'stiffness', '[N/m]', err)) return
+                c%mats%stiffness(ia, ib) = stiffness
+                c%mats%stiffness(ib, ia) = stiffness
+            else if (stiffness /= unset) then
+                call set_error(err, dem_err_input, at // ": key 'stiffness': the normal " // &
+                    "stiffness of the linear law, used only with &contact_model " // &
+                    "normal_model = 'hooke' (the Hertz law's comes from the materials)")
+                return
+            end if
             c%mats%rolling_model(ia, ib) = merge(rolling_epsd2, rolling_cdt, &
                                                  rolling_model == 'epsd2')
             c%mats%rolling_model(ib, ia) = c%mats%rolling_model(ia, ib)
@@ -177,9 +200,10 @@ contains
         end do
     end subroutine read_pairs
 
-    !> &contact_model: variants of Hertz-Mindlin that imitate other codes (doc/theory.md,
-    !> section 3). A named `variant` sets every other key (and the integrator &run takes if it
-    !> names none); keys given beside it override it.
+    !> &contact_model: the normal and tangential laws (doc/theory.md, sections 2.3-2.5) and
+    !> the variants of Hertz-Mindlin that imitate other codes (section 3). A named `variant`
+    !> sets the variant's keys (and the integrator &run takes if it names none); keys given
+    !> beside it override it.
     subroutine read_contact_model(nf, c, err)
         type(nml_file_t), intent(in) :: nf
         type(case_t), intent(inout) :: c
@@ -199,8 +223,14 @@ contains
                                        ! contact ends, default T; F: kept while the pair is in
                                        ! the neighbour list, and continued by its next contact
                                        ! (LIGGGHTS 3.8.0)
+        character(len=name_len) :: normal_model      ! 'hertz' (default) | 'hooke' (linear
+                                       ! spring-dashpot, &pair stiffness)
+        character(len=name_len) :: tangential_model  ! 'mindlin' (default): the spring capped
+                                       ! at mu |F_n|; 'coulomb': spring and damping together
+                                       ! capped at mu max(F_n, 0)
         namelist /contact_model/ variant, tangential_stiffness_factor, tangential_damping, &
-            clamp_normal, tangential_history, lever_velocity, lever_torque, reset_pair_history
+            clamp_normal, tangential_history, lever_velocity, lever_torque, reset_pair_history, &
+            normal_model, tangential_model
         type(group_io_t) :: io
         character(len=:), allocatable :: at
         type(contact_options_t) :: o
@@ -215,6 +245,8 @@ contains
         lever_velocity = 'radius'
         lever_torque = 'radius'
         reset_pair_history = .true.
+        normal_model = 'hertz'
+        tangential_model = 'mindlin'
         do while (group_reading(nf, 'contact_model', 1, io, at, err))
             if (io%unit == 0) read(io%text, nml=contact_model, iostat=io%ios, iomsg=io%msg)
             if (io%unit /= 0) write(io%unit, nml=contact_model, iostat=io%ios, iomsg=io%msg)
@@ -269,6 +301,26 @@ contains
             if (.not. lever_shift(lever_torque, 'lever_torque', o%shift_t)) return
         end if
         if (given('reset_pair_history')) o%reset_pair_history = reset_pair_history
+        select case (normal_model)
+        case ('hertz')
+            o%normal = normal_hertz
+        case ('hooke')
+            o%normal = normal_hooke
+        case default
+            call set_error(err, dem_err_input, at // ": key 'normal_model': '" // &
+                trim(normal_model) // "' is not known (accepted: hertz, hooke)")
+            return
+        end select
+        select case (tangential_model)
+        case ('mindlin')
+            o%tangential = tangential_mindlin
+        case ('coulomb')
+            o%tangential = tangential_coulomb
+        case default
+            call set_error(err, dem_err_input, at // ": key 'tangential_model': '" // &
+                trim(tangential_model) // "' is not known (accepted: mindlin, coulomb)")
+            return
+        end select
         c%opts = o
     contains
         logical function given(key)

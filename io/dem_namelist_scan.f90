@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Splits a namelist file into its groups and a group into its `key = value` items, so that
 !> every error can name the file, the line, the group and the key. Comments (`!` to the end
 !> of the line, outside quotes) are removed; each group becomes one line of text.

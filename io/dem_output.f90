@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Text outputs of a run, in its output directory: series.csv (one row per output
 !> interval), probes.csv (the probes' values at the same times), histogram_<probe>.csv
 !> (once each), contact.csv (the traced particle's contact, every step) and final.csv (the

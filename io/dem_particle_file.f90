@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Particle files: CSV with a header line naming the columns id, material, radius, x, y, z
 !> and optionally vx, vy, vz, wx, wy, wz (any order; others are ignored). `final.csv` of a
 !> run is such a file, so a run's end state can start another case; another code's state can

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Reads triangle meshes from STL files, ASCII or binary. A file is binary when its size is
 !> 84 + 50 n bytes, n being the little-endian uint32 at byte 80 (the header may begin with
 !> the word "solid", so the header is not used to decide). Otherwise a file that looks like

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The XDMF index of the snapshots (doc/user/output.md): one XML file that ParaView opens
 !> directly, a time series whose every step holds the particles (points carrying radius,
 !> velocity and the other fields, to be drawn with a sphere glyph scaled by radius) and the

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Writes the namelists of the Chung & Ooi (2011) verification tests 1-4 with the
 parameters of Table 3 of the benchmark paper (Dosta et al. 2024), and of their tests 5-8
 with the parameters of Chung & Ooi's paper. Run it again after editing; the .nml files it

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The chute's steady flow from its snapshots (examples/chute/README.md): the mean velocity
 along the slope in layers of height, the Bagnold profile fitted to it, and the mass flow
 rate through a cross-section.

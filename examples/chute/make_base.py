@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Writes the rough base of the chute example as a binary STL file beside this script:
 
   base.stl  a height field over x = -2D .. 12D, y = -2D .. 7D (D = 2 mm, one particle

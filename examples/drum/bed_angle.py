@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The drum example's numbers and figure: the bed's centre of mass (probes.csv, probe `com`)
 turns about the drum's axis when the drum turns; the angle it turns by is the angle of the
 bed's surface (a bed that fills a circular segment has its centre of mass on the segment's

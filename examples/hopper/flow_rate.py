@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The hopper example's numbers and figure: the mass discharged (series.csv, `removed`,
 times the mass of a sphere) against time, its slope once the flow is steady, and Beverloo's
 correlation for a flat-bottomed silo with a circular orifice,

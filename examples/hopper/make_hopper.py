@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Writes the walls of the hopper example as binary STL files beside this script:
 
   hopper.stl  a flat-bottomed cylinder (a 64-gon) of radius 0.018 m, 0.1 m high, open at the

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The impact example's numbers and figure: the ball's height and vertical velocity
 (probes.csv, probe `ball`) beside free fall from 0.47 m, and the mechanical energy of all
 particles (kinetic, translational and rotational, plus potential: series.csv), which the

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The pour example's numbers and figure: the particles against time beside the inflow's
 schedule floor(rate t) up to rate x (end - start) = 3000, the force of the beads on the walls
 against their weight, and the bed's solid fraction at the end.

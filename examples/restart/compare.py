@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The restart example's figure and verdict: the three runs of examples/restart/run-restart
 (1 rank straight, 2 ranks straight, 2 ranks from the 1-rank run's checkpoint at 0.25 s) side
 by side: their kinetic energy and particle count against time, and whether every output is

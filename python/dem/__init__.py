@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """dem from Python: a ctypes layer over the C interface of the solver's shared library
 libdem.so (src/api/dem_coupling.h; doc/user/python.md).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Finding and loading libdem.so, the C prototypes of its calls, and MPI (doc/user/python.md).
 
 The library is looked for, in this order, at: the path given to load_library(); the file

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """A coupled run held by a handle of the C interface (src/api/dem_coupling.h): one case,
 advanced from Python, its particles read as NumPy arrays, forces and drag set per particle,
 deposits onto a grid (doc/user/python.md)."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Parameter sweeps: a case run once per value of namelist keys, each run in a folder of its
 own, a measure taken of each (doc/user/python.md)."""
 import os

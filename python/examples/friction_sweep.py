@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """A friction sweep with dem.sweep (doc/user/python.md): a glass sphere launched sliding at
 v0 = 0.1 m/s along a rigid floor, without spin, for three friction coefficients. Friction
 slows it and spins it up until it rolls, at 5/7 v0 whatever mu, after t_r = 2 v0 / (7 mu g),

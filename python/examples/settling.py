@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Stokes settling of a glass sphere in a viscous fluid, driven from Python (the worked
 example of doc/user/python.md): the fluid's drag beta (u_f - v), beta = 6 pi mu R, and the
 buoyancy rho_f V g are given to the DEM, which adds gravity; after 18 relaxation times the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Shared set-up of the Python package's tests: the package from this source tree (unless
 an installed one is asked for), the solver's library and program from the environment
 (DEM_LIBRARY, DEM_EXE: CTest sets them) or the repository's build/, cases written as text."""

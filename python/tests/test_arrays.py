@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The particles as NumPy arrays: views over the solver's memory (no copy) that agree with
 the copies; the deposit of a cloud of spheres onto a grid that holds them all keeps their
 volume and momentum (every kernel), and onto one cell gives their volume over the cell's."""

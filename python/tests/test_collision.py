@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Two equal glass spheres meeting head-on without gravity: the total momentum is conserved
 to round-off; an elastic collision (restitution 1) exchanges their velocities and keeps the
 kinetic energy; with restitution 0.5 the relative velocity after the contact is -0.5 times

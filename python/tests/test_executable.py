@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The same case run by the dem program and from Python to the same end time: the same
 particles (ids, materials, radii) at the same positions and velocities, in the program's
 final.csv, in Python's arrays, and in the final.csv that closing the Python run writes."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The package on several MPI ranks with mpi4py (CTest runs it on 2: mpirun -np 2 python3 -m
 pytest test_mpi.py): a run on all ranks gives the same particles as the same case run on
 rank 0 alone (COMM_SELF), bit for bit, and the same deposit; forces set by id from rank 0

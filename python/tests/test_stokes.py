@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Stokes settling: a glass sphere released in a viscous fluid, with the drag
 beta (u_f - v), beta = 6 pi mu R, set through the package and buoyancy as an external force,
 reaches the analytical terminal velocity 2 (rho_p - rho_f) g R^2 / (9 mu); the impulses of

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """A friction sweep (dem.sweep): a sphere launched sliding along a floor without spin slows
 under the friction mu m g until it rolls, at 5/7 of its speed whatever mu (the torque of
 friction spins it up to v = w R), after t_r = 2 v0 / (7 mu g) and the distance

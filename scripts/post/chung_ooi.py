@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Analytical expectations for the Chung & Ooi (2011) tests 1-4 and the quantities measured
 from the solver's outputs. Used by the test suite, the figure script and the dt sweep.
 Nothing here comes from the solver: the formulas are Hertz theory (Johnson, Contact
@@ -132,6 +133,41 @@ def oblique_results(final_csv):
     return et, spin, rebound, f["vz"] / vn
 
 
+def tsuji_impulses(e, steps=200000):
+    """The normal impulses of a Hertz contact with the damping of doc/theory.md 2.1 (Tsuji's
+    form, c_n = -2 sqrt(5/6) beta), in units of m* v: the net impulse (1 + e, the restitution
+    being exact for the continuous equation) and the impulse of its repulsive part, which
+    exceeds it by the attractive end of the contact (2.2). In the units delta = L x,
+    t = (L / v) tau, L = (m* v^2 / K)^(2/5), K = (4/3) E* sqrt(R*), the equation is
+    x'' = -(x^(3/2) + D x^(1/4) x') with D = c_n sqrt(3/2), whatever m*, R*, E* and v;
+    integrated here with classical Runge-Kutta from x = 0, x' = 1 until x returns to 0."""
+    beta = math.log(e) / math.sqrt(math.log(e)**2 + math.pi**2)
+    d = -2.0 * math.sqrt(5.0 / 6.0) * beta * math.sqrt(1.5)
+
+    def force(x, u):
+        x = max(x, 0.0)
+        return x**1.5 + d * x**0.25 * u
+
+    h = 4.0 / steps                       # the contact lasts about 2.9 units
+    x, u, net, rep = 0.0, 1.0, 0.0, 0.0
+    while True:
+        k1x, k1u = u, -force(x, u)
+        k2x, k2u = u + 0.5 * h * k1u, -force(x + 0.5 * h * k1x, u + 0.5 * h * k1u)
+        k3x, k3u = u + 0.5 * h * k2u, -force(x + 0.5 * h * k2x, u + 0.5 * h * k2u)
+        k4x, k4u = u + h * k3u, -force(x + h * k3x, u + h * k3u)
+        f = force(x, u)
+        x_new = x + h / 6.0 * (k1x + 2 * k2x + 2 * k3x + k4x)
+        u_new = u + h / 6.0 * (k1u + 2 * k2u + 2 * k3u + k4u)
+        if x_new <= 0.0:
+            frac = x / (x - x_new)        # the step's part before x crosses 0
+            net += frac * h * f
+            rep += frac * h * max(f, 0.0)
+            return net, rep
+        net += h * f                      # (left rectangles: the step is small)
+        rep += h * max(f, 0.0)
+        x, u = x_new, u_new
+
+
 def test5_results(final_csv):
     """Test 5, per sphere: the normalised incident angle v_t / (mu v_n), the normalised spin
     R w' / (mu v_n) and rebound angle v_ct' / (mu v_n') (v_ct' = v_x' - R w_y', the contact
@@ -154,9 +190,11 @@ def spin_results(stem, final_csv):
     """Tests 6-8, per spinning sphere (ids 1.. in test 6; 1, 3, 5, ... in tests 7 and 8):
     the initial spin w0, the change of spin w' + w0 (friction slows it), its gross-sliding
     value 5 mu (1 + e) v_n m* / (2 R m) (m* / m = 1 against the plane; 1/2 and v_n = 2 v in
-    test 7, whose spheres meet at 2 v; m2 / (m1 + m2) in test 8), and whether the contact
-    slides throughout: R w0 above 3.5 mu (1 + e) v (the contact point's slip, and in test 7
-    both surfaces', stops at that change)."""
+    test 7, whose spheres meet at 2 v; m2 / (m1 + m2) in test 8), that value for friction
+    mu times the repulsive part of the normal force (the Coulomb-capped law: times the
+    repulsive over the net normal impulse, tsuji_impulses), and whether the contact slides
+    throughout: R w0 above 3.5 mu (1 + e) v (the contact point's slip, and in test 7 both
+    surfaces', stops at that change)."""
     p = TEST6
     f = read_csv(final_csv)
     w0 = np.asarray(p["spins"])
@@ -169,7 +207,8 @@ def spin_results(stem, final_csv):
         ratio = m2 / (m1 + m2)
     limit = 2.5 * p["mu"] * (1.0 + p["e"]) * p["v"] * ratio / p["R"] * np.ones(len(w0))
     sliding = p["R"] * w0 > 3.5 * p["mu"] * (1.0 + p["e"]) * p["v"]
-    return w0, change, limit, sliding
+    net, repulsive = tsuji_impulses(p["e"])
+    return w0, change, limit, limit * repulsive / net, sliding
 
 
 CHUNG_OOI_CASES = ("test1_sphere_sphere", "test2_sphere_wall", "test3_restitution",

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """A picture of a run: loads its snapshots.xmf, draws the particles as spheres of their
 radius coloured by their speed and the walls as a translucent surface, and writes a PNG.
 

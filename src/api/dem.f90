@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The public Fortran API in one module: read a case, set up a run (or restore it from a
 !> checkpoint), run it. Every failure comes back as an error_t (a code, dem_err_*, and a
 !> message); nothing in the library stops the program.

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The interface a CFD code drives the DEM through (doc/user/coupling.md), in the style of MFiX's
 !> DES coupling: initialise from a case file on the caller's communicator, advance by the
 !> fluid's time step in uniform sub-steps that end exactly at t + dt, read the owned

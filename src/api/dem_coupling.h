@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /* The C interface of dem's CFD coupling (src/api/dem_coupling.f90, doc/user/coupling.md).
  *
  * A coupled run is an opaque handle, dem_coupling *, that dem_coupling_init sets up and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /* The one source of its own of the shared library libdem.so (CMakeLists.txt: dem_shared),
  * which otherwise holds the layers' objects: the version of the library, so that a program
  * that loads it at run time (the Python package) can tell which it loaded. */

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /* The processor check of a program built for an x86-64 level (DEM_SIMD_LEVEL, from cmake's
  * DEM_SIMD: cmake/DemFlags.cmake). It runs before main, and this file is compiled without
  * -march, so that on a processor without that level the program stops with a message

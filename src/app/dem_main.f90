@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The `dem` program: run a case, check it, or print the version or the usage.
 program dem_main
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Error values returned by library code; only the program decides to stop.
 module dem_error
     implicit none

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> File-system operations the Fortran standard lacks, through the C library (POSIX):
 !> creating directories, renaming (atomic within a file system), removing and truncating;
 !> and text files whose every write is checked (cfile_t, C stdio): gfortran's FLUSH and CLOSE

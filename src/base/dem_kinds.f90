@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Kinds used everywhere: working precision, default integers and 64-bit global ids.
 module dem_kinds
     use, intrinsic :: iso_fortran_env, only: real64, int32, int64

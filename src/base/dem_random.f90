@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> A small, portable random number generator (xorshift64, Marsaglia 2003): only shifts and
 !> exclusive ors on 64 bits, so the same seed gives the same numbers with every compiler, and
 !> its whole state is one integer, which a checkpoint can store.

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> SIGTERM and SIGUSR1, which batch schedulers send some time before they kill a job, are
 !> caught and remembered (from signals_install, which the program calls at its start), so
 !> that the time loop can write a checkpoint and stop cleanly at the end of the step. The

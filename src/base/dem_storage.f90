@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Per-particle storage that follows a rank's share of the particles: the capacity policy
 !> (grow to 5/4 of the need when it is short, shrink to that when the store is more than
 !> 3/2 of the need; doc/user/parallel.md), the reallocation of arrays whose last index is the

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Text: reading files line by line, writing numbers.
 module dem_text
     use dem_kinds, only: wp, i8

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Wall-clock time spent in each phase of the time step, for the end-of-run summary and the
 !> benchmarks (ns per particle-step).
 module dem_timers

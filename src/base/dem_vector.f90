@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Small vector helpers callable from host and device loops.
 module dem_vector
     use dem_kinds, only: wp

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The version of the solver; CMakeLists.txt reads it from here.
 module dem_version
     implicit none

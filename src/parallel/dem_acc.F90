@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The only module that moves data between host and device (OpenACC), and that chooses the
 !> device. Without -fopenacc the directives are comments and these wrappers do nothing.
 !> Preprocessed (.F90) for the one call of the OpenACC runtime library, under _OPENACC.

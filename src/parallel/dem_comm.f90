@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Thin wrappers over mpi_f08; the only module that calls MPI. It works on a duplicate of the
 !> communicator it is given and initialises MPI only when nobody has.
 module dem_comm

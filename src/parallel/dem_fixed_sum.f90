@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Sums whose value does not depend on the order of their terms, nor on how the terms are
 !> spread over the ranks: each term is stored in two levels of 64-bit fixed point, where
 !> addition is exact (doc/theory.md, section 13). The rows of series.csv, the probes and the

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The one METIS call the solver makes: k-way partitioning of a weighted graph (METIS 5,
 !> 32-bit indices, through its C API).
 module dem_metis

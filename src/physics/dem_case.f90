@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The description of a run, as read from a namelist file, and the time scales derived
 !> from it (the quantities `dem --check` prints and the stability bound on dt).
 module dem_case

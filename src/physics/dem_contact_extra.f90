@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The laws a case may add to the Hertz-Mindlin contact (doc/theory.md, section 15): rolling
 !> resistance, by a constant directional torque (CDT) or an elastic-plastic spring (EPSD2),
 !> and the simplified JKR cohesion (sJKR), as LIGGGHTS names them. The contact kernels call

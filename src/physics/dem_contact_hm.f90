@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The stages of the no-slip Hertz-Mindlin contact law (doc/theory.md, section 2) over a
 !> batch of independent contacts ("lanes") at once: Hertz's stiffness, the damped normal force
 !> (which the linear law shares), the turning of the tangential spring, and the tangential
@@ -179,8 +180,7 @@ contains
 
     !> The Coulomb-capped tangential force of lanes 1..m: the spring and the damping together,
     !> F_t = -kt x - gt q v_t, limited to mu max(F_n, 0) (no friction while the normal force
-    !> attracts); where limited, the spring is set to the length that gives the capped force
-    !> with the damping, x = -(F_t + gt q v_t) / kt (MercuryDPM's sliding friction).
+    !> attracts); where limited, the spring is set to carry the capped force, x = -F_t / kt.
     pure subroutine coulomb_lanes(m, root, q, t1, t2, t3, lane)
         !$acc routine seq
         integer(ip), intent(in) :: m
@@ -212,10 +212,9 @@ contains
                 lane(l, lane_f2) = f2
                 lane(l, lane_f3) = f3
                 kt = lane(l, lane_st) * root(l)
-                g = lane(l, lane_gt) * q(l)
-                lane(l, lane_x1) = -(f1 + g * t1(l)) / kt
-                lane(l, lane_x2) = -(f2 + g * t2(l)) / kt
-                lane(l, lane_x3) = -(f3 + g * t3(l)) / kt
+                lane(l, lane_x1) = -f1 / kt
+                lane(l, lane_x2) = -f2 / kt
+                lane(l, lane_x3) = -f3 / kt
             end if
         end do
     end subroutine coulomb_lanes

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The linear spring-dashpot normal law (LIGGGHTS `hooke/stiffness`, MercuryDPM
 !> LinearViscoelastic; doc/theory.md, section 2.4): F_n = k_n d + c_n v_n with a stiffness k_n
 !> given per material pair and c_n = -2 beta sqrt(m* k_n) from the restitution, so that an

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The contact model (doc/theory.md, sections 1-3 and 15): the constants of every material pair
 !> for the kernels, with an integer id per sub-model (normal: Hertz or linear; tangential:
 !> Mindlin's spring or its Coulomb-capped variant; rolling: none, CDT or EPSD2; cohesion:

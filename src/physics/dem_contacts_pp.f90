@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Particle-particle contact forces (doc/theory.md, section 2) in one pass over the pairs.
 !> The neighbour lists hold every pair once in a compact store (dem_neighbors); the
 !> constants of a pair in contact come from the two particles' radii, masses and materials.

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Particle-wall contact forces. A sphere's contacts with the triangles near it are reduced
 !> to the local minima of its distance to the surface they form, so that a flat surface of
 !> many triangles acts as one plane over faces, shared edges and shared vertices

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Deposition of the particles onto a fluid code's cells, a Cartesian grid or a list of cell
 !> centres (doc/user/coupling.md; doc/theory.md, section 14): per cell, the solids volume, the
 !> particle momentum, and the drag sums (beta, beta v) a semi-implicit fluid solver needs. On

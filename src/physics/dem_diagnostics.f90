@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Whole-system quantities written to series.csv, the contact trace of one particle, and the
 !> checks that the state is finite and slower than the instability bound. Host-side and
 !> called at output times only (and every step for the trace, which is a diagnostic for

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The forces a coupled fluid sets (doc/theory.md, section 14), added after gravity and the
 !> particle contacts (pp_forces, which start every step's forces from gravity).
 module dem_forces

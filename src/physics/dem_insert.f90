@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Insertion of non-overlapping spheres at random in a region (random sequential addition):
 !> each new sphere takes random positions until one overlaps no sphere already there
 !> (doc/theory.md, section 10). Radii from a size distribution (size_dist_t): uniform,

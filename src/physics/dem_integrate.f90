@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Time integration of translation and rotation (doc/theory.md, section 5).
 !> Symplectic Euler: v += F/m dt, x += v dt (and w += T/I dt), after the forces.
 !> Velocity Verlet: kick(dt/2) and drift(dt) before the forces, kick(dt/2) after.

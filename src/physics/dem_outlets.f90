@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Outlets: regions where particles leave the simulation (below a plane, outside a box).
 module dem_outlets
     use dem_kinds, only: wp, ip

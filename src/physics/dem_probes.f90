@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Probes: what the benchmark cases measure, as general features of a case (doc/theory.md,
 !> section 8). At every output time, a probe gives a row of values for probes.csv: the
 !> particles of each material whose centre lies in a region (count), their centre of mass

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Time scales that bound the time step whatever the contact law (doc/theory.md, section 6):
 !> the Rayleigh time and the step limit of a damped oscillator; each law's own are in its
 !> module (dem_contact_hm, dem_contact_hooke).

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Frames: the state of a run captured by particle id (for snapshots, checkpoints, the
 !> final state and the last good state of the instability guard), and a run's state
 !> restored from a checkpoint's frame.

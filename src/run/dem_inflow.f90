@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Inflow: the &insert groups with a rate insert particles during the run (doc/theory.md,
 !> section 10). At an insertion step every rank sends rank 0 its particles near the regions
 !> due; rank 0 places the new spheres clear of them (dem_insert, from the case's generator:

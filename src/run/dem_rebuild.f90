@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Lists and migration: the particles re-sorted in space and the neighbour lists rebuilt when
 !> they are stale (doc/theory.md, section 9), after the particles have gone to the ranks of
 !> their blocks, repartitioned when the load is out of balance (doc/user/parallel.md); between

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Run control: the stop for the wall-time limit or a signal (with a checkpoint), the
 !> instability guard (speeds, finite state, kinetic and elastic energy; doc/theory.md,
 !> section 6) that stops an unstable run with the last good state saved, and the progress

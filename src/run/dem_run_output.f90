@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The outputs of a run as it goes (doc/user/output.md): the rows of series.csv and probes.csv,
 !> the histograms, the traced particle's contact.csv, snapshots with their XDMF index, and
 !> checkpoints with checkpoints/latest. Sums over the ranks are in fixed point; rank 0

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The state of a run (solver_t: particles, lists, contact history, walls, ranks, the
 !> bookkeeping of outputs and checkpoints) and what every part of the run layer shares: the
 !> time of a step, the collective error test, and moving the state to and from the device.

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> A case set up from its file: read and validated (dem_input), then what needs the
 !> particles of every rank: the &insert groups placed (doc/theory.md, section 10), each rank's
 !> share kept, the summary of the particles and what is drawn from it (the skin, the speed

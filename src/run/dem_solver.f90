@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The run: set up from a case (or a checkpoint, dem_frames), started, advanced step by
 !> step (dem_step) until t_end, a settled state or a stop, and finished with the final
 !> state (doc/theory.md, section 5; doc/user/output.md). The public procedures of the run layer.

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> One time step (doc/theory.md, section 5): `time_step` and `forces` read as the design
 !> does, each line a step and a call into the module named for it (integration:
 !> dem_integrate; walls: dem_mesh; lists, migration and the halo: dem_rebuild; gravity and

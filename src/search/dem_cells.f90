@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Cell binning as kernels on the device (or the host, without OpenACC): a counting sort of
 !> items by cell, and the prefix sum it needs. The cell counts are taken with atomics, and
 !> each cell's items are then put in increasing order, so the result is the same whatever

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Domain decomposition of an MPI run (doc/user/parallel.md; doc/theory.md, section 13). Space is
 !> cut into cubic blocks over the case's bounding box (the outer layers of blocks reach to
 !> infinity); METIS assigns the blocks to ranks, weighted by the particles and their contacts

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Verlet lists with a skin: for every owned particle, the particles and wall triangles
 !> within reach (radii plus skin), rebuilt when any particle has moved more than half the
 !> skin (doc/theory.md, section 9). The particle list is a full list (each pair appears in

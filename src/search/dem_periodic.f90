@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Periodic boundaries (doc/theory.md, section 16; doc/user/input.md, &periodic): along each
 !> periodic axis space repeats with the period L from a low face. The particles that leave
 !> are wrapped back at each list rebuild; the ones within reach of a face meet the others'

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The history of the contacts, in one place: the tangential displacement of every particle
 !> pair in contact, in slots that the neighbour lists' pairs name (dem_neighbors; doc/theory.md
 !> section 9), and of every particle's wall contacts, in slots per particle keyed by triangle.

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Materials, the per-pair table (restitution, friction, rolling resistance, cohesion, the
 !> linear law's stiffness) and the contact model's choices as the input gives them: the
 !> sub-model ids and the variant's switches (doc/theory.md, sections 1, 2, 3 and 15). The

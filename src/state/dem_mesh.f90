@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Triangle walls: storage, rigid motion (constant velocities, a sinusoidal oscillation,
 !> piecewise-linear velocity tables), the closest point of a triangle to a point (face, edge
 !> or vertex), and the flat rectangular wall made of triangles (doc/theory.md, section 4).

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The particle store: one array per field, owned particles first (1..n_own), then ghosts
 !> (n_own+1..n_own+n_ghost), no holes. Vectors are stored as (3, n).
 module dem_particles

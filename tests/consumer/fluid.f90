@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The smallest Fortran fluid code: the DEM case given on the command line, advanced ten
 !> fluid steps of 1e-4 s; prints the time and the particles. Built with find_package(dem).
 program fluid

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Shared helpers of the checkpoint and run-control regression tests: a small case with
 contacts and moving walls written on the fly, the checksum of a checkpoint's datasets
 recomputed independently of the solver, exact comparison of HDF5 datasets, and running the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Shared helpers of the regression tests: run the solver on a case, check expectations
 and report failures with a non-zero exit code."""
 import os

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """doc/architecture.md against the tree:
 - the layers of its first table are those of CMakeLists.txt (DEM_LAYERS, in that order), each
   in the folder it names;

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """A restart from a file that is not a good checkpoint of the case is refused with a clear
 error, and changes nothing.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Reduced versions of the benchmark cases (cases/make_cases.py: the same
 namelists, with fewer particles and Young's moduli scaled down so that dt grows with the
 square root of the scale), prepared and run as the full ones are, checked for what must

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """An OpenACC build gives the same results as the plain build: the same cases, run with both
 executables, write identical files (every digit of every number; the HDF5 snapshots and
 checkpoints byte for byte, as they carry no time stamps). scripts/install/build makes the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Long runs as chains of short ones: scripts/jobs/run-chain and the SLURM template
 scripts/jobs/dem-slurm.sbatch. A chain is only useful if continuing from a checkpoint changes
 nothing, so every chain here is compared with one uninterrupted run of the same case.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """A run killed (SIGKILL) in the middle of writing a checkpoint loses nothing it had saved.
 
 The case (written here) has 200 soft spheres falling in a box onto a rising, spinning STL

@@ -1,9 +1,12 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Chung & Ooi verification tests 1-4 (cases/verification) against Hertz theory and the
 Coulomb limits, computed in scripts/post/chung_ooi.py independently of the solver; and tests
 5-8 (a sphere sliding on a plane or on another sphere by its tangential velocity or its spin)
 with the Coulomb-capped tangential law: where the contact slides throughout the impact, the
-spin (and in test 5 the rebound angle) meet the rigid-body limits within 1 %, and nowhere
-does the spin change exceed them.
+spin (and in test 5 the rebound angle) meet the rigid-body limits for a tangential impulse
+of mu times the repulsive normal impulse within 0.1 % (the repulsive impulse exceeds the net
+one by the attractive end of a damped contact: 3.4 % at e = 0.5, computed independently in
+chung_ooi.tsuji_impulses), and nowhere does the spin change exceed them.
 usage: test_chung_ooi.py DEM WORKDIR"""
 import os
 import sys
@@ -81,9 +84,8 @@ def coulomb_case(stem):
 
 
 # Tests 5-8 with the Coulomb-capped tangential law: the limits where the contact slides
-# throughout; below them, the spin changes less (within 1e-3: friction stops at the end of
-# a damped contact, where the normal force attracts, so the tangential impulse is at most
-# mu times the repulsive part of the normal impulse)
+# throughout; below them, the spin changes less (friction acts on the repulsive part of the
+# normal force only, so the tangential impulse is at most mu times the repulsive impulse)
 stem = "test5_tangential"
 run_dem(dem, coulomb_case(stem), work)
 incident, spin, spin_limit, rebound, rebound_limit, sliding = co.test5_results(
@@ -93,15 +95,16 @@ for k in range(len(incident)):
     check(spin[k] <= spin_limit[k] * (1 + 1e-3), f"test 5, v_t/(mu v_n) = {incident[k]:.2f}: "
           f"spin {spin[k]:.4f} above its limit {spin_limit[k]:.4f}")
     if sliding[k]:
-        check_close(spin[k], spin_limit[k], 1e-2, f"test 5, {incident[k]:.2f}: spin")
-        check_close(rebound[k], rebound_limit[k], 1e-2, f"test 5, {incident[k]:.2f}: rebound")
+        check_close(spin[k], spin_limit[k], 1e-3, f"test 5, {incident[k]:.2f}: spin")
+        check_close(rebound[k], rebound_limit[k], 1e-3, f"test 5, {incident[k]:.2f}: rebound")
 for stem in ("test6_spin_wall", "test7_spin_pair", "test8_spin_large"):
     run_dem(dem, coulomb_case(stem), work)
-    w0, change, limit, sliding = co.spin_results(stem, out(stem + "_coulomb", "final.csv"))
+    w0, change, _, limit, sliding = co.spin_results(stem, out(stem + "_coulomb",
+                                                                 "final.csv"))
     check(np.count_nonzero(sliding) >= 3, f"{stem}: some impacts slide throughout")
     for k in range(len(w0)):
         check(change[k] <= limit[k] * (1 + 1e-3), f"{stem}, w0 = {w0[k]}: spin change "
               f"{change[k]:.4f} above its limit {limit[k]:.4f}")
         if sliding[k]:
-            check_close(change[k], limit[k], 1e-2, f"{stem}, w0 = {w0[k]}: spin change")
+            check_close(change[k], limit[k], 1e-3, f"{stem}, w0 = {w0[k]}: spin change")
 finish()

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """A text output that cannot be written stops the run with a clear error, and what was
 written before is whole (issue 30, items 1-2).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The examples of examples/ (doc/user/examples.md), each run for a shorter time than its
 namelist says (t_end rewritten; everything else as the user runs it) after a `dem --check`
 without a warning, and checked against what physics says, not against the solver's own

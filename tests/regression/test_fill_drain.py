@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Filling a box by random insertion, settling it, restarting from the settled particle file,
 and draining it through an outlet.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The FoBiS.py build (the fobos at the source root, mode gnu) against the CMake one: the same
 version, and the same results on Chung & Ooi test 1 (contact.csv and final.csv).
 Builds into WORKDIR/build-fobis, so the source tree is left as it is.

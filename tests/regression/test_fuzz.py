@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Fuzzed inputs (scripts/dev/fuzz-inputs, its fixed seed): 200 mutants of a small case's
 namelist, particle file and STL wall, and of one of its checkpoints. Each runs through
 `dem --check` and `dem`; none may crash or hang, `--check` must accept exactly the mutants

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The GPU bundle (scripts/install/gpu-bundle, doc/user/gpu.md) is self-contained: packed from
 this OpenACC build without the beds, it runs a short case (the settling box with a moving STL
 floor, a snapshot and a checkpoint: particle and wall contacts, parallel HDF5) on 1 and 2 ranks

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Inflow (&insert with a rate, doc/user/input.md; doc/theory.md section 10):
 
 1. a mass rate of a discrete mixture by mass into an empty box above a floor: the mass

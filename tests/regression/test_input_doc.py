@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The input reference doc/user/input.md lists exactly the namelist groups and keys that dem
 accepts, in their order. They are asked of the program, from its messages: an unknown group's
 lists the groups (dem_input's table, whose names are checked here against the `namelist`

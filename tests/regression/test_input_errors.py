@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Bad input gets a clear error that names the file, the namelist group and the key (and
 where the group's keys are described: doc/user/input.md, &group), exit code 2, and leaves
 no output behind. Also the command line: --version, --help, --check.

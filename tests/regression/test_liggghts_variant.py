@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The LIGGGHTS variant of the contact law (&contact_model variant = 'liggghts' /) against
 LIGGGHTS 3.8.0's own results, committed as references (LIGGGHTS is not needed to run this):
 

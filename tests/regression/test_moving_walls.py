@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Walls read from STL files, at rest and in rigid motion, against impulse balances.
 
 1. A square wall (two triangles, from an ASCII STL in millimetres, scale 1e-3) moving at

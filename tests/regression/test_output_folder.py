@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """An output folder belongs to one run, and a damaged `checkpoints/latest` is refused.
 
 A case (60 spheres falling into a box, snapshots and checkpoints every 0.01 s to 0.05 s) is

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """find_package(dem) works for a fluid code: this build is installed into WORKDIR/prefix, and
 tests/consumer (a Fortran and a C program, built with CMake against dem::dem only) is
 configured, built and run against the install: the C program's coupling checks pass on 2

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The same answer on any number of MPI ranks (doc/user/parallel.md): a case run on 1, 2, 3 (and
 4) ranks gives bit-identical results: final.csv, series.csv (energies summed in id order,
 contact counts), probes.csv, snapshots (with forces and contact counts), and the

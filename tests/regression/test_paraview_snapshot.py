@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """scripts/post/paraview-snapshot.py on a small run (60 spheres falling into a box), with each
 backend that is installed: ParaView's pvpython (with an Xvfb server when there is no
 display) and each Python with a vtk module (this Python, .venv's, /usr/bin/python3; with

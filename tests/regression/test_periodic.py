@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Periodic boundaries (doc/user/input.md, &periodic; doc/theory.md, section 16):
 
 1. A granular gas periodic along x, y and z (125 spheres on a jittered lattice with random

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Probes (&probe) against the same quantities computed here from the snapshots written at
 the same steps.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The Python package as a user installs it: `pip install ./python` into a fresh virtual
 environment (with the system's site packages, as the project's .venv), no compiler, no
 index; imported from outside the source tree, the installed copy is the one used; without

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Checkpoint and restart continue a run bit for bit.
 
 1. For both integrators, a run of 2N steps straight and a run of N steps, then --restart from

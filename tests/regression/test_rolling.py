@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Rolling resistance and cohesion in whole runs (doc/theory.md, section 15).
 
 1. A sphere rolling on a rigid plane (v0 = 0.1 m/s, w0 = v0 / R) with the constant

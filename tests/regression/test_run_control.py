@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Run control: signals, the wall-time limit, the progress line and the instability guard.
 
 The cases are written here: 200 soft spheres falling in a box of four planes onto a rising,

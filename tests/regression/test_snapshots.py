@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """HDF5 snapshots and their XDMF index, read as ParaView and h5py users read them.
 
 1. snapshots.xmf is well-formed XML whose time series has one step per snapshot; every

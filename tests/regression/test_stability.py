@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Numerical stability on hard cases, for both integrators.
 
 1. An elastic, frictionless sphere bouncing on a rigid plane for about 100 bounces keeps

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Every run ends with one line that says why it stopped, and settling is judged only once
 the particles have had the time to move.
 

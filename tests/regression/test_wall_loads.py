@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Wall loads (the 'wall_load' probe) against momentum balances, and prescribed wall motions
 (oscillation, velocity tables) in a run (doc/theory.md, sections 4 and 8):
 

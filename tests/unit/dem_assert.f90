@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> A small assertion module for the test programs: each check prints what failed; the
 !> program ends with assert_finish, which stops with exit code 1 if anything failed.
 module dem_assert

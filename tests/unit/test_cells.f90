@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The device rebuild's building blocks against brute force: prefix sums across the chunk
 !> boundaries of prefix_sum (n = 1, 255-257, 1000, 0); the counting sort bin_items (every
 !> binned item in its cell once, cells in increasing order, items left out absent), on random

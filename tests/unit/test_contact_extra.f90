@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Rolling resistance and sJKR cohesion (dem_contact_extra, doc/theory.md section 15):
 !> 1. sJKR through the particle kernel: two spheres at rest pressed together (equal radii and
 !>    unequal) feel the Hertz force less k pi a^2, a the radius of the circle in which their

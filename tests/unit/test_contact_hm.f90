@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The Hertz-Mindlin kernel against the formulas it must reproduce, written independently:
 !> Hertz's elastic force, MercuryDPM's form of the viscous damping, the Coulomb limit, the
 !> turning of the tangential history (both updates), Newton's third law.

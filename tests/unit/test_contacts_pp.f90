@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The one-pass particle contact kernel (each pair evaluated once, its force added to both
 !> particles in fixed point) against brute force evaluating every contact from both sides in
 !> floating point: the same forces and torques to the rounding of the fixed point (half a

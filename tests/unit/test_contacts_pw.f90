@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> A sphere pressed onto a flat wall of many triangles feels exactly the force of one plane
 !> (Hertz), through one contact, wherever it is: over faces, shared edges and vertices shared
 !> by six triangles. Two walls meeting at 90 degrees give two contacts. A sphere sliding

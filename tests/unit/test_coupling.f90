@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> dem_coupling driven as a fluid code would (run on 1 and 2 ranks): a sphere released in a
 !> quiescent viscous fluid with Stokes drag beta = 6 pi mu R and buoyancy as an external
 !> force, advanced by a fluid step that the DEM cuts into 4 sub-steps.

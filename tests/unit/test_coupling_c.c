@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /* dem_coupling from C (src/api/dem_coupling.h), as a C fluid code calls it, on 1 and 2 ranks:
  * a sphere in a fluid moving sideways at u with drag beta (no buoyancy). Across the flow
  * (x) symplectic Euler gives v_n = u (1 - (1 - h beta / m)^n) after n sub-steps of h, to

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Two coupled runs in one process, each on its own coupling_t handle (run on 1 and 2 ranks):
 !> bed A (60 spheres of 1 mm falling onto a floor in a box, dt 2e-5 s) and bed B (40 spheres
 !> of 0.5 to 0.8 mm of another material onto a floor, dt 1.5e-5 s, with EPSD2 rolling

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Deposition through dem_coupling (run on 1, 2 and 3 ranks): 300 spheres of 0.6-1 mm in
 !> a box, given drag coefficients and fluid velocities that differ by particle and advanced
 !> three fluid steps, then deposited onto a 5 x 4 x 6 grid that holds them all, with each

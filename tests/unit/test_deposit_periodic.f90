@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Deposition onto a grid that is periodic along its three axes (dem_deposit, `wrap`), as the
 !> coupling does where the grid spans a periodic case's period: 60 spheres of 0.3-0.8 mm at
 !> places spread over a 12 x 8 x 10 mm box (many across its faces), on a 6 x 4 x 4 grid, for

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> dem_fixed_sum on any number of ranks (run with 1, 2, 3 and 4): the same N terms, dealt
 !> to the ranks in turn and added in reverse order, into three bins. Their sums must be
 !> (1) exact, bit for bit, for dyadic terms whose exact sum a double holds (it is computed

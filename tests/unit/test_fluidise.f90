@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> A packed bed under an upward fluid flow, through dem_coupling (run on 1 and 2 ranks): 150
 !> spheres settle in a square box in a still fluid (drag beta, 0.3 s), then the fluid rises at
 !> u_f. On a sphere at rest the drag beta u_f is below its weight for u_f = 0.5 m g / beta:

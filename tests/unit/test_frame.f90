@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> frame_spread of dem_frame on any number of ranks (run with 1, 2 and 3): N particles
 !> with ids 3k + 1 (gaps between them) are dealt to the ranks in a scrambled order, rank 1
 !> holding none, every field that frames hold (dem_particles' particles_fields) a function

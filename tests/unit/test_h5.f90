@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> dem_h5: what is written is read back bit for bit (reals, integers, 64-bit integers,
 !> strings; scalars, vectors, matrices, empty arrays); a missing dataset, a dataset of
 !> another shape or type, a damaged byte of data and a truncated file are refused with

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> dem_h5 on any number of ranks (run with 1 and with 3): every rank writes its own rows of
 !> a distributed dataset (rank r holds r + 1 rows of (r, row, column) codes, some ranks
 !> none) collectively, and a replicated one; every rank then reads the whole file back

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> read_case of dem_input on any number of ranks (run with 1, 2, 3 and 4): each rank keeps a
 !> share of the particles, not all of them.
 !> - A case of 5 &particle groups and a CSV file of 23 rows (fields functions of the id): the

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The radius distributions of &insert (dem_insert, doc/theory.md section 10) against their
 !> definitions: for each, n radii drawn from the case's generator must lie within the
 !> Kolmogorov-Smirnov distance 1.63/sqrt(n) (the 1 % critical value) of the truncated CDF

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The integrators under a constant force, against closed forms: symplectic Euler gives
 !> x_n = x_0 + n h v_0 + h^2 a n (n + 1) / 2; velocity Verlet is exact for constant force.
 !> The speed guard of the kick (and of the kick and drift) against particles set above and

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The library returns a status and never stops the program that calls it (a small driver
 !> on the facade module `dem`, as an embedding code would be):
 !> - a case file that does not exist, and one with a bad value, give dem_err_input with a

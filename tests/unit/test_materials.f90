@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Effective moduli and damping ratios against the table of the benchmark's materials
 !> (MercuryDPM's OSBenchmark values, as listed in the project's case definitions), and the
 !> Hertz-Mindlin kernel constants the contact model builds from them (dem_contact_model).

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Closest point on a triangle against brute-force sampling of the triangle, its feature
 !> classification, the flat wall made of triangles (area, orientation), and rigid wall
 !> motion (poses against the closed form, wall velocity against finite differences), and the

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Splitting namelist files into groups and items: comments, strings holding '!', '/', '='
 !> and '&', groups over several lines, line numbers; and the errors for text outside a group
 !> and a group left open.

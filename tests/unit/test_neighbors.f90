@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Verlet lists against brute force for random polydisperse spheres (size ratios 1 to 20),
 !> near the edges of the domain too: every pair within R_i + R_j + skin is listed in both
 !> rows and no other, rows ordered by partner id; the wall list holds exactly the triangles

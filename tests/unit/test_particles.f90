@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> The particle store's operations, all drawn from one description of the fields
 !> (particles_fields), checked field by field against what each operation means:
 !> - the packed rows are the fields' rows: 2 integers (id, material) and 19 reals (radius,

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Reading STL files: an ASCII cube (coordinates, area, closed and consistently oriented
 !> surface), the same cube in binary with a header that begins with "solid", two solids in
 !> one file, number formats against the compiler's own conversion, files larger than the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /* A toy one-dimensional fluid solver coupled two-way to dem through the C interface: a
  * settling suspension (doc/user/coupling.md walks through it). Run on 1 and 2 ranks.
  *

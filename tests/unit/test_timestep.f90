@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 !> Hertz impact scales against the values of the Chung & Ooi tests 1 and 2 (Hertz theory,
 !> evaluated independently in the project's case definitions), the critical step against
 !> its closed form, the Rayleigh time against a hand-evaluated example, and the squeezed

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Convert a `dem` particle file (CSV) into a LIGGGHTS data file for atom_style granular.
 
 The CSV has a header line naming the columns (any order; others are ignored):

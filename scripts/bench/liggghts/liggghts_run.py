@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Running LIGGGHTS 3.8.0 from the comparison scripts (chung-ooi-liggghts, bed-reference,
 ../compare-liggghts): one rank, output kept in the run directory, and the last snapshot of
 a custom dump."""
