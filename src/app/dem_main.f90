@@ -15,7 +15,7 @@ program dem_main
     use dem_signals, only: signals_install
     use dem_folder, only: folder_conflict
     use dem_integrate, only: integrator_verlet
-    use dem_materials, only: rolling_epsd2
+    use dem_materials, only: rolling_epsd2, normal_hooke, tangential_coulomb
     implicit none
     type(comm_t) :: comm
     type(case_t) :: c
@@ -161,7 +161,20 @@ contains
         type(time_scales_t) :: ts
         real(wp) :: mem
         integer :: k
+        character(len=23) :: time_label
+        character(len=:), allocatable :: law
         call case_time_scales(c, ts)
+        time_label = merge('  linear contact time  ', '  Hertz contact time   ', &
+                           c%opts%normal == normal_hooke)
+        law = 'Hertz'
+        if (c%opts%normal == normal_hooke) law = 'linear spring-dashpot'
+        if (c%opts%tangential == tangential_coulomb) then
+            law = law // ', Coulomb-capped tangential'
+        else if (c%opts%normal == normal_hooke) then
+            law = law // ', Mindlin tangential'
+        else
+            law = 'Hertz-Mindlin'
+        end if
         ! peak resident sizes measured (doc/user/running.md): 31 MiB for a sphere on a plane, plus
         ! about 2900 bytes per particle (a bed of 25 000) and 790 per triangle (planes of
         ! 0.5 and 2 million), a checkpoint built in memory included
@@ -178,13 +191,13 @@ contains
         write(output_unit, '(a,es12.5,a,es10.3,a)') '  Rayleigh time        ', ts%rayleigh, &
             ' s (smallest particle, radius ', ts%rayleigh_radius, ' m)'
         if (ts%speed > 0.0_wp) then
-            write(output_unit, '(a,es12.5,a,es10.3,a)') '  Hertz contact time   ', ts%contact, &
+            write(output_unit, '(a,es12.5,a,es10.3,a)') time_label, ts%contact, &
                 ' s (at the largest expected speed, ', ts%speed, ' m/s)'
         else
-            write(output_unit, '(a)') '  Hertz contact time   n/a (nothing moves or falls; ' // &
-                'set &run expected_speed)'
+            write(output_unit, '(a)') time_label // 'n/a (nothing moves or falls; set &run ' // &
+                'expected_speed)'
         end if
-        write(output_unit, '(a)') '  contact law          Hertz-Mindlin, variant ' // &
+        write(output_unit, '(a)') '  contact law          ' // trim(law) // ', variant ' // &
             trim(c%opts%variant) // ' (&contact_model), ' // &
             trim(merge('velocity Verlet ', 'symplectic Euler', c%integrator == integrator_verlet))
         if (allocated(c%mats%rolling_friction)) then     ! (only in a case that has them)

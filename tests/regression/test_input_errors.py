@@ -116,6 +116,20 @@ bad("negative_cohesion",
     sub("'glass', 'steel', restitution = 0.5, friction = 0.3",
         "'glass', 'steel', restitution = 0.5, friction = 0.3, cohesion_energy_density = -1"),
     "pair", "cohesion_energy_density")
+bad("unknown_normal_model", GOOD + "&contact_model normal_model = 'hook' /\n", "contact_model",
+    "normal_model", "'hook'")
+bad("unknown_tangential_model", GOOD + "&contact_model tangential_model = 'coloumb' /\n",
+    "contact_model", "tangential_model", "'coloumb'")
+bad("hooke_without_stiffness", GOOD + "&contact_model normal_model = 'hooke' /\n", "pair",
+    "stiffness", "normal_model = 'hooke'")
+bad("hooke_negative_stiffness",
+    sub("'glass', 'glass', restitution = 0.5, friction = 0.3",
+        "'glass', 'glass', restitution = 0.5, friction = 0.3, stiffness = -1")
+    + "&contact_model normal_model = 'hooke' /\n", "pair", "stiffness")
+bad("stiffness_with_hertz",
+    sub("'glass', 'glass', restitution = 0.5, friction = 0.3",
+        "'glass', 'glass', restitution = 0.5, friction = 0.3, stiffness = 1e6"),
+    "pair", "stiffness", "normal_model = 'hooke'")
 bad("undefined_pair", sub("&pair materials = 'glass', 'steel', restitution = 0.5, "
                           "friction = 0.3 /\n", ""), "pair", None, "'glass' and 'steel'")
 bad("nan_position", sub("position = 0, 0, 0.011", "position = 0, NaN, 0.011"), "particle",
