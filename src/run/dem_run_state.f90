@@ -173,6 +173,9 @@ contains
         call acc_data(s%pc%mu, op)
         call acc_data(s%pc%gn, op)
         call acc_data(s%pc%gt, op)
+        call acc_data(s%pc%rmodel, op)     ! (read by the kernels' rolling and cohesion path)
+        call acc_data(s%pc%mur, op)
+        call acc_data(s%pc%kcoh, op)
         if (s%mesh%n_tri > 0) then
             call mesh_data(s%mesh, op)
         end if
