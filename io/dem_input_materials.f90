@@ -5,7 +5,7 @@
 !> the normal law). Each key is declared once, by its group's `namelist` statement, documented
 !> beside its variable (default, unit, range) and in doc/user/input.md.
 module dem_input_materials
-    use dem_kinds, only: wp
+    use dem_kinds, only: wp, ip
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_namelist_scan, only: nml_file_t
     use dem_input_group, only: group_io_t, group_reading, group_count, group_at_most_once
@@ -301,28 +301,32 @@ contains
             if (.not. lever_shift(lever_torque, 'lever_torque', o%shift_t)) return
         end if
         if (given('reset_pair_history')) o%reset_pair_history = reset_pair_history
-        select case (normal_model)
-        case ('hertz')
-            o%normal = normal_hertz
-        case ('hooke')
-            o%normal = normal_hooke
-        case default
-            call set_error(err, dem_err_input, at // ": key 'normal_model': '" // &
-                trim(normal_model) // "' is not known (accepted: hertz, hooke)")
-            return
-        end select
-        select case (tangential_model)
-        case ('mindlin')
-            o%tangential = tangential_mindlin
-        case ('coulomb')
-            o%tangential = tangential_coulomb
-        case default
-            call set_error(err, dem_err_input, at // ": key 'tangential_model': '" // &
-                trim(tangential_model) // "' is not known (accepted: mindlin, coulomb)")
-            return
-        end select
+        o%normal = model_id(normal_model, 'normal_model', [character(len=8) :: 'hertz', 'hooke'], &
+                            [normal_hertz, normal_hooke])
+        if (err%failed()) return
+        o%tangential = model_id(tangential_model, 'tangential_model', &
+                                [character(len=8) :: 'mindlin', 'coulomb'], &
+                                [tangential_mindlin, tangential_coulomb])
+        if (err%failed()) return
         c%opts = o
     contains
+        !> The id ids(k) of the sub-model names(k) that key `key` names (`value`); 0 and an
+        !> error naming the accepted names if it names none of them.
+        integer(ip) function model_id(value, key, names, ids) result(id)
+            character(len=*), intent(in) :: value, key, names(:)
+            integer(ip), intent(in) :: ids(:)
+            character(len=:), allocatable :: accepted
+            integer :: k
+            id = 0
+            accepted = ''
+            do k = 1, size(names)
+                if (value == names(k)) id = ids(k)
+                accepted = accepted // trim(names(k)) // merge(', ', '  ', k < size(names))
+            end do
+            if (id == 0) call set_error(err, dem_err_input, at // ": key '" // key // "': '" // &
+                trim(value) // "' is not known (accepted: " // trim(accepted) // ')')
+        end function model_id
+
         logical function given(key)
             character(len=*), intent(in) :: key
             given = any(io%keys == key)

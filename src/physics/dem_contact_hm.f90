@@ -161,21 +161,7 @@ contains
             fs2(l) = ft2
             fmax(l) = ft_max
         end do
-        do l = 1, m
-            if (fs2(l) > fmax(l)**2) then
-                g = fmax(l) / sqrt(fs2(l))
-                kt = lane(l, lane_st) * root(l)
-                f1 = lane(l, lane_f1) * g
-                f2 = lane(l, lane_f2) * g
-                f3 = lane(l, lane_f3) * g
-                lane(l, lane_f1) = f1
-                lane(l, lane_f2) = f2
-                lane(l, lane_f3) = f3
-                lane(l, lane_x1) = -f1 / kt
-                lane(l, lane_x2) = -f2 / kt
-                lane(l, lane_x3) = -f3 / kt
-            end if
-        end do
+        call slide_lanes(m, root, fs2, fmax, lane)
     end subroutine mindlin_lanes
 
     !> The Coulomb-capped tangential force of lanes 1..m: the spring and the damping together,
@@ -202,22 +188,36 @@ contains
             fs2(l) = f1 * f1 + f2 * f2 + f3 * f3
             fmax(l) = lane(l, lane_mu) * max(lane(l, lane_fn), 0.0_wp)
         end do
+        call slide_lanes(m, root, fs2, fmax, lane)
+    end subroutine coulomb_lanes
+
+    !> The sliding lanes of a tangential law: where the force's square fs2 exceeds the limit's
+    !> square, the force rescaled to the limit fmax and the spring set to carry it,
+    !> x = -F_t / kt (in a loop of its own, rarely taken, so that the law's loop has no branch
+    !> and runs on vector registers).
+    pure subroutine slide_lanes(m, root, fs2, fmax, lane)
+        !$acc routine seq
+        integer(ip), intent(in) :: m
+        real(wp), intent(in) :: root(max_lanes), fs2(max_lanes), fmax(max_lanes)
+        real(wp), intent(inout) :: lane(lane_rows, law_columns)
+        real(wp) :: f1, f2, f3, kt, g
+        integer(ip) :: l
         do l = 1, m
             if (fs2(l) > fmax(l)**2) then
                 g = fmax(l) / sqrt(fs2(l))
+                kt = lane(l, lane_st) * root(l)
                 f1 = lane(l, lane_f1) * g
                 f2 = lane(l, lane_f2) * g
                 f3 = lane(l, lane_f3) * g
                 lane(l, lane_f1) = f1
                 lane(l, lane_f2) = f2
                 lane(l, lane_f3) = f3
-                kt = lane(l, lane_st) * root(l)
                 lane(l, lane_x1) = -f1 / kt
                 lane(l, lane_x2) = -f2 / kt
                 lane(l, lane_x3) = -f3 / kt
             end if
         end do
-    end subroutine coulomb_lanes
+    end subroutine slide_lanes
 
     !> The energy of a Hertz spring at overlap d, the work of F = kn sqrt(R*) d^(3/2):
     !> (2/5) kn sqrt(R*) d^(5/2) [J].
