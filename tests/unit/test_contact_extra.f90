@@ -67,8 +67,9 @@ program test_contact_extra
             slot = 0
             n_hist = 0
             call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
-                           [sum(r)**2], hz, mdl, kn, st, zero, zero, mu, .false., .true., 0.0_wp, 0.0_wp, &
-                           .true., .true., none, zero, kc, dt, no_g, slot, xi3, n_hist, acc, f, t)
+                           [sum(r)**2], hz, mdl, kn, st, zero, zero, mu, .false., .true., 0.0_wp, &
+                           0.0_wp, .true., .true., none, zero, kc, dt, no_g, slot, xi3, n_hist, &
+                           acc, f, t)
             call assert_close(-f(1, 1), hertz - kcoh * pi * a2, 1.0e-9_wp, &
                               'sJKR pair: Hertz less k pi a^2')
             call assert_close(f(1, 2), -f(1, 1), 1.0e-12_wp, 'sJKR pair: opposite forces')
@@ -117,9 +118,9 @@ program test_contact_extra
     xi3 = 0.0_wp
     slot = 0
     n_hist = 0
-    call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
-                   [sum(r)**2], hz, mdl, kn, st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, &
-                   .true., .true., model, mur, zero, dt, no_g, slot, xi3, n_hist, acc, f, t)
+    call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, [sum(r)**2], &
+                   hz, mdl, kn, st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, .true., &
+                   .true., model, mur, zero, dt, no_g, slot, xi3, n_hist, acc, f, t)
     call assert_close(t(2, 1), -0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: on the turning one')
     call assert_close(t(2, 2), 0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: the opposite')
     call assert_true(all(t([1, 3], :) == 0.0_wp), 'CDT pair: about y only')
@@ -174,12 +175,11 @@ contains
         tt = 0.0_wp
         call pw_forces(1_ip, 1_ip, [1_ip], plane%n_tri, plane%n_tri, plane%n_wall, 1_ip, &
                        reshape([0.0_wp, 0.0_wp, z], [3, 1]), v(:, 1:1), w(:, 1:1), r(1:1), &
-                       m(1:1), [1_ip], [1_ip, plane%n_tri + 1], wlist, &
-                       reshape([0.0_wp, 0.0_wp, z], [3, 1]), spread(-1.0_wp, 1, plane%n_tri), &
-                       0.0_wp, plane%vert, plane%mat, &
-                       plane%wall, plane%wall_v, plane%wall_w, plane%wall_c, hz, mdl, kn, st, zero, &
-                       zero, mu, .false., .true., 0.0_wp, 0.0_wp, .true., none, zero, kc, dt, &
-                       wtri, wxi, .false., 1_ip, load, ff, tt, overflow)
+                       m(1:1), [1_ip], [1_ip, plane%n_tri + 1], wlist, reshape([0.0_wp, 0.0_wp, &
+                       z], [3, 1]), spread(-1.0_wp, 1, plane%n_tri), 0.0_wp, plane%vert, &
+                       plane%mat, plane%wall, plane%wall_v, plane%wall_w, plane%wall_c, hz, mdl, &
+                       kn, st, zero, zero, mu, .false., .true., 0.0_wp, 0.0_wp, .true., none, &
+                       zero, kc, dt, wtri, wxi, .false., 1_ip, load, ff, tt, overflow)
         fw = ff(:, 1)
         tw = tt(:, 1)
     end subroutine wall_force
