@@ -12,8 +12,8 @@
 #            -march=x86-64-v4 (AVX-512; AMD since Zen 4, Intel server processors) with
 #            -mprefer-vector-width=256: AVX-512's instructions on 256-bit registers, as GCC's
 #            own tunings for Intel's AVX-512 processors choose, since 512-bit ones lower the
-#            clock of many of them (the whole step 8 % slower here: doc/results/
-#            performance.md, eleventh step); native: -march=native. A program built for avx2
+#            clock of many of them (the whole step 8-12 % slower on 512-bit ones:
+#            doc/results/performance.md); native: -march=native. A program built for avx2
 #            or avx512 stops with a message on a processor without them
 #            (src/app/dem_cpu_check.c).
 #   Debug:   -O0 -g and run-time checks (gfortran: -fcheck=all -ffpe-trap=... -Wall)

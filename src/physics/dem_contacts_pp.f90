@@ -143,7 +143,7 @@ contains
                 m = m + merge(1_i8, 0_i8, over)
                 s = slot(p)
                 ! (this form, measured: with s == 0 tested first, gfortran 12's code took 13-42 %
-                ! longer for the particle contacts; doc/results/performance.md, tenth step)
+                ! longer for the particle contacts; doc/results/performance.md, what did not pay)
                 if (over .neqv. s > 0) then                ! the contact begins or ends
                     if (.not. over) then                   ! ends: its slot kept for it
                         if (reset) hist(:, s) = 0.0_wp

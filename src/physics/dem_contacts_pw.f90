@@ -272,7 +272,7 @@ contains
             ! misses in turn; here the misses of the block's rows overlap (`lines` is
             ! VOLATILE, so that the loads are kept). The lines that only rows with contacts
             ! read (velocities, forces, wall history) are not loaded here: about half the
-            ! rows have none, and loading theirs too was slower (issue 28, thirteenth step)
+            ! rows have none, and loading theirs too was slower (doc/results/performance.md)
             do kr = 1, n_block
                 i = row(k0 + kr)
                 lines = x(1, i) + x(3, i) + x_ref(1, i) + x_ref(3, i) + radius(i) &
