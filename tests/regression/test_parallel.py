@@ -23,7 +23,8 @@ checkpoints' particles and contact history, for
 7. a case started from a CSV particle file and from the HDF5 snapshot of its first step (each
    rank reading its block of the file) on 1, 2 and 3 ranks: the same final.csv; and a case
    whose materials lack the snapshot's stops on every rank count with the same message;
-8. a polydisperse bed with sJKR cohesion (radii 1 to 2 mm) on 1, 2 and 3 ranks.
+8. a polydisperse bed with sJKR cohesion (radii 1 to 2 mm) on 1, 2 and 3 ranks, with the
+   Hertz-Mindlin law and with the linear law and the Coulomb-capped tangential law.
 
 The runs are independent: each rank count decomposes space differently (METIS on blocks),
 so equality means that the forces do not depend on the decomposition, that particles
@@ -293,6 +294,16 @@ with open(os.path.join(work, "cohesive.nml"), "w") as f:
 outs = compare("cohesive", [1, 2, 3], ("final.csv", "series.csv"))
 s = np.genfromtxt(os.path.join(outs[1], "series.csv"), delimiter=",", names=True)
 check(s["contacts_pp"][-1] > 50, f"cohesive: the bed has {s['contacts_pp'][-1]:.0f} contacts")
+# and with the linear normal law and the Coulomb-capped tangential law
+with open(os.path.join(work, "cohesive_linear.nml"), "w") as f:
+    f.write(text.replace("cohesion_energy_density = 2e5 /",
+                         "cohesion_energy_density = 2e5, stiffness = 2e3 /")
+            + "&contact_model normal_model = 'hooke', tangential_model = 'coulomb' /\n")
+outs = compare("cohesive_linear", [1, 2, 3], ("final.csv", "series.csv"))
+s = np.genfromtxt(os.path.join(outs[1], "series.csv"), delimiter=",", names=True)
+check(s["contacts_pp"].max() >= 5 and s["contacts_pw"][-1] > 100,
+      f"cohesive, linear law: at most {s['contacts_pp'].max():.0f} pair contacts, "
+      f"{s['contacts_pw'][-1]:.0f} on the walls at the end")
 
 # tracing is for one rank: on two, --check and the run both refuse it as bad input (exit 2,
 # naming &output's trace_id), where the run used to stop at its start with exit 3
