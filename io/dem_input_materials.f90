@@ -234,6 +234,13 @@ contains
         type(group_io_t) :: io
         character(len=:), allocatable :: at
         type(contact_options_t) :: o
+        integer :: k
+        ! the levers' names and their shifts s of R - s d
+        character(len=11), parameter :: levers(2) = [character(len=11) :: 'radius', 'mid_overlap']
+        real(wp), parameter :: shifts(2) = [0.0_wp, 0.5_wp]
+        ! the ids of the normal_model and tangential_model names
+        integer(ip), parameter :: normals(2) = [normal_hertz, normal_hooke], &
+                                  tangentials(2) = [tangential_mindlin, tangential_coulomb]
 
         if (.not. group_at_most_once(nf, 'contact_model', err)) return
         if (group_count(nf, 'contact_model') == 0) return
@@ -285,69 +292,49 @@ contains
         if (given('tangential_damping')) o%tangential_damping = tangential_damping
         if (given('clamp_normal')) o%clamp_normal = clamp_normal
         if (given('tangential_history')) then
-            select case (tangential_history)
-            case ('keep_length', 'project')
-                o%keep_length = tangential_history == 'keep_length'
-            case default
-                call set_error(err, dem_err_input, at // ": key 'tangential_history': '" // &
-                    trim(tangential_history) // "' is not known (accepted: keep_length, project)")
-                return
-            end select
+            k = choice(tangential_history, 'tangential_history', [character(len=11) :: &
+                       'keep_length', 'project'])
+            if (k == 0) return
+            o%keep_length = k == 1
         end if
         if (given('lever_velocity')) then
-            if (.not. lever_shift(lever_velocity, 'lever_velocity', o%shift_v)) return
+            k = choice(lever_velocity, 'lever_velocity', levers)
+            if (k == 0) return
+            o%shift_v = shifts(k)
         end if
         if (given('lever_torque')) then
-            if (.not. lever_shift(lever_torque, 'lever_torque', o%shift_t)) return
+            k = choice(lever_torque, 'lever_torque', levers)
+            if (k == 0) return
+            o%shift_t = shifts(k)
         end if
         if (given('reset_pair_history')) o%reset_pair_history = reset_pair_history
-        o%normal = model_id(normal_model, 'normal_model', [character(len=8) :: 'hertz', 'hooke'], &
-                            [normal_hertz, normal_hooke])
-        if (err%failed()) return
-        o%tangential = model_id(tangential_model, 'tangential_model', &
-                                [character(len=8) :: 'mindlin', 'coulomb'], &
-                                [tangential_mindlin, tangential_coulomb])
-        if (err%failed()) return
+        k = choice(normal_model, 'normal_model', [character(len=5) :: 'hertz', 'hooke'])
+        if (k == 0) return
+        o%normal = normals(k)
+        k = choice(tangential_model, 'tangential_model', [character(len=7) :: 'mindlin', 'coulomb'])
+        if (k == 0) return
+        o%tangential = tangentials(k)
         c%opts = o
     contains
-        !> The id ids(k) of the sub-model names(k) that key `key` names (`value`); 0 and an
-        !> error naming the accepted names if it names none of them.
-        integer(ip) function model_id(value, key, names, ids) result(id)
-            character(len=*), intent(in) :: value, key, names(:)
-            integer(ip), intent(in) :: ids(:)
-            character(len=:), allocatable :: accepted
-            integer :: k
-            id = 0
-            accepted = ''
-            do k = 1, size(names)
-                if (value == names(k)) id = ids(k)
-                accepted = accepted // trim(names(k)) // merge(', ', '  ', k < size(names))
-            end do
-            if (id == 0) call set_error(err, dem_err_input, at // ": key '" // key // "': '" // &
-                trim(value) // "' is not known (accepted: " // trim(accepted) // ')')
-        end function model_id
-
         logical function given(key)
             character(len=*), intent(in) :: key
             given = any(io%keys == key)
         end function given
 
-        !> The shift of a lever R - shift d named by the key `key`.
-        logical function lever_shift(value, key, shift) result(ok)
-            character(len=*), intent(in) :: value, key
-            real(wp), intent(out) :: shift
-            ok = .true.
-            select case (value)
-            case ('radius')
-                shift = 0.0_wp
-            case ('mid_overlap')
-                shift = 0.5_wp
-            case default
-                ok = .false.
-                shift = 0.0_wp
-                call set_error(err, dem_err_input, at // ": key '" // key // "': '" // &
-                    trim(value) // "' is not known (accepted: radius, mid_overlap)")
-            end select
-        end function lever_shift
+        !> The place k of `value`, the value of key `key`, among its accepted values `names`;
+        !> 0 and an error naming them if it is none of them.
+        integer function choice(value, key, names) result(k)
+            character(len=*), intent(in) :: value, key, names(:)
+            character(len=:), allocatable :: accepted
+            integer :: m
+            k = 0
+            accepted = ''
+            do m = 1, size(names)
+                if (value == names(m)) k = m
+                accepted = accepted // trim(names(m)) // merge(', ', '  ', m < size(names))
+            end do
+            if (k == 0) call set_error(err, dem_err_input, at // ": key '" // key // "': '" // &
+                trim(value) // "' is not known (accepted: " // trim(accepted) // ')')
+        end function choice
     end subroutine read_contact_model
 end module dem_input_materials

@@ -25,10 +25,9 @@ module dem_contact_model
     public :: contact_model_t, contact_model_build, law_lanes, law_force, normal_energy, &
               pair_contact_time, pair_critical_dt, pair_squeeze_dt
 
-    !> The kernels' constants per material pair (i, j), symmetric, and the sub-models.
+    !> The kernels' constants per material pair (i, j), symmetric; the sub-models are those
+    !> of `opts` (%normal, %tangential).
     type :: contact_model_t
-        integer(ip) :: normal = 0             !< normal_hertz or normal_hooke (dem_materials)
-        integer(ip) :: tangential = 0         !< tangential_mindlin or tangential_coulomb
         !> Hertz: kn = (4/3) E* [Pa], st = 8 G* times the stiffness factor [Pa], the damping
         !> factors gn = cn sqrt(2 E*), gt = ct sqrt(st) [Pa^(1/2)] (cn = -2 sqrt(5/6) beta,
         !> ct = cn or 0 without tangential damping), so that a contact's damping
@@ -38,7 +37,7 @@ module dem_contact_model
         real(wp), allocatable :: mu(:, :)     !< sliding friction [-]
         real(wp), allocatable :: estar(:, :), gstar(:, :)  !< effective moduli [Pa]
         real(wp), allocatable :: zeta(:, :)   !< the normal mode's damping ratio [-]
-        type(contact_options_t) :: opts       !< the variant's switches, for the kernels
+        type(contact_options_t) :: opts       !< the sub-models and the variant's switches
         !> rolling resistance and cohesion (doc/theory.md, section 15): whether any pair has
         !> them (the kernels take their extra path only then), and per pair the model, the
         !> coefficient mu_r [-] and the cohesion energy density k [J/m^3]
@@ -60,8 +59,6 @@ contains
         integer(ip) :: a, b, n
         real(wp) :: estar, gstar, cn, ct, beta
         n = mats%n
-        cm%normal = opts%normal
-        cm%tangential = opts%tangential
         allocate(cm%kn(n, n), cm%st(n, n), cm%mu(n, n), cm%gn(n, n), cm%gt(n, n), &
                  cm%estar(n, n), cm%gstar(n, n), cm%zeta(n, n))
         cm%kn = 0.0_wp
@@ -207,7 +204,7 @@ contains
         type(contact_model_t), intent(in) :: cm
         integer(ip), intent(in) :: a, b
         real(wp), intent(in) :: mstar, rstar, speed
-        if (cm%normal == normal_hooke) then
+        if (cm%opts%normal == normal_hooke) then
             tc = hooke_contact_time(mstar, cm%kn(a, b), cm%zeta(a, b))
         else
             tc = hertz_contact_time(mstar, rstar, cm%estar(a, b), speed)
@@ -222,14 +219,14 @@ contains
         real(wp), intent(in) :: mstar, rstar, speed
         real(wp) :: zeta
         zeta = cm%zeta(a, b)
-        if (cm%normal == normal_hooke) then
+        if (cm%opts%normal == normal_hooke) then
             dtc = hooke_critical_dt(mstar, cm%kn(a, b), zeta)
         else
             dtc = hertz_critical_dt(mstar, rstar, cm%estar(a, b), speed, zeta)
         end if
         if (cm%mu(a, b) > 0.0_wp) then          ! the tangential mode, on the mass 2 m*/7
             if (.not. cm%opts%tangential_damping) zeta = 0.0_wp
-            if (cm%normal == normal_hooke) then
+            if (cm%opts%normal == normal_hooke) then
                 dtc = min(dtc, hooke_critical_dt(mstar / 3.5_wp, cm%st(a, b), &
                                                  zeta * sqrt(3.5_wp)))
             else
@@ -251,7 +248,7 @@ contains
         st = 0.0_wp
         if (cm%mu(a, b) > 0.0_wp) st = cm%st(a, b)
         zeta_t = merge(sqrt(5.0_wp) * zeta, 0.0_wp, cm%opts%tangential_damping)
-        if (cm%normal == normal_hooke) then
+        if (cm%opts%normal == normal_hooke) then
             dtc = hooke_squeeze_dt(m, cm%kn(a, b), st, sqrt(2.0_wp) * zeta, zeta_t)
         else
             dtc = squeeze_critical_dt(m, mh, rstar, cm%estar(a, b), st, speed, &

@@ -120,7 +120,7 @@ contains
                           ke_r, pe, vmax, mass)
             energy = ke_t + ke_r + elastic_energy(s%comm, k, k + p%n_ghost, &
                 size(s%nb%list, kind=ip), p%x, p%radius, p%mat, s%nb%start, s%nb%list, &
-                c%mats%n, s%pc%normal, s%pc%kn, s%cs%wall_tri, s%mesh)
+                c%mats%n, s%pc%opts%normal, s%pc%kn, s%cs%wall_tri, s%mesh)
         end associate
         if (energy > case_energy_bound(c, mass)) &
             call unstable(s, c, err, [energy, case_energy_bound(c, mass)])

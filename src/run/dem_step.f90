@@ -141,8 +141,8 @@ contains
         type(case_t), intent(in) :: c
         associate (p => s%p, nb => s%nb, pc => s%pc, o => s%pc%opts, n => s%p%n_own)
             call pp_forces(n, n + p%n_ghost, nb%n_pairs, c%mats%n, p%x, p%v, p%w, p%radius, &
-                           p%mass, p%mat, nb%scale, nb%pair, nb%reach2, pc%normal, &
-                           pc%tangential, pc%kn, pc%st, pc%gn, &
+                           p%mass, p%mat, nb%scale, nb%pair, nb%reach2, o%normal, &
+                           o%tangential, pc%kn, pc%st, pc%gn, &
                            pc%gt, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, o%shift_t, &
                            o%reset_pair_history, pc%rolling .or. pc%cohesion, pc%rmodel, &
                            pc%mur, pc%kcoh, c%dt, c%gravity, s%cs%slot, s%cs%hist, s%cs%n_hist, &
@@ -170,7 +170,7 @@ contains
             call pw_forces(n, nb%n_wrow, nb%wrow, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, &
                            p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%wstart, nb%wlist, &
                            nb%x_ref, nb%wslack, nb%wall_moved, m%vert, m%mat, &
-                           m%wall, m%wall_v, m%wall_w, m%wall_c, pc%normal, pc%tangential, &
+                           m%wall, m%wall_v, m%wall_w, m%wall_c, o%normal, o%tangential, &
                            pc%kn, pc%st, pc%gn, &
                            pc%gt, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, &
                            o%shift_t, pc%rolling .or. pc%cohesion, pc%rmodel, pc%mur, pc%kcoh, &

@@ -76,7 +76,8 @@ program test_contact_model
     call assert_close(norm2(ft), mu * fn, 1.0e-12_wp, 'Coulomb: |F_t| = mu F_n at onset')
     call assert_true(ft(1) < 0.0_wp, 'Coulomb: against the sliding')
     ! the spring then carries the capped force
-    call assert_close(-kt * xi(1), ft(1), 1.0e-12_wp, 'Coulomb: the spring carries the capped force')
+    call assert_close(-kt * xi(1), ft(1), 1.0e-12_wp, &
+                      'Coulomb: the spring carries the capped force')
     xi = 0.0_wp
     call law_force(normal_hooke, tangential_mindlin, 1.0e-5_wp, nz, [2.0_wp, 0.0_wp, 0.0_wp], &
                    rstar, mstar, cm%kn(1, 1), kt, cm%gn(1, 1), cm%gt(1, 1), mu, .false., &
@@ -115,9 +116,9 @@ contains
         do
             d_old = d
             if (d > 0.0_wp) then
-                call law_force(cm%normal, cm%tangential, d, nz, [0.0_wp, 0.0_wp, u], rstar, &
-                               mstar, cm%kn(1, 1), cm%st(1, 1), cm%gn(1, 1), cm%gt(1, 1), &
-                               cm%mu(1, 1), .false., .true., h, x_t, f_n, f_t)
+                call law_force(cm%opts%normal, cm%opts%tangential, d, nz, [0.0_wp, 0.0_wp, u], &
+                               rstar, mstar, cm%kn(1, 1), cm%st(1, 1), cm%gn(1, 1), &
+                               cm%gt(1, 1), cm%mu(1, 1), .false., .true., h, x_t, f_n, f_t)
                 u = u - f_n / mstar * h
             end if
             d = d + u * h
