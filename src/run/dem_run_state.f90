@@ -68,6 +68,7 @@ module dem_run_state
         logical :: settled = .false.   !< the kinetic energy fell below stop_kinetic_energy
         real(wp) :: settled_energy = 0.0_wp  !< the kinetic energy then [J]
         logical :: emptied = .false.   !< the outlets took every particle out
+        logical :: deep_warned = .false.  !< an overlap beyond overlap_warn was reported
         integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
         integer(i8) :: particle_steps = 0  !< this rank's particles in each of them, summed
         integer(ip) :: particles_most = 0  !< the most particles this rank held in them

@@ -12,7 +12,6 @@ module dem_solver
     use dem_contact_model, only: contact_model_build
     use dem_contact_store, only: store_init, max_wall_contacts, store_history_widths
     use dem_integrate, only: integrator_verlet
-    use dem_diagnostics, only: deep_overlap_id, deep_wall_id
     use dem_output, only: output_open, output_final, output_close
     use dem_probes, only: probe_header, probe_wall_load
     use dem_frame, only: frame_t
@@ -25,7 +24,7 @@ module dem_solver
     use dem_rebuild, only: rebuild, settle_outlets, start_domain
     use dem_frames, only: capture, solver_restore => frame_restore
     use dem_run_output, only: write_trace, write_snapshot, write_xdmf
-    use dem_run_control, only: unstable
+    use dem_run_control, only: unstable, deep_pair, deep_wall, smallest, overlap_warn
     use dem_step, only: time_step, forces, write_row
     implicit none
     private
@@ -169,7 +168,7 @@ contains
         type(error_t), intent(inout) :: err
         integer(i8) :: ids(2)
         if (.not. s%restarted) then
-            ids(1) = smallest(repeated_id(s))
+            ids(1) = smallest(s, repeated_id(s))
             if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particle id ' // &
                                            itoa(ids(1)) // ' is given twice')
             if (failed_anywhere(s, err)) return
@@ -179,31 +178,14 @@ contains
         call device_data(s, acc_enter)
         call rebuild(s, .false., err)
         if (err%failed() .or. s%restarted) return
-        associate (p => s%p, n => s%p%n_own)
-            if (s%mesh%n_tri > 0) then
-                ids(1) = smallest(deep_wall_id(n, size(s%nb%wlist, kind=ip), s%mesh%n_tri, &
-                                  p%gid, p%x, p%radius, s%nb%wstart, s%nb%wlist, s%mesh%vert))
-                if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particle ' &
-                    // itoa(ids(1)) // ' overlaps a wall by more than half its radius')
-                if (failed_anywhere(s, err)) return
-            end if
-            ids(1) = smallest(deep_overlap_id(n, n + p%n_ghost, size(s%nb%list, kind=ip), &
-                              p%gid, p%x, p%radius, s%nb%start, s%nb%list, 0_i8))
-            if (ids(1) == 0) return
-            ids(2) = smallest(deep_overlap_id(n, n + p%n_ghost, size(s%nb%list, kind=ip), &
-                              p%gid, p%x, p%radius, s%nb%start, s%nb%list, ids(1)))
-        end associate
-        call set_error(err, dem_err_input, c%source // ': particles ' // itoa(ids(1)) // &
-                       ' and ' // itoa(ids(2)) // ' overlap by more than half the smaller radius')
-    contains
-        !> The smallest of the ranks' ids > 0 (0 if none has one).
-        integer(i8) function smallest(id) result(least)
-            integer(i8), intent(in) :: id
-            integer(i8) :: a(1)
-            a = merge(-id, -huge(1_i8), id > 0)
-            call comm_max(s%comm, a)
-            least = merge(-a(1), 0_i8, a(1) > -huge(1_i8))
-        end function smallest
+        ids(1) = deep_wall(s, overlap_warn)
+        if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particle ' // &
+            itoa(ids(1)) // ' overlaps a wall by more than half its radius')
+        if (failed_anywhere(s, err)) return
+        ids = deep_pair(s, overlap_warn)
+        if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particles ' // &
+            itoa(ids(1)) // ' and ' // itoa(ids(2)) // ' overlap by more than half the ' // &
+            'smaller radius')
     end subroutine solver_prepare
 
     !> The smallest id that two particles share among those of rank mod(id, P): each rank
