@@ -81,6 +81,7 @@ module dem_case
                                                       !< given (case_speed_bound)
         real(wp) :: max_energy = 0.0_wp               !< energy guard [J], 0: case_energy_bound
         real(wp) :: energy_speed = 0.0_wp             !< its speed (case_energy_speed) [m/s]
+        real(wp) :: max_overlap = 0.9_wp              !< overlap guard, of the smaller radius
         real(wp) :: wall_time_limit = 0.0_wp          !< checkpoint and stop before [s], 0: none
         real(wp) :: progress_interval = 0.0_wp        !< between progress lines [s], 0: none
         real(wp) :: imbalance_limit = 1.1_wp          !< repartition above this load ratio

@@ -13,6 +13,7 @@ module dem_run_control
     use dem_run_state, only: solver_t, time_of, summed, particle_data, stop_wall_time, stop_signal
     use dem_run_output, only: contact_counts, write_checkpoint, write_frame_checkpoint
     use dem_domain, only: domain_update
+    use dem_mesh, only: mesh_speed_bound
     use dem_rebuild, only: settle_outlets
     use dem_diagnostics, only: energies, elastic_energy, first_nonfinite, deep_overlap_id, &
                                deep_wall_id
@@ -26,12 +27,15 @@ module dem_run_control
     implicit none
     private
     public :: run_control, progress, energy_guard, unstable, deep_pair, deep_wall, smallest, &
-              overlap_warn, overlap_stop
+              overlap_warn
 
-    !> Overlaps during a run, as fractions of the smaller radius (of the radius against a
-    !> wall): deeper than overlap_warn is reported once, deeper than overlap_stop stops the
-    !> run as unstable (doc/theory.md, section 6); a run's particles start within overlap_warn.
-    real(wp), parameter :: overlap_warn = 0.5_wp, overlap_stop = 0.9_wp
+    !> An overlap during a run deeper than this fraction of the smaller radius (of the radius
+    !> against a wall) is reported once (deeper than &run max_overlap stops the run; doc/
+    !> theory.md, section 6); a run's particles start within it.
+    real(wp), parameter :: overlap_warn = 0.5_wp
+    !> The energy balance's room, a fraction of the energy a closed case can set free
+    !> (balance_guard; doc/theory.md, section 6).
+    real(wp), parameter :: balance_room = 0.25_wp
 
     !> time left for the end of a stopped run after its checkpoint: closing files, the timing
     !> report, MPI_Finalize (measured: 50 to 140 ms on one node) [s]
@@ -139,10 +143,46 @@ contains
             call unstable(s, c, err, [energy, case_energy_bound(c, mass)])
             return
         end if
-        call overlap_guard(s, c, err)
+        if (closed_case(s, c)) call balance_guard(s, c, energy, pe, mass, err)
+        if (.not. err%failed()) call overlap_guard(s, c, err)
     end subroutine energy_guard
 
-    !> The overlaps' check of energy_guard: an overlap deeper than overlap_stop stops the run
+    !> A case that gives its particles no energy but from gravity: no moving wall, inflow,
+    !> cohesion, coupled fluid or &run max_energy (which says that something else does), and
+    !> no periodic axis along which gravity acts.
+    logical function closed_case(s, c) result(closed)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        closed = c%max_energy == 0.0_wp .and. .not. c%inflow .and. &
+                 mesh_speed_bound(s%mesh) == 0.0_wp .and. all(s%pc%kcoh == 0.0_wp) .and. &
+                 .not. allocated(s%p%ext) .and. &
+                 .not. any(c%periodic%axis .and. c%gravity /= 0.0_wp)
+    end function closed_case
+
+    !> The energy balance of a closed case (closed_case): the kinetic and elastic energy
+    !> `energy` plus the gravitational energy `pe` [J] can only fall, so a rise above its
+    !> value at the run's first check by more than balance_room times the energy the case
+    !> can set free there (`energy` and (1/2) M v_e^2, M `mass` [kg]) stops the run as
+    !> unstable (doc/theory.md, section 6). Every rank has the same sums.
+    subroutine balance_guard(s, c, energy, pe, mass, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        real(wp), intent(in) :: energy, pe, mass
+        type(error_t), intent(inout) :: err
+        if (s%balance_room < 0.0_wp) then          ! the run's first check: the reference
+            s%balance_total = energy + pe
+            s%balance_time = time_of(s, c, s%step)
+            s%balance_room = balance_room * (energy + 0.5_wp * mass * c%energy_speed**2)
+        end if
+        if (energy + pe - s%balance_total <= s%balance_room) return
+        call stop_unstable(s, c, err, 'unstable: the kinetic, elastic and gravitational ' // &
+            'energy has grown by ' // real_text(energy + pe - s%balance_total) // ' J since ' // &
+            't = ' // real_text(s%balance_time) // ' s, more than ' // &
+            real_text(s%balance_room) // ' J, though nothing in the case gives the ' // &
+            'particles energy')
+    end subroutine balance_guard
+
+    !> The overlaps' check of energy_guard: an overlap deeper than max_overlap stops the run
     !> (the state is not good), one deeper than overlap_warn is reported on standard error,
     !> the first time only. Collective.
     subroutine overlap_guard(s, c, err)
@@ -151,7 +191,7 @@ contains
         type(error_t), intent(inout) :: err
         integer(i8) :: ids(2)
         character(len=:), allocatable :: what
-        what = deep_text(overlap_stop)
+        what = deep_text(c%max_overlap)
         if (len(what) > 0) then
             call stop_unstable(s, c, err, 'unstable: ' // what)
             return
@@ -169,18 +209,19 @@ contains
         function deep_text(depth) result(text)
             real(wp), intent(in) :: depth
             character(len=:), allocatable :: text
-            character(len=4) :: part
-            write(part, '(f4.2)') depth
+            character(len=16) :: part
+            write(part, '(f16.2)') depth
+            part = adjustl(part)
             text = ''
             ids(1) = deep_wall(s, depth)
             if (ids(1) > 0) then
                 text = 'particle ' // itoa(ids(1)) // ' overlaps a wall by more than ' // &
-                       part // ' of its radius'
+                       trim(part) // ' of its radius'
                 return
             end if
             ids = deep_pair(s, depth)
             if (ids(1) > 0) text = 'particles ' // itoa(ids(1)) // ' and ' // itoa(ids(2)) // &
-                ' overlap by more than ' // part // ' of the smaller radius'
+                ' overlap by more than ' // trim(part) // ' of the smaller radius'
         end function deep_text
     end subroutine overlap_guard
 

@@ -69,6 +69,9 @@ module dem_run_state
         real(wp) :: settled_energy = 0.0_wp  !< the kinetic energy then [J]
         logical :: emptied = .false.   !< the outlets took every particle out
         logical :: deep_warned = .false.  !< an overlap beyond overlap_warn was reported
+        real(wp) :: balance_total = 0.0_wp   !< the energy at the run's first check [J]
+        real(wp) :: balance_time = 0.0_wp    !< its time [s]
+        real(wp) :: balance_room = -1.0_wp   !< the rise allowed [J]; < 0: not yet checked
         integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
         integer(i8) :: particle_steps = 0  !< this rank's particles in each of them, summed
         integer(ip) :: particles_most = 0  !< the most particles this rank held in them

@@ -21,6 +21,17 @@
    wall (at a row of series.csv, every 0.1 ms here: the sphere falls through the plane
    within 2 ms), and the checkpoint it names holds a state whose overlap is below the stop limit,
    0.9 R (the last good state).
+3. The energy balance of a closed case: the elastic, frictionless glass sphere of
+   test_stability.py (R = 1 mm, dropped from 0.1 mm onto a rigid plane, e = 1) at 4 times
+   the stability bound that `dem --check` prints, with allow_unstable. Each bounce gains
+   energy; the run must stop with exit 3 and the energy balance's message, before the
+   kinetic and gravitational energy (1/2) m v^2 + m g z, computed here from series.csv, has
+   risen from its start by more than a quarter of what the case can set free, and the
+   checkpoint the message names holds a state whose energy (with the Hertz energy of its
+   overlap, (2/5) (4/3) E/(1 - nu^2) sqrt(R) d^(5/2)) is within that rise. At twice the
+   bound the same sphere runs its 0.9 s to the end: the balance guard does not stop a run
+   whose energy stays (within 2 %) at or below its start (below it mid-contact, where the
+   rows' kinetic and gravitational energy leaves the elastic energy out).
 usage: test_guard.py DEM WORKDIR"""
 import math
 import os
@@ -130,4 +141,53 @@ if named:
     if z is not None:
         check(R - z < 0.9 * R, f"the named state's overlap {R - z:.4g} m is within the stop "
                                f"limit")
+# 3. the energy balance
+R, rho, E, nu, g, z0 = 1.0e-3, 2800.0, 48.0e9, 0.2, 9.81, 1.1e-3
+m = rho * 4.0 / 3.0 * math.pi * R**3
+bounce = """&run dt = {dt!r}, t_end = 0.9, gravity = 0, 0, -9.81, allow_unstable = .true. /
+&output dir = 'output/{name}', interval = 1.0e-4 /
+&material name = 'glass', density = 2800.0, youngs_modulus = 48.0e9, poisson_ratio = 0.2 /
+&material name = 'rigid', rigid = .true. /
+&pair materials = 'glass', 'glass', restitution = 1.0, friction = 0.0 /
+&pair materials = 'glass', 'rigid', restitution = 1.0, friction = 0.0 /
+&particle id = 1, material = 'glass', radius = 1.0e-3, position = 0, 0, 1.1e-3 /
+&wall_plane material = 'rigid', point = 0, 0, 0, normal = 0, 0, 1, half_width = 0.01 /
+"""
+r = subprocess.run([dem, "--check", write("bounce", bounce.format(dt=1e-7, name="bounce"))],
+                   cwd=work, capture_output=True, text=True)
+bound = float(re.search(r"stability bound +(\S+) s", r.stdout).group(1))
+speed = float(re.search(r"Hertz contact time +\S+ s \(at the largest expected speed, +(\S+) "
+                        r"m/s\)", r.stdout).group(1))
+room = 0.25 * 0.5 * m * speed**2          # (the sphere starts at rest, touching nothing)
+
+
+def energy(series):
+    return series["kinetic_translational"] + series["potential_gravity"]
+
+
+rc, out, err = run_dem(dem, write("bounce_x4", bounce.format(dt=4 * bound, name="bounce_x4")),
+                       work, expect_rc=3)
+check("unstable: the kinetic, elastic and gravitational energy has grown by" in err,
+      f"at 4 x the bound the energy balance stops the run: {err}")
+s4 = np.genfromtxt(os.path.join(work, "output", "bounce_x4", "series.csv"), delimiter=",",
+                   names=True)
+check(np.all(energy(s4) - energy(s4)[0] <= room * (1 + 1e-9)),
+      f"at 4 x the bound the rows' energy rose by {max(energy(s4) - energy(s4)[0]):.4g} J, "
+      f"more than {room:.4g} J")
+named = re.search(r"(checkpoints/checkpoint_\d+\.h5)", err)
+check(named is not None, f"the message names the last good state's checkpoint: {err}")
+if named:
+    with h5py.File(os.path.join(work, "output", "bounce_x4", named.group(1)), "r") as f:
+        z = f["particles/position"][...].reshape(-1, 3)[0, 2]
+        v = f["particles/velocity"][...].reshape(-1, 3)[0]
+    d = max(0.0, R - z)
+    e = (0.5 * m * v @ v + m * g * z
+         + 0.4 * 4.0 / 3.0 * E / (1 - nu**2) * math.sqrt(R) * d**2.5)
+    check(e - m * g * z0 <= room * (1 + 1e-9), f"the named state's energy rose by "
+                                               f"{e - m * g * z0:.4g} J, more than {room:.4g} J")
+run_dem(dem, write("bounce_x2", bounce.format(dt=2 * bound, name="bounce_x2")), work)
+s2 = np.genfromtxt(os.path.join(work, "output", "bounce_x2", "series.csv"), delimiter=",",
+                   names=True)
+check(s2["time"][-1] > 0.9 - 1e-9 and max(energy(s2)) < 1.02 * energy(s2)[0],
+      "at twice the bound the sphere bounces to the end without gaining energy")
 finish()
