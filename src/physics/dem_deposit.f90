@@ -132,7 +132,8 @@ contains
                         j = 1 + cx + g%n(1) * (cy + g%n(2) * cz)
                         do kk = g%start(j), g%start(j + 1) - 1
                             d2 = sum((centres(:, g%item(kk)) - x)**2)
-                            if (d2 < best .or. (d2 == best .and. g%item(kk) < best_k)) then
+                            if (d2 < best .or. (d2 == best .and. g%item(kk) < best_k) .or. &
+                                best_k == 0) then           ! (the first even when d2 = inf)
                                 best = d2
                                 best_k = g%item(kk)
                             end if
@@ -178,7 +179,7 @@ contains
         real(wp) :: s, lo, hi
         integer :: k, first, last
         w = 0.0_wp
-        s = (x - o) / h                      ! position in cells
+        s = reach((x - o) / h, nc, wrap)     ! position in cells
         select case (kernel)
         case (kernel_cell)
             first = floor(s)
@@ -190,8 +191,8 @@ contains
             w(2) = s - 0.5_wp - first
             w(1) = 1.0_wp - w(2)
         case default                         ! kernel_dpvm: [x - r, x + r] over the cells
-            lo = (x - r - o) / h
-            hi = (x + r - o) / h
+            lo = reach((x - r - o) / h, nc, wrap)
+            hi = reach((x + r - o) / h, nc, wrap)
             first = floor(lo)
             last = min(first + 7, floor(hi))
             do k = first, last
@@ -223,4 +224,17 @@ contains
             end if
         end if
     end subroutine axis_weights
+
+    !> A position s in cells, held to [-8, nc + 8] (a NaN to -8) unless the axis wraps: a
+    !> particle farther outside touches no cell either way (its support spans at most 7
+    !> cells: see doc/user/coupling.md), and its cell index stays an integer.
+    pure real(wp) function reach(s, nc, wrap) result(held)
+        real(wp), intent(in) :: s
+        integer, intent(in) :: nc
+        logical, intent(in) :: wrap
+        held = s
+        if (wrap) return
+        if (.not. held >= -8.0_wp) held = -8.0_wp
+        if (held > real(nc, wp) + 8.0_wp) held = real(nc, wp) + 8.0_wp
+    end function reach
 end module dem_deposit
