@@ -13,6 +13,7 @@
 module dem_coupling
     use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char, c_int64_t, c_null_char, &
                                            c_ptr, c_loc, c_null_ptr, c_intptr_t
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_runtime
     use dem_comm, only: comm_t, comm_from_handle, comm_free, comm_counts, comm_exchange, &
@@ -186,7 +187,10 @@ contains
         n_sub = 1
         associate (c => self%run%c, s => self%run%s)
             write(text, '(es12.5)') dt
-            if (.not. (dt > 0.0_wp .and. dt <= huge(dt))) then
+            if (.not. ieee_is_finite(dt)) then
+                call set_error(err, dem_err_input, 'dem_coupling_advance: dt = ' // &
+                               trim(adjustl(text)) // ' s: must be finite and > 0')
+            else if (.not. dt > 0.0_wp) then
                 call set_error(err, dem_err_input, 'dem_coupling_advance: dt = ' // &
                                trim(adjustl(text)) // ' s: must be finite and > 0')
             else if (dt / self%run%dt_case > 2.0_wp**52) then
@@ -543,10 +547,13 @@ contains
         write(h_text, '("(",es10.3,",",es10.3,",",es10.3,")")') h
         write(n_text, '("(",i0,",",i0,",",i0,")")') nc
         write(bound, '(es10.3)') 2.0_wp / 7.0_wp * r_max
-        if (.not. all(abs(origin) <= huge(1.0_wp))) then
+        if (.not. all(ieee_is_finite(origin))) then
             call set_error(err, dem_err_input, name // 'origin = ' // trim(o_text) // &
                            ' m: must be finite')
-        else if (.not. all(h > 0.0_wp .and. h <= huge(1.0_wp))) then
+        else if (.not. all(ieee_is_finite(h))) then
+            call set_error(err, dem_err_input, name // 'h = ' // trim(h_text) // &
+                           ' m: must be finite and > 0')
+        else if (.not. all(h > 0.0_wp)) then
             call set_error(err, dem_err_input, name // 'h = ' // trim(h_text) // &
                            ' m: must be finite and > 0')
         else if (any(nc < 1) .or. product(int(nc, i8)) > 2_i8**30) then
@@ -634,12 +641,13 @@ contains
                            'volume each (n >= 1)')
         else if (.not. finite(centres)) then
             call set_error(err, dem_err_input, name // 'the centres must be finite')
-        else if (.not. all(maxval(centres, dim=2) - minval(centres, dim=2) <= huge(1.0_wp))) &
+        else if (.not. all(ieee_is_finite(maxval(centres, dim=2) - minval(centres, dim=2)))) &
             then
             call set_error(err, dem_err_input, name // 'the centres spread beyond the ' // &
                            'largest double')
-        else if (.not. all(volumes >= max(tiny(1.0_wp), (2.0_wp / 7.0_wp * r_max)**3) .and. &
-                           volumes <= huge(1.0_wp))) then
+        else if (.not. all(ieee_is_finite(volumes))) then
+            call set_error(err, dem_err_input, name // 'each volume must be finite')
+        else if (.not. all(volumes >= max(tiny(1.0_wp), (2.0_wp / 7.0_wp * r_max)**3))) then
             call set_error(err, dem_err_input, name // 'each volume must be finite and at ' // &
                            'least ' // trim(adjustl(bound)) // ' m^3 ((2/7 of the largest ' // &
                            'particle diameter)^3, and a normal double)')
@@ -708,13 +716,14 @@ contains
     !> True when every value of a is finite.
     pure logical function finite(a)
         real(wp), intent(in) :: a(:, :)
-        finite = all(abs(a) <= huge(1.0_wp))
+        finite = all(ieee_is_finite(a))
     end function finite
 
     !> True when every drag coefficient is finite and >= 0 [kg/s].
     pure logical function drag_coefficients(beta)
         real(wp), intent(in) :: beta(:)
-        drag_coefficients = all(beta >= 0.0_wp .and. beta <= huge(1.0_wp))
+        drag_coefficients = all(ieee_is_finite(beta))
+        if (drag_coefficients) drag_coefficients = all(beta >= 0.0_wp)
     end function drag_coefficients
 
     !> The error of a call on a handle that holds no run.

@@ -10,6 +10,7 @@
 !> fixed point (dem_fixed_sum), where addition is exact and so does not depend on the order:
 !> the result is the same bit for bit on any number of ranks.
 module dem_deposit
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_sum
     use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total
@@ -234,7 +235,10 @@ contains
         logical, intent(in) :: wrap
         held = s
         if (wrap) return
-        if (.not. held >= -8.0_wp) held = -8.0_wp
-        if (held > real(nc, wp) + 8.0_wp) held = real(nc, wp) + 8.0_wp
+        if (ieee_is_nan(held)) then
+            held = -8.0_wp
+        else
+            held = min(max(held, -8.0_wp), real(nc, wp) + 8.0_wp)
+        end if
     end function reach
 end module dem_deposit
