@@ -371,14 +371,16 @@ contains
         integer(i8) :: bad(1)
         integer :: nv, ranks, r, k, a, i
         character(len=64) :: text
+        character(len=:), allocatable :: name
+        name = trim(merge('dem_coupling_set_force_by_id', 'dem_coupling_set_drag_by_id ', &
+                          row == ext_force))
         if (.not. going(self, err)) return
         if (.not. err%failed()) then
             if (.not. finite(values) .or. (row == ext_beta .and. &
                                            .not. drag_coefficients(values(1, :)))) &
-                call set_error(err, dem_err_input, 'dem_coupling_set_by_id: values not ' // &
-                               'finite, or beta < 0')
+                call set_error(err, dem_err_input, name // ': values not finite, or beta < 0')
         end if
-        call agree(self, err, 'dem_coupling_set_by_id')
+        call agree(self, err, name)
         if (err%failed()) return
         associate (p => self%run%s%p, comm => self%run%comm)
             nv = size(values, 1)
@@ -528,8 +530,8 @@ contains
     end subroutine deposit_on_grid
 
     !> Why the grid of nc cells of size h from origin cannot be deposited on, if it cannot
-    !> (doc/user/coupling.md, "Arguments"): origin and h finite; h > 0 and at least 2/7 of
-    !> the largest particle diameter 2 r_max on every axis (the divided-volume kernel spreads
+    !> (doc/user/coupling.md, "Arguments and statuses"): origin and h finite; h > 0 and at
+    !> least 2/7 of the largest particle diameter 2 r_max on every axis (the divided-volume kernel spreads
     !> a particle over at most 8 cells per axis, and no kernel puts more than
     !> 4/3 pi (7/2)^3, about 180, cell volumes of solids into one cell per particle); a cell
     !> volume that is a normal double; 1 to 2^30 cells; and the grid within 2^40 cells of the
@@ -623,8 +625,8 @@ contains
     end subroutine deposit_on_cells
 
     !> Why the cells of the given centres [m] and volumes [m^3] cannot be deposited on, if
-    !> they cannot (doc/user/coupling.md, "Arguments"): at least one cell, a centre and a
-    !> volume each; the centres finite, spread over a finite box; each volume finite and at
+    !> they cannot (doc/user/coupling.md, "Arguments and statuses"): at least one cell, a
+    !> centre and a volume each; the centres finite, spread over a finite box; each volume finite and at
     !> least (2/7 of the largest particle diameter)^3, and a normal double (the grid's
     !> bounds, check_grid, for a cell of any shape).
     subroutine check_cells(centres, volumes, r_max, err)
