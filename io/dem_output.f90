@@ -10,7 +10,7 @@
 !> length at its checkpoint and appends to them.
 module dem_output
     use dem_files, only: make_directory, file_truncate, file_rename, cfile_t, cfile_open, &
-                         cfile_write, cfile_size, cfile_close
+                         cfile_write, cfile_size, cfile_close, cfile_sync, file_sync
     use dem_comm, only: comm_t, comm_barrier, comm_any
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io, dem_err_input
@@ -199,16 +199,20 @@ contains
             call comm_barrier(comm)
         end do
         if (comm_any(comm, err%failed())) return
-        if (comm%rank == 0) call file_rename(part, dir // '/final.csv', err)
+        if (comm%rank == 0) then                  ! on the disk before it is named final.csv
+            if (.not. file_sync(part)) call set_error(err, dem_err_io, part // ': cannot ' // &
+                                                      'force it to the disk (fsync)')
+            if (.not. err%failed()) call file_rename(part, dir // '/final.csv', err)
+        end if
     end subroutine output_final
 
-    !> Close the open files (a close that fails names its file in err).
+    !> Force the open files to the disk and close them (a file that fails is named in err).
     subroutine output_close(out, err)
         type(output_t), intent(inout) :: out
         type(error_t), intent(inout) :: err
-        call close_file(out%series, err)
-        call close_file(out%contact, err)
-        call close_file(out%probes, err)
+        call close_file(out%series, err, sync=.true.)
+        call close_file(out%contact, err, sync=.true.)
+        call close_file(out%probes, err, sync=.true.)
     end subroutine output_close
 
     !> Write one row; a row not written whole (a full disk) is cut off again (the file back
@@ -230,11 +234,18 @@ contains
                        'full); the rows before are whole')
     end subroutine write_row
 
-    !> Close a file (if open); a failed close names it in err.
-    subroutine close_file(f, err)
+    !> Close a file (if open), with `sync` forced to the disk first; a failed close names it
+    !> in err.
+    subroutine close_file(f, err, sync)
         type(cfile_t), intent(inout) :: f
         type(error_t), intent(inout) :: err
+        logical, intent(in), optional :: sync
         integer :: ios
+        if (present(sync)) then
+            call cfile_sync(f, ios)
+            if (ios /= 0 .and. .not. err%failed()) call set_error(err, dem_err_io, f%path // &
+                ': cannot force it to the disk (fsync)')
+        end if
         call cfile_close(f, ios)
         if (ios /= 0 .and. .not. err%failed()) call set_error(err, dem_err_io, f%path // &
             ': cannot close it (the disk may be full)')

@@ -5,7 +5,9 @@
 module dem_solver
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
-    use dem_comm, only: comm_t, comm_sum, comm_max, comm_node_rank, comm_counts, comm_exchange
+    use dem_comm, only: comm_t, comm_sum, comm_max, comm_node_rank, comm_counts, comm_exchange, &
+                        comm_any
+    use dem_files, only: file_exists
     use dem_case, only: case_t, case_time_scales, case_particle_materials, case_speed_bound
     use dem_particles, only: particles_init, particles_add, order_by_id
     use dem_domain, only: domain_imbalance, sorted_by_rank
@@ -16,7 +18,7 @@ module dem_solver
     use dem_output, only: output_open, output_final, output_close
     use dem_probes, only: probe_header, probe_wall_load
     use dem_frame, only: frame_t
-    use dem_folder, only: folder_claim
+    use dem_folder, only: folder_claim, folder_restart, folder_sync, folder_missing_snapshot
     use dem_text, only: itoa
     use dem_acc, only: acc_enter, acc_exit, acc_select_device
     use dem_timers, only: timers_t, timer_start, wall_seconds
@@ -30,7 +32,7 @@ module dem_solver
     implicit none
     private
     public :: solver_t, solver_init, solver_prepare, solver_restore, solver_run, solver_start, &
-              solver_advance, solver_finish, solver_time, solver_retime, solver_particles, &
+              solver_ended, solver_advance, solver_finish, solver_time, solver_retime, solver_particles, &
               solver_particle_steps, solver_parallel_stats, &
               stop_end, stop_settled, stop_wall_time, stop_signal, stop_emptied
 
@@ -80,7 +82,7 @@ contains
             s%inflow_count = 0
             s%inflow_mass = 0.0_wp
         end if
-        allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0), s%stale(0))
+        allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0))
     end subroutine solver_init
 
     !> Run to t_end (or until a stop), writing series.csv, contact.csv (when tracing),
@@ -122,7 +124,9 @@ contains
             if (err%failed()) return
             if (s%comm%rank == 0) then  ! the CSV files are rank 0's
                 if (s%restarted) then
-                    call output_open(r%out, c%output_dir, s%trace > 0, columns, err, &
+                    call folder_restart(c%output_dir, s%restart_file, s%step, s%ckpt_step, err)
+                    if (.not. err%failed()) call output_open(r%out, c%output_dir, &
+                        s%trace > 0, columns, err, &
                         [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes])
                     if (.not. err%failed() .and. size(s%snap_step) > 0) &
                         call write_xdmf(s, c, err)
@@ -227,6 +231,29 @@ contains
         end do
     end function repeated_id
 
+    !> For a run restored from its folder's newest checkpoint (dem --resume): whether it had
+    !> ended there (its last step, or settled) and written final.csv, so that there is
+    !> nothing left to do and nothing to write. A snapshot that the checkpoint lists (as
+    !> snapshots.xmf does) but that is not there is an error naming it. Collective.
+    logical function solver_ended(s, c, err) result(ended)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        character(len=:), allocatable :: missing
+        ended = .false.
+        if (s%comm%rank == 0) then
+            missing = folder_missing_snapshot(c%output_dir, s%snap_step)
+            if (len(missing) > 0) call set_error(err, dem_err_input, missing // ': listed ' // &
+                'in snapshots.xmf (and in the checkpoint) but not there: the folder was ' // &
+                'changed; dem --restart CHECKPOINT CASE continues from an older checkpoint, ' // &
+                'removing the folder starts the run afresh')
+        end if
+        if (failed_anywhere(s, err)) return
+        call plan_run(s, c)
+        ended = (s%step >= s%run%n_end .or. s%settled) .and. &
+                comm_any(s%comm, s%comm%rank == 0 .and. file_exists(c%output_dir // '/final.csv'))
+    end function solver_ended
+
     !> The run's last step and the steps between outputs, for dt = c%dt from step0.
     subroutine plan_run(s, c)
         type(solver_t), intent(inout) :: s
@@ -302,7 +329,10 @@ contains
             end associate
             bad = failed_anywhere(s, err)
         end if
-        if (s%comm%rank == 0) call output_close(s%run%out, err)
+        if (s%comm%rank == 0) then
+            call output_close(s%run%out, err)
+            if (.not. err%failed()) call folder_sync(c%output_dir, s%snap_step, err)
+        end if
         bad = failed_anywhere(s, err)
         call device_data(s, acc_exit)
     end subroutine solver_finish
