@@ -14,7 +14,7 @@ module dem_folder_lock
     use dem_kinds, only: i8
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_io
     use dem_comm, only: comm_t, comm_any, comm_max
-    use dem_files, only: make_directory
+    use dem_files, only: make_directory, files_matching
     use dem_text, only: itoa
     implicit none
     private
@@ -24,10 +24,12 @@ module dem_folder_lock
     integer(c_int), parameter :: ewouldblock = 11           ! errno: held by another
     integer(c_int), parameter :: w_ok = 2                   ! access: writable
 
-    !> A lock this process holds: the folder and the open lock file.
+    !> A lock this process holds: the folder, the open lock file, and whether taking the
+    !> lock created the folder.
     type :: held_t
         character(len=:), allocatable :: dir
         type(c_ptr) :: fp = c_null_ptr
+        logical :: created = .false.
     end type held_t
     type(held_t), allocatable, save :: held(:)
 
@@ -68,6 +70,14 @@ module dem_folder_lock
             character(kind=c_char), intent(in) :: path(*)
             integer(c_int), value :: mode
         end function c_access
+        integer(c_int) function c_rmdir(path) bind(C, name='rmdir')
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: path(*)
+        end function c_rmdir
+        integer(c_int) function c_remove(path) bind(C, name='remove')
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: path(*)
+        end function c_remove
         integer(c_int) function c_getpid() bind(C, name='getpid')
             import :: c_int
         end function c_getpid
@@ -103,7 +113,8 @@ contains
     end subroutine folder_lock
 
     !> Release the lock of folder `dir` if this process holds it: its file emptied, the
-    !> kernel's lock let go.
+    !> kernel's lock let go; a folder that the lock created and that holds nothing else is
+    !> removed again (a run refused at once leaves no trace).
     subroutine folder_unlock(dir)
         character(len=*), intent(in) :: dir
         integer :: k
@@ -112,6 +123,10 @@ contains
         do k = 1, size(held)
             if (held(k)%dir /= dir) cycle
             rc = c_ftruncate(c_fileno(held(k)%fp), 0_c_long)
+            if (held(k)%created .and. size(files_matching(dir // '/*')) == 1) then
+                rc = c_remove(dir // '/lock' // c_null_char)
+                rc = c_rmdir(dir // c_null_char)
+            end if
             rc = c_fclose(held(k)%fp)
             held = [held(:k - 1), held(k + 1:)]
             return
@@ -124,14 +139,12 @@ contains
         type(error_t), intent(inout) :: err
         character(len=:), allocatable :: path, holder, me
         type(c_ptr) :: fp
-        logical :: taken, no_flock
+        logical :: taken, no_flock, created
         integer(c_int) :: rc
         path = dir // '/lock'
+        created = c_access(dir // c_null_char, 0_c_int) /= 0
         call make_directory(dir, err)
-        if (err%failed()) then
-            if (c_access(dir // c_null_char, 0_c_int) == 0) err = error_t()  ! (read-only)
-            return
-        end if
+        if (err%failed()) return
         fp = c_fopen(path // c_null_char, 'a+e' // c_null_char)
         if (.not. c_associated(fp)) then
             if (c_access(dir // c_null_char, w_ok) /= 0) return     ! nobody can write there
@@ -161,7 +174,7 @@ contains
             return
         end if
         if (.not. allocated(held)) allocate(held(0))
-        held = [held, held_t(dir, fp)]
+        held = [held, held_t(dir, fp, created)]
     end subroutine lock_here
 
     !> 'process PID on host HOST' from a lock file's line 'HOST PID START'.

@@ -17,7 +17,7 @@ module dem_output
     use dem_text, only: read_line
     implicit none
     private
-    public :: output_t, output_open, output_series, output_contact, output_final, &
+    public :: output_t, output_open, output_check, output_series, output_contact, output_final, &
               output_close, output_sizes, output_probes, output_histogram
 
     character(len=*), parameter :: series_header = &
@@ -57,10 +57,7 @@ contains
         if (err%failed()) return
         bytes = 0
         if (present(keep)) bytes = keep
-        call check_header(dir // '/series.csv', series_header, bytes(1), err)
-        if (trace) call check_header(dir // '/contact.csv', contact_header, bytes(2), err)
-        if (len(probe_columns) > 0) call check_header(dir // '/probes.csv', 'time,step' // &
-                                                      probe_columns, bytes(3), err)
+        call output_check(dir, trace, probe_columns, bytes, err)
         if (err%failed()) return
         call open_csv(dir // '/series.csv', series_header, out%series, err, bytes(1))
         if (err%failed()) return
@@ -70,6 +67,21 @@ contains
         if (len(probe_columns) > 0) call open_csv(dir // '/probes.csv', 'time,step' // &
                                                   probe_columns, out%probes, err, bytes(3))
     end subroutine output_open
+
+    !> The files a run continued from a checkpoint appends to (those at least `keep` bytes
+    !> long: series.csv, contact.csv when tracing, probes.csv with `probe_columns`) must have
+    !> the run's columns: an input error otherwise, checked before anything is changed.
+    subroutine output_check(dir, trace, probe_columns, keep, err)
+        character(len=*), intent(in) :: dir
+        logical, intent(in) :: trace
+        character(len=*), intent(in) :: probe_columns
+        integer(i8), intent(in) :: keep(3)
+        type(error_t), intent(inout) :: err
+        call check_header(dir // '/series.csv', series_header, keep(1), err)
+        if (trace) call check_header(dir // '/contact.csv', contact_header, keep(2), err)
+        if (len(probe_columns) > 0) call check_header(dir // '/probes.csv', 'time,step' // &
+                                                      probe_columns, keep(3), err)
+    end subroutine output_check
 
     !> The lengths of series.csv, contact.csv and probes.csv now [bytes] (0: not open).
     function output_sizes(out) result(bytes)

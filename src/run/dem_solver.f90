@@ -15,7 +15,7 @@ module dem_solver
     use dem_contact_store, only: store_init, max_wall_contacts, store_history_widths
     use dem_integrate, only: integrator_verlet
     use dem_diagnostics, only: deep_overlap_id, deep_wall_id
-    use dem_output, only: output_open, output_final, output_close
+    use dem_output, only: output_open, output_check, output_final, output_close
     use dem_probes, only: probe_header, probe_wall_load
     use dem_frame, only: frame_t
     use dem_folder, only: folder_claim, folder_restart, folder_sync, folder_missing_snapshot
@@ -108,6 +108,7 @@ contains
         real(wp), intent(in) :: started
         type(error_t), intent(inout) :: err
         character(len=:), allocatable :: columns
+        integer(i8) :: bytes(3)
         integer :: k
         logical :: bad
         call store_history_widths(s%pc%rolling_spring)     ! (this run's: see solver_init)
@@ -123,11 +124,13 @@ contains
             if (.not. failed_anywhere(s, err)) call solver_prepare(s, c, err)
             if (err%failed()) return
             if (s%comm%rank == 0) then  ! the CSV files are rank 0's
-                if (s%restarted) then
-                    call folder_restart(c%output_dir, s%restart_file, s%step, s%ckpt_step, err)
+                if (s%restarted) then            ! (nothing changed before the checks)
+                    bytes = [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes]
+                    call output_check(c%output_dir, s%trace > 0, columns, bytes, err)
+                    if (.not. err%failed()) call folder_restart(c%output_dir, s%restart_file, &
+                                                                s%step, s%ckpt_step, err)
                     if (.not. err%failed()) call output_open(r%out, c%output_dir, &
-                        s%trace > 0, columns, err, &
-                        [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes])
+                                                             s%trace > 0, columns, err, bytes)
                     if (.not. err%failed() .and. size(s%snap_step) > 0) &
                         call write_xdmf(s, c, err)
                 else
