@@ -163,13 +163,15 @@ contains
         if (.not. err%failed()) call sync_or_fail(dir // '/checkpoints', err)
     end subroutine folder_point_latest
 
-    !> Remove the checkpoint files of `dir` (and any .part left of one) but those of steps
-    !> `kept`: what a run killed after a checkpoint write, before its pruning, left behind.
+    !> Remove the checkpoint files of `dir` (and any .part left of one or of latest) but
+    !> those of steps `kept`: what a run killed after a checkpoint write, before its
+    !> pruning, left behind.
     subroutine folder_prune(dir, kept)
         character(len=*), intent(in) :: dir
         integer(i8), intent(in) :: kept(:)
         character(len=:), allocatable :: paths(:)
         integer :: k, j
+        call file_remove(dir // '/checkpoints/latest.part')
         paths = files_matching(dir // '/checkpoints/checkpoint_*.h5*')
         do k = 1, size(paths)
             do j = 1, size(kept)

@@ -18,7 +18,8 @@ module dem_solver
     use dem_output, only: output_open, output_check, output_final, output_close
     use dem_probes, only: probe_header, probe_wall_load
     use dem_frame, only: frame_t
-    use dem_folder, only: folder_claim, folder_restart, folder_sync, folder_missing_snapshot
+    use dem_folder, only: folder_claim, folder_restart, folder_sync, folder_missing_snapshot, &
+                          folder_prune
     use dem_text, only: itoa
     use dem_acc, only: acc_enter, acc_exit, acc_select_device
     use dem_timers, only: timers_t, timer_start, wall_seconds
@@ -236,7 +237,8 @@ contains
 
     !> For a run restored from its folder's newest checkpoint (dem --resume): whether it had
     !> ended there (its last step, or settled) and written final.csv, so that there is
-    !> nothing left to do and nothing to write. A snapshot that the checkpoint lists (as
+    !> nothing left to do and nothing to write (but what a run killed at its end left in
+    !> checkpoints/ is removed, where it can be). A snapshot that the checkpoint lists (as
     !> snapshots.xmf does) but that is not there is an error naming it. Collective.
     logical function solver_ended(s, c, err) result(ended)
         type(solver_t), intent(inout) :: s
@@ -255,6 +257,7 @@ contains
         call plan_run(s, c)
         ended = (s%step >= s%run%n_end .or. s%settled) .and. &
                 comm_any(s%comm, s%comm%rank == 0 .and. file_exists(c%output_dir // '/final.csv'))
+        if (ended .and. s%comm%rank == 0) call folder_prune(c%output_dir, s%ckpt_step)
     end function solver_ended
 
     !> The run's last step and the steps between outputs, for dt = c%dt from step0.
