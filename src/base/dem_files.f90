@@ -2,8 +2,9 @@
 !> File-system operations the Fortran standard lacks, through the C library (POSIX):
 !> creating directories, renaming (atomic within a file system), removing and truncating,
 !> forcing a file or directory to the disk (fsync), listing the files that match a pattern
-!> (glob), and a file's absolute path; and text files whose every write is checked (cfile_t, C stdio): gfortran's FLUSH and CLOSE
-!> report no error when the disk is full, fwrite and fflush do.
+!> (glob), and a file's absolute path; and text files whose every write is checked
+!> (cfile_t, C stdio): gfortran's FLUSH and CLOSE report no error when the disk is full,
+!> fwrite and fflush do.
 module dem_files
     use, intrinsic :: iso_c_binding, only: c_char, c_int, c_long, c_null_char, c_ptr, &
                                            c_null_ptr, c_associated, c_size_t, c_f_pointer

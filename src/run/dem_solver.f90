@@ -33,8 +33,8 @@ module dem_solver
     implicit none
     private
     public :: solver_t, solver_init, solver_prepare, solver_restore, solver_run, solver_start, &
-              solver_ended, solver_advance, solver_finish, solver_time, solver_retime, solver_particles, &
-              solver_particle_steps, solver_parallel_stats, &
+              solver_ended, solver_advance, solver_finish, solver_time, solver_retime, &
+              solver_particles, solver_particle_steps, solver_parallel_stats, &
               stop_end, stop_settled, stop_wall_time, stop_signal, stop_emptied
 
 contains
