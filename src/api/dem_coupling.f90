@@ -29,6 +29,7 @@ module dem_coupling
     use dem_deposit, only: deposit_grid, deposit_cells, kernel_cell, kernel_trilinear, &
                            kernel_dpvm, n_deposit
     use dem_timers, only: wall_seconds
+    use dem_folder_lock, only: folder_lock, folder_unlock
     implicit none
     private
     public :: coupling_t
@@ -84,6 +85,7 @@ contains
         integer, intent(out) :: status
         character(len=*), intent(out) :: message
         type(error_t) :: err
+        character(len=:), allocatable :: note      ! (a stale lock taken over: no one to tell)
         if (allocated(self%run)) then
             call set_error(err, dem_err_runtime, 'dem_coupling: already initialised')
         else
@@ -94,6 +96,7 @@ contains
                     err%message = 'dem_coupling_init: ' // err%message
                 else
                     call read_case(trim(file), c, err, comm)
+                    if (.not. err%failed()) call folder_lock(c%output_dir, comm, note, err)
                     if (.not. err%failed()) then
                         call solver_init(s, c, comm)
                         call case_release_particles(c)
@@ -101,6 +104,7 @@ contains
                         allocate(s%removed_ids(0))           ! outlets record what they remove
                         self%run%dt_case = c%dt
                         call solver_start(s, c, wall_seconds(), err)
+                        if (err%failed()) call folder_unlock(c%output_dir)
                     end if
                     if (err%failed()) call comm_free(comm)
                 end if
@@ -120,6 +124,7 @@ contains
         if (ready(self, err)) then
             if (self%run%failure%failed()) err = self%run%failure
             call solver_finish(self%run%s, self%run%c, err)
+            call folder_unlock(self%run%c%output_dir)
             call comm_free(self%run%comm)
             deallocate(self%run)
         end if

@@ -115,9 +115,7 @@ module dem_run_state
         integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
         real(wp), allocatable :: snap_time(:)
         integer(i8), allocatable :: ckpt_step(:)             !< checkpoints kept
-        integer(i8), allocatable :: stale(:)  !< checkpoints of a continuation abandoned by a
-                                              !< restart from an older one: removed once this
-                                              !< run has written its own
+        character(len=:), allocatable :: restart_file  !< the checkpoint restored
         real(wp) :: ckpt_seconds = 0.0_wp  !< wall time of the slowest checkpoint write [s]
         integer :: stopped = stop_end      !< why the last solver_run returned
         character(len=:), allocatable :: stop_message

@@ -6,7 +6,8 @@
 !> touch), and the ids that outputs and probes name found. Collective over the ranks.
 module dem_setup
     use dem_kinds, only: wp, ip, i8
-    use dem_error, only: error_t, set_error, dem_err_input
+    use dem_error, only: error_t, set_error, dem_err_input, dem_err_stopped
+    use dem_signals, only: signal_received
     use dem_comm, only: comm_t, comm_any
     use dem_case, only: case_t, insert_t, time_scales_t, case_time_scales, case_summarize, &
                         case_speed_bound, case_energy_speed, case_append_particles, &
@@ -77,8 +78,14 @@ contains
                 call with_images(c%periodic, c%x(:, 1:c%n_held), c%radius(1:c%n_held), &
                                  2.0_wp * max(g%size%r_max, maxval(c%radius(1:c%n_held))), &
                                  xa, ra)
-                call insert_random(rng, g%region, n, g%size, xa, ra, 10000, x, r, placed)
-                if (placed < n) then
+                call insert_random(rng, g%region, n, g%size, xa, ra, 10000, x, r, placed, &
+                                   interruptible=.true.)
+                if (placed < n .and. len(signal_received()) > 0) then
+                    call set_error(err, dem_err_stopped, signal_received() // ' received ' // &
+                        'while ' // g%at // ' placed its spheres: stopped before the run ' // &
+                        'started, nothing written (dem --resume starts it again)')
+                    return
+                else if (placed < n) then
                     call set_error(err, dem_err_input, g%at // ": key 'n': only " // &
                         itoa(placed) // ' of ' // itoa(n) // ' spheres found room in the ' // &
                         'region (random insertion fills at most about a third of a volume): ' // &
