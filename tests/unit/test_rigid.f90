@@ -45,10 +45,12 @@ program test_rigid
 contains
 
     !> The rotation by q and by q* undo each other; q v q* of a vector about the axis of q is
-    !> the vector; a quarter turn about z takes x to y; (a b) v (a b)* = a (b v b*) a*.
+    !> the vector; a quarter turn about z takes x to y; (a b) v (a b)* = a (b v b*) a*; the
+    !> angular velocity w of rigid_omega gives back L = R I R^T w.
     subroutine helpers()
         real(wp) :: v(3), a(4), b(4), z(4), back(3), axis(3), turned(3), ab(3), a_b(3)
-        real(wp) :: body(3), by_conjugate(3)
+        real(wp) :: body(3), by_conjugate(3), w(3), l_back(3)
+        real(wp), parameter :: inertia(3) = [1.0_wp, 2.0_wp, 3.0_wp]
         real(wp), parameter :: u(3) = [1.0_wp, 2.0_wp, 2.0_wp], y(3) = [0.0_wp, 1.0_wp, 0.0_wp]
         integer :: k
         v = [0.3_wp, -1.2_wp, 2.0_wp]
@@ -63,6 +65,8 @@ contains
         a_b = quat_to_lab(a, quat_to_lab(b, v))
         body = quat_to_body(a, v)
         by_conjugate = quat_to_lab(quat_conjugate(a), v)
+        w = rigid_omega(a, 1.0_wp / inertia, v)
+        l_back = quat_to_lab(a, inertia * quat_to_body(a, w))
         do k = 1, 3
             call assert_close(back(k), v(k), 0.0_wp, 'helpers: to the lab and back', 16 * eps)
             call assert_close(axis(k), u(k), 0.0_wp, &
@@ -73,6 +77,7 @@ contains
                               'helpers: the product composes the rotations', 32 * eps)
             call assert_close(body(k), by_conjugate(k), 0.0_wp, &
                               'helpers: to the body is the rotation by q*', 0.0_wp)
+            call assert_close(l_back(k), v(k), 0.0_wp, 'helpers: L = R I R^T w', 32 * eps)
         end do
     end subroutine helpers
 
