@@ -61,28 +61,28 @@ contains
                                                            !! start the error messages
         real(wp) :: origin(3), d(3), mom(10), s(3,3), volume
         integer :: k
-        character(len=:), allocatable :: where
+        character(len=:), allocatable :: head
 
-        where = prefix(context)
+        head = prefix(context)
         if (size(radii) < 1 .or. size(centres, 1) /= 3 .or. size(centres, 2) /= size(radii)) then
-            call set_error(err, dem_err_input, where // 'a clump needs at least one member, '// &
+            call set_error(err, dem_err_input, head // 'a clump needs at least one member, '// &
                            'each with a centre (3 coordinates) and a radius')
             return
         end if
         do k = 1, size(radii)
             if (.not. (ieee_is_finite(radii(k)) .and. radii(k) > 0.0_wp)) then
-                call set_error(err, dem_err_input, where // 'member ' // itoa(k) // &
+                call set_error(err, dem_err_input, head // 'member ' // itoa(k) // &
                                ': radius = ' // real_text(radii(k)) // ' (must be > 0, finite)')
                 return
             end if
             if (.not. all(ieee_is_finite(centres(:, k)))) then
-                call set_error(err, dem_err_input, where // 'member ' // itoa(k) // &
+                call set_error(err, dem_err_input, head // 'member ' // itoa(k) // &
                                ': its centre is not finite')
                 return
             end if
         end do
         if (.not. (ieee_is_finite(density) .and. density > 0.0_wp)) then
-            call set_error(err, dem_err_input, where // 'density = ' // real_text(density) // &
+            call set_error(err, dem_err_input, head // 'density = ' // real_text(density) // &
                            ' (must be > 0, finite)')
             return
         end if
@@ -118,23 +118,23 @@ contains
         type(clump_mass_t), intent(out) :: props
         type(error_t), intent(inout) :: err
         character(len=*), intent(in), optional :: context  !! where the template is given
-        character(len=:), allocatable :: where
+        character(len=:), allocatable :: head
 
-        where = prefix(context)
+        head = prefix(context)
         if (size(centres, 2) < 1 .or. size(centres, 1) /= 3) then
-            call set_error(err, dem_err_input, where // 'a clump needs at least one member')
+            call set_error(err, dem_err_input, head // 'a clump needs at least one member')
         else if (.not. all(ieee_is_finite(centres))) then
-            call set_error(err, dem_err_input, where // 'a member''s centre is not finite')
+            call set_error(err, dem_err_input, head // 'a member''s centre is not finite')
         else if (.not. (ieee_is_finite(mass) .and. mass > 0.0_wp)) then
-            call set_error(err, dem_err_input, where // 'mass = ' // real_text(mass) // &
+            call set_error(err, dem_err_input, head // 'mass = ' // real_text(mass) // &
                            ' (must be > 0, finite)')
         else if (.not. all(ieee_is_finite(centre))) then
-            call set_error(err, dem_err_input, where // 'centre_of_mass is not finite')
+            call set_error(err, dem_err_input, head // 'centre_of_mass is not finite')
         else if (.not. all(ieee_is_finite(inertia))) then
-            call set_error(err, dem_err_input, where // 'inertia is not finite')
+            call set_error(err, dem_err_input, head // 'inertia is not finite')
         else if (maxval(abs(inertia - transpose(inertia))) &
                  > symmetry_tol * maxval(abs(inertia))) then
-            call set_error(err, dem_err_input, where // 'inertia is not symmetric')
+            call set_error(err, dem_err_input, head // 'inertia is not symmetric')
         end if
         if (err%failed()) return
         props%mass = mass
@@ -143,11 +143,11 @@ contains
         call body_frame(centres, props)
         associate (m => props%moments)
             if (.not. m(1) > 0.0_wp) then
-                call set_error(err, dem_err_input, where // 'inertia is not positive definite: '&
+                call set_error(err, dem_err_input, head // 'inertia is not positive definite: '&
                     // 'principal moments ' // real_text(m(1)) // ', ' // real_text(m(2)) // &
                     ', ' // real_text(m(3)) // ' kg m^2 (each must be > 0)')
             else if (m(3) > (m(1) + m(2)) * (1.0_wp + triangle_tol)) then
-                call set_error(err, dem_err_input, where // 'inertia: the principal moments ' &
+                call set_error(err, dem_err_input, head // 'inertia: the principal moments ' &
                     // real_text(m(1)) // ', ' // real_text(m(2)) // ', ' // real_text(m(3)) &
                     // ' kg m^2 break the triangle inequality (the largest must be at most the '&
                     // 'sum of the other two): no body has them')
@@ -174,13 +174,14 @@ contains
             do k = 1, 3
                 p = pairs(1, k)
                 q = pairs(2, k)
-                if (m(p,q) == 0.0_wp) cycle
-                theta = (m(q,q) - m(p,p)) / (2.0_wp * m(p,q))
-                if (abs(theta) > 1e150_wp) then
-                    t = 0.5_wp / theta
-                else
-                    t = sign(1.0_wp, theta) / (abs(theta) + sqrt(theta**2 + 1.0_wp))
+                ! an element below the final tolerance is set to zero (theta stays finite)
+                if (abs(m(p,q)) <= 1e-3_wp * epsilon(1.0_wp) * scale) then
+                    m(p,q) = 0.0_wp
+                    m(q,p) = 0.0_wp
+                    cycle
                 end if
+                theta = (m(q,q) - m(p,p)) / (2.0_wp * m(p,q))
+                t = sign(1.0_wp, theta) / (abs(theta) + sqrt(theta**2 + 1.0_wp))
                 c = 1.0_wp / sqrt(t**2 + 1.0_wp)
                 rot = identity()
                 rot(p,p) = c
