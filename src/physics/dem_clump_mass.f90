@@ -294,12 +294,14 @@ contains
     pure subroutine slice_breaks(c, r, breaks)
         real(wp), intent(in) :: c(:,:), r(:)
         real(wp), allocatable, intent(out) :: breaks(:)
-        real(wp) :: list(2 * size(r) + size(r) * (size(r) - 1) &
-                         + size(r) * (size(r) - 1) * (size(r) - 2) / 3 + 2)
+        real(wp), allocatable :: list(:)
         real(wp) :: n(3), dist, t, rc, u(3), w(3), p0(3), g(2,2), rhs(2), ab(2), det, aq, bq, &
                     cq, disc, s, p(3)
         integer :: count, i, j, k, side
 
+        ! room for the extremes, the poles, two per pair and two per triple
+        allocate(list(2 + 2 * size(r) + size(r) * (size(r) - 1) &
+                      + size(r) * (size(r) - 1) * (size(r) - 2) / 3))
         count = 2
         list(1) = minval(c(3, :) - r)
         list(2) = maxval(c(3, :) + r)
