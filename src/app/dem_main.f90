@@ -209,7 +209,7 @@ contains
                 'cohesion_energy_density; doc/theory.md, section 15)'
         end if
         write(output_unit, '(a,es12.5,a,i0,a)') '  dt                   ', c%dt, ' s (', &
-            ceiling(c%t_end / c%dt - 1.0e-9_wp), ' steps)'
+            ceiling(c%t_end / c%dt - 1.0e-9_wp, i8), ' steps)'
         write(output_unit, '(a,f10.4)') '  dt / Rayleigh time   ', c%dt / ts%rayleigh
         if (ts%speed > 0.0_wp) write(output_unit, '(a,f10.4)') '  dt / contact time    ', &
             c%dt / ts%contact
