@@ -11,7 +11,7 @@ module dem_input_walls
     use dem_namelist_scan, only: nml_file_t
     use dem_input_group, only: group_io_t, group_reading, group_count
     use dem_input_values, only: unset, name_len, check_positive, in_range, check_vector, &
-                                check_direction, find_material, relative_to
+                                check_direction, find_material, relative_to, check_memory
     use dem_case, only: case_t
     use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion, mesh_set_oscillation, &
                         mesh_set_tables
@@ -23,6 +23,9 @@ module dem_input_walls
     public :: read_walls, read_meshes, read_periodic
 
     integer, parameter :: max_table = 1000   !< points of a wall's velocity table
+    !> The most squares along a side of a &wall_plane (its 2 divisions^2 triangles counted
+    !> by a default integer).
+    integer, parameter :: max_divisions = 32767
 
 contains
 
@@ -60,10 +63,13 @@ contains
             if (.not. check_vector(at, normal, 'normal', .true., err)) return
             if (.not. check_direction(at, normal, 'normal', err)) return
             if (.not. check_positive(at, half_width, 'half_width', '[m]', err)) return
-            if (divisions < 1) then
-                call set_error(err, dem_err_input, at // ": key 'divisions': must be >= 1")
+            if (divisions < 1 .or. divisions > max_divisions) then
+                call set_error(err, dem_err_input, at // ": key 'divisions': must be in 1 .. " &
+                               // itoa(max_divisions))
                 return
             end if
+            if (.not. check_memory(c, at, 'divisions', 0.0_wp, &
+                                   2.0_wp * real(divisions, wp)**2, 0.0_wp, err)) return
             if (.not. wall_name_free(c, at, name, err)) return
             call mesh_add_plane(c%mesh, point, normal, half_width, divisions, im)
             c%mesh%name(c%mesh%n_wall) = name

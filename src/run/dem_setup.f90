@@ -14,7 +14,8 @@ module dem_setup
     use dem_insert, only: insert_random, insert_velocities, region_face, region_slab
     use dem_random, only: rng_t, rng_seed
     use dem_input, only: read_case_file
-    use dem_text, only: itoa
+    use dem_text, only: itoa, real_text
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_periodic, only: with_images
     implicit none
     private
@@ -161,6 +162,7 @@ contains
         call case_time_scales(c, ts)
         if (c%max_speed == huge(1.0_wp)) c%max_speed = case_speed_bound(c, ts)
         c%energy_speed = case_energy_speed(c, ts)
+        if (.not. scales_finite(c, ts, err)) return
         if (c%dt > ts%bound .and. .not. c%allow_unstable) then
             write(s1, '(es10.3)') c%dt
             write(s2, '(es10.3)') ts%bound
@@ -170,6 +172,42 @@ contains
                 'allow_unstable = .true. runs anyway)')
         end if
     end subroutine drawn_from_particles
+
+    !> False, with `err` set, where the time scales, the total mass or the guards are not
+    !> finite and positive (radii or speeds beyond what double precision resolves), or
+    !> where a particle starts as fast as the instability guard (its speed, or its rim speed
+    !> |w| r): the run would stop at its first step.
+    logical function scales_finite(c, ts, err) result(ok)
+        type(case_t), intent(in) :: c
+        type(time_scales_t), intent(in) :: ts
+        type(error_t), intent(inout) :: err
+        real(wp) :: checked(5)
+        integer(ip) :: a
+        checked = [ts%rayleigh, ts%bound, c%summary%mass, c%max_speed, c%energy_speed]
+        ok = all(ieee_is_finite(checked)) .and. checked(1) > 0.0_wp .and. &
+             checked(2) > 0.0_wp .and. checked(4) > 0.0_wp .and. &
+             (checked(3) > 0.0_wp .or. c%n_particles == 0)
+        if (ok .and. ts%speed > 0.0_wp) ok = ieee_is_finite(ts%contact) .and. &
+                                             ts%contact > 0.0_wp
+        if (.not. ok) then
+            a = minloc(c%summary%rmin, dim=1)
+            call set_error(err, dem_err_input, c%run_at // ': the time scales are not ' // &
+                'finite and positive (Rayleigh time ' // real_text(ts%rayleigh) // ' s, ' // &
+                'contact time ' // real_text(ts%contact) // ' s, total mass ' // &
+                real_text(c%summary%mass) // ' kg): the smallest radius, ' // &
+                real_text(c%summary%rmin(a)) // " m (material '" // trim(c%mats%name(a)) // &
+                "'), or the largest speed, " // real_text(ts%speed) // ' m/s, is out of ' // &
+                "range (key 'radius' or 'velocity' of &particle, a particle file's columns, " // &
+                "&insert's radii)")
+            return
+        end if
+        ok = max(c%summary%speed, c%summary%rim) < c%max_speed
+        if (.not. ok) call set_error(err, dem_err_input, c%run_at // ": key 'max_speed': " // &
+            'a particle starts at ' // real_text(max(c%summary%speed, c%summary%rim)) // &
+            " m/s (its speed, or the rim speed |w| r of its angular velocity: &particle " // &
+            "'angular_velocity', a particle file's wx, wy, wz), at or above the instability " // &
+            'guard, ' // real_text(c%max_speed) // ' m/s: the run would stop at its first step')
+    end function scales_finite
 
     !> Each period at least 2 (2 R + skin), R the largest radius (of the inflow too): a
     !> particle then meets at most one image of another, and none of itself.
