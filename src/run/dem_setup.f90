@@ -88,6 +88,7 @@ contains
                 end if
                 next_id = 1
                 if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
+                if (.not. ids_left(g, next_id, real(n, wp), err)) return
                 call case_append_particles(c, [(next_id + i, i = 0, n - 1)], spread(g%mat, 1, n), &
                                            r, x, insert_velocities(rng, g%velocity, &
                                                                    g%velocity_spread, n), &
@@ -107,6 +108,10 @@ contains
                         3.0_wp * g%size%r_max))
             end associate
         end do
+        do k = 1, size(c%inserts)                ! the ids of the inflow to come
+            if (.not. c%inserts(k)%inflow) cycle
+            if (.not. ids_left(c%inserts(k), c%next_id, inflow_count(c%inserts(k)), err)) return
+        end do
         k = findloc(c%inserts%inflow, .true., dim=1)
         c%inflow = k > 0
         if (k > 0) then                          ! the inflow's generator
@@ -114,6 +119,33 @@ contains
             c%rng_state = rng%state
         end if
     contains
+        !> False, with `err` set, where `count` ids from `first` on pass the largest id.
+        logical function ids_left(g, first, count, err) result(ok)
+            type(insert_t), intent(in) :: g
+            integer(i8), intent(in) :: first
+            real(wp), intent(in) :: count
+            type(error_t), intent(inout) :: err
+            ok = count < real(huge(1_i8) - first, wp)
+            if (.not. ok) call set_error(err, dem_err_input, g%at // ": key 'n': the ids " // &
+                'of its spheres would pass the largest id, 2^63 - 1 (they follow the ' // &
+                'largest id before them, ' // itoa(first - 1) // ')')
+        end function ids_left
+
+        !> The most spheres an inflow inserts up to t_end: rate times its time, or its mass
+        !> in spheres of its smallest radius.
+        real(wp) function inflow_count(g) result(count)
+            type(insert_t), intent(in) :: g
+            real(wp), parameter :: pi = acos(-1.0_wp)
+            real(wp) :: span
+            span = max(0.0_wp, min(g%end, c%t_end) - g%start)
+            if (g%rate > 0.0_wp) then
+                count = g%rate * span + 1.0_wp
+            else
+                count = g%mass_rate * span / (4.0_wp / 3.0_wp * pi * g%size%r_min**3 * &
+                                              c%mats%density(g%mat)) + 1.0_wp
+            end if
+        end function inflow_count
+
         !> The steps in which a sphere of the group moves one largest diameter d from its
         !> velocity v0 and gravity g: (sqrt(v0^2 + 2 g d) - v0) / g, or d / v0 without
         !> gravity, 1000 steps when it does not move; at least 1.
@@ -130,7 +162,7 @@ contains
             else
                 t = 1000.0_wp * c%dt
             end if
-            every = max(1_i8, nint(t / c%dt, i8))
+            every = max(1_i8, nint(min(t / c%dt, 1.0e18_wp), i8))   ! (no overflow)
         end function default_every
     end subroutine place_inserts
 
