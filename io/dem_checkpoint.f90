@@ -5,10 +5,11 @@
 !> for bit (contact history, run bookkeeping) and what identifies its case, so that a
 !> restart of another case is refused. A checkpoint is also a snapshot, and both can seed a
 !> new case as particle files. Files are written under a temporary name and renamed once
-!> complete.
+!> complete; a checkpoint is forced to the disk (fsync) before the rename, and the rename
+!> after it.
 module dem_checkpoint
     use dem_kinds, only: wp, ip, i8
-    use dem_error, only: error_t, set_error, dem_err_input
+    use dem_error, only: error_t, set_error, dem_err_input, dem_err_io
     use dem_version, only: dem_version_string
     use dem_comm, only: comm_t, comm_barrier, comm_max, comm_any
     use dem_particles, only: particles_fields, field_visitor_t, frame_none, frame_state, &
@@ -19,12 +20,12 @@ module dem_checkpoint
     use dem_case, only: case_t
     use dem_mesh, only: mesh_t, mesh_move
     use dem_text, only: itoa
-    use dem_files, only: file_rename
+    use dem_files, only: file_rename, file_sync
     use dem_h5, only: h5_file_t, h5_create, h5_open, h5_close, h5_group, h5_write, h5_read, &
                       h5_dims, h5_text_length, h5_exists
     implicit none
     private
-    public :: frame_write, checkpoint_read, checkpoint_kept, snapshot_read_particles
+    public :: frame_write, checkpoint_read, snapshot_read_particles
 
     character(len=*), parameter :: checkpoint_format = 'dem checkpoint 1'
     character(len=*), parameter :: snapshot_format = 'dem snapshot 1'
@@ -105,9 +106,20 @@ contains
         if (checkpoint) call write_state(h)
         call h5_close(h, err)
         call comm_barrier(comm)
-        if (comm%rank == 0 .and. .not. err%failed()) call file_rename(part, path, err)
+        if (comm%rank == 0 .and. .not. err%failed()) then
+            if (checkpoint) call synced(part)
+            if (.not. err%failed()) call file_rename(part, path, err)
+            if (checkpoint .and. .not. err%failed()) call synced(path(:index(path, '/', &
+                                                                       back=.true.) - 1))
+        end if
         call comm_barrier(comm)
     contains
+        subroutine synced(name)
+            character(len=*), intent(in) :: name
+            if (.not. file_sync(name)) call set_error(err, dem_err_io, name // &
+                ': cannot force it to the disk (fsync)')
+        end subroutine synced
+
         subroutine write_state(h_)
             type(h5_file_t), intent(inout) :: h_
             call h5_group(h_, '/state', err)
@@ -159,26 +171,6 @@ contains
             v = reshape(mesh%vert, [3, 3 * mesh%n_tri])
         end if
     end function corners
-
-    !> The steps of the checkpoints that were kept when checkpoint `path` was written (it
-    !> last); none if the file cannot be read.
-    function checkpoint_kept(path) result(steps)
-        character(len=*), intent(in) :: path
-        integer(i8), allocatable :: steps(:)
-        type(h5_file_t) :: h
-        type(error_t) :: err
-        integer(i8), allocatable :: dims(:)
-        allocate(steps(0))
-        call h5_open(h, path, err)
-        call h5_dims(h, '/state/checkpoint_step', dims, err, 1)
-        if (.not. err%failed()) then
-            deallocate(steps)
-            allocate(steps(dims(1)))
-            call h5_read(h, '/state/checkpoint_step', steps, err)
-            if (err%failed()) steps = [integer(i8) ::]
-        end if
-        call h5_close(h, err)
-    end function checkpoint_kept
 
     !> Density, Young's modulus, Poisson ratio and rigidity (1 or 0) of each material.
     function material_properties(c) result(props)

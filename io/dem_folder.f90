@@ -5,16 +5,23 @@
 !> folder that holds the outputs of a run of another case (its input.nml differs, or it has
 !> outputs and no input.nml) is refused unless `overwrite`; a folder of the same case, or
 !> one overwritten, is cleared of the old run's outputs first, so that no later snapshot,
-!> checkpoint or row of the old run is left beside the new one.
+!> checkpoint or row of the old run is left beside the new one. Every sequence of changes to
+!> the folder is ordered so that a run killed at any point leaves a folder that
+!> `dem --resume` continues as if nothing had happened: `latest` is the last thing a
+!> checkpoint write changes and the first thing a clear removes, and checkpoints and
+!> `latest` reach the disk (fsync) before `latest` names them.
 module dem_folder
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_io
-    use dem_files, only: file_exists, file_remove, file_rename, make_directory
-    use dem_text, only: read_line, step_file
-    use dem_checkpoint, only: checkpoint_kept
+    use dem_files, only: file_exists, file_remove, file_rename, make_directory, file_sync, &
+                         files_matching, absolute_path
+    use dem_text, only: step_file
+    use dem_xdmf, only: snapshot_file
     use dem_kinds, only: i8
     implicit none
     private
-    public :: folder_claim, folder_conflict, checkpoint_file, checkpoint_latest
+    public :: folder_claim, folder_conflict, checkpoint_file, checkpoint_latest, &
+              folder_point_latest, folder_prune, folder_restart, folder_missing_snapshot, &
+              folder_sync
 
     !> The name of the case text in the folder.
     character(len=*), parameter :: marker = 'input.nml'
@@ -31,7 +38,8 @@ contains
         name = step_file('checkpoints/checkpoint_', step)
     end function checkpoint_file
 
-    !> The newest checkpoint of an output directory (named by checkpoints/latest); '' if
+    !> The newest checkpoint of an output directory (named by checkpoints/latest, relative to
+    !> the directory, or absolute for a restart from another folder's); '' if
     !> there is no latest. With err, a latest that names nothing (empty, unreadable) or a
     !> file that is not there is an error: the folder was damaged, a fresh start would
     !> silently redo the run.
@@ -60,6 +68,7 @@ contains
             return
         end if
         path = dir // '/' // trim(name)
+        if (name(1:1) == '/') path = trim(name)        ! (a restart from another folder)
         inquire(file=path, exist=there)
         if (.not. there .and. present(err)) call set_error(err, dem_err_input, dir // &
             '/checkpoints/latest: names ' // trim(name) // ', which is not there' // fix)
@@ -111,39 +120,128 @@ contains
         end do
     end function folder_used
 
-    !> Remove the outputs of the run in `dir`: the files above, the snapshots snapshots.xmf
-    !> names, the checkpoints latest names and those kept with it, latest itself.
+    !> Remove the outputs of the run in `dir`: `latest` first (from then on the folder holds
+    !> no run to continue), then every checkpoint and snapshot file there, the files above,
+    !> and input.nml last.
     subroutine clear(dir)
         character(len=*), intent(in) :: dir
-        character(len=:), allocatable :: latest, line
-        integer(i8), allocatable :: kept(:)
-        integer :: k, u, ios, at, ends
-        if (file_exists(dir // '/snapshots.xmf')) then
-            open(newunit=u, file=dir // '/snapshots.xmf', status='old', action='read', &
-                 iostat=ios)
-            do while (ios == 0)
-                call read_line(u, line, ios)
-                if (ios /= 0) exit
-                at = index(line, 'snapshots/snapshot_')
-                ends = index(line, '.h5')
-                if (at > 0 .and. ends > at) call file_remove(dir // '/' // line(at:ends + 2))
-            end do
-            close(u, iostat=ios)
-        end if
-        latest = checkpoint_latest(dir)
-        if (len(latest) > 0) then
-            kept = checkpoint_kept(latest)
-            do k = 1, size(kept)
-                call file_remove(dir // '/' // checkpoint_file(kept(k)))
-            end do
-            call file_remove(latest)
-        end if
+        integer :: k
         call file_remove(dir // '/checkpoints/latest')
+        call remove_all(files_matching(dir // '/checkpoints/checkpoint_*.h5*'))
+        call remove_all(files_matching(dir // '/snapshots/snapshot_*.h5*'))
         do k = 1, size(outputs)
             call file_remove(dir // '/' // trim(outputs(k)))
         end do
         call file_remove(dir // '/' // marker)
     end subroutine clear
+
+    subroutine remove_all(paths)
+        character(len=*), intent(in) :: paths(:)
+        integer :: k
+        do k = 1, size(paths)
+            call file_remove(trim(paths(k)))
+        end do
+    end subroutine remove_all
+
+    !> Point dir/checkpoints/latest at `name` (a checkpoint relative to `dir`, or an absolute
+    !> path): written to latest.part, forced to the disk, renamed, and the rename forced to
+    !> the disk.
+    subroutine folder_point_latest(dir, name, err)
+        character(len=*), intent(in) :: dir, name
+        type(error_t), intent(inout) :: err
+        integer :: u, ios
+        open(newunit=u, file=dir // '/checkpoints/latest.part', status='replace', &
+             action='write', iostat=ios)
+        if (ios == 0) write(u, '(a)', iostat=ios) name
+        if (ios == 0) close(u, iostat=ios)
+        if (ios == 0 .and. .not. file_sync(dir // '/checkpoints/latest.part')) ios = 1
+        if (ios /= 0) then
+            call set_error(err, dem_err_io, dir // '/checkpoints/latest: cannot write')
+            return
+        end if
+        call file_rename(dir // '/checkpoints/latest.part', dir // '/checkpoints/latest', err)
+        if (.not. err%failed()) call sync_or_fail(dir // '/checkpoints', err)
+    end subroutine folder_point_latest
+
+    !> Remove the checkpoint files of `dir` (and any .part left of one or of latest) but
+    !> those of steps `kept`: what a run killed after a checkpoint write, before its
+    !> pruning, left behind.
+    subroutine folder_prune(dir, kept)
+        character(len=*), intent(in) :: dir
+        integer(i8), intent(in) :: kept(:)
+        character(len=:), allocatable :: paths(:)
+        integer :: k, j
+        call file_remove(dir // '/checkpoints/latest.part')
+        paths = files_matching(dir // '/checkpoints/checkpoint_*.h5*')
+        do k = 1, size(paths)
+            do j = 1, size(kept)
+                if (trim(paths(k)) == dir // '/' // checkpoint_file(kept(j))) exit
+            end do
+            if (j > size(kept)) call file_remove(trim(paths(k)))
+        end do
+    end subroutine folder_prune
+
+    !> Before a run continued from checkpoint `path` (of step `step`, which kept the
+    !> checkpoints of steps `kept`) changes `dir`: `latest` names that checkpoint (so that a
+    !> run killed from now on is continued from it, not from a newer one whose rows are cut
+    !> off), and the other checkpoints, newer ones of an abandoned continuation included,
+    !> are removed.
+    subroutine folder_restart(dir, path, step, kept, err)
+        character(len=*), intent(in) :: dir, path
+        integer(i8), intent(in) :: step, kept(:)
+        type(error_t), intent(inout) :: err
+        character(len=:), allocatable :: name
+        name = absolute_path(path)
+        if (name == absolute_path(dir // '/' // checkpoint_file(step))) then
+            name = checkpoint_file(step)
+        else
+            call make_directory(dir // '/checkpoints', err)
+            if (err%failed()) return
+        end if
+        if (absolute_path(checkpoint_latest(dir)) /= absolute_path(path)) &
+            call folder_point_latest(dir, name, err)
+        if (err%failed()) return
+        call folder_prune(dir, kept)
+    end subroutine folder_restart
+
+    !> The first snapshot of steps `steps` (those snapshots.xmf lists) that is not in `dir`
+    !> ('' if all are).
+    function folder_missing_snapshot(dir, steps) result(name)
+        character(len=*), intent(in) :: dir
+        integer(i8), intent(in) :: steps(:)
+        character(len=:), allocatable :: name
+        integer :: k
+        name = ''
+        do k = 1, size(steps)
+            if (file_exists(dir // '/' // snapshot_file(steps(k)))) cycle
+            name = dir // '/' // snapshot_file(steps(k))
+            return
+        end do
+    end function folder_missing_snapshot
+
+    !> Force the outputs of a run that ended to the disk: the text files, the snapshots of
+    !> steps `snaps` and the folders that hold them.
+    subroutine folder_sync(dir, snaps, err)
+        character(len=*), intent(in) :: dir
+        integer(i8), intent(in) :: snaps(:)
+        type(error_t), intent(inout) :: err
+        integer :: k
+        do k = 1, size(snaps)          ! (those there: a restart into another folder has none)
+            if (file_exists(dir // '/' // snapshot_file(snaps(k)))) &
+                call sync_or_fail(dir // '/' // snapshot_file(snaps(k)), err)
+        end do
+        if (file_exists(dir // '/snapshots/.')) call sync_or_fail(dir // '/snapshots', err)
+        if (file_exists(dir // '/snapshots.xmf')) call sync_or_fail(dir // '/snapshots.xmf', err)
+        call sync_or_fail(dir, err)
+    end subroutine folder_sync
+
+    subroutine sync_or_fail(path, err)
+        character(len=*), intent(in) :: path
+        type(error_t), intent(inout) :: err
+        if (err%failed()) return
+        if (.not. file_sync(path)) call set_error(err, dem_err_io, path // ': cannot force ' // &
+                                                  'it to the disk (fsync)')
+    end subroutine sync_or_fail
 
     !> The whole text of a file ('' if it cannot be read).
     function file_text(path) result(text)

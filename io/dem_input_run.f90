@@ -42,6 +42,9 @@ contains
                                     ! stops the run [J], > 0, default M v^2 (M the
                                     ! particles' mass, v the expected speed of dem --check
                                     ! plus twice the fastest wall surface's)
+        real(wp) :: max_overlap     ! overlap guard: an overlap deeper than this fraction of
+                                    ! the smaller radius (of the radius at a wall) at an
+                                    ! output row stops the run [-], in (0, 1], default 0.9
         real(wp) :: wall_time_limit ! write a checkpoint and stop before this much wall-clock
                                     ! time [s], >= 0, default 0 (none)
         real(wp) :: progress_interval  ! wall-clock time between progress lines [s], >= 0
@@ -53,8 +56,8 @@ contains
         logical :: gpu_aware_mpi    ! in an OpenACC build on several ranks, hand device
                                     ! addresses of the halo buffers to MPI, default false
         namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable, &
-            stop_kinetic_energy, max_speed, max_energy, wall_time_limit, progress_interval, &
-            imbalance_limit, gpu_aware_mpi
+            stop_kinetic_energy, max_speed, max_energy, max_overlap, wall_time_limit, &
+            progress_interval, imbalance_limit, gpu_aware_mpi
         type(group_io_t) :: io
         character(len=:), allocatable :: at
 
@@ -69,6 +72,7 @@ contains
         stop_kinetic_energy = 0.0_wp
         max_speed = unset
         max_energy = unset
+        max_overlap = c%max_overlap
         wall_time_limit = 0.0_wp
         progress_interval = 10.0_wp
         imbalance_limit = 1.1_wp
@@ -115,6 +119,11 @@ contains
             if (.not. check_positive(at, max_energy, 'max_energy', '[J]', err)) return
             c%max_energy = max_energy
         end if
+        if (.not. in_range(max_overlap, 0.0_wp, 1.0_wp, .false., .true.)) then
+            call set_error(err, dem_err_input, at // ": key 'max_overlap': must be in (0, 1]")
+            return
+        end if
+        c%max_overlap = max_overlap
         if (.not. check_nonnegative(at, wall_time_limit, 'wall_time_limit', '[s]', err)) return
         c%wall_time_limit = wall_time_limit
         if (.not. check_nonnegative(at, progress_interval, 'progress_interval', '[s]', err)) return

@@ -10,14 +10,14 @@
 !> length at its checkpoint and appends to them.
 module dem_output
     use dem_files, only: make_directory, file_truncate, file_rename, cfile_t, cfile_open, &
-                         cfile_write, cfile_size, cfile_close
+                         cfile_write, cfile_size, cfile_close, cfile_sync, file_sync
     use dem_comm, only: comm_t, comm_barrier, comm_any
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io, dem_err_input
     use dem_text, only: read_line
     implicit none
     private
-    public :: output_t, output_open, output_series, output_contact, output_final, &
+    public :: output_t, output_open, output_check, output_series, output_contact, output_final, &
               output_close, output_sizes, output_probes, output_histogram
 
     character(len=*), parameter :: series_header = &
@@ -57,10 +57,7 @@ contains
         if (err%failed()) return
         bytes = 0
         if (present(keep)) bytes = keep
-        call check_header(dir // '/series.csv', series_header, bytes(1), err)
-        if (trace) call check_header(dir // '/contact.csv', contact_header, bytes(2), err)
-        if (len(probe_columns) > 0) call check_header(dir // '/probes.csv', 'time,step' // &
-                                                      probe_columns, bytes(3), err)
+        call output_check(dir, trace, probe_columns, bytes, err)
         if (err%failed()) return
         call open_csv(dir // '/series.csv', series_header, out%series, err, bytes(1))
         if (err%failed()) return
@@ -70,6 +67,21 @@ contains
         if (len(probe_columns) > 0) call open_csv(dir // '/probes.csv', 'time,step' // &
                                                   probe_columns, out%probes, err, bytes(3))
     end subroutine output_open
+
+    !> The files a run continued from a checkpoint appends to (those at least `keep` bytes
+    !> long: series.csv, contact.csv when tracing, probes.csv with `probe_columns`) must have
+    !> the run's columns: an input error otherwise, checked before anything is changed.
+    subroutine output_check(dir, trace, probe_columns, keep, err)
+        character(len=*), intent(in) :: dir
+        logical, intent(in) :: trace
+        character(len=*), intent(in) :: probe_columns
+        integer(i8), intent(in) :: keep(3)
+        type(error_t), intent(inout) :: err
+        call check_header(dir // '/series.csv', series_header, keep(1), err)
+        if (trace) call check_header(dir // '/contact.csv', contact_header, keep(2), err)
+        if (len(probe_columns) > 0) call check_header(dir // '/probes.csv', 'time,step' // &
+                                                      probe_columns, keep(3), err)
+    end subroutine output_check
 
     !> The lengths of series.csv, contact.csv and probes.csv now [bytes] (0: not open).
     function output_sizes(out) result(bytes)
@@ -199,16 +211,20 @@ contains
             call comm_barrier(comm)
         end do
         if (comm_any(comm, err%failed())) return
-        if (comm%rank == 0) call file_rename(part, dir // '/final.csv', err)
+        if (comm%rank == 0) then                  ! on the disk before it is named final.csv
+            if (.not. file_sync(part)) call set_error(err, dem_err_io, part // ': cannot ' // &
+                                                      'force it to the disk (fsync)')
+            if (.not. err%failed()) call file_rename(part, dir // '/final.csv', err)
+        end if
     end subroutine output_final
 
-    !> Close the open files (a close that fails names its file in err).
+    !> Force the open files to the disk and close them (a file that fails is named in err).
     subroutine output_close(out, err)
         type(output_t), intent(inout) :: out
         type(error_t), intent(inout) :: err
-        call close_file(out%series, err)
-        call close_file(out%contact, err)
-        call close_file(out%probes, err)
+        call close_file(out%series, err, sync=.true.)
+        call close_file(out%contact, err, sync=.true.)
+        call close_file(out%probes, err, sync=.true.)
     end subroutine output_close
 
     !> Write one row; a row not written whole (a full disk) is cut off again (the file back
@@ -230,11 +246,18 @@ contains
                        'full); the rows before are whole')
     end subroutine write_row
 
-    !> Close a file (if open); a failed close names it in err.
-    subroutine close_file(f, err)
+    !> Close a file (if open), with `sync` forced to the disk first; a failed close names it
+    !> in err.
+    subroutine close_file(f, err, sync)
         type(cfile_t), intent(inout) :: f
         type(error_t), intent(inout) :: err
+        logical, intent(in), optional :: sync
         integer :: ios
+        if (present(sync)) then
+            call cfile_sync(f, ios)
+            if (ios /= 0 .and. .not. err%failed()) call set_error(err, dem_err_io, f%path // &
+                ': cannot force it to the disk (fsync)')
+        end if
         call cfile_close(f, ios)
         if (ios /= 0 .and. .not. err%failed()) call set_error(err, dem_err_io, f%path // &
             ': cannot close it (the disk may be full)')

@@ -54,9 +54,8 @@ def write(name, text):
         f.write(text)
 
 
-def run(dt, t_end, interval, trace=0, expected_speed=None):
-    speed = "" if expected_speed is None else f", expected_speed = {expected_speed}"
-    s = (f"&run dt = {dt}, t_end = {t_end}, gravity = 0, 0, 0{speed} /\n"
+def run(dt, t_end, interval, trace=0):
+    s = (f"&run dt = {dt}, t_end = {t_end}, gravity = 0, 0, 0 /\n"
          f"&output interval = {interval}")
     if trace:
         s += f", trace_id = {trace}"
@@ -141,8 +140,7 @@ text += wall("rigid", (0, 0, 0), 0.01, 1)
 write("test5_tangential.nml", text)
 
 # Tests 6-8: Al alloy, E = 70 GPa, nu = 0.33, rho = 2700, R = 0.1 m, normal 0.2 m/s,
-# initial spin w0 = 0.175 ... 21 rad/s, e = 0.5, mu = 0.4. The expected speed is the fastest
-# rim speed, R w0 = 2.1 m/s (the energy guard's bound, M v^2, then holds the spin's energy).
+# initial spin w0 = 0.175 ... 21 rad/s, e = 0.5, mu = 0.4.
 R6, gap6, V6 = 0.1, 1.0e-5, 0.2
 SPINS = [0.175, 0.3, 0.42, 0.6, 0.8, 1.0, 1.2, 1.5, 2.0, 2.4, 2.8, 3.0, 3.5, 4.0, 6.0, 8.0,
          10.0, 12.0, 14.0, 21.0]
@@ -151,7 +149,7 @@ AL = material("al_alloy", 2700.0, 70.0e9, 0.33)
 # Test 6: one sphere per spin above a rigid plane, 0.3 m apart along y.
 text = ("! Chung & Ooi test 6: spheres spinning at w0 = 0.175 ... 21 rad/s onto a rigid plane.\n"
         "! Sphere k has the k-th spin, about -y.\n"
-        + run(1.0e-7, 1.2e-3, 1.0e-4, expected_speed=R6 * SPINS[-1]) + AL + material("rigid", rigid=True)
+        + run(1.0e-7, 1.2e-3, 1.0e-4) + AL + material("rigid", rigid=True)
         + pair("al_alloy", "al_alloy", 0.5, 0.4) + pair("al_alloy", "rigid", 0.5, 0.4))
 for k, w0 in enumerate(SPINS, start=1):
     text += particle(k, "al_alloy", R6, (0, 0.3 * (k - 1), R6 + gap6), (0, 0, -V6), (0, -w0, 0))
@@ -162,7 +160,7 @@ write("test6_spin_wall.nml", text)
 # (ids 2k - 1 above, 2k below) has the k-th spin, pairs 0.3 m apart along y.
 text = ("! Chung & Ooi test 7: pairs of identical spheres spinning at w0 = 0.175 ... 21 rad/s.\n"
         "! Pair k: spheres 2k - 1 (above) and 2k (below), both spinning about -y.\n"
-        + run(1.0e-7, 1.2e-3, 1.0e-4, expected_speed=R6 * SPINS[-1]) + AL + pair("al_alloy", "al_alloy", 0.5, 0.4))
+        + run(1.0e-7, 1.2e-3, 1.0e-4) + AL + pair("al_alloy", "al_alloy", 0.5, 0.4))
 for k, w0 in enumerate(SPINS, start=1):
     y = 0.3 * (k - 1)
     text += particle(2 * k - 1, "al_alloy", R6, (0, y, R6 + gap6), (0, 0, -V6), (0, -w0, 0))
@@ -175,7 +173,7 @@ write("test7_spin_pair.nml", text)
 R8 = 0.5
 text = ("! Chung & Ooi test 8: a sphere spinning at w0 = 0.175 ... 21 rad/s onto a larger one.\n"
         "! Pair k: sphere 2k - 1 (R = 0.1 m, spinning about -y) onto 2k (R = 0.5 m, at rest).\n"
-        + run(1.0e-7, 1.2e-3, 1.0e-4, expected_speed=R6 * SPINS[-1]) + AL
+        + run(1.0e-7, 1.2e-3, 1.0e-4) + AL
         + material("al_alloy_heavy", 2700.0e3, 70.0e9, 0.33)
         + pair("al_alloy", "al_alloy", 0.5, 0.4)
         + pair("al_alloy", "al_alloy_heavy", 0.5, 0.4)

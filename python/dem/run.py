@@ -12,6 +12,7 @@ from . import _library
 
 _MESSAGE_LEN = 1024
 _KERNELS = {"cell": 1, "trilinear": 2, "dpvm": 3}
+_MAX_CELLS = 2**30          # the most cells of a deposit grid (doc/user/coupling.md)
 _serials = itertools.count()
 
 #: The owned particles: ids (int64, n), material indices (int32, n, from 1 in the order of
@@ -27,8 +28,11 @@ Deposit = namedtuple("Deposit", "eps momentum beta_sum beta_v")
 
 
 class DemError(RuntimeError):
-    """A call of the C interface that failed: status 2 (bad input), 3 (the run cannot go
-    on) or 4 (an output could not be written), with the solver's message."""
+    """A call of the C interface that failed: status 2 (bad input or arguments: nothing was
+    changed), 3 (the run cannot go on: it failed, or it is closed) or 4 (an output could
+    not be written), with the solver's message. Once a run has failed, every later call
+    that would go on with it raises status 3 with the failure's message, and so does
+    close()."""
 
     def __init__(self, status, message):
         super().__init__(f"{message} (status {status})")
@@ -113,6 +117,16 @@ class Run:
             raise DemError(3, "dem: the run is closed")
         return self._handle
 
+    def _check_plain(self, status, refused):
+        """Raise DemError for a non-zero status of a call without a message: status 2 with
+        `refused` (what its arguments must be), status 3 with the run's failure."""
+        if status == 2:
+            raise DemError(2, refused)
+        if status != 0:
+            message = ctypes.create_string_buffer(_MESSAGE_LEN)
+            self._lib.dem_coupling_status(self._handle, message, _MESSAGE_LEN)
+            _check(status, message)
+
     @property
     def time(self):
         """The DEM's time [s]."""
@@ -143,8 +157,9 @@ class Run:
         x, v, w = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
         if n > 0:
             P = _library.as_pointer
-            self._lib.dem_coupling_get(self._live(), P(gid, ctypes.c_int64),
-                                       P(material, ctypes.c_int), P(radius), P(x), P(v), P(w))
+            self._check_plain(self._lib.dem_coupling_get(
+                self._live(), P(gid, ctypes.c_int64), P(material, ctypes.c_int), P(radius),
+                P(x), P(v), P(w)), "dem_coupling_get: an array is NULL")
         return Particles(gid, material, radius, x, v, w)
 
     def views(self):
@@ -154,7 +169,9 @@ class Run:
         close(): copy what must outlive them (np.array(view))."""
         n = self.count
         addresses = [ctypes.c_void_p() for _ in range(5)]
-        self._lib.dem_coupling_views(self._live(), *(ctypes.byref(a) for a in addresses))
+        self._check_plain(self._lib.dem_coupling_views(self._live(),
+                                                       *(ctypes.byref(a) for a in addresses)),
+                          "dem_coupling_views: an address is NULL")
         gid, radius, x, v, w = (a.value for a in addresses)
         V = _library.view
         return Particles(V(gid, (n,), np.int64), None, V(radius, (n,), np.float64),
@@ -166,28 +183,33 @@ class Run:
         velocities in an OpenACC build on a GPU, for the caller's own device code (e.g.
         CuPy's UnownedMemory); the host addresses otherwise."""
         addresses = [ctypes.c_void_p() for _ in range(3)]
-        self._lib.dem_coupling_device_views(self._live(), *(ctypes.byref(a) for a in addresses))
+        self._check_plain(self._lib.dem_coupling_device_views(
+            self._live(), *(ctypes.byref(a) for a in addresses)),
+            "dem_coupling_device_views: an address is NULL")
         return tuple(a.value for a in addresses)
 
     def set_force(self, force, torque=None):
         """External force [N] and torque [N m] per owned particle (n x 3, or one 3-vector for
-        all; torque None: zero), kept until set again."""
+        all; torque None: zero), kept until set again. Values that are not finite raise
+        DemError (status 2) and nothing is set."""
         n = self.count
         f = _vectors(force, n, "force")
         t = _vectors(np.zeros(3) if torque is None else torque, n, "torque")
-        if n > 0:
-            self._lib.dem_coupling_set_force(self._live(), _library.as_pointer(f),
-                                             _library.as_pointer(t))
+        self._check_plain(self._lib.dem_coupling_set_force(
+            self._live(), _library.as_pointer(f), _library.as_pointer(t)),
+            "dem_coupling_set_force: a force or torque is not finite")
 
     def set_drag(self, beta, fluid_velocity):
         """Drag coefficient beta [kg/s] (n, or one number) and fluid velocity [m/s] (n x 3,
-        or one 3-vector) per owned particle: the drag beta (u_f - v) acts at every sub-step."""
+        or one 3-vector) per owned particle: the drag beta (u_f - v) acts at every sub-step.
+        Values that are not finite, or a beta < 0, raise DemError (status 2) and nothing is
+        set."""
         n = self.count
         b = _scalars(beta, n, "beta")
         u = _vectors(fluid_velocity, n, "fluid_velocity")
-        if n > 0:
-            self._lib.dem_coupling_set_drag(self._live(), _library.as_pointer(b),
-                                            _library.as_pointer(u))
+        self._check_plain(self._lib.dem_coupling_set_drag(
+            self._live(), _library.as_pointer(b), _library.as_pointer(u)),
+            "dem_coupling_set_drag: a beta or fluid velocity is not finite, or a beta < 0")
 
     def set_force_by_id(self, ids, force, torque=None):
         """Force and torque for particles given by global id, on any rank (each id once over
@@ -219,7 +241,9 @@ class Run:
         n = self.count
         j = np.zeros((n, 3))
         if n > 0:
-            self._lib.dem_coupling_impulse(self._live(), _library.as_pointer(j))
+            self._check_plain(self._lib.dem_coupling_impulse(self._live(),
+                                                             _library.as_pointer(j)),
+                              "dem_coupling_impulse: the array is NULL")
         return j
 
     def removed(self):
@@ -228,21 +252,28 @@ class Run:
         n = self._lib.dem_coupling_removed_count(self._handle)
         ids = np.zeros(n, np.int64)
         if n > 0:
-            self._lib.dem_coupling_removed(self._live(), _library.as_pointer(ids,
-                                                                             ctypes.c_int64))
+            self._check_plain(self._lib.dem_coupling_removed(
+                self._live(), _library.as_pointer(ids, ctypes.c_int64)),
+                "dem_coupling_removed: the array is NULL")
         return ids
 
     def deposit(self, origin, h, n, kernel="cell"):
         """Deposit the particles of all ranks onto the grid of n = (nx, ny, nz) cells of size
         h from origin, with kernel 'cell', 'trilinear' or 'dpvm' (divided particle volume);
         every rank gets the whole grid (collective). Returns a Deposit of arrays indexed
-        [i, j, k] (vectors [i, j, k, component])."""
+        [i, j, k] (vectors [i, j, k, component]). A grid the library refuses (a non-finite
+        origin or h, cells smaller than 2/7 of the largest particle diameter, more than 2^30
+        cells: doc/user/coupling.md) raises DemError with status 2."""
         o = np.ascontiguousarray(origin, dtype=np.float64).reshape(3)
         hh = np.ascontiguousarray(h, dtype=np.float64).reshape(3)
-        nn = np.ascontiguousarray(n, dtype=np.int32).reshape(3)
+        n64 = np.asarray(n, dtype=np.float64).reshape(3)         # (held to int32's range)
+        nn = np.ascontiguousarray(np.clip(np.nan_to_num(n64, nan=0.0), -2**31, 2**31 - 1),
+                                  dtype=np.int32)
         if kernel not in _KERNELS:
             raise ValueError(f"kernel {kernel!r}: one of {', '.join(_KERNELS)}")
-        cells = int(np.prod(nn))
+        cells = int(np.prod(nn.astype(np.int64)))
+        if not (np.all(nn >= 1) and cells <= _MAX_CELLS):
+            cells = 0                                    # refused by the library, unwritten
         eps, beta_sum = np.zeros(cells), np.zeros(cells)
         momentum, beta_v = np.zeros(3 * cells), np.zeros(3 * cells)
         message = ctypes.create_string_buffer(_MESSAGE_LEN)

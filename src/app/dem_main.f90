@@ -4,8 +4,7 @@ program dem_main
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use dem, only: wp, dem_version_string, error_t, case_t, time_scales_t, case_time_scales, &
                    case_release_particles, case_energy_bound, read_case, solver_t, solver_init, &
-                   solver_prepare, &
-                   solver_restore, &
+                   solver_prepare, solver_restore, &
                    solver_run, stop_wall_time, stop_signal, stop_settled, stop_emptied, &
                    solver_time, frame_t, checkpoint_read, &
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
@@ -15,6 +14,8 @@ program dem_main
     use dem_acc, only: acc_traffic
     use dem_signals, only: signals_install
     use dem_folder, only: folder_conflict
+    use dem_folder_lock, only: folder_lock, folder_unlock
+    use dem_solver, only: solver_ended
     use dem_integrate, only: integrator_verlet
     use dem_materials, only: rolling_epsd2, normal_hooke, tangential_coulomb
     implicit none
@@ -23,8 +24,8 @@ program dem_main
     type(solver_t) :: s
     type(error_t) :: err
     type(frame_t) :: fr
-    character(len=:), allocatable :: arg1, path, restart
-    logical :: check_only, resume
+    character(len=:), allocatable :: arg1, path, restart, note
+    logical :: check_only, resume, locked
     integer :: nargs
     real(wp) :: started
 
@@ -33,6 +34,7 @@ program dem_main
     integer, parameter :: exit_continue = 75
 
     started = wall_seconds()
+    locked = .false.
     call signals_install()     ! from now on SIGTERM and SIGUSR1 stop the run at a checkpoint
     call comm_init(comm)
     nargs = command_argument_count()
@@ -80,6 +82,10 @@ program dem_main
         end if
         call finish(0)
     end if
+    call folder_lock(c%output_dir, comm, note, err)    ! before anything is read or written
+    if (err%failed()) call fail(err)
+    locked = .true.
+    if (comm%rank == 0 .and. len(note) > 0) write(output_unit, '(a)') 'dem: ' // note
     if (resume) then
         restart = checkpoint_latest(c%output_dir, err)
         if (err%failed()) call fail(err)
@@ -87,10 +93,18 @@ program dem_main
     if (len(restart) > 0) then
         call checkpoint_read(restart, c, comm, fr, err)
         if (err%failed()) call fail(err)
-        call solver_restore(s, c, fr)
-        if (comm%rank == 0) write(output_unit, '(a,es12.5,a)') 'dem: restarting from ' // &
-            restart // ' (t = ', fr%time, ' s)'
+        call solver_restore(s, c, fr, restart)
         fr = frame_t()                    ! the solver holds its share of it now
+        if (resume) then
+            if (solver_ended(s, c, err)) then
+                if (comm%rank == 0) write(output_unit, '(a)') 'dem: done: the run in ' // &
+                    c%output_dir // ' had ended (' // restart // '); nothing to do'
+                call finish(0)
+            end if
+            if (err%failed()) call fail(err)
+        end if
+        if (comm%rank == 0) write(output_unit, '(a,es12.5,a)') 'dem: restarting from ' // &
+            restart // ' (t = ', solver_time(s, c), ' s)'
     end if
     call solver_run(s, c, started, err)
     if (err%failed()) call fail(err)
@@ -339,6 +353,7 @@ contains
 
     subroutine finish(code)
         integer, intent(in) :: code
+        if (locked) call folder_unlock(c%output_dir)
         call comm_free(comm)
         if (code /= 0) stop code, quiet=.true.
         stop

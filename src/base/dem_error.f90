@@ -3,11 +3,12 @@
 module dem_error
     implicit none
     private
-    public :: error_t, set_error, dem_err_input, dem_err_runtime, dem_err_io
+    public :: error_t, set_error, dem_err_input, dem_err_runtime, dem_err_io, dem_err_stopped
 
     integer, parameter :: dem_err_input = 2    !< bad input: file, group, key or value
     integer, parameter :: dem_err_runtime = 3  !< the run cannot go on (instability, overflow)
     integer, parameter :: dem_err_io = 4       !< an output could not be written
+    integer, parameter :: dem_err_stopped = 75 !< stopped early by a signal; to be continued
 
     !> An error code (0: no error) and a message for the user.
     type :: error_t

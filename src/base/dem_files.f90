@@ -1,18 +1,30 @@
 ! SPDX-License-Identifier: BSD-3-Clause
 !> File-system operations the Fortran standard lacks, through the C library (POSIX):
-!> creating directories, renaming (atomic within a file system), removing and truncating;
-!> and text files whose every write is checked (cfile_t, C stdio): gfortran's FLUSH and CLOSE
-!> report no error when the disk is full, fwrite and fflush do.
+!> creating directories, renaming (atomic within a file system), removing and truncating,
+!> forcing a file or directory to the disk (fsync), listing the files that match a pattern
+!> (glob), and a file's absolute path; and text files whose every write is checked
+!> (cfile_t, C stdio): gfortran's FLUSH and CLOSE report no error when the disk is full,
+!> fwrite and fflush do.
 module dem_files
     use, intrinsic :: iso_c_binding, only: c_char, c_int, c_long, c_null_char, c_ptr, &
-                                           c_null_ptr, c_associated, c_size_t
+                                           c_null_ptr, c_associated, c_size_t, c_f_pointer
     use dem_kinds, only: wp, i8
     use dem_error, only: error_t, set_error, dem_err_io
     implicit none
     private
     public :: make_directory, file_rename, file_remove, file_truncate, file_exists, &
-              input_file_problem, file_write_bytes, physical_memory_mib
-    public :: cfile_t, cfile_open, cfile_write, cfile_size, cfile_close
+              input_file_problem, file_write_bytes, file_sync, files_matching, absolute_path, &
+              physical_memory_mib
+    public :: cfile_t, cfile_open, cfile_write, cfile_size, cfile_close, cfile_sync
+
+    !> The first fields of the C library's glob_t (glibc and musl alike), then room for the
+    !> rest.
+    type, bind(C) :: glob_t
+        integer(c_size_t) :: pathc = 0
+        type(c_ptr) :: pathv = c_null_ptr
+        integer(c_size_t) :: offs = 0
+        type(c_ptr) :: rest(16) = c_null_ptr
+    end type glob_t
 
     !> A text file open for writing through C stdio.
     type :: cfile_t
@@ -61,6 +73,38 @@ module dem_files
             import :: c_int, c_ptr
             type(c_ptr), value :: fp
         end function c_fclose
+        integer(c_int) function c_fileno(fp) bind(C, name='fileno')
+            import :: c_int, c_ptr
+            type(c_ptr), value :: fp
+        end function c_fileno
+        integer(c_int) function c_fsync(fd) bind(C, name='fsync')
+            import :: c_int
+            integer(c_int), value :: fd
+        end function c_fsync
+        integer(c_int) function c_glob(pattern, flags, errfunc, pglob) bind(C, name='glob')
+            import :: c_char, c_int, c_ptr, glob_t
+            character(kind=c_char), intent(in) :: pattern(*)
+            integer(c_int), value :: flags
+            type(c_ptr), value :: errfunc
+            type(glob_t), intent(inout) :: pglob
+        end function c_glob
+        subroutine c_globfree(pglob) bind(C, name='globfree')
+            import :: glob_t
+            type(glob_t), intent(inout) :: pglob
+        end subroutine c_globfree
+        type(c_ptr) function c_realpath(path, resolved) bind(C, name='realpath')
+            import :: c_char, c_ptr
+            character(kind=c_char), intent(in) :: path(*)
+            type(c_ptr), value :: resolved
+        end function c_realpath
+        subroutine c_free(p) bind(C, name='free')
+            import :: c_ptr
+            type(c_ptr), value :: p
+        end subroutine c_free
+        integer(c_size_t) function c_strlen(p) bind(C, name='strlen')
+            import :: c_ptr, c_size_t
+            type(c_ptr), value :: p
+        end function c_strlen
     end interface
 
 contains
@@ -131,6 +175,69 @@ contains
         character(len=*), intent(in) :: path
         inquire(file=path, exist=exists)
     end function file_exists
+
+    !> Force file or directory `path` to the disk (fsync): its data, and for a directory the
+    !> names in it (a rename into it); false if it cannot be opened or the disk refuses.
+    logical function file_sync(path) result(ok)
+        character(len=*), intent(in) :: path
+        type(c_ptr) :: fp
+        fp = c_fopen(path // c_null_char, 're' // c_null_char)  ! (a directory opens too)
+        ok = c_associated(fp)
+        if (.not. ok) return
+        ok = c_fsync(c_fileno(fp)) == 0
+        ok = c_fclose(fp) == 0 .and. ok
+    end function file_sync
+
+    !> The paths that match the shell pattern `pattern` (glob: `*`, `?`, `[...]`), sorted,
+    !> each at most len(paths) long; none if none does.
+    function files_matching(pattern) result(paths)
+        character(len=*), intent(in) :: pattern
+        character(len=:), allocatable :: paths(:)
+        type(glob_t) :: g
+        type(c_ptr), pointer :: names(:)
+        character(kind=c_char), pointer :: name(:)
+        integer :: k, j, longest
+        allocate(character(len=1) :: paths(0))
+        if (c_glob(pattern // c_null_char, 0_c_int, c_null_ptr, g) /= 0) then
+            call c_globfree(g)
+            return
+        end if
+        call c_f_pointer(g%pathv, names, [int(g%pathc)])
+        longest = 1
+        do k = 1, size(names)
+            longest = max(longest, int(c_strlen(names(k))))
+        end do
+        deallocate(paths)
+        allocate(character(len=longest) :: paths(size(names)))
+        do k = 1, size(names)
+            call c_f_pointer(names(k), name, [int(c_strlen(names(k)))])
+            paths(k) = ''
+            do j = 1, size(name)
+                paths(k)(j:j) = name(j)
+            end do
+        end do
+        call c_globfree(g)
+    end function files_matching
+
+    !> The absolute path of an existing file, links resolved ('' if there is none).
+    function absolute_path(path) result(resolved)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: resolved
+        type(c_ptr) :: p
+        character(kind=c_char), pointer :: name(:)
+        integer :: j
+        p = c_realpath(path // c_null_char, c_null_ptr)
+        if (.not. c_associated(p)) then
+            resolved = ''
+            return
+        end if
+        call c_f_pointer(p, name, [int(c_strlen(p))])
+        allocate(character(len=size(name)) :: resolved)
+        do j = 1, size(name)
+            resolved(j:j) = name(j)
+        end do
+        call c_free(p)
+    end function absolute_path
 
     !> Why `path` cannot be read as an input file: '' if it can; else that it does not exist,
     !> is a directory, or is empty or not a regular file (a device or a pipe has no size:
@@ -208,6 +315,15 @@ contains
         bytes = -1
         if (c_associated(f%fp)) bytes = int(c_ftell(f%fp), i8)
     end function cfile_size
+
+    !> Force what was written to the file to the disk (fsync); ios /= 0 if that failed.
+    subroutine cfile_sync(f, ios)
+        type(cfile_t), intent(in) :: f
+        integer, intent(out) :: ios
+        ios = 0
+        if (.not. c_associated(f%fp)) return
+        if (c_fsync(c_fileno(f%fp)) /= 0) ios = 1
+    end subroutine cfile_sync
 
     !> Close the file (nothing if not open); ios /= 0 if the close failed.
     subroutine cfile_close(f, ios)

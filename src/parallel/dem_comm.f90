@@ -10,8 +10,12 @@ module dem_comm
                        MPI_Isend, MPI_Irecv, MPI_Recv, MPI_Waitall, MPI_STATUSES_IGNORE, &
                        MPI_ANY_SOURCE, &
                        MPI_INTEGER, MPI_INTEGER8, MPI_DOUBLE_PRECISION, MPI_LOGICAL, MPI_SUM, &
-                       MPI_MAX, MPI_LOR, MPI_BXOR, MPI_IN_PLACE, MPI_INFO_NULL
+                       MPI_MAX, MPI_LOR, MPI_BXOR, MPI_IN_PLACE, MPI_INFO_NULL, &
+                       MPI_COMM_NULL, MPI_SUCCESS, MPI_Errhandler, MPI_ERRORS_RETURN, &
+                       MPI_Comm_get_errhandler, MPI_Comm_set_errhandler, &
+                       MPI_Errhandler_free, MPI_Comm_test_inter
     use dem_kinds, only: wp, i8
+    use dem_error, only: error_t, set_error, dem_err_input
     implicit none
     private
     integer, parameter :: tag_counts = 1     !< comm_counts' messages
@@ -78,13 +82,49 @@ contains
     end subroutine comm_init
 
     !> Duplicate the communicator of Fortran handle `handle` (MPI_Comm_c2f of a C one),
-    !> which MPI must already be initialised for.
-    subroutine comm_from_handle(c, handle)
+    !> which MPI must already be initialised for. A handle that is no communicator of this
+    !> process (MPI_COMM_NULL, a freed one, any other number), an intercommunicator, or MPI
+    !> not running, is an error in err (dem_err_input) and nothing is duplicated: the handle
+    !> is tried with MPI_ERRORS_RETURN on MPI_COMM_WORLD, whose error handler MPI invokes for
+    !> a call on an invalid communicator, then that handler is put back as it was.
+    subroutine comm_from_handle(c, handle, err)
         type(comm_t), intent(out) :: c
         integer, intent(in) :: handle
+        type(error_t), intent(inout) :: err
         type(MPI_Comm) :: parent
+        type(MPI_Errhandler) :: world_handler
+        logical :: up, down, inter
+        integer :: n, ierr
+        character(len=16) :: text
+        write(text, '(i0)') handle
+        call MPI_Initialized(up)
+        call MPI_Finalized(down)
+        if (.not. up .or. down) then
+            call set_error(err, dem_err_input, 'communicator ' // trim(text) // &
+                           ': MPI is not running (MPI_Init first, MPI_Finalize after)')
+            return
+        end if
         parent%mpi_val = handle
-        call comm_init(c, parent)
+        ierr = MPI_SUCCESS + 1
+        inter = .false.
+        if (handle /= MPI_COMM_NULL%mpi_val) then
+            call MPI_Comm_get_errhandler(MPI_COMM_WORLD, world_handler)
+            call MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN)
+            call MPI_Comm_size(parent, n, ierr)
+            if (ierr == MPI_SUCCESS) call MPI_Comm_test_inter(parent, inter, ierr)
+            call MPI_Comm_set_errhandler(MPI_COMM_WORLD, world_handler)
+            call MPI_Errhandler_free(world_handler)
+        end if
+        if (ierr /= MPI_SUCCESS) then
+            call set_error(err, dem_err_input, 'communicator ' // trim(text) // &
+                           ': not a communicator of this process (MPI_COMM_NULL, freed, ' // &
+                           'or not from MPI_Comm_c2f)')
+        else if (inter) then
+            call set_error(err, dem_err_input, 'communicator ' // trim(text) // &
+                           ': an intercommunicator (an intracommunicator is needed)')
+        else
+            call comm_init(c, parent)
+        end if
     end subroutine comm_from_handle
 
     !> Free the communicator, and finalise MPI if this module started it.

@@ -27,6 +27,7 @@ module dem_case
         real(wp) :: mass = 0.0_wp           !< total mass [kg]
         real(wp) :: speed = 0.0_wp          !< largest initial speed [m/s]
         real(wp) :: rim = 0.0_wp            !< largest initial rim speed |w| r [m/s]
+        real(wp) :: spin_energy = 0.0_wp    !< initial rotational kinetic energy [J]
         real(wp) :: low = 0.0_wp            !< lowest and highest centre along gravity [m]
         real(wp) :: high = 0.0_wp
     end type summary_t
@@ -81,6 +82,7 @@ module dem_case
                                                       !< given (case_speed_bound)
         real(wp) :: max_energy = 0.0_wp               !< energy guard [J], 0: case_energy_bound
         real(wp) :: energy_speed = 0.0_wp             !< its speed (case_energy_speed) [m/s]
+        real(wp) :: max_overlap = 0.9_wp              !< overlap guard, of the smaller radius
         real(wp) :: wall_time_limit = 0.0_wp          !< checkpoint and stop before [s], 0: none
         real(wp) :: progress_interval = 0.0_wp        !< between progress lines [s], 0: none
         real(wp) :: imbalance_limit = 1.1_wp          !< repartition above this load ratio
@@ -152,7 +154,7 @@ contains
         type(case_t), intent(inout) :: c
         type(comm_t), intent(in) :: comm
         real(wp), parameter :: pi = acos(-1.0_wp)
-        real(wp) :: e(3), g, big(2 * c%mats%n + 4), mass(1), lo(3), hi(3), corner(3)
+        real(wp) :: e(3), g, big(2 * c%mats%n + 4), sums(2), lo(3), hi(3), corner(3), m
         integer(ip) :: i, a
         integer :: k
         associate (sm => c%summary)
@@ -161,6 +163,7 @@ contains
             sm%mass = 0.0_wp
             sm%speed = 0.0_wp
             sm%rim = 0.0_wp
+            sm%spin_energy = 0.0_wp
             sm%low = huge(1.0_wp)
             sm%high = -huge(1.0_wp)
             g = norm2(c%gravity)
@@ -170,7 +173,10 @@ contains
                 a = c%mat(i)
                 sm%rmin(a) = min(sm%rmin(a), c%radius(i))
                 sm%rmax(a) = max(sm%rmax(a), c%radius(i))
-                sm%mass = sm%mass + 4.0_wp / 3.0_wp * pi * c%radius(i)**3 * c%mats%density(a)
+                m = 4.0_wp / 3.0_wp * pi * c%radius(i)**3 * c%mats%density(a)
+                sm%mass = sm%mass + m
+                sm%spin_energy = sm%spin_energy + 0.2_wp * m * c%radius(i)**2 &
+                                 * dot_product(c%w(:, i), c%w(:, i))
                 sm%speed = max(sm%speed, norm2(c%v(:, i)))
                 sm%rim = max(sm%rim, norm2(c%w(:, i)) * c%radius(i))
                 sm%low = min(sm%low, dot_product(e, c%x(:, i)))
@@ -198,9 +204,10 @@ contains
             sm%low = -big(2 * c%mats%n + 2)
             sm%high = big(2 * c%mats%n + 3)
             sm%rim = big(2 * c%mats%n + 4)
-            mass = sm%mass
-            call comm_sum(comm, mass)
-            sm%mass = mass(1)
+            sums = [sm%mass, sm%spin_energy]
+            call comm_sum(comm, sums)
+            sm%mass = sums(1)
+            sm%spin_energy = sums(2)
         end associate
     end subroutine case_summarize
 
@@ -261,15 +268,17 @@ contains
     end function case_energy_speed
 
     !> The energy guard's bound [J] for particles of total mass `mass` [kg]: &run max_energy,
-    !> or else twice their kinetic energy were they all at the guard's speed, M v_e^2
-    !> (doc/theory.md, section 6); none (huge) without a speed.
+    !> or else twice their kinetic energy were they all at the guard's speed, M v_e^2, plus
+    !> the rotational energy at the start (doc/theory.md, section 6); none (huge) without
+    !> a speed or a spin.
     pure real(wp) function case_energy_bound(c, mass) result(bound)
         type(case_t), intent(in) :: c
         real(wp), intent(in) :: mass
         bound = c%max_energy
         if (bound > 0.0_wp) return
         bound = huge(1.0_wp)
-        if (c%energy_speed > 0.0_wp) bound = mass * c%energy_speed**2
+        if (c%energy_speed > 0.0_wp .or. c%summary%spin_energy > 0.0_wp) &
+            bound = mass * c%energy_speed**2 + c%summary%spin_energy
     end function case_energy_bound
 
     !> Rayleigh time of the smallest particle, shortest Hertz contact time over the material

@@ -10,6 +10,7 @@
 !> fixed point (dem_fixed_sum), where addition is exact and so does not depend on the order:
 !> the result is the same bit for bit on any number of ranks.
 module dem_deposit
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_sum
     use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total
@@ -132,7 +133,8 @@ contains
                         j = 1 + cx + g%n(1) * (cy + g%n(2) * cz)
                         do kk = g%start(j), g%start(j + 1) - 1
                             d2 = sum((centres(:, g%item(kk)) - x)**2)
-                            if (d2 < best .or. (d2 == best .and. g%item(kk) < best_k)) then
+                            if (d2 < best .or. (d2 == best .and. g%item(kk) < best_k) .or. &
+                                best_k == 0) then           ! (the first even when d2 = inf)
                                 best = d2
                                 best_k = g%item(kk)
                             end if
@@ -178,7 +180,7 @@ contains
         real(wp) :: s, lo, hi
         integer :: k, first, last
         w = 0.0_wp
-        s = (x - o) / h                      ! position in cells
+        s = reach((x - o) / h, nc, wrap)     ! position in cells
         select case (kernel)
         case (kernel_cell)
             first = floor(s)
@@ -190,8 +192,8 @@ contains
             w(2) = s - 0.5_wp - first
             w(1) = 1.0_wp - w(2)
         case default                         ! kernel_dpvm: [x - r, x + r] over the cells
-            lo = (x - r - o) / h
-            hi = (x + r - o) / h
+            lo = reach((x - r - o) / h, nc, wrap)
+            hi = reach((x + r - o) / h, nc, wrap)
             first = floor(lo)
             last = min(first + 7, floor(hi))
             do k = first, last
@@ -223,4 +225,20 @@ contains
             end if
         end if
     end subroutine axis_weights
+
+    !> A position s in cells, held to [-8, nc + 8] (a NaN to -8) unless the axis wraps: a
+    !> particle farther outside touches no cell either way (its support spans at most 7
+    !> cells: see doc/user/coupling.md), and its cell index stays an integer.
+    pure real(wp) function reach(s, nc, wrap) result(held)
+        real(wp), intent(in) :: s
+        integer, intent(in) :: nc
+        logical, intent(in) :: wrap
+        held = s
+        if (wrap) return
+        if (ieee_is_nan(held)) then
+            held = -8.0_wp
+        else
+            held = min(max(held, -8.0_wp), real(nc, wp) + 8.0_wp)
+        end if
+    end function reach
 end module dem_deposit

@@ -165,16 +165,17 @@ contains
         end do
     end subroutine wall_elastic_terms
 
-    !> Of the pairs in the owned particles' list entries that overlap by more than half the
-    !> smaller radius (deeper than any contact of a sound state: bad input), the smallest
-    !> lower id (lower = 0), or the smallest higher id of those whose lower id is `lower`; 0
-    !> if there is none. A reduction, on the device.
+    !> Of the pairs in the owned particles' list entries that overlap by more than `depth`
+    !> times the smaller radius (half of it is deeper than any contact of a sound state), the
+    !> smallest lower id (lower = 0), or the smallest higher id of those whose lower id is
+    !> `lower`; 0 if there is none. A reduction, on the device.
     integer(i8) function deep_overlap_id(n_own, n_all, n_entries, gid, x, radius, start, list, &
-                                         lower) result(id)
+                                         depth, lower) result(id)
         integer(ip), intent(in) :: n_own, n_all, n_entries
         integer(i8), intent(in) :: gid(n_all)
         real(wp), intent(in) :: x(3, n_all), radius(n_all)
         integer(ip), intent(in) :: start(n_own + 1), list(n_entries)
+        real(wp), intent(in) :: depth                !! [-]
         integer(i8), intent(in) :: lower
         integer(ip) :: i, k, j
         integer(i8) :: low
@@ -184,7 +185,7 @@ contains
             do k = start(i), start(i + 1) - 1
                 j = list(k)
                 if ((x(1, j) - x(1, i))**2 + (x(2, j) - x(2, i))**2 + (x(3, j) - x(3, i))**2 &
-                    >= (radius(i) + radius(j) - 0.5_wp * min(radius(i), radius(j)))**2) cycle
+                    >= (radius(i) + radius(j) - depth * min(radius(i), radius(j)))**2) cycle
                 low = min(gid(i), gid(j))
                 if (lower == 0) then
                     id = min(id, low)
@@ -196,15 +197,17 @@ contains
         if (id == huge(1_i8)) id = 0
     end function deep_overlap_id
 
-    !> The smallest id of the owned particles that overlap a wall by more than half their
-    !> radius (a candidate triangle nearer to the centre than that: bad input, as for pairs;
-    !> a centre on the surface has no normal); 0 if there is none. A reduction, on the device.
+    !> The smallest id of the owned particles that overlap a wall by more than `depth` times
+    !> their radius (a candidate triangle nearer to the centre than 1 - depth radii; as for
+    !> pairs; a centre on the surface has no normal); 0 if there is none. A reduction, on the
+    !> device.
     integer(i8) function deep_wall_id(n_own, n_cand, n_tri, gid, x, radius, wstart, wlist, &
-                                      vert) result(id)
+                                      vert, depth) result(id)
         integer(ip), intent(in) :: n_own, n_cand, n_tri
         integer(i8), intent(in) :: gid(n_own)
         real(wp), intent(in) :: x(3, n_own), radius(n_own), vert(3, 3, n_tri)   !! [m]
         integer(ip), intent(in) :: wstart(n_own + 1), wlist(n_cand)
+        real(wp), intent(in) :: depth                !! [-]
         integer(ip) :: i, k, tri, feature
         real(wp) :: q(3)
         id = huge(1_i8)
@@ -216,7 +219,7 @@ contains
                 call closest_point_triangle(x(:, i), vert(:, 1, tri), vert(:, 2, tri), &
                                             vert(:, 3, tri), q, feature)
                 if ((q(1) - x(1, i))**2 + (q(2) - x(2, i))**2 + (q(3) - x(3, i))**2 &
-                    < (0.5_wp * radius(i))**2) id = min(id, gid(i))
+                    < ((1.0_wp - depth) * radius(i))**2) id = min(id, gid(i))
             end do
         end do
         if (id == huge(1_i8)) id = 0

@@ -8,6 +8,7 @@ module dem_insert
     use dem_random, only: rng_t, rng_uniform
     use dem_mesh, only: closest_point_triangle
     use dem_vector, only: cross
+    use dem_signals, only: signal_received
     implicit none
     private
     public :: region_t, region_box, region_cylinder, region_mesh, region_face, region_bounds, &
@@ -200,9 +201,11 @@ contains
     !> Insert n spheres with radii drawn from `dist` into region reg, clear of the m
     !> spheres (x_old, r_old) already present. `placed` < n when a sphere found no room in
     !> max_tries attempts (the region is too full), or, with mass_goal, once the spheres
-    !> placed weigh at least mass_goal (a sphere of radius r weighs mass_factor r^3).
+    !> placed weigh at least mass_goal (a sphere of radius r weighs mass_factor r^3), or,
+    !> with `interruptible`, once a signal was received (dem_signals: looked at every 65536
+    !> spheres, so that a long start-up can be stopped).
     subroutine insert_random(rng, reg, n, dist, x_old, r_old, max_tries, x, r, placed, &
-                             mass_factor, mass_goal)
+                             mass_factor, mass_goal, interruptible)
         type(rng_t), intent(inout) :: rng
         type(region_t), intent(in) :: reg
         integer(ip), intent(in) :: n
@@ -213,6 +216,7 @@ contains
         integer(ip), intent(out) :: placed
         real(wp), intent(in), optional :: mass_factor   !! [kg/m^3]
         real(wp), intent(in), optional :: mass_goal     !! [kg]
+        logical, intent(in), optional :: interruptible
         real(wp) :: lo(3), hi(3), h, p(3), big, rlo(3), rhi(3), mass
         integer(ip), allocatable :: head(:), next(:)
         real(wp), allocatable :: xs(:, :), rs(:)
@@ -243,6 +247,9 @@ contains
         placed = 0
         mass = 0.0_wp
         do k = 1, n
+            if (present(interruptible) .and. mod(k, 65536) == 0) then
+                if (interruptible .and. len(signal_received()) > 0) return
+            end if
             r(k) = size_draw(rng, dist)
             free = .false.
             do tries = 1, max_tries

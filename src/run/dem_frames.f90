@@ -12,8 +12,6 @@ module dem_frames
     use dem_contact_store, only: store_walls_restore, store_pairs_data
     use dem_mesh, only: mesh_t, mesh_move
     use dem_frame, only: frame_t, frame_spread
-    use dem_checkpoint, only: checkpoint_kept
-    use dem_folder, only: checkpoint_latest
     use dem_output, only: output_t, output_sizes
     use dem_acc, only: acc_data, acc_to_host
     implicit none
@@ -26,14 +24,12 @@ contains
     !> ranks, each rank the particles it read: checkpoint_read). If dt is
     !> the checkpoint's, the times of the steps are those of the run that wrote it, so that
     !> the continuation is bit for bit the same; otherwise time counts on from its time.
-    !> Checkpoints newer than this one (a continuation now abandoned) are removed once the
-    !> run writes its first checkpoint.
-    subroutine frame_restore(s, c, fr)
+    !> `path` is the checkpoint's file, which the run's start makes the folder's latest.
+    subroutine frame_restore(s, c, fr, path)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(frame_t), intent(inout) :: fr
-        character(len=:), allocatable :: latest
-        integer(i8), allocatable :: kept(:)
+        character(len=*), intent(in) :: path
         integer(ip), allocatable :: places(:)
         integer(ip) :: i, n
         n = fr%n
@@ -76,11 +72,7 @@ contains
         s%snap_time = fr%snap_time
         s%snap_n = fr%snap_n
         s%ckpt_step = fr%ckpt_step
-        latest = checkpoint_latest(c%output_dir)
-        if (len(latest) > 0) then
-            kept = checkpoint_kept(latest)
-            s%stale = pack(kept, kept > fr%step)
-        end if
+        s%restart_file = path
         if (s%mesh%moving) call mesh_move(s%mesh, fr%time)
         s%good = fr                       ! this rank's particles and their pairs (distribute)
         s%restarted = .true.

@@ -4,16 +4,19 @@
 !> section 6) that stops an unstable run with the last good state saved, and the progress
 !> line, which reads the state and changes none of it.
 module dem_run_control
-    use, intrinsic :: iso_fortran_env, only: output_unit
+    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
-    use dem_comm, only: comm_any, comm_gather
+    use dem_comm, only: comm_any, comm_gather, comm_max
     use dem_case, only: case_t, case_energy_bound
     use dem_run_state, only: solver_t, time_of, summed, particle_data, stop_wall_time, stop_signal
     use dem_run_output, only: contact_counts, write_checkpoint, write_frame_checkpoint
     use dem_domain, only: domain_update
-    use dem_diagnostics, only: energies, elastic_energy, first_nonfinite
+    use dem_mesh, only: mesh_speed_bound
+    use dem_rebuild, only: settle_outlets
+    use dem_diagnostics, only: energies, elastic_energy, first_nonfinite, deep_overlap_id, &
+                               deep_wall_id
     use dem_output, only: output_t
     use dem_frame, only: frame_t, frame_spread
     use dem_folder, only: checkpoint_file
@@ -23,7 +26,16 @@ module dem_run_control
     use dem_acc, only: acc_to_host
     implicit none
     private
-    public :: run_control, progress, energy_guard, unstable
+    public :: run_control, progress, energy_guard, unstable, deep_pair, deep_wall, smallest, &
+              overlap_warn
+
+    !> An overlap during a run deeper than this fraction of the smaller radius (of the radius
+    !> against a wall) is reported once (deeper than &run max_overlap stops the run; doc/
+    !> theory.md, section 6); a run's particles start within it.
+    real(wp), parameter :: overlap_warn = 0.5_wp
+    !> The energy balance's room, a fraction of the energy a closed case can set free
+    !> (balance_guard; doc/theory.md, section 6).
+    real(wp), parameter :: balance_room = 0.25_wp
 
     !> time left for the end of a stopped run after its checkpoint: closing files, the timing
     !> report, MPI_Finalize (measured: 50 to 140 ms on one node) [s]
@@ -64,7 +76,12 @@ contains
             s%stop_message = 'a signal (SIGTERM or SIGUSR1) was received'
             if (len(sig) > 0) s%stop_message = sig // ' received'
         end if
-        if (.not. written) call write_checkpoint(s, c, out, err)
+        if (.not. written) then           ! (the guards check every state a checkpoint holds)
+            call settle_outlets(s, err)
+            if (.not. err%failed()) call energy_guard(s, c, err)
+            if (err%failed()) return
+            call write_checkpoint(s, c, out, err)
+        end if
         s%stop_message = s%stop_message // '; stopped at t = ' // real_text(time_of(s, c, &
             s%step)) // ' s after writing ' // c%output_dir // '/' // &
             checkpoint_file(s%step) // '; continue with dem --resume ' // c%source
@@ -122,9 +139,128 @@ contains
                 size(s%nb%list, kind=ip), p%x, p%radius, p%mat, s%nb%start, s%nb%list, &
                 c%mats%n, s%pc%opts%normal, s%pc%kn, s%cs%wall_tri, s%mesh)
         end associate
-        if (energy > case_energy_bound(c, mass)) &
+        if (energy > case_energy_bound(c, mass)) then
             call unstable(s, c, err, [energy, case_energy_bound(c, mass)])
+            return
+        end if
+        if (closed_case(s, c)) call balance_guard(s, c, energy, pe, mass, err)
+        if (.not. err%failed()) call overlap_guard(s, c, err)
     end subroutine energy_guard
+
+    !> A case that gives its particles no energy but from gravity: no moving wall, inflow,
+    !> cohesion, coupled fluid or &run max_energy (which says that something else does), and
+    !> no periodic axis along which gravity acts.
+    logical function closed_case(s, c) result(closed)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        closed = c%max_energy == 0.0_wp .and. .not. c%inflow .and. &
+                 mesh_speed_bound(s%mesh) == 0.0_wp .and. all(s%pc%kcoh == 0.0_wp) .and. &
+                 .not. allocated(s%p%ext) .and. &
+                 .not. any(c%periodic%axis .and. c%gravity /= 0.0_wp)
+    end function closed_case
+
+    !> The energy balance of a closed case (closed_case): the kinetic and elastic energy
+    !> `energy` plus the gravitational energy `pe` [J] can only fall, so a rise above its
+    !> value at the run's first check by more than balance_room times the energy the case
+    !> can set free there (`energy` and (1/2) M v_e^2, M `mass` [kg]) stops the run as
+    !> unstable (doc/theory.md, section 6). Every rank has the same sums.
+    subroutine balance_guard(s, c, energy, pe, mass, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        real(wp), intent(in) :: energy, pe, mass
+        type(error_t), intent(inout) :: err
+        if (s%balance_room < 0.0_wp) then          ! the run's first check: the reference
+            s%balance_total = energy + pe
+            s%balance_time = time_of(s, c, s%step)
+            s%balance_room = balance_room * (energy + 0.5_wp * mass * c%energy_speed**2)
+        end if
+        if (energy + pe - s%balance_total <= s%balance_room) return
+        call stop_unstable(s, c, err, 'unstable: the kinetic, elastic and gravitational ' // &
+            'energy has grown by ' // real_text(energy + pe - s%balance_total) // ' J since ' // &
+            't = ' // real_text(s%balance_time) // ' s, more than ' // &
+            real_text(s%balance_room) // ' J, though nothing in the case gives the ' // &
+            'particles energy')
+    end subroutine balance_guard
+
+    !> The overlaps' check of energy_guard: an overlap deeper than max_overlap stops the run
+    !> (the state is not good), one deeper than overlap_warn is reported on standard error,
+    !> the first time only. Collective.
+    subroutine overlap_guard(s, c, err)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        integer(i8) :: ids(2)
+        character(len=:), allocatable :: what
+        what = deep_text(c%max_overlap)
+        if (len(what) > 0) then
+            call stop_unstable(s, c, err, 'unstable: ' // what)
+            return
+        end if
+        if (s%deep_warned) return
+        what = deep_text(overlap_warn)
+        if (len(what) == 0) return
+        s%deep_warned = .true.
+        if (s%comm%rank == 0) write(error_unit, '(a)') 'dem: warning: ' // what // ' at t = ' &
+            // real_text(time_of(s, c, s%step)) // ' s (deeper than a sound contact: ' // &
+            'doc/theory.md, section 6)'
+    contains
+        !> What overlaps deeper than `depth`: the particle against a wall, or else the pair, of
+        !> smallest ids; '' if none does.
+        function deep_text(depth) result(text)
+            real(wp), intent(in) :: depth
+            character(len=:), allocatable :: text
+            character(len=16) :: part
+            write(part, '(f16.2)') depth
+            part = adjustl(part)
+            text = ''
+            ids(1) = deep_wall(s, depth)
+            if (ids(1) > 0) then
+                text = 'particle ' // itoa(ids(1)) // ' overlaps a wall by more than ' // &
+                       trim(part) // ' of its radius'
+                return
+            end if
+            ids = deep_pair(s, depth)
+            if (ids(1) > 0) text = 'particles ' // itoa(ids(1)) // ' and ' // itoa(ids(2)) // &
+                ' overlap by more than ' // trim(part) // ' of the smaller radius'
+        end function deep_text
+    end subroutine overlap_guard
+
+    !> The pair of smallest ids, over all ranks, that overlaps by more than `depth` times the
+    !> smaller radius (deep_overlap_id); 0, 0 if none does. Collective.
+    function deep_pair(s, depth) result(ids)
+        type(solver_t), intent(in) :: s
+        real(wp), intent(in) :: depth
+        integer(i8) :: ids(2)
+        integer(ip) :: n
+        n = s%p%n_own
+        ids = 0
+        ids(1) = smallest(s, deep_overlap_id(n, n + s%p%n_ghost, size(s%nb%list, kind=ip), &
+            s%p%gid, s%p%x, s%p%radius, s%nb%start, s%nb%list, depth, 0_i8))
+        if (ids(1) > 0) ids(2) = smallest(s, deep_overlap_id(n, n + s%p%n_ghost, &
+            size(s%nb%list, kind=ip), s%p%gid, s%p%x, s%p%radius, s%nb%start, s%nb%list, &
+            depth, ids(1)))
+    end function deep_pair
+
+    !> The smallest id, over all ranks, of the particles that overlap a wall by more than
+    !> `depth` times their radius (deep_wall_id); 0 if none does. Collective.
+    integer(i8) function deep_wall(s, depth) result(id)
+        type(solver_t), intent(in) :: s
+        real(wp), intent(in) :: depth
+        id = 0
+        if (s%mesh%n_tri == 0) return
+        id = smallest(s, deep_wall_id(s%p%n_own, size(s%nb%wlist, kind=ip), s%mesh%n_tri, &
+            s%p%gid, s%p%x, s%p%radius, s%nb%wstart, s%nb%wlist, s%mesh%vert, depth))
+    end function deep_wall
+
+    !> The smallest of the ranks' ids > 0 (0 if none has one). Collective.
+    integer(i8) function smallest(s, id) result(least)
+        type(solver_t), intent(in) :: s
+        integer(i8), intent(in) :: id
+        integer(i8) :: a(1)
+        a = merge(-id, -huge(1_i8), id > 0)
+        call comm_max(s%comm, a)
+        least = merge(-a(1), 0_i8, a(1) > -huge(1_i8))
+    end function smallest
 
     !> The instability guard has tripped: write the last good state as a checkpoint (unless a
     !> checkpoint, which passed the guard too, is newer), and stop the run naming the
@@ -135,16 +271,15 @@ contains
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
         real(wp), intent(in), optional :: energy(2)
-        type(frame_t) :: good
-        type(error_t) :: write_err
-        character(len=:), allocatable :: what, saved
+        character(len=:), allocatable :: what
         integer(i8), allocatable :: ids(:)
-        real(wp), allocatable :: speeds(:)
+        real(wp), allocatable :: speeds(:), spins(:)
         integer(ip) :: i, bad
-        real(wp) :: speed, v_i
+        real(wp) :: speed, v_i, spin
         call particle_data(s, acc_to_host)
         bad = 0
         speed = ieee_value(speed, ieee_quiet_nan)     ! a non-finite state
+        spin = 0.0_wp                                 ! 1: the speed is a rim speed
         associate (p => s%p)
             do i = 1, p%n_own
                 if (first_nonfinite(1_ip, p%x(:, i:i), p%v(:, i:i), p%w(:, i:i)) > 0) then
@@ -164,10 +299,12 @@ contains
                     end if
                     bad = i
                     speed = v_i
+                    spin = merge(1.0_wp, 0.0_wp, v_i > norm2(p%v(:, i)))
                 end do
             end if
             call comm_gather(s%comm, [merge(p%gid(max(bad, 1)), 0_i8, bad > 0)], ids)
             call comm_gather(s%comm, [speed], speeds)
+            call comm_gather(s%comm, [spin], spins)
         end associate
         what = ''
         if (s%comm%rank == 0) then              ! the offender of lowest id, any rank
@@ -176,17 +313,39 @@ contains
             end if
             i = minloc(ids, mask=ids > 0, dim=1)
             what = 'unstable: particle ' // itoa(ids(i))
+            if (.not. ieee_is_nan(speeds(i))) then
+                if (spins(i) > 0.0_wp) then
+                    what = what // ' spins at a rim speed (angular speed times radius) of '
+                else
+                    what = what // ' moves at a speed of '
+                end if
+                what = what // real_text(speeds(i)) // ' m/s'
+            end if
             if (ieee_is_nan(speeds(i))) then
                 what = what // ' has a non-finite state'
             else if (present(energy)) then
-                what = what // ' moves at ' // real_text(speeds(i)) // ' m/s, the fastest, ' // &
-                       'as the kinetic and elastic energy, ' // real_text(energy(1)) // &
-                       ' J, exceeds the bound ' // real_text(energy(2)) // ' J (&run max_energy)'
+                what = what // ', the fastest, as the kinetic and elastic energy, ' // &
+                       real_text(energy(1)) // ' J, exceeds the bound ' // &
+                       real_text(energy(2)) // ' J (&run max_energy)'
             else
-                what = what // ' moves at ' // real_text(speeds(i)) // ' m/s, above the bound ' &
-                       // real_text(c%max_speed) // ' m/s (&run max_speed)'
+                what = what // ', above the bound ' // real_text(c%max_speed) // &
+                       ' m/s (&run max_speed)'
             end if
         end if
+        call stop_unstable(s, c, err, what)
+    end subroutine unstable
+
+    !> Stop an unstable run (`what` says why, on rank 0): write the last good state as a
+    !> checkpoint (unless a checkpoint, which passed the guards too, is newer) and set err,
+    !> naming the time, dt and that state. Collective.
+    subroutine stop_unstable(s, c, err, what)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        character(len=*), intent(in) :: what
+        type(frame_t) :: good
+        type(error_t) :: write_err
+        character(len=:), allocatable :: saved
         saved = ''
         if (any(s%ckpt_step > s%good%step)) then     ! a checkpoint newer than the last row
             saved = '; the last good state is in ' // c%output_dir // '/' // &
@@ -204,5 +363,5 @@ contains
             real_text(time_of(s, c, s%step)) // ' s; dt is ' // &
             real_text(c%dt / s%scales%rayleigh) // ' of the Rayleigh time (' // &
             real_text(s%scales%rayleigh) // ' s): reduce dt' // saved)
-    end subroutine unstable
+    end subroutine stop_unstable
 end module dem_run_control

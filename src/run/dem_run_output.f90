@@ -5,7 +5,7 @@
 !> writes the text files, every rank its part of the HDF5 files.
 module dem_run_output
     use dem_kinds, only: wp, ip, i8
-    use dem_error, only: error_t, set_error, dem_err_runtime
+    use dem_error, only: error_t
     use dem_comm, only: comm_sum
     use dem_case, only: case_t
     use dem_run_state, only: solver_t, time_of, particle_data
@@ -18,9 +18,9 @@ module dem_run_output
     use dem_probes, only: probe_values, probe_histogram_counts, probe_histogram, probe_wall_load
     use dem_frame, only: frame_t
     use dem_checkpoint, only: frame_write
-    use dem_folder, only: checkpoint_file
+    use dem_folder, only: checkpoint_file, folder_point_latest, folder_prune
     use dem_xdmf, only: xdmf_write, snapshot_file
-    use dem_files, only: make_directory, file_remove, file_rename
+    use dem_files, only: make_directory
     use dem_timers, only: wall_seconds
     use dem_acc, only: acc_data, acc_to_host
     implicit none
@@ -197,7 +197,8 @@ contains
     end subroutine write_checkpoint
 
     !> Write frame `fr` as a checkpoint, point checkpoints/latest at it, and remove the
-    !> checkpoints beyond the last checkpoint_keep.
+    !> checkpoints beyond the last checkpoint_keep (in this order: a run killed in between
+    !> is continued from the newest whole checkpoint, and its start removes what was left).
     subroutine write_frame_checkpoint(s, c, fr, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -205,7 +206,6 @@ contains
         type(error_t), intent(inout) :: err
         integer(i8), allocatable :: kept(:)
         real(wp) :: t0
-        integer :: k, u, ios
         t0 = wall_seconds()
         call make_directory(c%output_dir // '/checkpoints', err)
         if (err%failed()) return
@@ -215,31 +215,11 @@ contains
         call frame_write(fr, c, mesh_at(s, fr%time), c%output_dir // '/' // &
                          checkpoint_file(fr%step), .true., s%comm, err)
         if (err%failed()) return
-        if (s%comm%rank == 0) call point_latest_and_prune()    ! the files are rank 0's
+        if (s%comm%rank == 0) then                     ! the files are rank 0's
+            call folder_point_latest(c%output_dir, checkpoint_file(fr%step), err)
+            if (.not. err%failed()) call folder_prune(c%output_dir, kept)
+        end if
         s%ckpt_step = kept                       ! the bookkeeping is every rank's
-        s%stale = [integer(i8) ::]
         s%ckpt_seconds = max(s%ckpt_seconds, wall_seconds() - t0)
-    contains
-        subroutine point_latest_and_prune()
-            open(newunit=u, file=c%output_dir // '/checkpoints/latest.part', status='replace', &
-                 action='write', iostat=ios)
-            if (ios == 0) write(u, '(a)', iostat=ios) checkpoint_file(fr%step)
-            if (ios == 0) close(u, iostat=ios)
-            if (ios /= 0) then
-                call set_error(err, dem_err_runtime, c%output_dir // '/checkpoints/latest: ' // &
-                               'cannot write')
-                return
-            end if
-            call file_rename(c%output_dir // '/checkpoints/latest.part', &
-                             c%output_dir // '/checkpoints/latest', err)
-            do k = 1, size(s%ckpt_step)
-                if (all(kept /= s%ckpt_step(k))) &
-                    call file_remove(c%output_dir // '/' // checkpoint_file(s%ckpt_step(k)))
-            end do
-            do k = 1, size(s%stale)
-                if (all(kept /= s%stale(k))) &
-                    call file_remove(c%output_dir // '/' // checkpoint_file(s%stale(k)))
-            end do
-        end subroutine point_latest_and_prune
     end subroutine write_frame_checkpoint
 end module dem_run_output

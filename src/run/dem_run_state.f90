@@ -68,6 +68,10 @@ module dem_run_state
         logical :: settled = .false.   !< the kinetic energy fell below stop_kinetic_energy
         real(wp) :: settled_energy = 0.0_wp  !< the kinetic energy then [J]
         logical :: emptied = .false.   !< the outlets took every particle out
+        logical :: deep_warned = .false.  !< an overlap beyond overlap_warn was reported
+        real(wp) :: balance_total = 0.0_wp   !< the energy at the run's first check [J]
+        real(wp) :: balance_time = 0.0_wp    !< its time [s]
+        real(wp) :: balance_room = -1.0_wp   !< the rise allowed [J]; < 0: not yet checked
         integer(i8) :: steps_run = 0   !< steps taken by the last solver_run
         integer(i8) :: particle_steps = 0  !< this rank's particles in each of them, summed
         integer(ip) :: particles_most = 0  !< the most particles this rank held in them
@@ -111,9 +115,7 @@ module dem_run_state
         integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
         real(wp), allocatable :: snap_time(:)
         integer(i8), allocatable :: ckpt_step(:)             !< checkpoints kept
-        integer(i8), allocatable :: stale(:)  !< checkpoints of a continuation abandoned by a
-                                              !< restart from an older one: removed once this
-                                              !< run has written its own
+        character(len=:), allocatable :: restart_file  !< the checkpoint restored
         real(wp) :: ckpt_seconds = 0.0_wp  !< wall time of the slowest checkpoint write [s]
         integer :: stopped = stop_end      !< why the last solver_run returned
         character(len=:), allocatable :: stop_message

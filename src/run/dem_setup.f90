@@ -6,7 +6,8 @@
 !> touch), and the ids that outputs and probes name found. Collective over the ranks.
 module dem_setup
     use dem_kinds, only: wp, ip, i8
-    use dem_error, only: error_t, set_error, dem_err_input
+    use dem_error, only: error_t, set_error, dem_err_input, dem_err_stopped
+    use dem_signals, only: signal_received
     use dem_comm, only: comm_t, comm_any
     use dem_case, only: case_t, insert_t, time_scales_t, case_time_scales, case_summarize, &
                         case_speed_bound, case_energy_speed, case_append_particles, &
@@ -78,8 +79,14 @@ contains
                 call with_images(c%periodic, c%x(:, 1:c%n_held), c%radius(1:c%n_held), &
                                  2.0_wp * max(g%size%r_max, maxval(c%radius(1:c%n_held))), &
                                  xa, ra)
-                call insert_random(rng, g%region, n, g%size, xa, ra, 10000, x, r, placed)
-                if (placed < n) then
+                call insert_random(rng, g%region, n, g%size, xa, ra, 10000, x, r, placed, &
+                                   interruptible=.true.)
+                if (placed < n .and. len(signal_received()) > 0) then
+                    call set_error(err, dem_err_stopped, signal_received() // ' received ' // &
+                        'while ' // g%at // ' placed its spheres: stopped before the run ' // &
+                        'started, nothing written (dem --resume starts it again)')
+                    return
+                else if (placed < n) then
                     call set_error(err, dem_err_input, g%at // ": key 'n': only " // &
                         itoa(placed) // ' of ' // itoa(n) // ' spheres found room in the ' // &
                         'region (random insertion fills at most about a third of a volume): ' // &
@@ -190,11 +197,13 @@ contains
         type(error_t), intent(inout) :: err
         type(time_scales_t) :: ts
         character(len=32) :: s1, s2
+        logical :: given
         if (c%skin == huge(1.0_wp)) c%skin = 0.4_wp * minval(c%summary%rmin)
         call case_time_scales(c, ts)
-        if (c%max_speed == huge(1.0_wp)) c%max_speed = case_speed_bound(c, ts)
+        given = c%max_speed /= huge(1.0_wp)
+        if (.not. given) c%max_speed = case_speed_bound(c, ts)
         c%energy_speed = case_energy_speed(c, ts)
-        if (.not. scales_finite(c, ts, err)) return
+        if (.not. scales_finite(c, ts, given, err)) return
         if (c%dt > ts%bound .and. .not. c%allow_unstable) then
             write(s1, '(es10.3)') c%dt
             write(s2, '(es10.3)') ts%bound
@@ -206,12 +215,14 @@ contains
     end subroutine drawn_from_particles
 
     !> False, with `err` set, where the time scales, the total mass or the guards are not
-    !> finite and positive (radii or speeds beyond what double precision resolves), or
-    !> where a particle starts as fast as the instability guard (its speed, or its rim speed
-    !> |w| r): the run would stop at its first step.
-    logical function scales_finite(c, ts, err) result(ok)
+    !> finite and positive (radii or speeds beyond what double precision resolves), or,
+    !> unless &run max_speed is `given`, where a particle starts as fast as the instability
+    !> guard's default (its speed, or its rim speed |w| r): the run would stop at its first
+    !> step.
+    logical function scales_finite(c, ts, given, err) result(ok)
         type(case_t), intent(in) :: c
         type(time_scales_t), intent(in) :: ts
+        logical, intent(in) :: given
         type(error_t), intent(inout) :: err
         real(wp) :: checked(5)
         integer(ip) :: a
@@ -233,12 +244,13 @@ contains
                 "&insert's radii)")
             return
         end if
-        ok = max(c%summary%speed, c%summary%rim) < c%max_speed
+        ok = given .or. max(c%summary%speed, c%summary%rim) < c%max_speed
         if (.not. ok) call set_error(err, dem_err_input, c%run_at // ": key 'max_speed': " // &
             'a particle starts at ' // real_text(max(c%summary%speed, c%summary%rim)) // &
             " m/s (its speed, or the rim speed |w| r of its angular velocity: &particle " // &
             "'angular_velocity', a particle file's wx, wy, wz), at or above the instability " // &
-            'guard, ' // real_text(c%max_speed) // ' m/s: the run would stop at its first step')
+            "guard's default, " // real_text(c%max_speed) // ' m/s: the run would stop at ' // &
+            'its first step (give max_speed if that speed is meant)')
     end function scales_finite
 
     !> Each period at least 2 (2 R + skin), R the largest radius (of the inflow too): a

@@ -5,18 +5,20 @@
 module dem_solver
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
-    use dem_comm, only: comm_t, comm_sum, comm_max, comm_node_rank, comm_counts, comm_exchange
+    use dem_comm, only: comm_t, comm_sum, comm_max, comm_node_rank, comm_counts, comm_exchange, &
+                        comm_any
+    use dem_files, only: file_exists
     use dem_case, only: case_t, case_time_scales, case_particle_materials, case_speed_bound
     use dem_particles, only: particles_init, particles_add, order_by_id
     use dem_domain, only: domain_imbalance, sorted_by_rank
     use dem_contact_model, only: contact_model_build
     use dem_contact_store, only: store_init, max_wall_contacts, store_history_widths
     use dem_integrate, only: integrator_verlet
-    use dem_diagnostics, only: deep_overlap_id, deep_wall_id
-    use dem_output, only: output_open, output_final, output_close
+    use dem_output, only: output_open, output_check, output_final, output_close
     use dem_probes, only: probe_header, probe_wall_load
     use dem_frame, only: frame_t
-    use dem_folder, only: folder_claim
+    use dem_folder, only: folder_claim, folder_restart, folder_sync, folder_missing_snapshot, &
+                          folder_prune
     use dem_text, only: itoa
     use dem_acc, only: acc_enter, acc_exit, acc_select_device
     use dem_timers, only: timers_t, timer_start, wall_seconds
@@ -25,13 +27,13 @@ module dem_solver
     use dem_rebuild, only: rebuild, settle_outlets, start_domain
     use dem_frames, only: capture, solver_restore => frame_restore
     use dem_run_output, only: write_trace, write_snapshot, write_xdmf
-    use dem_run_control, only: unstable
+    use dem_run_control, only: unstable, deep_pair, deep_wall, smallest, overlap_warn
     use dem_step, only: time_step, forces, write_row
     implicit none
     private
     public :: solver_t, solver_init, solver_prepare, solver_restore, solver_run, solver_start, &
-              solver_advance, solver_finish, solver_time, solver_retime, solver_particles, &
-              solver_particle_steps, solver_parallel_stats, &
+              solver_ended, solver_advance, solver_finish, solver_time, solver_retime, &
+              solver_particles, solver_particle_steps, solver_parallel_stats, &
               stop_end, stop_settled, stop_wall_time, stop_signal, stop_emptied
 
 contains
@@ -80,7 +82,7 @@ contains
             s%inflow_count = 0
             s%inflow_mass = 0.0_wp
         end if
-        allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0), s%stale(0))
+        allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0))
     end subroutine solver_init
 
     !> Run to t_end (or until a stop), writing series.csv, contact.csv (when tracing),
@@ -106,6 +108,7 @@ contains
         real(wp), intent(in) :: started
         type(error_t), intent(inout) :: err
         character(len=:), allocatable :: columns
+        integer(i8) :: bytes(3)
         integer :: k
         logical :: bad
         call store_history_widths(s%pc%rolling_spring)     ! (this run's: see solver_init)
@@ -121,9 +124,13 @@ contains
             if (.not. failed_anywhere(s, err)) call solver_prepare(s, c, err)
             if (err%failed()) return
             if (s%comm%rank == 0) then  ! the CSV files are rank 0's
-                if (s%restarted) then
-                    call output_open(r%out, c%output_dir, s%trace > 0, columns, err, &
-                        [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes])
+                if (s%restarted) then            ! (nothing changed before the checks)
+                    bytes = [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes]
+                    call output_check(c%output_dir, s%trace > 0, columns, bytes, err)
+                    if (.not. err%failed()) call folder_restart(c%output_dir, s%restart_file, &
+                                                                s%step, s%ckpt_step, err)
+                    if (.not. err%failed()) call output_open(r%out, c%output_dir, &
+                                                             s%trace > 0, columns, err, bytes)
                     if (.not. err%failed() .and. size(s%snap_step) > 0) &
                         call write_xdmf(s, c, err)
                 else
@@ -169,7 +176,7 @@ contains
         type(error_t), intent(inout) :: err
         integer(i8) :: ids(2)
         if (.not. s%restarted) then
-            ids(1) = smallest(repeated_id(s))
+            ids(1) = smallest(s, repeated_id(s))
             if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particle id ' // &
                                            itoa(ids(1)) // ' is given twice')
             if (failed_anywhere(s, err)) return
@@ -179,31 +186,14 @@ contains
         call device_data(s, acc_enter)
         call rebuild(s, .false., err)
         if (err%failed() .or. s%restarted) return
-        associate (p => s%p, n => s%p%n_own)
-            if (s%mesh%n_tri > 0) then
-                ids(1) = smallest(deep_wall_id(n, size(s%nb%wlist, kind=ip), s%mesh%n_tri, &
-                                  p%gid, p%x, p%radius, s%nb%wstart, s%nb%wlist, s%mesh%vert))
-                if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particle ' &
-                    // itoa(ids(1)) // ' overlaps a wall by more than half its radius')
-                if (failed_anywhere(s, err)) return
-            end if
-            ids(1) = smallest(deep_overlap_id(n, n + p%n_ghost, size(s%nb%list, kind=ip), &
-                              p%gid, p%x, p%radius, s%nb%start, s%nb%list, 0_i8))
-            if (ids(1) == 0) return
-            ids(2) = smallest(deep_overlap_id(n, n + p%n_ghost, size(s%nb%list, kind=ip), &
-                              p%gid, p%x, p%radius, s%nb%start, s%nb%list, ids(1)))
-        end associate
-        call set_error(err, dem_err_input, c%source // ': particles ' // itoa(ids(1)) // &
-                       ' and ' // itoa(ids(2)) // ' overlap by more than half the smaller radius')
-    contains
-        !> The smallest of the ranks' ids > 0 (0 if none has one).
-        integer(i8) function smallest(id) result(least)
-            integer(i8), intent(in) :: id
-            integer(i8) :: a(1)
-            a = merge(-id, -huge(1_i8), id > 0)
-            call comm_max(s%comm, a)
-            least = merge(-a(1), 0_i8, a(1) > -huge(1_i8))
-        end function smallest
+        ids(1) = deep_wall(s, overlap_warn)
+        if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particle ' // &
+            itoa(ids(1)) // ' overlaps a wall by more than half its radius')
+        if (failed_anywhere(s, err)) return
+        ids = deep_pair(s, overlap_warn)
+        if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particles ' // &
+            itoa(ids(1)) // ' and ' // itoa(ids(2)) // ' overlap by more than half the ' // &
+            'smaller radius')
     end subroutine solver_prepare
 
     !> The smallest id that two particles share among those of rank mod(id, P): each rank
@@ -226,6 +216,31 @@ contains
             if (ids(1, order(k)) == ids(1, order(k - 1))) id = ids(1, order(k))
         end do
     end function repeated_id
+
+    !> For a run restored from its folder's newest checkpoint (dem --resume): whether it had
+    !> ended there (its last step, or settled) and written final.csv, so that there is
+    !> nothing left to do and nothing to write (but what a run killed at its end left in
+    !> checkpoints/ is removed, where it can be). A snapshot that the checkpoint lists (as
+    !> snapshots.xmf does) but that is not there is an error naming it. Collective.
+    logical function solver_ended(s, c, err) result(ended)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        type(error_t), intent(inout) :: err
+        character(len=:), allocatable :: missing
+        ended = .false.
+        if (s%comm%rank == 0) then
+            missing = folder_missing_snapshot(c%output_dir, s%snap_step)
+            if (len(missing) > 0) call set_error(err, dem_err_input, missing // ': listed ' // &
+                'in snapshots.xmf (and in the checkpoint) but not there: the folder was ' // &
+                'changed; dem --restart CHECKPOINT CASE continues from an older checkpoint, ' // &
+                'removing the folder starts the run afresh')
+        end if
+        if (failed_anywhere(s, err)) return
+        call plan_run(s, c)
+        ended = (s%step >= s%run%n_end .or. s%settled) .and. &
+                comm_any(s%comm, s%comm%rank == 0 .and. file_exists(c%output_dir // '/final.csv'))
+        if (ended .and. s%comm%rank == 0) call folder_prune(c%output_dir, s%ckpt_step)
+    end function solver_ended
 
     !> The run's last step and the steps between outputs, for dt = c%dt from step0.
     subroutine plan_run(s, c)
@@ -302,7 +317,10 @@ contains
             end associate
             bad = failed_anywhere(s, err)
         end if
-        if (s%comm%rank == 0) call output_close(s%run%out, err)
+        if (s%comm%rank == 0) then
+            call output_close(s%run%out, err)
+            if (.not. err%failed()) call folder_sync(c%output_dir, s%snap_step, err)
+        end if
         bad = failed_anywhere(s, err)
         call device_data(s, acc_exit)
     end subroutine solver_finish

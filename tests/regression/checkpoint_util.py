@@ -227,7 +227,8 @@ def crash_signs(text):
 
 
 def tree_state(path):
-    """{relative path: (size, mtime_ns, bytes)} of every file under path (empty if none)."""
+    """{relative path: (size, mtime_ns, bytes)} of every file under path (empty if none),
+    but the folder's lock file, which every run takes and releases."""
     state = {}
     if not os.path.exists(path):
         return state
@@ -235,6 +236,8 @@ def tree_state(path):
         for name in dirs + files:
             full = os.path.join(root, name)
             rel = os.path.relpath(full, path)
+            if rel == "lock":
+                continue
             if os.path.isdir(full):
                 state[rel + "/"] = None
             else:

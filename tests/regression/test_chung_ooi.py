@@ -9,6 +9,7 @@ one by the attractive end of a damped contact: 3.4 % at e = 0.5, computed indepe
 chung_ooi.tsuji_impulses), and nowhere does the spin change exceed them.
 usage: test_chung_ooi.py DEM WORKDIR"""
 import os
+import shutil
 import sys
 
 import numpy as np
@@ -17,6 +18,7 @@ from regression_util import ROOT, check, check_close, finish, run_dem
 import chung_ooi as co
 
 dem, work = sys.argv[1], sys.argv[2]
+shutil.rmtree(work, ignore_errors=True)    # (an output folder of another case is refused)
 cases = os.path.join(ROOT, "cases", "verification")
 
 
