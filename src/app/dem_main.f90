@@ -9,6 +9,7 @@ program dem_main
                    solver_time, frame_t, checkpoint_read, &
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
                    solver_particles, solver_particle_steps, solver_parallel_stats, i8
+    use dem_case, only: case_memory_mib
     use dem_comm, only: comm_t, comm_init, comm_free, comm_max
     use dem_acc, only: acc_traffic
     use dem_signals, only: signals_install
@@ -189,10 +190,7 @@ contains
         else
             law = 'Hertz-Mindlin'
         end if
-        ! peak resident sizes measured (doc/user/running.md): 31 MiB for a sphere on a plane, plus
-        ! about 2900 bytes per particle (a bed of 25 000) and 790 per triangle (planes of
-        ! 0.5 and 2 million), a checkpoint built in memory included
-        mem = 31.0_wp + (2900.0_wp * c%n_particles + 790.0_wp * c%mesh%n_tri) / 2.0_wp**20
+        mem = case_memory_mib(real(c%n_particles, wp), real(c%mesh%n_tri, wp))
         write(output_unit, '(a)') 'case ' // c%source
         write(output_unit, '(a,i0,a,i0,a)') '  particles            ', c%n_particles, &
             ' (wall triangles ', c%mesh%n_tri, ')'
@@ -223,7 +221,7 @@ contains
                 'cohesion_energy_density; doc/theory.md, section 15)'
         end if
         write(output_unit, '(a,es12.5,a,i0,a)') '  dt                   ', c%dt, ' s (', &
-            ceiling(c%t_end / c%dt - 1.0e-9_wp), ' steps)'
+            ceiling(c%t_end / c%dt - 1.0e-9_wp, i8), ' steps)'
         write(output_unit, '(a,f10.4)') '  dt / Rayleigh time   ', c%dt / ts%rayleigh
         if (ts%speed > 0.0_wp) write(output_unit, '(a,f10.4)') '  dt / contact time    ', &
             c%dt / ts%contact

@@ -15,7 +15,8 @@ module dem_setup
     use dem_insert, only: insert_random, insert_velocities, region_face, region_slab
     use dem_random, only: rng_t, rng_seed
     use dem_input, only: read_case_file
-    use dem_text, only: itoa
+    use dem_text, only: itoa, real_text
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_periodic, only: with_images
     implicit none
     private
@@ -94,6 +95,7 @@ contains
                 end if
                 next_id = 1
                 if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
+                if (.not. ids_left(g, next_id, real(n, wp), err)) return
                 call case_append_particles(c, [(next_id + i, i = 0, n - 1)], spread(g%mat, 1, n), &
                                            r, x, insert_velocities(rng, g%velocity, &
                                                                    g%velocity_spread, n), &
@@ -113,6 +115,10 @@ contains
                         3.0_wp * g%size%r_max))
             end associate
         end do
+        do k = 1, size(c%inserts)                ! the ids of the inflow to come
+            if (.not. c%inserts(k)%inflow) cycle
+            if (.not. ids_left(c%inserts(k), c%next_id, inflow_count(c%inserts(k)), err)) return
+        end do
         k = findloc(c%inserts%inflow, .true., dim=1)
         c%inflow = k > 0
         if (k > 0) then                          ! the inflow's generator
@@ -120,6 +126,33 @@ contains
             c%rng_state = rng%state
         end if
     contains
+        !> False, with `err` set, where `count` ids from `first` on pass the largest id.
+        logical function ids_left(g, first, count, err) result(ok)
+            type(insert_t), intent(in) :: g
+            integer(i8), intent(in) :: first
+            real(wp), intent(in) :: count
+            type(error_t), intent(inout) :: err
+            ok = count < real(huge(1_i8) - first, wp)
+            if (.not. ok) call set_error(err, dem_err_input, g%at // ": key 'n': the ids " // &
+                'of its spheres would pass the largest id, 2^63 - 1 (they follow the ' // &
+                'largest id before them, ' // itoa(first - 1) // ')')
+        end function ids_left
+
+        !> The most spheres an inflow inserts up to t_end: rate times its time, or its mass
+        !> in spheres of its smallest radius.
+        real(wp) function inflow_count(g) result(count)
+            type(insert_t), intent(in) :: g
+            real(wp), parameter :: pi = acos(-1.0_wp)
+            real(wp) :: span
+            span = max(0.0_wp, min(g%end, c%t_end) - g%start)
+            if (g%rate > 0.0_wp) then
+                count = g%rate * span + 1.0_wp
+            else
+                count = g%mass_rate * span / (4.0_wp / 3.0_wp * pi * g%size%r_min**3 * &
+                                              c%mats%density(g%mat)) + 1.0_wp
+            end if
+        end function inflow_count
+
         !> The steps in which a sphere of the group moves one largest diameter d from its
         !> velocity v0 and gravity g: (sqrt(v0^2 + 2 g d) - v0) / g, or d / v0 without
         !> gravity, 1000 steps when it does not move; at least 1.
@@ -136,7 +169,7 @@ contains
             else
                 t = 1000.0_wp * c%dt
             end if
-            every = max(1_i8, nint(t / c%dt, i8))
+            every = max(1_i8, nint(min(t / c%dt, 1.0e18_wp), i8))   ! (no overflow)
         end function default_every
     end subroutine place_inserts
 
@@ -164,10 +197,13 @@ contains
         type(error_t), intent(inout) :: err
         type(time_scales_t) :: ts
         character(len=32) :: s1, s2
+        logical :: given
         if (c%skin == huge(1.0_wp)) c%skin = 0.4_wp * minval(c%summary%rmin)
         call case_time_scales(c, ts)
-        if (c%max_speed == huge(1.0_wp)) c%max_speed = case_speed_bound(c, ts)
+        given = c%max_speed /= huge(1.0_wp)
+        if (.not. given) c%max_speed = case_speed_bound(c, ts)
         c%energy_speed = case_energy_speed(c, ts)
+        if (.not. scales_finite(c, ts, given, err)) return
         if (c%dt > ts%bound .and. .not. c%allow_unstable) then
             write(s1, '(es10.3)') c%dt
             write(s2, '(es10.3)') ts%bound
@@ -177,6 +213,45 @@ contains
                 'allow_unstable = .true. runs anyway)')
         end if
     end subroutine drawn_from_particles
+
+    !> False, with `err` set, where the time scales, the total mass or the guards are not
+    !> finite and positive (radii or speeds beyond what double precision resolves), or,
+    !> unless &run max_speed is `given`, where a particle starts as fast as the instability
+    !> guard's default (its speed, or its rim speed |w| r): the run would stop at its first
+    !> step.
+    logical function scales_finite(c, ts, given, err) result(ok)
+        type(case_t), intent(in) :: c
+        type(time_scales_t), intent(in) :: ts
+        logical, intent(in) :: given
+        type(error_t), intent(inout) :: err
+        real(wp) :: checked(5)
+        integer(ip) :: a
+        checked = [ts%rayleigh, ts%bound, c%summary%mass, c%max_speed, c%energy_speed]
+        ok = all(ieee_is_finite(checked)) .and. checked(1) > 0.0_wp .and. &
+             checked(2) > 0.0_wp .and. checked(4) > 0.0_wp .and. &
+             (checked(3) > 0.0_wp .or. c%n_particles == 0)
+        if (ok .and. ts%speed > 0.0_wp) ok = ieee_is_finite(ts%contact) .and. &
+                                             ts%contact > 0.0_wp
+        if (.not. ok) then
+            a = minloc(c%summary%rmin, dim=1)
+            call set_error(err, dem_err_input, c%run_at // ': the time scales are not ' // &
+                'finite and positive (Rayleigh time ' // real_text(ts%rayleigh) // ' s, ' // &
+                'contact time ' // real_text(ts%contact) // ' s, total mass ' // &
+                real_text(c%summary%mass) // ' kg): the smallest radius, ' // &
+                real_text(c%summary%rmin(a)) // " m (material '" // trim(c%mats%name(a)) // &
+                "'), or the largest speed, " // real_text(ts%speed) // ' m/s, is out of ' // &
+                "range (key 'radius' or 'velocity' of &particle, a particle file's columns, " // &
+                "&insert's radii)")
+            return
+        end if
+        ok = given .or. max(c%summary%speed, c%summary%rim) < c%max_speed
+        if (.not. ok) call set_error(err, dem_err_input, c%run_at // ": key 'max_speed': " // &
+            'a particle starts at ' // real_text(max(c%summary%speed, c%summary%rim)) // &
+            " m/s (its speed, or the rim speed |w| r of its angular velocity: &particle " // &
+            "'angular_velocity', a particle file's wx, wy, wz), at or above the instability " // &
+            "guard's default, " // real_text(c%max_speed) // ' m/s: the run would stop at ' // &
+            'its first step (give max_speed if that speed is meant)')
+    end function scales_finite
 
     !> Each period at least 2 (2 R + skin), R the largest radius (of the inflow too): a
     !> particle then meets at most one image of another, and none of itself.
