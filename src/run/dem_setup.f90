@@ -8,7 +8,7 @@ module dem_setup
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_stopped
     use dem_signals, only: signal_received
-    use dem_comm, only: comm_t, comm_any
+    use dem_comm, only: comm_t, comm_any, comm_max
     use dem_case, only: case_t, insert_t, time_scales_t, case_time_scales, case_summarize, &
                         case_speed_bound, case_energy_speed, case_append_particles, &
                         case_settle_time
@@ -36,6 +36,9 @@ contains
         if (.not. err%failed()) call place_inserts(c, err)  ! (every rank holds all particles)
         if (.not. err%failed()) then
             if (size(c%inserts) > 0) call keep_share(c, comm%rank, comm%size)
+            call check_ranges(c, comm, err)
+        end if
+        if (.not. err%failed()) then
             call case_summarize(c, comm)
             call drawn_from_particles(c, err)
             c%settle_time = case_settle_time(c)
@@ -305,6 +308,66 @@ contains
     end subroutine check_pairs_used
 
     !> Each id the case names is a particle of some rank.
+    !> Every particle's radius at least radius_floor, its speed and its rim speed |w| r
+    !> below light_speed (and the inflow's radii and speeds too): the ranges in which its
+    !> mass, inertia, energies and time scales are finite (doc/user/input.md). The particle
+    !> of smallest id out of range is named, on every rank.
+    subroutine check_ranges(c, comm, err)
+        type(case_t), intent(in) :: c
+        type(comm_t), intent(in) :: comm
+        type(error_t), intent(inout) :: err
+        real(wp), parameter :: radius_floor = 1.0e-9_wp   !! [m]
+        real(wp), parameter :: light_speed = 2.99792458e8_wp   !! [m/s]
+        integer(i8) :: least(1)               ! minus the smallest id out of range
+        real(wp) :: found(3)                  ! its radius, speed and rim speed
+        integer(ip) :: i
+        character(len=:), allocatable :: key
+        least = -huge(1_i8)
+        do i = 1, c%n_held
+            if (.not. in_range(c%radius(i), c%v(:, i), c%w(:, i))) &
+                least = max(least, -c%gid(i))
+        end do
+        call comm_max(comm, least)
+        if (least(1) == -huge(1_i8)) then
+            do i = 1, size(c%inserts)
+                associate (g => c%inserts(i))
+                    if (.not. g%inflow) cycle
+                    if (in_range(g%size%r_min, abs(g%velocity) + g%velocity_spread, &
+                                 [0.0_wp, 0.0_wp, 0.0_wp])) cycle
+                    call set_error(err, dem_err_input, g%at // ": keys 'radius_min', " // &
+                        "'velocity', 'velocity_spread': the inflow's radii must be at least " &
+                        // real_text(radius_floor) // ' m and its speeds below ' // &
+                        real_text(light_speed) // ' m/s')
+                    return
+                end associate
+            end do
+            return
+        end if
+        found = -huge(1.0_wp)
+        do i = 1, c%n_held
+            if (c%gid(i) == -least(1)) found = [c%radius(i), norm2(c%v(:, i)), &
+                                                norm2(c%w(:, i)) * c%radius(i)]
+        end do
+        call comm_max(comm, found)
+        key = 'radius'
+        if (.not. found(3) < light_speed) key = 'angular_velocity'
+        if (.not. found(2) < light_speed) key = 'velocity'
+        if (.not. found(1) >= radius_floor) key = 'radius'
+        call set_error(err, dem_err_input, c%source // ': particle ' // itoa(-least(1)) // &
+            ": key '" // key // "' out of range: its radius is " // real_text(found(1)) // &
+            ' m (at least ' // real_text(radius_floor) // ' m), its speed ' // &
+            real_text(found(2)) // ' m/s and its rim speed |w| r ' // real_text(found(3)) // &
+            ' m/s (both below ' // real_text(light_speed) // " m/s) (&particle, a particle " // &
+            "file's columns, or &insert)")
+    contains
+        !> A radius, velocity and angular velocity in range (NaN is not).
+        pure logical function in_range(r, v, w)
+            real(wp), intent(in) :: r, v(3), w(3)
+            in_range = r >= radius_floor .and. norm2(v) < light_speed .and. &
+                       norm2(w) * r < light_speed
+        end function in_range
+    end subroutine check_ranges
+
     subroutine check_ids(c, comm, err)
         type(case_t), intent(in) :: c
         type(comm_t), intent(in) :: comm

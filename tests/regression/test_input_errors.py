@@ -409,8 +409,10 @@ bad("insert_behind_wall", GOOD + INS.replace("0.03, box_max", "-0.02, box_max") 
 bad("ids_overflow", sub("&particle material", "&particle id = 9223372036854775805, material")
     + INS + "radius_min = 1e-3 /\n", "insert", "n", "largest id")
 bad("tiny_radius", sub("t_end = 1e-5,", "t_end = 1e-5, allow_unstable = .true.,")
-    .replace("radius = 0.01", "radius = 1e-300"), "run", None, "time scales are not finite")
-bad("spinning", sub("velocity = 0, 0, -1", "velocity = 0, 0, -1, angular_velocity = 1e300, "
+    .replace("radius = 0.01", "radius = 1e-300"), None, "radius", "out of range")
+bad("spinning_light", sub("velocity = 0, 0, -1", "velocity = 0, 0, -1, angular_velocity = "
+                          "1e300, 0, 0"), None, "angular_velocity", "out of range")
+bad("spinning", sub("velocity = 0, 0, -1", "velocity = 0, 0, -1, angular_velocity = 1e7, "
                     "0, 0"), "run", "max_speed", "rim speed")
 # a component by its subscript, and a list given in part, are read
 path = os.path.join(work, "good_parts.nml")
