@@ -10,9 +10,10 @@ program dem_main
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
                    solver_particles, solver_particle_steps, solver_parallel_stats, i8
     use dem_case, only: case_memory_mib
-    use dem_comm, only: comm_t, comm_init, comm_free, comm_max
+    use dem_comm, only: comm_t, comm_init, comm_free, comm_max, comm_any
+    use dem_error, only: set_error, dem_err_stopped
     use dem_acc, only: acc_traffic
-    use dem_signals, only: signals_install
+    use dem_signals, only: signals_install, signal_received
     use dem_folder, only: folder_conflict
     use dem_folder_lock, only: folder_lock, folder_unlock
     use dem_solver, only: solver_ended
@@ -75,6 +76,11 @@ program dem_main
     if (check_only) then               ! the checks of a run's start: ids, overlaps
         call solver_prepare(s, c, err)
         if (err%failed()) call fail(err)
+        if (comm_any(comm, len(signal_received()) > 0)) then   ! (a long start: honoured)
+            call set_error(err, dem_err_stopped, trim(signal_received()) // ' received while ' &
+                           // 'the case was checked: stopped before the end of the check')
+            call fail(err)
+        end if
         if (comm%rank == 0 .and. .not. c%output_overwrite) then   ! (--resume may continue)
             if (folder_conflict(c%output_dir, c%source, c%input_text) /= '') &
                 write(output_unit, '(a)') '  warning: a fresh run stops at once: ' // &
