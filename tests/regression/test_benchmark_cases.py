@@ -41,6 +41,7 @@ hold whatever the size:
    particle file of its preparation in output/benchmark/; a filling of another seed differs
    from its case only in the seed, its outputs' folder and the particle file it reads.
 usage: test_benchmark_cases.py DEM WORKDIR [MPIEXEC]"""
+import math
 import os
 import re
 import shutil
@@ -190,11 +191,17 @@ N_BED = 4000
 # overlap guard stops)
 SCALE_IMPACT = 1e-1
 run("prepare_impact_4000", mc.prepare_impact(N_BED, scale=SCALE_IMPACT, t_end=0.2))
-out = run("impact_4000", mc.impact(N_BED, scale=SCALE_IMPACT, t_end=0.04, interval=1e-4))
-s, p = table(out, "series.csv"), table(out, "probes.csv")
-check(np.all(s["particles"] == N_BED + 1), "impact: particle count conserved")
 with open(os.path.join(work, mc.OUT, "prepare_impact_4000", "final.csv")) as f:
     top = max(float(line.split(",")[5]) for line in f.readlines()[1:]) + 0.001
+# (the impactor set 1 mm above the bed, at the speed of its fall from the case's start, and
+# the run from there: the free fall before it takes two thirds of the case's first 40 ms)
+z0 = top + 0.011
+v0 = math.sqrt(5.0**2 + 2 * 9.81 * (0.06 - z0))
+out = run("impact_4000", mc.impact(N_BED, scale=SCALE_IMPACT, t_end=0.015, interval=1e-4)
+          .replace("position = 0, 0, 0.06, velocity = 0, 0, -5 /",
+                   f"position = 0, 0, {z0!r}, velocity = 0, 0, {-v0!r} /"))
+s, p = table(out, "series.csv"), table(out, "probes.csv")
+check(np.all(s["particles"] == N_BED + 1), "impact: particle count conserved")
 z, vz = p["impactor_z"], p["impactor_vz"]
 inside = (z - 0.01 < top) & (z - 0.01 > mc.FLOOR + 0.002) & (np.cumsum(vz > 0) == 0)
 speed = -vz[inside]
