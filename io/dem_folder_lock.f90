@@ -14,7 +14,8 @@ module dem_folder_lock
     use dem_kinds, only: i8
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_io
     use dem_comm, only: comm_t, comm_any, comm_max
-    use dem_files, only: make_directory, files_matching
+    use dem_files, only: make_directory, files_matching, c_fopen, c_fclose, c_fileno, c_fwrite, &
+                         c_fflush, c_remove
     use dem_text, only: itoa
     implicit none
     private
@@ -34,18 +35,6 @@ module dem_folder_lock
     type(held_t), allocatable, save :: held(:)
 
     interface
-        type(c_ptr) function c_fopen(path, mode) bind(C, name='fopen')
-            import :: c_char, c_ptr
-            character(kind=c_char), intent(in) :: path(*), mode(*)
-        end function c_fopen
-        integer(c_int) function c_fclose(fp) bind(C, name='fclose')
-            import :: c_int, c_ptr
-            type(c_ptr), value :: fp
-        end function c_fclose
-        integer(c_int) function c_fileno(fp) bind(C, name='fileno')
-            import :: c_int, c_ptr
-            type(c_ptr), value :: fp
-        end function c_fileno
         integer(c_int) function c_flock(fd, operation) bind(C, name='flock')
             import :: c_int
             integer(c_int), value :: fd, operation
@@ -55,16 +44,6 @@ module dem_folder_lock
             integer(c_int), value :: fd
             integer(c_long), value :: length
         end function c_ftruncate
-        integer(c_size_t) function c_fwrite(buf, size, n, fp) bind(C, name='fwrite')
-            import :: c_char, c_size_t, c_ptr
-            character(kind=c_char), intent(in) :: buf(*)
-            integer(c_size_t), value :: size, n
-            type(c_ptr), value :: fp
-        end function c_fwrite
-        integer(c_int) function c_fflush(fp) bind(C, name='fflush')
-            import :: c_int, c_ptr
-            type(c_ptr), value :: fp
-        end function c_fflush
         integer(c_int) function c_access(path, mode) bind(C, name='access')
             import :: c_char, c_int
             character(kind=c_char), intent(in) :: path(*)
@@ -74,10 +53,6 @@ module dem_folder_lock
             import :: c_char, c_int
             character(kind=c_char), intent(in) :: path(*)
         end function c_rmdir
-        integer(c_int) function c_remove(path) bind(C, name='remove')
-            import :: c_char, c_int
-            character(kind=c_char), intent(in) :: path(*)
-        end function c_remove
         integer(c_int) function c_getpid() bind(C, name='getpid')
             import :: c_int
         end function c_getpid
