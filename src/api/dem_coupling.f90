@@ -1023,28 +1023,17 @@ contains
         integer(c_int64_t), intent(in), optional :: ids(*)
         real(c_double), intent(in), optional :: f(3, *), t(3, *)
         character(kind=c_char), intent(out), optional :: message(*)
-        type(coupling_t), pointer :: self
-        type(error_t) :: err
-        character(len=1024) :: text
         real(wp), allocatable :: values(:, :)
-        self => from_c(handle)
-        if (associated(self)) then
-            if (n > 0 .and. present(ids) .and. present(f) .and. present(t)) then
-                allocate(values(6, n))
-                values(1:3, :) = f(:, 1:n)
-                values(4:6, :) = t(:, 1:n)
-                call set_by_id(self, ids(1:n), values, ext_force, err)
-            else
-                if (n /= 0) call set_error(err, dem_err_input, 'dem_coupling_set_force_by_id: ' &
-                                           // 'n < 0, or ids, force or torque NULL')
-                allocate(values(6, 0))
-                call set_by_id(self, empty_ids, values, ext_force, err)
-            end if
-            call report(err, status, text)
-        else
-            call null_handle(status, text)
+        logical :: given
+        given = n > 0 .and. present(ids) .and. present(f) .and. present(t)
+        allocate(values(6, merge(n, 0, given)))
+        if (given) then
+            values(1:3, :) = f(:, 1:n)
+            values(4:6, :) = t(:, 1:n)
         end if
-        call c_message(text, message, message_len)
+        status = rows_by_id(handle, n, ids, given, values, ext_force, &
+                            'dem_coupling_set_force_by_id: n < 0, or ids, force or torque NULL', &
+                            message, message_len)
     end function dem_coupling_set_force_by_id
 
     integer(c_int) function dem_coupling_set_drag_by_id(handle, n, ids, beta, u_f, message, &
@@ -1054,29 +1043,49 @@ contains
         integer(c_int64_t), intent(in), optional :: ids(*)
         real(c_double), intent(in), optional :: beta(*), u_f(3, *)
         character(kind=c_char), intent(out), optional :: message(*)
+        real(wp), allocatable :: values(:, :)
+        logical :: given
+        given = n > 0 .and. present(ids) .and. present(beta) .and. present(u_f)
+        allocate(values(4, merge(n, 0, given)))
+        if (given) then
+            values(1, :) = beta(1:n)
+            values(2:4, :) = u_f(:, 1:n)
+        end if
+        status = rows_by_id(handle, n, ids, given, values, ext_beta, &
+                            'dem_coupling_set_drag_by_id: n < 0, or ids, beta or ' // &
+                            'fluid_velocity NULL', message, message_len)
+    end function dem_coupling_set_drag_by_id
+
+    !> The by-id setters' common part: the handle checked, then `values` (the arguments
+    !> `given`) set from row `row` of the particles' external block, or `refusal` where
+    !> they were not (n /= 0 without them; n = 0 sets nothing, collectively).
+    integer(c_int) function rows_by_id(handle, n, ids, given, values, row, refusal, message, &
+                                       message_len) result(status)
+        type(c_ptr), value :: handle
+        integer(c_int), intent(in) :: n, message_len
+        integer(c_int64_t), intent(in), optional :: ids(*)
+        logical, intent(in) :: given
+        real(wp), intent(in) :: values(:, :)
+        integer, intent(in) :: row
+        character(len=*), intent(in) :: refusal
+        character(kind=c_char), intent(out), optional :: message(*)
         type(coupling_t), pointer :: self
         type(error_t) :: err
         character(len=1024) :: text
-        real(wp), allocatable :: values(:, :)
         self => from_c(handle)
         if (associated(self)) then
-            if (n > 0 .and. present(ids) .and. present(beta) .and. present(u_f)) then
-                allocate(values(4, n))
-                values(1, :) = beta(1:n)
-                values(2:4, :) = u_f(:, 1:n)
-                call set_by_id(self, ids(1:n), values, ext_beta, err)
+            if (given) then
+                call set_by_id(self, ids(1:n), values, row, err)
             else
-                if (n /= 0) call set_error(err, dem_err_input, 'dem_coupling_set_drag_by_id: ' &
-                                           // 'n < 0, or ids, beta or fluid_velocity NULL')
-                allocate(values(4, 0))
-                call set_by_id(self, empty_ids, values, ext_beta, err)
+                if (n /= 0) call set_error(err, dem_err_input, refusal)
+                call set_by_id(self, empty_ids, values, row, err)
             end if
             call report(err, status, text)
         else
             call null_handle(status, text)
         end if
         call c_message(text, message, message_len)
-    end function dem_coupling_set_drag_by_id
+    end function rows_by_id
 
     integer(c_int) function dem_coupling_views(handle, gid, radius, x, v, w) result(status) &
             bind(C, name='dem_coupling_views')
