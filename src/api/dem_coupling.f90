@@ -536,8 +536,8 @@ contains
 
     !> Why the grid of nc cells of size h from origin cannot be deposited on, if it cannot
     !> (doc/user/coupling.md, "Arguments and statuses"): origin and h finite; h > 0 and at
-    !> least 2/7 of the largest particle diameter 2 r_max on every axis (the divided-volume kernel spreads
-    !> a particle over at most 8 cells per axis, and no kernel puts more than
+    !> least 2/7 of the largest particle diameter 2 r_max on every axis (the divided-volume
+    !> kernel spreads a particle over at most 8 cells per axis, and no kernel puts more than
     !> 4/3 pi (7/2)^3, about 180, cell volumes of solids into one cell per particle); a cell
     !> volume that is a normal double; 1 to 2^30 cells; and the grid within 2^40 cells of the
     !> coordinates' origin (|origin| + nc h <= 2^40 h), so that its cell faces are distinct
@@ -631,8 +631,8 @@ contains
 
     !> Why the cells of the given centres [m] and volumes [m^3] cannot be deposited on, if
     !> they cannot (doc/user/coupling.md, "Arguments and statuses"): at least one cell, a
-    !> centre and a volume each; the centres finite, spread over a finite box; each volume finite and at
-    !> least (2/7 of the largest particle diameter)^3, and a normal double (the grid's
+    !> centre and a volume each; the centres finite, spread over a finite box; each volume
+    !> finite and at least (2/7 of the largest particle diameter)^3, and a normal double (the grid's
     !> bounds, check_grid, for a cell of any shape).
     subroutine check_cells(centres, volumes, r_max, err)
         real(wp), intent(in) :: centres(:, :), volumes(:)

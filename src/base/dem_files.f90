@@ -16,7 +16,7 @@ module dem_files
               input_file_problem, file_write_bytes, file_sync, files_matching, absolute_path, &
               physical_memory_mib
     public :: cfile_t, cfile_open, cfile_write, cfile_size, cfile_close, cfile_sync
-    public :: c_fopen, c_fclose, c_fileno, c_fwrite, c_fflush, c_remove   ! (libc, for dem_folder_lock)
+    public :: c_fopen, c_fclose, c_fileno, c_fwrite, c_fflush, c_remove   ! (dem_folder_lock's)
 
     !> The first fields of the C library's glob_t (glibc and musl alike), then room for the
     !> rest.
