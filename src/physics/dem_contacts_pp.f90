@@ -13,8 +13,7 @@ module dem_contacts_pp
                               lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
                               lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
                               lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
-    use dem_contact_model, only: law_lanes
-    use dem_contact_extra, only: rolling_torque, sjkr_area_pair
+    use dem_contact_model, only: law_lanes, contact_kinematics, contact_extra, contact_torque
     use dem_materials, only: rolling_none, rolling_epsd2
     use dem_contact_store, only: n_pair_history
     implicit none
@@ -105,23 +104,21 @@ contains
         integer(i8) :: lp(tile + 1)
         logical :: over
         integer(i8) :: kf(3), kc(3)
-        real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, g, sv, &
-                    st_, ri, rj, rsum, msum, wr(3), hr(3), tr(3), n1, n2, n3
-        logical :: shifted_v, shifted_t, extra_
+        real(wp) :: d1, d2, d3, dist2, dist, inv, fp(3), cp(3), si, sj, g, sv, st_, rsum, msum, &
+                    hr(3), tr(3), nrm(3), ft(3), vrel(3), ov, fn
+        logical :: shifted_t, extra_
         real(wp) :: lane(lane_rows, pp_columns)   ! the tile's pairs in contact (one spare)
 
         sv = shift_v
         st_ = shift_t
-        shifted_v = shift_v /= 0.0_wp
         shifted_t = shift_t /= 0.0_wp
         extra_ = extra
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, s) &
         !$acc private(over, side, a, b, rsum, msum) &
-        !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g, ri, rj) &
-        !$acc firstprivate(sv, st_, shifted_v, shifted_t, extra_) private(wr, hr, tr, lane) &
-        !$acc private(n1, n2, n3)
+        !$acc private(d1, d2, d3, dist2, dist, inv, fp, cp, si, sj, g, nrm, ft, vrel, ov, fn) &
+        !$acc firstprivate(sv, st_, shifted_t, extra_) private(hr, tr, lane)
         do p0 = 0, n_pairs - 1, tile
             ! the pairs of the tile that overlap, as lanes 1..m (every pair is written to lane
             ! m + 1, and kept by counting it: no branch on the overlap, which a branch predictor
@@ -158,7 +155,8 @@ contains
                     slot(p) = int(-s, ip)                  ! (begins again: its slot back)
                 end if
             end do
-            ! their normals, overlaps, relative velocities, constants and history
+            ! their normals, overlaps, relative velocities (contact_kinematics), constants and
+            ! history
             do l = 1, m
                 p = lp(l)
                 i = pair(1, p)
@@ -168,19 +166,18 @@ contains
                 msum = mass(i) + mass(j)
                 g = 1.0_wp / (dist * (rsum * msum))      ! one division for 1/dist, R*, m*
                 inv = (rsum * msum) * g
-                n1 = lane(l, lane_d1) * inv
-                n2 = lane(l, lane_d2) * inv
-                n3 = lane(l, lane_d3) * inv
-                lane(l, lane_n1) = n1
-                lane(l, lane_n2) = n2
-                lane(l, lane_n3) = n3
-                lane(l, lane_ov) = rsum - dist
-                ws1 = radius(i) * w(1, i) + radius(j) * w(1, j)
-                ws2 = radius(i) * w(2, i) + radius(j) * w(2, j)
-                ws3 = radius(i) * w(3, i) + radius(j) * w(3, j)
-                lane(l, lane_v1) = v(1, i) - v(1, j) + (ws2 * n3 - ws3 * n2)
-                lane(l, lane_v2) = v(2, i) - v(2, j) + (ws3 * n1 - ws1 * n3)
-                lane(l, lane_v3) = v(3, i) - v(3, j) + (ws1 * n2 - ws2 * n1)
+                nrm(1) = lane(l, lane_d1) * inv
+                nrm(2) = lane(l, lane_d2) * inv
+                nrm(3) = lane(l, lane_d3) * inv
+                call contact_kinematics(nrm, dist, radius(i), radius(j), sv, v(:, i), w(:, i), &
+                                        v(:, j), w(:, j), ov, vrel)
+                lane(l, lane_n1) = nrm(1)
+                lane(l, lane_n2) = nrm(2)
+                lane(l, lane_n3) = nrm(3)
+                lane(l, lane_ov) = ov
+                lane(l, lane_v1) = vrel(1)
+                lane(l, lane_v2) = vrel(2)
+                lane(l, lane_v3) = vrel(3)
                 a = mat(i)
                 b = mat(j)
                 g = dist * g
@@ -196,42 +193,27 @@ contains
                 lane(l, lane_x2) = hist(2, s)
                 lane(l, lane_x3) = hist(3, s)
             end do
-            if (shifted_v) then     ! the relative velocities again, with levers R - shift_v d
-                do l = 1, m
-                    p = lp(l)
-                    i = pair(1, p)
-                    j = pair(2, p)
-                    ri = radius(i) - sv * lane(l, lane_ov)
-                    rj = radius(j) - sv * lane(l, lane_ov)
-                    ws1 = ri * w(1, i) + rj * w(1, j)
-                    ws2 = ri * w(2, i) + rj * w(2, j)
-                    ws3 = ri * w(3, i) + rj * w(3, j)
-                    n1 = lane(l, lane_n1)
-                    n2 = lane(l, lane_n2)
-                    n3 = lane(l, lane_n3)
-                    lane(l, lane_v1) = v(1, i) - v(1, j) + (ws2 * n3 - ws3 * n2)
-                    lane(l, lane_v2) = v(2, i) - v(2, j) + (ws3 * n1 - ws1 * n3)
-                    lane(l, lane_v3) = v(3, i) - v(3, j) + (ws1 * n2 - ws2 * n1)
-                end do
-            end if
             call law_lanes(int(m, ip), normal, tangential, clamp_normal, keep_length, dt, &
                            lane(:, 1:law_columns))
-            if (extra_) then        ! rolling resistance, cohesion: the torques into the sums
-                do l = 1, m         ! (over R, as n x F_t), the cohesion into fn
+            if (extra_) then        ! rolling resistance, cohesion (contact_extra): the torques
+                do l = 1, m         ! into the sums (over R, as n x F_t), the cohesion into fn
                     p = lp(l)
                     i = pair(1, p)
                     j = pair(2, p)
                     a = mat(i)
                     b = mat(j)
+                    hr = 0.0_wp
+                    if (rmodel_ab(a, b) == rolling_epsd2) hr = hist(4:6, slot(p))
+                    nrm = lane_normal(lane, l)
+                    fn = lane(l, lane_fn)
+                    call contact_extra(rmodel_ab(a, b), mur_ab(a, b), kcoh_ab(a, b), &
+                                       lane(l, lane_rs), lane(l, lane_kn), lane(l, lane_st), &
+                                       lane(l, lane_ov), radius(i), radius(j), &
+                                       sqrt(lane(l, lane_dd)), nrm, w(:, i) - w(:, j), dt, fn, &
+                                       hr, tr)
+                    lane(l, lane_fn) = fn
+                    if (rmodel_ab(a, b) == rolling_epsd2) hist(4:6, slot(p)) = hr
                     if (rmodel_ab(a, b) /= rolling_none) then
-                        hr = 0.0_wp
-                        if (rmodel_ab(a, b) == rolling_epsd2) hr = hist(4:6, slot(p))
-                        wr = w(:, i) - w(:, j)
-                        call rolling_torque(rmodel_ab(a, b), mur_ab(a, b), lane(l, lane_rs), &
-                                            lane(l, lane_kn), lane(l, lane_st), &
-                                            lane(l, lane_ov), lane(l, lane_fn), &
-                                            lane(l, lane_n1:lane_n3), wr, dt, hr, tr)
-                        if (rmodel_ab(a, b) == rolling_epsd2) hist(4:6, slot(p)) = hr
                         do c = 1, 3
                             kc(c) = to_fixed(tr(c) / radius(i) * scale(i))
                             !$acc atomic update
@@ -245,9 +227,6 @@ contains
                             end do
                         end if
                     end if
-                    if (kcoh_ab(a, b) > 0.0_wp) lane(l, lane_fn) = lane(l, lane_fn) &
-                        - kcoh_ab(a, b) * sjkr_area_pair(radius(i), radius(j), &
-                                                         sqrt(lane(l, lane_dd)))
                 end do
             end if
             ! the history back, and F and n x F_t into both particles' sums
@@ -259,8 +238,10 @@ contains
                 hist(1, s) = lane(l, lane_x1)
                 hist(2, s) = lane(l, lane_x2)
                 hist(3, s) = lane(l, lane_x3)
-                fp = -lane(l, lane_fn) * lane(l, lane_n1:lane_n3) + lane(l, lane_f1:lane_f3)
-                cp = normal_cross_ft(lane, l)
+                nrm = lane_normal(lane, l)
+                ft = lane_tangential(lane, l)
+                fp = -lane(l, lane_fn) * nrm + ft
+                cp = contact_torque(nrm, ft, 1.0_wp)          ! n x F_t (the sums are over R)
                 si = scale(i)
                 do c = 1, 3
                     kf(c) = to_fixed(fp(c) * si)
@@ -288,7 +269,7 @@ contains
             if (shifted_t) then     ! levers R - shift_t d: each torque word replaced by that
                 do l = 1, m         ! of n x F_t (R - shift_t d) / R (the sums are over R)
                     p = lp(l)
-                    cp = normal_cross_ft(lane, l)
+                    cp = contact_torque(lane_normal(lane, l), lane_tangential(lane, l), 1.0_wp)
                     do side = 1, 2                ! i, then j where this rank owns it
                         i = pair(side, p)
                         if (side == 2 .and. i > n_own) exit
@@ -316,17 +297,27 @@ contains
         end do
     end subroutine pp_forces
 
-    !> n x F_t of lane l: the normal and the tangential force of a contact of the kernel's
-    !> block (the torque on either particle over its lever).
-    pure function normal_cross_ft(lane, l) result(cp)
+    !> The unit normal of lane l of the kernel's block.
+    pure function lane_normal(lane, l) result(nrm)
         !$acc routine seq
         real(wp), intent(in) :: lane(lane_rows, pp_columns)
         integer(i8), intent(in) :: l
-        real(wp) :: cp(3)
-        cp(1) = lane(l, lane_n2) * lane(l, lane_f3) - lane(l, lane_n3) * lane(l, lane_f2)
-        cp(2) = lane(l, lane_n3) * lane(l, lane_f1) - lane(l, lane_n1) * lane(l, lane_f3)
-        cp(3) = lane(l, lane_n1) * lane(l, lane_f2) - lane(l, lane_n2) * lane(l, lane_f1)
-    end function normal_cross_ft
+        real(wp) :: nrm(3)
+        nrm(1) = lane(l, lane_n1)
+        nrm(2) = lane(l, lane_n2)
+        nrm(3) = lane(l, lane_n3)
+    end function lane_normal
+
+    !> The tangential force of lane l of the kernel's block [N].
+    pure function lane_tangential(lane, l) result(ft)
+        !$acc routine seq
+        real(wp), intent(in) :: lane(lane_rows, pp_columns)
+        integer(i8), intent(in) :: l
+        real(wp) :: ft(3)
+        ft(1) = lane(l, lane_f1)
+        ft(2) = lane(l, lane_f2)
+        ft(3) = lane(l, lane_f3)
+    end function lane_tangential
 
     !> The scale 2^(57 - e) of one-word fixed point for terms and sums within bound < 2^e:
     !> to_fixed(t scale) is t to 2^-57 of the bound, and the sum of such words, converted back

@@ -10,9 +10,8 @@ module dem_contacts_pw
                               lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
                               lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
                               lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
-    use dem_contact_model, only: law_lanes
-    use dem_contact_extra, only: rolling_torque, sjkr_area_wall
-    use dem_materials, only: rolling_none
+    use dem_contact_model, only: law_lanes, contact_kinematics, wall_point_velocity, &
+                                 contact_extra, contact_torque
     use dem_mesh, only: closest_point_triangle, feature_face
     use dem_contact_store, only: max_wall_contacts, n_wall_columns
     implicit none
@@ -244,8 +243,9 @@ contains
         integer(ip) :: slot(max_wall_candidates)
         real(wp) :: q(3, max_wall_candidates), qk(3)
         real(wp) :: new_xi(3, max_wall_contacts)
-        real(wp) :: nrm(3), vrel(3), ft(3), fi(3), ti(3), dist, r, tol, moved, ws(3), d(3), &
-                    lever, tr(3), xr(3), new_xr(3, max_wall_contacts)
+        real(wp) :: nrm(3), vrel(3), ft(3), fi(3), ti(3), dist, r, tol, moved, ov, tr(3), xr(3), &
+                    new_xr(3, max_wall_contacts)
+        real(wp) :: still(3)         ! a wall's rotation about the contact point (none)
         logical :: keep(max_wall_candidates), many, over, spring
         ! the block's rows: their lanes first(kr)..last(kr) (none if `idle`: no contact, none
         ! ended); the lanes: the contacts' law (law_lanes) and what follows it
@@ -257,12 +257,13 @@ contains
         real(wp), volatile :: lines
 
         overflow = 0
+        still = 0.0_wp
         spring = n_wall_columns > max_wall_contacts   ! the slots' EPSD2 springs after theirs
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
         !$acc private(kr, k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk, l, m) &
         !$acc private(new_xi, nrm, vrel, ft, fi, ti, dist, r, tol, moved, keep, n_block) &
         !$acc private(slot, lines, first, last, idle, ltri, lslot, lq, lane) &
-        !$acc private(many, over, i, wl, ws, d, lever, tr, xr, new_xr) firstprivate(spring)
+        !$acc private(many, over, i, wl, ov, tr, xr, new_xr) firstprivate(spring, still)
         do k0 = 0, n_row - 1, rows_per_block
             n_block = min(rows_per_block, n_row - k0)
             ! the lines of the particle data that every row's search for touching triangles
@@ -337,20 +338,14 @@ contains
                     if (slot(c) > 0) lane(m, lane_x1:lane_x3) = wxi(:, slot(c), i)
                     dist = sqrt(sum((q(:, c) - x(:, i))**2))
                     nrm = (q(:, c) - x(:, i)) / dist
-                    ! minus the wall's velocity at the contact point
                     wl = twall(tri)
-                    lever = r - shift_v * (r - dist)
-                    ws = lever * w(:, i)
-                    d = q(:, c) - wall_c(:, wl)
-                    vrel(1) = v(1, i) + (ws(2) * nrm(3) - ws(3) * nrm(2)) - wall_v(1, wl) &
-                              - (wall_w(2, wl) * d(3) - wall_w(3, wl) * d(2))
-                    vrel(2) = v(2, i) + (ws(3) * nrm(1) - ws(1) * nrm(3)) - wall_v(2, wl) &
-                              - (wall_w(3, wl) * d(1) - wall_w(1, wl) * d(3))
-                    vrel(3) = v(3, i) + (ws(1) * nrm(2) - ws(2) * nrm(1)) - wall_v(3, wl) &
-                              - (wall_w(1, wl) * d(2) - wall_w(2, wl) * d(1))
+                    call contact_kinematics(nrm, dist, r, 0.0_wp, shift_v, v(:, i), w(:, i), &
+                                            wall_point_velocity(q(:, c), wall_v(:, wl), &
+                                                                wall_w(:, wl), wall_c(:, wl)), &
+                                            still, ov, vrel)
                     b = tmat(tri)
                     lane(m, lane_ld) = dist
-                    lane(m, lane_ov) = r - dist
+                    lane(m, lane_ov) = ov
                     lane(m, lane_n1:lane_n3) = nrm
                     lane(m, lane_v1:lane_v3) = vrel
                     lane(m, lane_rs) = r
@@ -380,20 +375,16 @@ contains
                     nrm = lane(l, lane_n1:lane_n3)
                     ft = lane(l, lane_f1:lane_f3)
                     dist = lane(l, lane_ld)
-                    if (extra) then          ! rolling resistance, cohesion
+                    if (extra) then          ! rolling resistance, cohesion (contact_extra)
                         wl = twall(tri)
                         b = tmat(tri)
                         xr = 0.0_wp
                         if (spring .and. lslot(l) > 0) xr = wxi(:, max_wall_contacts + lslot(l), i)
-                        if (rmodel(a, b) /= rolling_none) then
-                            call rolling_torque(rmodel(a, b), mur(a, b), r, kn(a, b), &
-                                                st(a, b), r - dist, lane(l, lane_fn), nrm, &
-                                                w(:, i) - wall_w(:, wl), dt, xr, tr)
-                            ti = ti + tr
-                        end if
+                        call contact_extra(rmodel(a, b), mur(a, b), kcoh(a, b), r, kn(a, b), &
+                                           st(a, b), lane(l, lane_ov), r, 0.0_wp, dist, nrm, &
+                                           w(:, i) - wall_w(:, wl), dt, lane(l, lane_fn), xr, tr)
+                        ti = ti + tr
                         new_xr(:, ns + 1) = xr
-                        if (kcoh(a, b) > 0.0_wp) lane(l, lane_fn) = lane(l, lane_fn) &
-                                                 - kcoh(a, b) * sjkr_area_wall(r, dist)
                     end if
                     ns = ns + 1
                     new_tri(ns) = tri
@@ -403,10 +394,7 @@ contains
                         wload(4:6, ns, i) = lq(:, l)
                     end if
                     fi = fi - lane(l, lane_fn) * nrm + ft
-                    lever = r - shift_t * (r - dist)
-                    ti(1) = ti(1) + lever * (nrm(2) * ft(3) - nrm(3) * ft(2))
-                    ti(2) = ti(2) + lever * (nrm(3) * ft(1) - nrm(1) * ft(3))
-                    ti(3) = ti(3) + lever * (nrm(1) * ft(2) - nrm(2) * ft(1))
+                    ti = ti + contact_torque(nrm, ft, r - shift_t * lane(l, lane_ov))
                 end do
                 do c = 1, ns                           ! the contacts into their new slots
                     wtri(c, i) = new_tri(c)
