@@ -13,9 +13,12 @@ module dem_contacts_pp
                               lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
                               lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
                               lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
-    use dem_contact_model, only: law_lanes, contact_kinematics, contact_extra, contact_torque
-    use dem_materials, only: rolling_none, rolling_epsd2
-    use dem_contact_store, only: n_pair_history
+    use dem_contact_model, only: contact_model_t, law_lanes, contact_kinematics, contact_extra, &
+                                 contact_torque
+    use dem_materials, only: contact_options_t, rolling_none, rolling_epsd2
+    use dem_particles, only: particles_t
+    use dem_neighbors, only: neighbors_t
+    use dem_contact_store, only: contact_store_t, n_pair_history
     implicit none
     private
     public :: pp_forces, pp_scales, fixed_scale
@@ -55,21 +58,41 @@ contains
     !> (doc/theory.md section 1) come from the material pair's table and the two particles'
     !> radii and masses, when it touches: 1/r, R* and m* from one division.
     !> The pairs are taken in tiles of `tile`: the overlapping pairs of a tile are gathered
-    !> into lanes and the contact law runs over those lanes at once (law_lanes). The lever of a
-    !> particle's rotation in the relative velocity is R - shift_v d, in the torque
+    !> into lanes, their kinematics computed (contact_kinematics, from the normal and distance
+    !> computed here) and the contact law runs over those lanes at once (law_lanes). The lever
+    !> of a particle's rotation in the relative velocity is R - shift_v d, in the torque
     !> R - shift_t d (0: the radius; 1/2: the contact point at mid-overlap, as LIGGGHTS).
     !> A pair's history is in the slot of the store (dem_contact_store) that slot(p) names:
     !> a contact that begins takes its pair's slot back or, the first time since the lists'
-    !> build, the next free one (cleared). With `reset`, a pair's history is cleared when its
-    !> contact ends; without, it is kept while the pair is listed (LIGGGHTS 3.8.0) and
-    !> continued by its next contact. With `extra` (a case whose pairs resist rolling or
-    !> cohere), the rolling torque and the sJKR force (dem_contact_extra) of the pair's model
-    !> follow the contact law; the EPSD2 spring is hist(4:6, slot).
-    subroutine pp_forces(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
-                         reach2, normal, tangential, kn_ab, st_ab, gn_ab, gt_ab, mu_ab, &
-                         clamp_normal, keep_length, &
-                         shift_v, shift_t, reset, extra, rmodel_ab, mur_ab, kcoh_ab, dt, gravity, &
-                         slot, hist, n_hist, acc, f, t)
+    !> build, the next free one (cleared). With the model's reset_pair_history, a pair's
+    !> history is cleared when its contact ends; without, it is kept while the pair is listed
+    !> (LIGGGHTS 3.8.0) and continued by its next contact. In a case whose pairs resist
+    !> rolling or cohere, the rolling torque and the sJKR force of the pair's model
+    !> (contact_extra) follow the contact law; the EPSD2 spring is hist(4:6, slot).
+    subroutine pp_forces(particles, nb, cm, cs, dt, gravity)
+        type(particles_t), intent(inout) :: particles  !! owned particles, then ghosts: x, v,
+                                                       !! w, radius, mass, mat; f, t set
+        type(neighbors_t), intent(inout) :: nb      !! the pairs (n_pairs, pair, reach2), the
+                                                    !! scales, the fixed-point sums (acc)
+        type(contact_model_t), intent(in) :: cm     !! the constants and sub-models
+        type(contact_store_t), intent(inout) :: cs  !! the pairs' slots and history
+        real(wp), intent(in) :: dt                  !! [s]
+        real(wp), intent(in) :: gravity(3)          !! [m/s^2]
+        associate (p => particles)
+            call pair_kernel(p%n_own, p%n_own + p%n_ghost, nb%n_pairs, size(cm%kn, 1, ip), &
+                             p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%scale, nb%pair, &
+                             nb%reach2, cm%opts, cm%kn, cm%st, cm%gn, cm%gt, cm%mu, &
+                             cm%rolling .or. cm%cohesion, cm%rmodel, cm%mur, cm%kcoh, dt, &
+                             gravity, cs%slot, cs%hist, cs%n_hist, nb%acc, p%f, p%t)
+        end associate
+    end subroutine pp_forces
+
+    !> pp_forces over plain arrays (explicit-shape dummies: gfortran 12 indexes them from their
+    !> base, and associate-names of the views' components through their descriptors, with
+    !> which the pair loop took about 1.6 times as long).
+    subroutine pair_kernel(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
+                           reach2, opts, kn_ab, st_ab, gn_ab, gt_ab, mu_ab, extra, rmodel_ab, &
+                           mur_ab, kcoh_ab, dt, gravity, slot, hist, n_hist, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
         integer(ip), intent(in) :: nm             !! materials
@@ -79,12 +102,9 @@ contains
         real(wp), intent(in) :: scale(n_all)      !! fixed-point scales (pp_scales)
         integer(ip), intent(in) :: pair(2, n_pairs)  !! the two particles of a pair
         real(wp), intent(in) :: reach2(n_pairs)      !! (R_i + R_j)^2 of a pair [m^2]
-        integer(ip), intent(in) :: normal, tangential   !! the sub-models (dem_contact_model)
+        type(contact_options_t), intent(in) :: opts  !! the sub-models and switches
         real(wp), intent(in) :: kn_ab(nm, nm), st_ab(nm, nm), mu_ab(nm, nm)  !! stiffnesses, [-]
         real(wp), intent(in) :: gn_ab(nm, nm), gt_ab(nm, nm)  !! damping factors
-        logical, intent(in) :: clamp_normal, keep_length   !! (law_lanes)
-        real(wp), intent(in) :: shift_v, shift_t     !! levers R - shift d [-]
-        logical, intent(in) :: reset                 !! the history cleared when a contact ends
         logical, intent(in) :: extra                 !! some pair resists rolling or coheres
         integer(ip), intent(in) :: rmodel_ab(nm, nm) !! rolling model (dem_materials)
         real(wp), intent(in) :: mur_ab(nm, nm)       !! rolling friction [-]
@@ -99,19 +119,24 @@ contains
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
                                                      !! (zero between calls)
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m] (the owned set)
-        integer(ip) :: c, side, a, b
+        integer(ip) :: c, side, a, b, normal, tangential
         integer(i8) :: i, j, p, p0, s, l, m     ! (64-bit: addresses without sign extensions)
         integer(i8) :: lp(tile + 1)
         logical :: over
         integer(i8) :: kf(3), kc(3)
         real(wp) :: d1, d2, d3, dist2, dist, inv, fp(3), cp(3), si, sj, g, sv, st_, rsum, msum, &
                     hr(3), tr(3), nrm(3), ft(3), vrel(3), ov, fn
-        logical :: shifted_t, extra_
+        logical :: shifted_t, extra_, reset, clamp_normal, keep_length
         real(wp) :: lane(lane_rows, pp_columns)   ! the tile's pairs in contact (one spare)
 
-        sv = shift_v
-        st_ = shift_t
-        shifted_t = shift_t /= 0.0_wp
+        normal = opts%normal
+        tangential = opts%tangential
+        clamp_normal = opts%clamp_normal
+        keep_length = opts%keep_length
+        reset = opts%reset_pair_history
+        sv = opts%shift_v
+        st_ = opts%shift_t
+        shifted_t = st_ /= 0.0_wp
         extra_ = extra
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
@@ -295,7 +320,7 @@ contains
             end do
             acc(:, i) = 0
         end do
-    end subroutine pp_forces
+    end subroutine pair_kernel
 
     !> The unit normal of lane l of the kernel's block.
     pure function lane_normal(lane, l) result(nrm)

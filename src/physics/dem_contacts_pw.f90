@@ -10,10 +10,13 @@ module dem_contacts_pw
                               lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
                               lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
                               lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
-    use dem_contact_model, only: law_lanes, contact_kinematics, wall_point_velocity, &
-                                 contact_extra, contact_torque
-    use dem_mesh, only: closest_point_triangle, feature_face
-    use dem_contact_store, only: max_wall_contacts, n_wall_columns
+    use dem_contact_model, only: contact_model_t, law_lanes, contact_kinematics, &
+                                 wall_point_velocity, contact_extra, contact_torque
+    use dem_materials, only: contact_options_t
+    use dem_mesh, only: mesh_t, closest_point_triangle, feature_face
+    use dem_particles, only: particles_t
+    use dem_neighbors, only: neighbors_t
+    use dem_contact_store, only: contact_store_t, max_wall_contacts, n_wall_columns
     implicit none
     private
     public :: pw_forces
@@ -188,21 +191,49 @@ contains
     end subroutine history_slots
 
     !> Add the wall contact forces and torques to every owned particle. `overflow` counts
-    !> particles with more separate contacts than the history store holds. The levers of the
+    !> particles with more separate contacts than the history store holds. Each contact's
+    !> normal and distance are computed here, its kinematics by contact_kinematics (the
+    !> wall's velocity at the contact point, wall_point_velocity); the levers of the
     !> rotation are R - shift_v d and R - shift_t d, as in pp_forces. With `record` (a step
     !> whose wall loads a probe reports), each contact's force on the particle and its
-    !> contact point go to wload, beside its slot of wtri. With `extra`, the rolling torque
-    !> and the sJKR force of the pair's model follow (as in pp_forces; R* = R, the wall's
-    !> rotation taken from the particle's); the EPSD2 spring of slot s is
-    !> wxi(:, max_wall_contacts + s). A candidate triangle whose slack (dem_neighbors) is more
-    !> than the particle and the walls have moved since the lists' build cannot touch the
-    !> particle and is not tested. The rows go in blocks of rows_per_block, whose particle data
-    !> are loaded together before the block's rows are computed (doc/theory.md, section 9).
-    subroutine pw_forces(n_own, n_row, row, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, &
-                         mat, wstart, wlist, x_ref, wslack, wmove, vert, tmat, twall, wall_v, &
-                         wall_w, wall_c, normal, tangential, kn, st, &
-                         gn, gt, mu, clamp_normal, keep_length, shift_v, shift_t, extra, &
-                         rmodel, mur, kcoh, dt, wtri, wxi, record, n_load, wload, f, t, overflow)
+    !> contact point go to wload, beside its slot of wtri. In a case whose pairs resist
+    !> rolling or cohere, the rolling torque and the sJKR force of the pair's model follow
+    !> (contact_extra, as in pp_forces; R* = R, the wall's rotation taken from the
+    !> particle's); the EPSD2 spring of slot s is wxi(:, max_wall_contacts + s). A candidate
+    !> triangle whose slack (dem_neighbors) is more than the particle and the walls have
+    !> moved since the lists' build cannot touch the particle and is not tested. The rows go
+    !> in blocks of rows_per_block, whose particle data are loaded together before the
+    !> block's rows are computed (doc/theory.md, section 9).
+    subroutine pw_forces(particles, nb, mesh, cm, cs, dt, record, wload, overflow)
+        type(particles_t), intent(inout) :: particles  !! the owned ones: x, v, w, radius,
+                                                       !! mass, mat; f, t added to
+        type(neighbors_t), intent(in) :: nb         !! the rows (n_wrow, wrow), their candidate
+                                                    !! triangles (wstart, wlist, wslack), x_ref
+                                                    !! and wall_moved
+        type(mesh_t), intent(in) :: mesh            !! the triangles and the walls' motion
+        type(contact_model_t), intent(in) :: cm     !! the constants and sub-models
+        type(contact_store_t), intent(inout) :: cs  !! the wall contacts' slots and history
+        real(wp), intent(in) :: dt                  !! [s]
+        logical, intent(in) :: record               !! each contact's load into wload
+        real(wp), contiguous, intent(inout) :: wload(:, :, :)  !! (6, max_wall_contacts,
+                                                    !! n_own when recording) [N], [m]
+        integer(ip), intent(out) :: overflow
+        associate (p => particles, m => mesh)
+            call wall_kernel(p%n_own, nb%n_wrow, nb%wrow, size(nb%wlist, kind=ip), m%n_tri, &
+                             m%n_wall, size(cm%kn, 1, ip), p%x, p%v, p%w, p%radius, p%mass, &
+                             p%mat, nb%wstart, nb%wlist, nb%x_ref, nb%wslack, nb%wall_moved, &
+                             m%vert, m%mat, m%wall, m%wall_v, m%wall_w, m%wall_c, cm%opts, &
+                             cm%kn, cm%st, cm%gn, cm%gt, cm%mu, cm%rolling .or. cm%cohesion, &
+                             cm%rmodel, cm%mur, cm%kcoh, dt, cs%wall_tri, cs%wall_xi, record, &
+                             size(wload, 3, ip), wload, p%f, p%t, overflow)
+        end associate
+    end subroutine pw_forces
+
+    !> pw_forces over plain arrays (explicit-shape dummies, as pair_kernel's).
+    subroutine wall_kernel(n_own, n_row, row, n_cand, n_tri, n_wall, nm, x, v, w, radius, &
+                           mass, mat, wstart, wlist, x_ref, wslack, wmove, vert, tmat, twall, &
+                           wall_v, wall_w, wall_c, opts, kn, st, gn, gt, mu, extra, rmodel, &
+                           mur, kcoh, dt, wtri, wxi, record, n_load, wload, f, t, overflow)
         integer(ip), intent(in) :: n_own, n_cand, n_tri, n_wall, nm
         integer(ip), intent(in) :: n_row, row(:)   !! the particles near walls or with wall
                                                    !! history (dem_neighbors)
@@ -219,11 +250,9 @@ contains
         real(wp), intent(in) :: wall_v(3, n_wall)   !! translation velocity of each wall [m/s]
         real(wp), intent(in) :: wall_w(3, n_wall)   !! angular velocity of each wall [rad/s]
         real(wp), intent(in) :: wall_c(3, n_wall)   !! a point of its rotation axis [m]
-        integer(ip), intent(in) :: normal, tangential   !! the sub-models (dem_contact_model)
+        type(contact_options_t), intent(in) :: opts   !! the sub-models and switches
         real(wp), intent(in) :: kn(nm, nm), st(nm, nm), mu(nm, nm)   !! stiffnesses, [-]
         real(wp), intent(in) :: gn(nm, nm), gt(nm, nm)   !! damping factors
-        logical, intent(in) :: clamp_normal, keep_length              !! (law_lanes)
-        real(wp), intent(in) :: shift_v, shift_t                      !! [-]
         logical, intent(in) :: extra              !! some pair resists rolling or coheres
         integer(ip), intent(in) :: rmodel(nm, nm) !! rolling model (dem_materials)
         real(wp), intent(in) :: mur(nm, nm)       !! rolling friction [-]
@@ -255,7 +284,16 @@ contains
         real(wp) :: lq(3, wall_lanes)
         real(wp) :: lane(lane_rows, lane_ld)
         real(wp), volatile :: lines
+        integer(ip) :: normal, tangential
+        logical :: clamp_normal, keep_length
+        real(wp) :: shift_v, shift_t
 
+        normal = opts%normal
+        tangential = opts%tangential
+        clamp_normal = opts%clamp_normal
+        keep_length = opts%keep_length
+        shift_v = opts%shift_v
+        shift_t = opts%shift_t
         overflow = 0
         still = 0.0_wp
         spring = n_wall_columns > max_wall_contacts   ! the slots' EPSD2 springs after theirs
@@ -411,5 +449,5 @@ contains
                 t(:, i) = t(:, i) + ti
             end do
         end do
-    end subroutine pw_forces
+    end subroutine wall_kernel
 end module dem_contacts_pw
