@@ -24,12 +24,12 @@ module dem_folder_lock
     integer(c_int), parameter :: ewouldblock = 11           ! errno: held by another
     integer(c_int), parameter :: w_ok = 2                   ! access: writable
 
-    !> A lock this process holds: the folder, the open lock file, and whether taking the
-    !> lock created the folder.
+    !> A lock this process holds: the folder, the open lock file, and the outermost folder
+    !> that taking the lock created ('' if none: the folder was there).
     type :: held_t
         character(len=:), allocatable :: dir
         type(c_ptr) :: fp = c_null_ptr
-        logical :: created = .false.
+        character(len=:), allocatable :: created
     end type held_t
     type(held_t), allocatable, save :: held(:)
 
@@ -123,9 +123,9 @@ contains
         do k = 1, size(held)
             if (held(k)%dir /= dir) cycle
             rc = c_ftruncate(c_fileno(held(k)%fp), 0_c_long)
-            if (held(k)%created .and. size(files_matching(dir // '/*')) == 1) then
+            if (len(held(k)%created) > 0 .and. size(files_matching(dir // '/*')) == 1) then
                 rc = c_remove(dir // '/lock' // c_null_char)
-                rc = c_rmdir(dir // c_null_char)
+                call remove_created(dir, held(k)%created)
             end if
             rc = c_fclose(held(k)%fp)
             held = [held(:k - 1), held(k + 1:)]
@@ -133,16 +133,45 @@ contains
         end do
     end subroutine folder_unlock
 
+    !> Remove the empty folders from `dir` up to `top` (an ancestor of dir, or dir itself):
+    !> those the lock created; one that is not empty stays (rmdir refuses it).
+    subroutine remove_created(dir, top)
+        character(len=*), intent(in) :: dir, top
+        character(len=:), allocatable :: path
+        integer(c_int) :: rc
+        path = dir
+        do
+            rc = c_rmdir(path // c_null_char)
+            if (path == top .or. index(path, '/', back=.true.) <= 1) exit
+            path = path(:index(path, '/', back=.true.) - 1)
+        end do
+    end subroutine remove_created
+
+    !> The outermost folder of `dir` and its ancestors that does not exist ('' if dir does).
+    function missing_top(dir) result(top)
+        character(len=*), intent(in) :: dir
+        character(len=:), allocatable :: top, path
+        top = ''
+        path = dir
+        do while (len(path) > 0)
+            if (c_access(path // c_null_char, 0_c_int) == 0) exit
+            top = path
+            if (index(path, '/', back=.true.) <= 1) exit
+            path = path(:index(path, '/', back=.true.) - 1)
+        end do
+    end function missing_top
+
     subroutine lock_here(dir, note, err)
         character(len=*), intent(in) :: dir
         character(len=:), allocatable, intent(inout) :: note
         type(error_t), intent(inout) :: err
         character(len=:), allocatable :: path, holder, me
         type(c_ptr) :: fp
-        logical :: taken, no_flock, created
+        character(len=:), allocatable :: created
+        logical :: taken, no_flock
         integer(c_int) :: rc
         path = dir // '/lock'
-        created = c_access(dir // c_null_char, 0_c_int) /= 0
+        created = missing_top(dir)
         call make_directory(dir, err)
         if (err%failed()) return
         fp = c_fopen(path // c_null_char, 'a+e' // c_null_char)

@@ -10,7 +10,8 @@ module dem_input_inserts
     use dem_namelist_scan, only: nml_file_t
     use dem_input_group, only: group_io_t, group_reading, group_count
     use dem_input_values, only: unset, name_len, check_positive, check_nonnegative, in_range, &
-                                check_vector, check_direction, find_material, relative_to
+                                check_vector, check_direction, find_material, relative_to, &
+                                check_memory
     use dem_case, only: case_t, insert_t
     use dem_stl, only: stl_read
     use dem_insert, only: region_t, region_box, region_cylinder, region_mesh, region_face, &
@@ -120,6 +121,7 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'n': must be >= 1")
                 return
             end if
+            if (.not. check_memory(c, at, 'n', real(n, wp), 0.0_wp, 0.0_wp, err)) return
             im = find_material(c, material, at, err, particles=.true.)
             if (im == 0) return
             if (.not. size_of(dist)) return

@@ -8,7 +8,8 @@ module dem_input_probes
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_namelist_scan, only: nml_file_t
     use dem_input_group, only: group_io_t, group_reading, group_count
-    use dem_input_values, only: unset, name_len, in_range, check_vector, check_direction
+    use dem_input_values, only: unset, name_len, in_range, check_vector, check_direction, &
+                                check_memory
     use dem_case, only: case_t, id_check_t
     use dem_outlets, only: outlet_t, outlet_plane, outlet_box
     use dem_probes, only: probe_t, probe_count, probe_center_of_mass, probe_track, &
@@ -94,6 +95,7 @@ contains
         integer :: k
         character(len=:), allocatable :: at
         type(probe_t) :: p
+        integer, parameter :: max_bins = 10000000   ! (a file of ten million rows)
 
         allocate(c%probes(group_count(nf, 'probe')))
         do k = 1, size(c%probes)
@@ -158,10 +160,13 @@ contains
                     call fail("key 'time': required, >= 0 [s]")
                     return
                 end if
-                if (bins < 1) then
-                    call fail("key 'bins': must be >= 1")
+                if (bins < 1 .or. bins > max_bins) then
+                    call fail("key 'bins': must be in 1 .. 10000000")
                     return
                 end if
+                if (.not. check_memory(c, at, 'bins', 0.0_wp, 0.0_wp, &
+                                       3.0_wp * 8.0_wp * 3.0_wp * real(bins, wp) / 2.0_wp**20, &
+                                       err)) return
                 if (.not. (in_range(v_min, -unset, unset, .false., .false.) .and. &
                            in_range(v_max, v_min, unset, .false., .false.))) then
                     call fail("key 'v_max': v_min and v_max are required, v_min < v_max [m/s]")

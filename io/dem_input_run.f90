@@ -9,7 +9,7 @@ module dem_input_run
     use dem_namelist_scan, only: nml_file_t
     use dem_input_group, only: group_io_t, group_reading, group_count, group_at_most_once
     use dem_input_values, only: unset, name_len, check_positive, check_nonnegative, in_range, &
-                                check_vector
+                                check_vector, check_steps
     use dem_case, only: case_t, id_check_t
     use dem_comm, only: comm_t
     use dem_integrate, only: integrator_euler, integrator_verlet
@@ -84,6 +84,7 @@ contains
         if (err%failed()) return
         if (.not. check_positive(at, dt, 'dt', '[s]', err)) return
         if (.not. check_positive(at, t_end, 't_end', '[s]', err)) return
+        if (.not. check_steps(at, t_end, dt, 't_end', err)) return
         select case (integrator)
         case ('symplectic_euler')
             c%integrator = integrator_euler
@@ -174,6 +175,7 @@ contains
             end do
             if (err%failed()) return
             if (.not. check_positive(at, interval, 'interval', '[s]', err)) return
+            if (.not. check_steps(at, interval, c%dt, 'interval', err)) return
             if (len_trim(dir) == 0) then
                 call set_error(err, dem_err_input, at // ": key 'dir': must not be empty")
                 return
@@ -187,8 +189,11 @@ contains
                 ": key 'trace_id': no particle has this id")]
             if (.not. check_nonnegative(at, snapshot_interval, &
                                         'snapshot_interval', '[s]', err)) return
+            if (.not. check_steps(at, snapshot_interval, c%dt, 'snapshot_interval', err)) return
             if (.not. check_nonnegative(at, checkpoint_interval, &
                                         'checkpoint_interval', '[s]', err)) return
+            if (.not. check_steps(at, checkpoint_interval, c%dt, 'checkpoint_interval', &
+                                  err)) return
             if (checkpoint_keep < 1) then
                 call set_error(err, dem_err_input, at // ": key 'checkpoint_keep': must be >= 1")
                 return

@@ -4,18 +4,23 @@
 !> sets an error that names the group's place, the key and what it accepts.
 module dem_input_values
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
-    use dem_kinds, only: wp
+    use dem_kinds, only: wp, i8
     use dem_error, only: error_t, set_error, dem_err_input
-    use dem_case, only: case_t
+    use dem_case, only: case_t, case_memory_mib
+    use dem_files, only: physical_memory_mib
     implicit none
     private
     public :: unset, name_len, check_positive, check_nonnegative, in_range, check_vector, &
-              check_direction, find_material, material_index, relative_to
+              check_direction, find_material, material_index, relative_to, check_steps, &
+              max_steps, check_memory
 
     !> The default of a key that has none: "not given".
     real(wp), parameter :: unset = huge(1.0_wp)
     !> The length of a name a key gives (a material, a variant, a region ...).
     integer, parameter :: name_len = 32
+    !> The most steps a time may span (t_end, an output interval): a quarter of the 64-bit
+    !> step counter's range, so that a run continued from a checkpoint counts on.
+    real(wp), parameter :: max_steps = real(huge(1_i8) / 4, wp)
 
 contains
 
@@ -88,6 +93,55 @@ contains
             ok = .true.
         end if
     end function check_vector
+
+    !> Check that a time key spans fewer than max_steps steps of dt.
+    logical function check_steps(at, val, dt, key, err) result(ok)
+        character(len=*), intent(in) :: at      !< the group's place ('file:line: &group')
+        real(wp), intent(in) :: val             !< the time [s], finite and >= 0
+        real(wp), intent(in) :: dt              !< the time step [s], > 0
+        character(len=*), intent(in) :: key     !< the key's name
+        type(error_t), intent(inout) :: err     !< set when the check fails
+        character(len=32) :: s1, s2
+        ok = val / dt < max_steps
+        if (ok) return
+        write(s1, '(es10.3)') val / dt
+        write(s2, '(es10.3)') max_steps
+        call set_error(err, dem_err_input, at // ": key '" // key // "': " // &
+            trim(adjustl(s1)) // ' steps of dt, more than a run counts (' // &
+            trim(adjustl(s2)) // ')')
+    end function check_steps
+
+    !> Check that what key `key` sizes fits this machine's memory: the case's estimated peak
+    !> (case_memory_mib: its particles so far, those of its &insert groups, its wall
+    !> triangles) with `particles` particles, `triangles` triangles and `mib` MiB more.
+    logical function check_memory(c, at, key, particles, triangles, mib, err) result(ok)
+        type(case_t), intent(in) :: c           !< the case read so far
+        character(len=*), intent(in) :: at      !< the group's place ('file:line: &group')
+        character(len=*), intent(in) :: key     !< the key's name
+        real(wp), intent(in) :: particles, triangles, mib  !< what the key adds
+        type(error_t), intent(inout) :: err     !< set when the check fails
+        real(wp) :: need, have
+        character(len=32) :: s1, s2
+        need = mib + case_memory_mib(real(c%n_particles, wp) + inserted() + particles, &
+                                     real(c%mesh%n_tri, wp) + triangles)
+        have = physical_memory_mib()
+        ok = need <= have
+        if (ok) return
+        write(s1, '(es10.3)') need
+        write(s2, '(es10.3)') have
+        call set_error(err, dem_err_input, at // ": key '" // key // "': the case would " // &
+            'need an estimated ' // trim(adjustl(s1)) // ' MiB, more than the ' // &
+            trim(adjustl(s2)) // ' MiB of this machine (dem --check prints the estimate)')
+    contains
+        real(wp) function inserted()
+            integer :: k
+            inserted = 0.0_wp
+            if (.not. allocated(c%inserts)) return
+            do k = 1, size(c%inserts)
+                inserted = inserted + real(c%inserts(k)%n, wp)
+            end do
+        end function inserted
+    end function check_memory
 
     !> A direction: `val` (finite) made a unit vector, scaled by its largest component first
     !> so that no square underflows (1e-300, 0, 0 is the x axis); zero is refused.

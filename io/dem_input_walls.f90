@@ -11,18 +11,22 @@ module dem_input_walls
     use dem_namelist_scan, only: nml_file_t
     use dem_input_group, only: group_io_t, group_reading, group_count
     use dem_input_values, only: unset, name_len, check_positive, in_range, check_vector, &
-                                check_direction, find_material, relative_to
+                                check_direction, find_material, relative_to, check_memory
     use dem_case, only: case_t
     use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion, mesh_set_oscillation, &
                         mesh_set_tables
     use dem_stl, only: stl_read
-    use dem_text, only: itoa
+    use dem_text, only: itoa, real_text
+    use dem_insert, only: region_face, region_bounds
     use dem_periodic, only: periodic_set
     implicit none
     private
     public :: read_walls, read_meshes, read_periodic
 
     integer, parameter :: max_table = 1000   !< points of a wall's velocity table
+    !> The most squares along a side of a &wall_plane (its 2 divisions^2 triangles counted
+    !> by a default integer).
+    integer, parameter :: max_divisions = 32767
 
 contains
 
@@ -60,15 +64,61 @@ contains
             if (.not. check_vector(at, normal, 'normal', .true., err)) return
             if (.not. check_direction(at, normal, 'normal', err)) return
             if (.not. check_positive(at, half_width, 'half_width', '[m]', err)) return
-            if (divisions < 1) then
-                call set_error(err, dem_err_input, at // ": key 'divisions': must be >= 1")
+            if (divisions < 1 .or. divisions > max_divisions) then
+                call set_error(err, dem_err_input, at // ": key 'divisions': must be in 1 .. " &
+                               // itoa(max_divisions))
                 return
             end if
+            if (.not. check_memory(c, at, 'divisions', 0.0_wp, &
+                                   2.0_wp * real(divisions, wp)**2, 0.0_wp, err)) return
             if (.not. wall_name_free(c, at, name, err)) return
+            if (.not. inserts_in_front(c, at, point, normal, half_width, err)) return
             call mesh_add_plane(c%mesh, point, normal, half_width, divisions, im)
             c%mesh%name(c%mesh%n_wall) = name
         end do
     end subroutine read_walls
+
+    !> False, with `err` set, where the region of an &insert group (its bounding box) reaches
+    !> behind the plane of a &wall_plane within its square (half_width about point, its
+    !> sides along the axes mesh_add_plane takes): spheres would be placed behind the wall.
+    !> A region that only touches the plane is in front of it. A face region (an inflow
+    !> entering by a rectangle) is not checked.
+    logical function inserts_in_front(c, at, point, normal, half_width, err) result(ok)
+        type(case_t), intent(in) :: c
+        character(len=*), intent(in) :: at
+        real(wp), intent(in) :: point(3), normal(3), half_width   !! normal: unit
+        type(error_t), intent(inout) :: err
+        real(wp) :: lo(3), hi(3), q(3, 8), d(8), u(8), w(8), a(3), b(3)
+        integer :: k, j
+        ok = .true.
+        if (abs(normal(1)) < 0.9_wp) then
+            a = [0.0_wp, normal(3), -normal(2)]                 ! x cross normal
+        else
+            a = [-normal(3), 0.0_wp, normal(1)]                 ! y cross normal
+        end if
+        a = a / norm2(a)
+        b = [normal(2) * a(3) - normal(3) * a(2), normal(3) * a(1) - normal(1) * a(3), &
+             normal(1) * a(2) - normal(2) * a(1)]
+        do k = 1, size(c%inserts)
+            if (c%inserts(k)%region%kind == region_face) cycle
+            call region_bounds(c%inserts(k)%region, lo, hi)
+            do j = 1, 8
+                q(:, j) = merge(hi, lo, [btest(j, 0), btest(j, 1), btest(j, 2)]) - point
+                d(j) = dot_product(normal, q(:, j))
+                u(j) = dot_product(a, q(:, j))
+                w(j) = dot_product(b, q(:, j))
+            end do
+            if (minval(d) >= 0.0_wp) cycle
+            if (minval(u) >= half_width .or. maxval(u) <= -half_width .or. &
+                minval(w) >= half_width .or. maxval(w) <= -half_width) cycle
+            ok = .false.
+            call set_error(err, dem_err_input, at // ': the region of the &insert group ' // &
+                'at ' // c%inserts(k)%at // ' reaches ' // real_text(-minval(d)) // &
+                ' m behind this wall: its spheres would be placed behind it (keep the ' // &
+                'region on the side the normal points to)')
+            return
+        end do
+    end function inserts_in_front
 
     !> &wall_mesh (repeated): a wall read from an STL file, at rest or in rigid motion.
     subroutine read_meshes(nf, c, err)

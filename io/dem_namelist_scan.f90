@@ -8,13 +8,14 @@ module dem_namelist_scan
     use dem_files, only: input_file_problem
     implicit none
     private
-    public :: nml_block_t, nml_file_t, nml_scan, nml_items, nml_location
+    public :: nml_block_t, nml_file_t, nml_scan, nml_items, nml_location, nml_line, nml_values
 
     !> One occurrence of a group: "&name ... /" on one line, and where it starts.
     type :: nml_block_t
         character(len=:), allocatable :: group  !< lower case, without the '&'
         character(len=:), allocatable :: text   !< the whole group, comments removed
         integer :: line = 0                     !< line of the '&'
+        integer, allocatable :: breaks(:)       !< where in `text` each further line starts
     end type nml_block_t
 
     !> A scanned file.
@@ -36,8 +37,17 @@ contains
         s = nf%path // ':' // trim(num) // ': &' // b%group
     end function nml_location
 
+    !> The line of the file at position `pos` of a group's text.
+    integer function nml_line(b, pos) result(line)
+        type(nml_block_t), intent(in) :: b      !< the group
+        integer, intent(in) :: pos              !< a position in b%text
+        line = b%line + count(b%breaks <= pos)
+    end function nml_line
+
     !> Read a file and split it into groups. Text outside groups other than blanks and
-    !> comments, and a group that is not closed, are errors.
+    !> comments, a group that is not closed with '/' (at the end of the file, or where the
+    !> next group starts), and a group closed with '&end' or '$end' (which the namelist read
+    !> takes as closing the group, and what follows up to the next '/' with it) are errors.
     subroutine nml_scan(path, nf, err)
         character(len=*), intent(in) :: path
         type(nml_file_t), intent(out) :: nf
@@ -48,6 +58,7 @@ contains
         integer :: u, ios, lineno, k, start_line, n
         logical :: in_group
         type(nml_block_t), allocatable :: tmp(:)
+        integer, allocatable :: breaks(:)
 
         nf%path = path
         nf%text = ''
@@ -96,6 +107,7 @@ contains
                     in_group = .true.
                     start_line = lineno
                     body = '&'
+                    breaks = [integer ::]
                     cycle
                 end if
                 if (ch == "'" .or. ch == '"') then
@@ -105,13 +117,20 @@ contains
                     body = body // ' /'
                     call add_block()
                     in_group = .false.
+                else if (ch == '&' .or. ch == '$') then     ! a group opens: this one is open
+                    call not_closed(line(k:))
+                    close(u)
+                    return
                 else if (ch == achar(9) .or. ch == achar(13)) then
                     body = body // ' '
                 else
                     body = body // ch
                 end if
             end do
-            if (in_group) body = body // ' '
+            if (in_group) then
+                body = body // ' '
+                breaks = [breaks, len(body) + 1]
+            end if
         end do
         close(u)
         if (in_group) then
@@ -127,8 +146,27 @@ contains
             tmp(n + 1)%group = group_name(body)
             tmp(n + 1)%text = body
             tmp(n + 1)%line = start_line
+            tmp(n + 1)%breaks = breaks
             call move_alloc(tmp, nf%blocks)
         end subroutine add_block
+
+        !> The error for the group in `body`, open where `rest` (from '&' or '$') starts.
+        subroutine not_closed(rest)
+            character(len=*), intent(in) :: rest
+            character(len=:), allocatable :: opened, name
+            write(num, '(i0)') start_line
+            opened = path // ':' // trim(num) // ': group &' // group_name(body) // &
+                     ' opened at line ' // trim(num)
+            write(num, '(i0)') lineno
+            name = group_name('&' // rest(2:))
+            if (name == 'end') then
+                call set_error(err, dem_err_input, opened // " is closed with '" // &
+                    rest(1:4) // "' at line " // trim(num) // ": close it with '/'")
+            else
+                call set_error(err, dem_err_input, opened // " is not closed with '/' " // &
+                    'before ' // rest(1:1) // name // ' at line ' // trim(num))
+            end if
+        end subroutine not_closed
     end subroutine nml_scan
 
     !> The group name that follows '&' in `body`, lower case.
@@ -145,13 +183,17 @@ contains
     end function group_name
 
     !> Start positions and lower-case names of the `key = value` items of a group's text.
-    subroutine nml_items(text, starts, keys)
+    !> With `subs`, the subscript of each ('' for none, else as written, blanks removed).
+    subroutine nml_items(text, starts, keys, subs)
         character(len=*), intent(in) :: text
         integer, allocatable, intent(out) :: starts(:)
         character(len=32), allocatable, intent(out) :: keys(:)
+        character(len=32), allocatable, intent(out), optional :: subs(:)
+        character(len=32) :: sub
         character :: quote
-        integer :: k, e, b, depth
+        integer :: k, e, b, depth, close_paren
         allocate(starts(0), keys(0))
+        if (present(subs)) allocate(subs(0))
         quote = ' '
         depth = 0
         k = len(group_name(text)) + 2
@@ -166,10 +208,13 @@ contains
                 do while (e > 1 .and. text(e:e) == ' ')
                     e = e - 1
                 end do
+                sub = ''
                 if (text(e:e) == ')') then
+                    close_paren = e
                     do while (e > 1 .and. text(e:e) /= '(')
                         e = e - 1
                     end do
+                    sub = without_blanks(text(e:close_paren))
                     e = e - 1
                 end if
                 b = e
@@ -178,10 +223,89 @@ contains
                 end do
                 starts = [starts, b]
                 keys = [character(len=32) :: keys, lower(text(b:e))]
+                if (present(subs)) subs = [character(len=32) :: subs, sub]
             end if
             k = k + 1
         end do
     end subroutine nml_items
+
+    !> The values of an item `key = value, ...`: how many there are (a repeat count r*
+    !> counting r; null values not counted), the length of the longest string among them
+    !> (quoted; a doubled quote counts once; 0 if none), and the first of them as written.
+    subroutine nml_values(item, n, longest, first)
+        character(len=*), intent(in) :: item
+        integer, intent(out) :: n, longest
+        character(len=:), allocatable, intent(out) :: first
+        integer :: k, e, rep, length, ios
+        character :: quote
+        n = 0
+        longest = 0
+        first = ''
+        k = index(item, '=') + 1
+        do
+            do while (k <= len(item))                   ! separators (and null values)
+                if (index(' ,' // achar(9), item(k:k)) == 0) exit
+                k = k + 1
+            end do
+            if (k > len(item)) exit
+            if (item(k:k) == '/') exit
+            e = k                                       ! r*: a repeat count
+            do while (e <= len(item))
+                if (item(e:e) < '0' .or. item(e:e) > '9') exit
+                e = e + 1
+            end do
+            rep = 1
+            if (e > k .and. e <= len(item)) then
+                if (item(e:e) == '*') then
+                    read(item(k:e - 1), *, iostat=ios) rep
+                    if (ios /= 0) rep = huge(rep)
+                    k = e + 1
+                end if
+            end if
+            if (k > len(item)) then                     ! 'r*' at the end: r null values
+                n = n + min(rep, huge(n) - n)
+                exit
+            end if
+            e = k                                       ! the value: from k to e
+            if (item(k:k) == "'" .or. item(k:k) == '"') then
+                quote = item(k:k)
+                length = 0
+                e = k + 1
+                do while (e <= len(item))
+                    if (item(e:e) == quote) then
+                        if (e == len(item)) exit
+                        if (item(e + 1:e + 1) /= quote) exit
+                        e = e + 1
+                    end if
+                    length = length + 1
+                    e = e + 1
+                end do
+                longest = max(longest, length)
+            else if (item(k:k) == '(') then
+                e = index(item(k:), ')') + k - 1
+                if (e < k) e = len(item)
+            else
+                do while (e < len(item))
+                    if (index(' ,/' // achar(9), item(e + 1:e + 1)) > 0) exit
+                    e = e + 1
+                end do
+            end if
+            e = min(e, len(item))
+            if (n == 0 .and. index(' ,', item(k:k)) == 0) first = item(k:e)
+            n = n + min(rep, huge(n) - n)
+            k = e + 1
+        end do
+    end subroutine nml_values
+
+    pure function without_blanks(s) result(r)
+        character(len=*), intent(in) :: s
+        character(len=:), allocatable :: r
+        integer :: k
+        r = ''
+        do k = 1, len(s)
+            if (s(k:k) /= ' ') r = r // s(k:k)
+        end do
+    end function without_blanks
 
     elemental logical function is_name_char(ch)
         character, intent(in) :: ch

@@ -8,7 +8,7 @@
 module dem_particle_file
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
-    use dem_text, only: read_line, without_bom
+    use dem_text, only: read_line, without_bom, excerpt
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_files, only: input_file_problem
     use dem_checkpoint, only: snapshot_read_particles
@@ -41,8 +41,8 @@ contains
         real(wp), allocatable, intent(out) :: radius(:), x(:, :), v(:, :), w(:, :)
         integer(ip), intent(out) :: n_rows
         type(error_t), intent(inout) :: err
-        character(len=:), allocatable :: line
-        character(len=64), allocatable :: fields(:)
+        character(len=:), allocatable :: line, text
+        integer, allocatable :: first(:), last(:)
         character(len=16) :: num
         integer :: u, ios, lineno, col(12), k, n, j
         integer(i8) :: id
@@ -86,12 +86,13 @@ contains
             close(u)
             return
         end if
-        call split(without_bom(line), fields)
+        line = without_bom(line)
+        call split(line, first, last)
         col = 0
-        do k = 1, size(fields)
+        do k = 1, size(first)
             do j = 1, 6
-                if (fields(k) == required(j)) col(j) = k
-                if (fields(k) == optional(j)) col(6 + j) = k
+                if (field(k) == required(j)) col(j) = k
+                if (field(k) == optional(j)) col(6 + j) = k
             end do
         end do
         do j = 1, 6
@@ -110,43 +111,52 @@ contains
             lineno = lineno + 1
             if (len_trim(line) == 0) cycle
             write(num, '(i0)') lineno
-            call split(line, fields)
-            if (size(fields) < maxval(col)) then
+            call split(line, first, last)
+            if (size(first) < maxval(col)) then
                 call set_error(err, dem_err_input, path // ':' // trim(num) // ': ' // &
                                'fewer columns than the header')
                 exit
             end if
             n_rows = n_rows + 1
-            read(fields(col(1)), *, iostat=ios) id
+            ios = 1
+            text = field(col(1))
+            if (is_integer(text)) read(text, *, iostat=ios) id
             if (ios /= 0 .or. id <= 0) then
                 call set_error(err, dem_err_input, path // ':' // trim(num) // &
-                               ": column 'id': '" // trim(fields(col(1))) // "' is not an id > 0")
+                               ": column 'id': '" // excerpt(field(col(1))) // &
+                               "' is not an id > 0 (a whole number below 2^63)")
                 exit
             end if
-            m = findloc(names, trim(fields(col(2))), dim=1)
+            text = field(col(2))
+            m = 0
+            do j = size(names), 1, -1               ! (the first of that name)
+                if (names(j) == text) m = j
+            end do
             if (m == 0) then
                 call set_error(err, dem_err_input, path // ':' // trim(num) // &
-                    ": column 'material': '" // trim(fields(col(2))) // &
+                    ": column 'material': '" // excerpt(field(col(2))) // &
                     "' is not a defined material")
                 exit
             end if
             if (rigid(m)) then
                 call set_error(err, dem_err_input, path // ':' // trim(num) // &
-                    ": column 'material': '" // trim(fields(col(2))) // &
+                    ": column 'material': '" // field(col(2)) // &
                     "' is rigid (rigid materials are for walls)")
                 exit
             end if
             val = 0.0_wp
             do j = 3, 12
                 if (col(j) == 0) cycle
-                read(fields(col(j)), *, iostat=ios) val(j - 2)
+                ios = 1
+                text = field(col(j))
+                if (is_real(text)) read(text, *, iostat=ios) val(j - 2)
                 if (ios == 0) then
                     if (.not. ieee_is_finite(val(j - 2))) ios = 1
                 end if
                 if (ios /= 0) then
                     call set_error(err, dem_err_input, path // ':' // trim(num) // ": column '" // &
-                        trim(column_name(j)) // "': '" // trim(fields(col(j))) // &
-                        "' is not a finite number")
+                        trim(column_name(j)) // "': '" // excerpt(field(col(j))) // &
+                        "' is not a finite number (digits, a decimal point, an exponent)")
                     exit
                 end if
             end do
@@ -174,6 +184,13 @@ contains
         end if
         call grow(n)
     contains
+        !> Field k of the line split last, without the blanks around it.
+        function field(k) result(f)
+            integer, intent(in) :: k
+            character(len=:), allocatable :: f
+            f = trim(adjustl(line(first(k):last(k))))
+        end function field
+
         subroutine grow(cap)
             integer, intent(in) :: cap
             integer(i8), allocatable :: g2(:)
@@ -222,25 +239,54 @@ contains
         end if
     end function column_name
 
-    !> The comma-separated fields of a line, trimmed.
-    subroutine split(line, fields)
+    !> Where each comma-separated field of a line starts and ends (of any length).
+    subroutine split(line, first, last)
         character(len=*), intent(in) :: line
-        character(len=64), allocatable, intent(out) :: fields(:)
-        integer :: a, b, k, n
+        integer, allocatable, intent(out) :: first(:), last(:)
+        integer :: b, k, n
         n = count([(line(k:k) == ',', k = 1, len(line))]) + 1
-        allocate(fields(n))
-        a = 1
+        allocate(first(n), last(n))
+        first(1) = 1
         do k = 1, n
-            b = index(line(a:), ',')
-            if (b == 0) then
-                b = len(line) + 1
-            else
-                b = a + b - 1
-            end if
-            fields(k) = adjustl(line(a:b - 1))
-            a = b + 1
+            if (k > 1) first(k) = last(k - 1) + 2
+            b = index(line(first(k):), ',')
+            last(k) = len(line)
+            if (b > 0) last(k) = first(k) + b - 2
         end do
     end subroutine split
+
+    !> True if `s` is wholly an integer: an optional sign and digits.
+    pure logical function is_integer(s)
+        character(len=*), intent(in) :: s
+        integer :: a
+        a = 1
+        if (len(s) > 0) then
+            if (s(1:1) == '+' .or. s(1:1) == '-') a = 2
+        end if
+        is_integer = len(s) >= a .and. verify(s(a:), '0123456789') == 0
+    end function is_integer
+
+    !> True if `s` is wholly a real number: an optional sign, digits with at most one decimal
+    !> point (at least one digit), and an optional exponent (e, E, d or D, an optional sign,
+    !> digits).
+    pure logical function is_real(s)
+        character(len=*), intent(in) :: s
+        integer :: e, a
+        is_real = .false.
+        e = scan(s, 'eEdD')
+        if (e == 0) e = len(s) + 1
+        if (e < len(s) + 1) then
+            if (.not. is_integer(s(e + 1:))) return
+        end if
+        a = 1
+        if (e > 1) then
+            if (s(1:1) == '+' .or. s(1:1) == '-') a = 2
+        end if
+        if (verify(s(a:e - 1), '0123456789.') /= 0) return
+        is_real = scan(s(a:e - 1), '0123456789') > 0 .and. &
+                  index(s(a:e - 1), '.') == index(s(a:e - 1), '.', back=.true.)
+    end function is_real
+
     !> For a missing file that is a run's final state (final.csv): what makes it. The
     !> benchmark cases' preparations write output/benchmark/prepare_<case>[_<stage>]/, which
     !> scripts/bench/prepare-benchmark <case> runs; any other run's, its case.

@@ -9,9 +9,11 @@ program dem_main
                    solver_time, frame_t, checkpoint_read, &
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
                    solver_particles, solver_particle_steps, solver_parallel_stats, i8
-    use dem_comm, only: comm_t, comm_init, comm_free, comm_max
+    use dem_case, only: case_memory_mib
+    use dem_comm, only: comm_t, comm_init, comm_free, comm_max, comm_any
+    use dem_error, only: set_error, dem_err_stopped
     use dem_acc, only: acc_traffic
-    use dem_signals, only: signals_install
+    use dem_signals, only: signals_install, signal_received
     use dem_folder, only: folder_conflict
     use dem_folder_lock, only: folder_lock, folder_unlock
     use dem_solver, only: solver_ended
@@ -74,6 +76,11 @@ program dem_main
     if (check_only) then               ! the checks of a run's start: ids, overlaps
         call solver_prepare(s, c, err)
         if (err%failed()) call fail(err)
+        if (comm_any(comm, len(signal_received()) > 0)) then   ! (a long start: honoured)
+            call set_error(err, dem_err_stopped, trim(signal_received()) // ' received while ' &
+                           // 'the case was checked: stopped before the end of the check')
+            call fail(err)
+        end if
         if (comm%rank == 0 .and. .not. c%output_overwrite) then   ! (--resume may continue)
             if (folder_conflict(c%output_dir, c%source, c%input_text) /= '') &
                 write(output_unit, '(a)') '  warning: a fresh run stops at once: ' // &
@@ -189,10 +196,7 @@ contains
         else
             law = 'Hertz-Mindlin'
         end if
-        ! peak resident sizes measured (doc/user/running.md): 31 MiB for a sphere on a plane, plus
-        ! about 2900 bytes per particle (a bed of 25 000) and 790 per triangle (planes of
-        ! 0.5 and 2 million), a checkpoint built in memory included
-        mem = 31.0_wp + (2900.0_wp * c%n_particles + 790.0_wp * c%mesh%n_tri) / 2.0_wp**20
+        mem = case_memory_mib(real(c%n_particles, wp), real(c%mesh%n_tri, wp))
         write(output_unit, '(a)') 'case ' // c%source
         write(output_unit, '(a,i0,a,i0,a)') '  particles            ', c%n_particles, &
             ' (wall triangles ', c%mesh%n_tri, ')'
@@ -223,7 +227,7 @@ contains
                 'cohesion_energy_density; doc/theory.md, section 15)'
         end if
         write(output_unit, '(a,es12.5,a,i0,a)') '  dt                   ', c%dt, ' s (', &
-            ceiling(c%t_end / c%dt - 1.0e-9_wp), ' steps)'
+            ceiling(c%t_end / c%dt - 1.0e-9_wp, i8), ' steps)'
         write(output_unit, '(a,f10.4)') '  dt / Rayleigh time   ', c%dt / ts%rayleigh
         if (ts%speed > 0.0_wp) write(output_unit, '(a,f10.4)') '  dt / contact time    ', &
             c%dt / ts%contact

@@ -8,12 +8,13 @@
 module dem_files
     use, intrinsic :: iso_c_binding, only: c_char, c_int, c_long, c_null_char, c_ptr, &
                                            c_null_ptr, c_associated, c_size_t, c_f_pointer
-    use dem_kinds, only: i8
+    use dem_kinds, only: wp, i8
     use dem_error, only: error_t, set_error, dem_err_io
     implicit none
     private
     public :: make_directory, file_rename, file_remove, file_truncate, file_exists, &
-              input_file_problem, file_write_bytes, file_sync, files_matching, absolute_path
+              input_file_problem, file_write_bytes, file_sync, files_matching, absolute_path, &
+              physical_memory_mib
     public :: cfile_t, cfile_open, cfile_write, cfile_size, cfile_close, cfile_sync
 
     !> The first fields of the C library's glob_t (glibc and musl alike), then room for the
@@ -149,6 +150,25 @@ contains
         if (c_truncate(path // c_null_char, int(length, c_long)) /= 0) &
             call set_error(err, dem_err_io, path // ': cannot truncate it')
     end subroutine file_truncate
+
+    !> The memory of this machine [MiB] (MemTotal of /proc/meminfo), huge where unknown.
+    real(wp) function physical_memory_mib() result(mib)
+        character(len=256) :: line
+        integer :: u, ios
+        real(wp) :: kib
+        mib = huge(1.0_wp)
+        open(newunit=u, file='/proc/meminfo', action='read', status='old', iostat=ios)
+        if (ios /= 0) return
+        do
+            read(u, '(a)', iostat=ios) line
+            if (ios /= 0) exit
+            if (line(1:9) /= 'MemTotal:') cycle
+            read(line(10:), *, iostat=ios) kib
+            if (ios == 0 .and. kib > 0.0_wp) mib = kib / 1024.0_wp
+            exit
+        end do
+        close(u)
+    end function physical_memory_mib
 
     !> True if a file exists.
     logical function file_exists(path) result(exists)

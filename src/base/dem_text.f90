@@ -82,7 +82,11 @@ contains
         real(wp), intent(in) :: x
         character(len=:), allocatable :: s
         character(len=24) :: buf
-        write(buf, '(es11.4)') x
+        if (abs(x) >= 1.0e100_wp .or. (abs(x) < 1.0e-99_wp .and. x /= 0.0_wp)) then
+            write(buf, '(es12.4e3)') x        ! (a three-digit exponent keeps its E)
+        else
+            write(buf, '(es11.4)') x
+        end if
         s = trim(adjustl(buf))
     end function real_text
 

@@ -17,7 +17,7 @@ module dem_case
     private
     public :: case_t, time_scales_t, insert_t, id_check_t, case_time_scales, case_summarize, &
               case_particle_materials, case_speed_bound, case_energy_speed, case_energy_bound, &
-              case_release_particles, case_append_particles, case_settle_time
+              case_release_particles, case_append_particles, case_settle_time, case_memory_mib
 
     !> What the time scales and the checks need of the particles of all ranks
     !> (case_summarize).
@@ -26,6 +26,7 @@ module dem_case
         real(wp), allocatable :: rmax(:)    !< largest radius of each material, 0 if none [m]
         real(wp) :: mass = 0.0_wp           !< total mass [kg]
         real(wp) :: speed = 0.0_wp          !< largest initial speed [m/s]
+        real(wp) :: rim = 0.0_wp            !< largest initial rim speed |w| r [m/s]
         real(wp) :: spin_energy = 0.0_wp    !< initial rotational kinetic energy [J]
         real(wp) :: low = 0.0_wp            !< lowest and highest centre along gravity [m]
         real(wp) :: high = 0.0_wp
@@ -153,7 +154,7 @@ contains
         type(case_t), intent(inout) :: c
         type(comm_t), intent(in) :: comm
         real(wp), parameter :: pi = acos(-1.0_wp)
-        real(wp) :: e(3), g, big(2 * c%mats%n + 3), sums(2), lo(3), hi(3), corner(3), m
+        real(wp) :: e(3), g, big(2 * c%mats%n + 4), sums(2), lo(3), hi(3), corner(3), m
         integer(ip) :: i, a
         integer :: k
         associate (sm => c%summary)
@@ -161,6 +162,7 @@ contains
             sm%rmax = spread(0.0_wp, 1, c%mats%n)
             sm%mass = 0.0_wp
             sm%speed = 0.0_wp
+            sm%rim = 0.0_wp
             sm%spin_energy = 0.0_wp
             sm%low = huge(1.0_wp)
             sm%high = -huge(1.0_wp)
@@ -176,6 +178,7 @@ contains
                 sm%spin_energy = sm%spin_energy + 0.2_wp * m * c%radius(i)**2 &
                                  * dot_product(c%w(:, i), c%w(:, i))
                 sm%speed = max(sm%speed, norm2(c%v(:, i)))
+                sm%rim = max(sm%rim, norm2(c%w(:, i)) * c%radius(i))
                 sm%low = min(sm%low, dot_product(e, c%x(:, i)))
                 sm%high = max(sm%high, dot_product(e, c%x(:, i)))
             end do
@@ -193,13 +196,14 @@ contains
                     sm%high = max(sm%high, dot_product(e, corner))
                 end do
             end do
-            big = [-sm%rmin, sm%rmax, sm%speed, -sm%low, sm%high]
+            big = [-sm%rmin, sm%rmax, sm%speed, -sm%low, sm%high, sm%rim]
             call comm_max(comm, big)
             sm%rmin = -big(1:c%mats%n)
             sm%rmax = big(c%mats%n + 1:2 * c%mats%n)
             sm%speed = big(2 * c%mats%n + 1)
             sm%low = -big(2 * c%mats%n + 2)
             sm%high = big(2 * c%mats%n + 3)
+            sm%rim = big(2 * c%mats%n + 4)
             sums = [sm%mass, sm%spin_energy]
             call comm_sum(comm, sums)
             sm%mass = sums(1)
@@ -346,6 +350,16 @@ contains
             ts%critical = min(ts%critical, pair_critical_dt(cm, a_, b_, mstar_, rstar_, speed_))
         end subroutine update
     end subroutine case_time_scales
+
+    !> The estimated peak memory of a run on one rank [MiB] with `particles` particles and
+    !> `triangles` wall triangles: the peak resident sizes measured (doc/user/running.md),
+    !> 31 MiB for a sphere on a plane, plus about 2900 bytes per particle (a bed of 25 000)
+    !> and 790 per triangle (planes of 0.5 and 2 million), a checkpoint built in memory
+    !> included.
+    pure real(wp) function case_memory_mib(particles, triangles) result(mib)
+        real(wp), intent(in) :: particles, triangles
+        mib = 31.0_wp + (2900.0_wp * particles + 790.0_wp * triangles) / 2.0_wp**20
+    end function case_memory_mib
 
     !> Append particles to the case's: those held here, of n_rows of all ranks.
     subroutine case_append_particles(c, gid, mat, radius, x, v, w, n_rows)

@@ -368,9 +368,9 @@ contains
         type(probe_t), intent(in) :: p
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: x(3, n), v(3, n)
-        integer(i8) :: counts(0:p%bins + 1, 3)
+        integer(i8), allocatable :: counts(:, :)   ! (not on the stack: up to 10^7 bins)
         integer(i8), allocatable :: flat(:)
-        allocate(flat(3 * (p%bins + 2)))
+        allocate(counts(0:p%bins + 1, 3), flat(3 * (p%bins + 2)))
         call acc_data(flat, acc_create)
         call histogram_bins(n, p%lo, p%hi, p%axis, p%v_min, p%v_max, p%bins, x, v, flat)
         call acc_data(flat, acc_to_host)

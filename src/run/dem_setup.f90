@@ -8,14 +8,15 @@ module dem_setup
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_stopped
     use dem_signals, only: signal_received
-    use dem_comm, only: comm_t, comm_any
+    use dem_comm, only: comm_t, comm_any, comm_max
     use dem_case, only: case_t, insert_t, time_scales_t, case_time_scales, case_summarize, &
                         case_speed_bound, case_energy_speed, case_append_particles, &
                         case_settle_time
     use dem_insert, only: insert_random, insert_velocities, region_face, region_slab
     use dem_random, only: rng_t, rng_seed
     use dem_input, only: read_case_file
-    use dem_text, only: itoa
+    use dem_text, only: itoa, real_text
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_periodic, only: with_images
     implicit none
     private
@@ -35,6 +36,9 @@ contains
         if (.not. err%failed()) call place_inserts(c, err)  ! (every rank holds all particles)
         if (.not. err%failed()) then
             if (size(c%inserts) > 0) call keep_share(c, comm%rank, comm%size)
+            call check_ranges(c, comm, err)
+        end if
+        if (.not. err%failed()) then
             call case_summarize(c, comm)
             call drawn_from_particles(c, err)
             c%settle_time = case_settle_time(c)
@@ -94,6 +98,7 @@ contains
                 end if
                 next_id = 1
                 if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
+                if (.not. ids_left(g, next_id, real(n, wp), err)) return
                 call case_append_particles(c, [(next_id + i, i = 0, n - 1)], spread(g%mat, 1, n), &
                                            r, x, insert_velocities(rng, g%velocity, &
                                                                    g%velocity_spread, n), &
@@ -113,6 +118,10 @@ contains
                         3.0_wp * g%size%r_max))
             end associate
         end do
+        do k = 1, size(c%inserts)                ! the ids of the inflow to come
+            if (.not. c%inserts(k)%inflow) cycle
+            if (.not. ids_left(c%inserts(k), c%next_id, inflow_count(c%inserts(k)), err)) return
+        end do
         k = findloc(c%inserts%inflow, .true., dim=1)
         c%inflow = k > 0
         if (k > 0) then                          ! the inflow's generator
@@ -120,6 +129,33 @@ contains
             c%rng_state = rng%state
         end if
     contains
+        !> False, with `err` set, where `count` ids from `first` on pass the largest id.
+        logical function ids_left(g, first, count, err) result(ok)
+            type(insert_t), intent(in) :: g
+            integer(i8), intent(in) :: first
+            real(wp), intent(in) :: count
+            type(error_t), intent(inout) :: err
+            ok = count < real(huge(1_i8) - first, wp)
+            if (.not. ok) call set_error(err, dem_err_input, g%at // ": key 'n': the ids " // &
+                'of its spheres would pass the largest id, 2^63 - 1 (they follow the ' // &
+                'largest id before them, ' // itoa(first - 1) // ')')
+        end function ids_left
+
+        !> The most spheres an inflow inserts up to t_end: rate times its time, or its mass
+        !> in spheres of its smallest radius.
+        real(wp) function inflow_count(g) result(count)
+            type(insert_t), intent(in) :: g
+            real(wp), parameter :: pi = acos(-1.0_wp)
+            real(wp) :: span
+            span = max(0.0_wp, min(g%end, c%t_end) - g%start)
+            if (g%rate > 0.0_wp) then
+                count = g%rate * span + 1.0_wp
+            else
+                count = g%mass_rate * span / (4.0_wp / 3.0_wp * pi * g%size%r_min**3 * &
+                                              c%mats%density(g%mat)) + 1.0_wp
+            end if
+        end function inflow_count
+
         !> The steps in which a sphere of the group moves one largest diameter d from its
         !> velocity v0 and gravity g: (sqrt(v0^2 + 2 g d) - v0) / g, or d / v0 without
         !> gravity, 1000 steps when it does not move; at least 1.
@@ -136,7 +172,7 @@ contains
             else
                 t = 1000.0_wp * c%dt
             end if
-            every = max(1_i8, nint(t / c%dt, i8))
+            every = max(1_i8, nint(min(t / c%dt, 1.0e18_wp), i8))   ! (no overflow)
         end function default_every
     end subroutine place_inserts
 
@@ -164,10 +200,13 @@ contains
         type(error_t), intent(inout) :: err
         type(time_scales_t) :: ts
         character(len=32) :: s1, s2
+        logical :: given
         if (c%skin == huge(1.0_wp)) c%skin = 0.4_wp * minval(c%summary%rmin)
         call case_time_scales(c, ts)
-        if (c%max_speed == huge(1.0_wp)) c%max_speed = case_speed_bound(c, ts)
+        given = c%max_speed /= huge(1.0_wp)
+        if (.not. given) c%max_speed = case_speed_bound(c, ts)
         c%energy_speed = case_energy_speed(c, ts)
+        if (.not. scales_finite(c, ts, given, err)) return
         if (c%dt > ts%bound .and. .not. c%allow_unstable) then
             write(s1, '(es10.3)') c%dt
             write(s2, '(es10.3)') ts%bound
@@ -177,6 +216,45 @@ contains
                 'allow_unstable = .true. runs anyway)')
         end if
     end subroutine drawn_from_particles
+
+    !> False, with `err` set, where the time scales, the total mass or the guards are not
+    !> finite and positive (radii or speeds beyond what double precision resolves), or,
+    !> unless &run max_speed is `given`, where a particle starts as fast as the instability
+    !> guard's default (its speed, or its rim speed |w| r): the run would stop at its first
+    !> step.
+    logical function scales_finite(c, ts, given, err) result(ok)
+        type(case_t), intent(in) :: c
+        type(time_scales_t), intent(in) :: ts
+        logical, intent(in) :: given
+        type(error_t), intent(inout) :: err
+        real(wp) :: checked(5)
+        integer(ip) :: a
+        checked = [ts%rayleigh, ts%bound, c%summary%mass, c%max_speed, c%energy_speed]
+        ok = all(ieee_is_finite(checked)) .and. checked(1) > 0.0_wp .and. &
+             checked(2) > 0.0_wp .and. checked(4) > 0.0_wp .and. &
+             (checked(3) > 0.0_wp .or. c%n_particles == 0)
+        if (ok .and. ts%speed > 0.0_wp) ok = ieee_is_finite(ts%contact) .and. &
+                                             ts%contact > 0.0_wp
+        if (.not. ok) then
+            a = minloc(c%summary%rmin, dim=1)
+            call set_error(err, dem_err_input, c%run_at // ': the time scales are not ' // &
+                'finite and positive (Rayleigh time ' // real_text(ts%rayleigh) // ' s, ' // &
+                'contact time ' // real_text(ts%contact) // ' s, total mass ' // &
+                real_text(c%summary%mass) // ' kg): the smallest radius, ' // &
+                real_text(c%summary%rmin(a)) // " m (material '" // trim(c%mats%name(a)) // &
+                "'), or the largest speed, " // real_text(ts%speed) // ' m/s, is out of ' // &
+                "range (key 'radius' or 'velocity' of &particle, a particle file's columns, " // &
+                "&insert's radii)")
+            return
+        end if
+        ok = given .or. max(c%summary%speed, c%summary%rim) < c%max_speed
+        if (.not. ok) call set_error(err, dem_err_input, c%run_at // ": key 'max_speed': " // &
+            'a particle starts at ' // real_text(max(c%summary%speed, c%summary%rim)) // &
+            " m/s (its speed, or the rim speed |w| r of its angular velocity: &particle " // &
+            "'angular_velocity', a particle file's wx, wy, wz), at or above the instability " // &
+            "guard's default, " // real_text(c%max_speed) // ' m/s: the run would stop at ' // &
+            'its first step (give max_speed if that speed is meant)')
+    end function scales_finite
 
     !> Each period at least 2 (2 R + skin), R the largest radius (of the inflow too): a
     !> particle then meets at most one image of another, and none of itself.
@@ -230,6 +308,66 @@ contains
     end subroutine check_pairs_used
 
     !> Each id the case names is a particle of some rank.
+    !> Every particle's radius at least radius_floor, its speed and its rim speed |w| r
+    !> below light_speed (and the inflow's radii and speeds too): the ranges in which its
+    !> mass, inertia, energies and time scales are finite (doc/user/input.md). The particle
+    !> of smallest id out of range is named, on every rank.
+    subroutine check_ranges(c, comm, err)
+        type(case_t), intent(in) :: c
+        type(comm_t), intent(in) :: comm
+        type(error_t), intent(inout) :: err
+        real(wp), parameter :: radius_floor = 1.0e-9_wp   !! [m]
+        real(wp), parameter :: light_speed = 2.99792458e8_wp   !! [m/s]
+        integer(i8) :: least(1)               ! minus the smallest id out of range
+        real(wp) :: found(3)                  ! its radius, speed and rim speed
+        integer(ip) :: i
+        character(len=:), allocatable :: key
+        least = -huge(1_i8)
+        do i = 1, c%n_held
+            if (.not. in_range(c%radius(i), c%v(:, i), c%w(:, i))) &
+                least = max(least, -c%gid(i))
+        end do
+        call comm_max(comm, least)
+        if (least(1) == -huge(1_i8)) then
+            do i = 1, size(c%inserts)
+                associate (g => c%inserts(i))
+                    if (.not. g%inflow) cycle
+                    if (in_range(g%size%r_min, abs(g%velocity) + g%velocity_spread, &
+                                 [0.0_wp, 0.0_wp, 0.0_wp])) cycle
+                    call set_error(err, dem_err_input, g%at // ": keys 'radius_min', " // &
+                        "'velocity', 'velocity_spread': the inflow's radii must be at least " &
+                        // real_text(radius_floor) // ' m and its speeds below ' // &
+                        real_text(light_speed) // ' m/s')
+                    return
+                end associate
+            end do
+            return
+        end if
+        found = -huge(1.0_wp)
+        do i = 1, c%n_held
+            if (c%gid(i) == -least(1)) found = [c%radius(i), norm2(c%v(:, i)), &
+                                                norm2(c%w(:, i)) * c%radius(i)]
+        end do
+        call comm_max(comm, found)
+        key = 'radius'
+        if (.not. found(3) < light_speed) key = 'angular_velocity'
+        if (.not. found(2) < light_speed) key = 'velocity'
+        if (.not. found(1) >= radius_floor) key = 'radius'
+        call set_error(err, dem_err_input, c%source // ': particle ' // itoa(-least(1)) // &
+            ": key '" // key // "' out of range: its radius is " // real_text(found(1)) // &
+            ' m (at least ' // real_text(radius_floor) // ' m), its speed ' // &
+            real_text(found(2)) // ' m/s and its rim speed |w| r ' // real_text(found(3)) // &
+            ' m/s (both below ' // real_text(light_speed) // " m/s) (&particle, a particle " // &
+            "file's columns, or &insert)")
+    contains
+        !> A radius, velocity and angular velocity in range (NaN is not).
+        pure logical function in_range(r, v, w)
+            real(wp), intent(in) :: r, v(3), w(3)
+            in_range = r >= radius_floor .and. norm2(v) < light_speed .and. &
+                       norm2(w) * r < light_speed
+        end function in_range
+    end subroutine check_ranges
+
     subroutine check_ids(c, comm, err)
         type(case_t), intent(in) :: c
         type(comm_t), intent(in) :: comm

@@ -14,7 +14,7 @@ from regression_util import ROOT, check, finish
 
 dem, work = sys.argv[1], sys.argv[2]
 r = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "dev", "fuzz-inputs"), dem, work,
-                    "--count", "200", "--jobs", "3"], capture_output=True, text=True,
+                    "--count", "200", "--jobs", "8"], capture_output=True, text=True,
                    timeout=1200)
 print(r.stdout[-20000:], r.stderr[-5000:])
 check(r.returncode == 0 and "200 mutants" in r.stdout and ": 0 failed" in r.stdout,

@@ -3,6 +3,7 @@
 where the group's keys are described: doc/user/input.md, &group), exit code 2, and leaves
 no output behind. Also the command line: --version, --help, --check.
 usage: test_input_errors.py DEM WORKDIR"""
+import concurrent.futures
 import os
 import re
 import shutil
@@ -33,13 +34,25 @@ def run(args, name):
     return r, d
 
 
+pending = []     # the bad cases' runs, made at once at the end (each dem start waits ~0.3 s)
+
+
 def bad(name, text, group, key, extra=""):
-    """A case whose text is `text` must fail naming the file, &group and key."""
+    """A case whose text is `text` must fail naming the file, &group and key (checked by
+    check_bad_cases)."""
     path = os.path.join(work, name + ".nml")
     with open(path, "w") as f:
         f.write(text)
-    for args in (["--check", path], [path]):
-        r, d = run(args, name + ("_check" if args[0] == "--check" else "_run"))
+    pending.append((name, path, group, key, extra))
+
+
+def check_bad_cases():
+    """Run the cases that bad() wrote, eight at a time, and check each."""
+    runs = [(case, args, case[0] + ("_check" if args[0] == "--check" else "_run"))
+            for case in pending for args in (["--check", case[1]], [case[1]])]
+    with concurrent.futures.ThreadPoolExecutor(8) as pool:
+        results = list(pool.map(lambda x: run(x[1], x[2]), runs))
+    for ((name, path, group, key, extra), _, _), (r, d) in zip(runs, results):
         msg = r.stderr
         check(r.returncode == 2, f"{name}: exit code {r.returncode}, expected 2 ({msg.strip()})")
         check(path in msg, f"{name}: message does not name the file: {msg.strip()}")
@@ -372,6 +385,86 @@ bad("stl_garbage", GOOD + f"&wall_mesh material = 'steel', file = '{garbage_stl}
 r, _ = run(["--check", os.path.join(work, "stl_garbage.nml")], "stl_garbage_length")
 check(len(r.stderr) < 2000, f"stl_garbage: the error is {len(r.stderr)} characters long")
 
+# the rules of the input (doc/user/input.md, "Rules of the input"): what the namelist read
+# alone let through (a vector given in part kept the rest of its default, a key given twice
+# its last value, &end swallowed the next group) is refused, naming the group and the key
+bad("vector_short", sub("gravity = 0, 0, 0", "gravity = -9.81"), "run", "gravity",
+    "1 value given, 3 expected")
+bad("vector_two", sub("velocity = 0, 0, -1", "velocity = 0, -1"), "particle", "velocity",
+    "2 values given, 3 expected")
+bad("vector_long", sub("velocity = 0, 0, -1", "velocity = 0, 0, -1, 5"), "particle",
+    "velocity", "4 values given, 3 expected")
+bad("vector_repeat_count", sub("velocity = 0, 0, -1", "velocity = 2*0"), "particle",
+    "velocity", "2 values given, 3 expected")
+bad("key_twice", sub("dt = 1e-7,", "dt = 1e-7,\n     dt = 2e-7,"), "run", "dt",
+    "given twice (lines 1 and 2)")
+bad("end_closing", sub("gravity = 0, 0, 0 /", "gravity = 0, 0, 0 &end"), "run", None,
+    "group &run opened at line 1 is closed with '&end' at line 1")
+bad("not_closed", sub("gravity = 0, 0, 0 /", "gravity = 0, 0, 0"), "run", None,
+    "group &run opened at line 1 is not closed with '/' before &output at line 2")
+bad("unquoted", sub("&particle material = 'glass'", "&particle material = glass"),
+    "particle", "material", "quote it")
+bad("long_dir", sub("&output interval = 1e-6 /", "&output interval = 1e-6, dir = '" +
+                    "d" * 513 + "' /"), "output", "dir", "513 characters, at most 512")
+bad("steps_overflow", sub("t_end = 1e-5", "t_end = 1e30"), "run", "t_end", "steps of dt")
+bad("divisions_real", sub("half_width = 0.1 /", "half_width = 0.1, divisions = 1e5 /"),
+    "wall_plane", "divisions", "an integer is expected")
+bad("divisions_range", sub("half_width = 0.1 /", "half_width = 0.1, divisions = 100000 /"),
+    "wall_plane", "divisions", "1 .. 32767")
+bad("divisions_memory", sub("half_width = 0.1 /", "half_width = 0.1, divisions = 32767 /"),
+    "wall_plane", "divisions", "MiB of this machine")
+bad("bins_range", GOOD + "&probe name = 'h', kind = 'histogram', time = 0, v_min = 0, "
+    "v_max = 1, bins = 2000000000 /\n", "probe", "bins", "1 .. 10000000")
+bad("insert_memory", GOOD + INS.replace("n = 5", "n = 2000000000") + "radius_min = 1e-3 /\n",
+    "insert", "n", "MiB of this machine")
+bad("insert_behind_wall", GOOD + INS.replace("0.03, box_max", "-0.02, box_max") +
+    "radius_min = 1e-3 /\n", "wall_plane", None, "reaches 2.0000E-02 m behind this wall")
+bad("ids_overflow", sub("&particle material", "&particle id = 9223372036854775805, material")
+    + INS + "radius_min = 1e-3 /\n", "insert", "n", "largest id")
+bad("tiny_radius", sub("t_end = 1e-5,", "t_end = 1e-5, allow_unstable = .true.,")
+    .replace("radius = 0.01", "radius = 1e-300"), None, "radius", "out of range")
+bad("spinning_light", sub("velocity = 0, 0, -1", "velocity = 0, 0, -1, angular_velocity = "
+                          "1e300, 0, 0"), None, "angular_velocity", "out of range")
+bad("spinning", sub("velocity = 0, 0, -1", "velocity = 0, 0, -1, angular_velocity = 1e7, "
+                    "0, 0"), "run", "max_speed", "rim speed")
+# a component by its subscript, and a list given in part, are read
+path = os.path.join(work, "good_parts.nml")
+with open(path, "w") as f:
+    f.write(sub("gravity = 0, 0, 0", "gravity(3) = 0") + INS + "radius_distribution = "
+            "'discrete', radii = 1e-3, 2e-3, fractions = 0.4, 0.6, fraction_by = 'number' /\n")
+r, _ = run(["--check", path], "good_parts")
+check(r.returncode == 0, f"a vector's component, a list in part: --check failed: {r.stderr}")
+# an &insert box in front of the floor, touching it, is accepted
+path = os.path.join(work, "good_touching.nml")
+with open(path, "w") as f:
+    f.write(GOOD + INS.replace("0.03, box_max", "0.0, box_max") + "radius_min = 1e-3 /\n")
+r, _ = run(["--check", path], "good_touching")
+check(r.returncode == 0, f"an &insert box touching a wall: --check failed: {r.stderr}")
+
+# particle files: every field read whole, at any length, and wholly a number
+CSV_CASE = sub("&particle material = 'glass', radius = 0.01, position = 0, 0, 0.011, "
+               "velocity = 0, 0, -1 /", "&particle_file file = '{csv}' /")
+for name, row, ok, words in (
+        ("csv_padded", "1,glass," + " " * 70 + "1e-3,0,0,0.011,0,0,-1", True, "1.000E-03 m"),
+        ("csv_unit", "1,glass,0.01,0,0,0.011,0.5 m/s,0,-1", False, "p_csv_unit.csv:2: "
+         "column 'vx': '0.5 m/s' is not a finite number"),
+        ("csv_long_garbage", "1,glass,0.01" + "7" * 100 + "x,0,0,0.011,0,0,-1", False,
+         "p_csv_long_garbage.csv:2: column 'radius'"),
+        ("csv_id", "1.5,glass,0.01,0,0,0.011,0,0,-1", False, "column 'id'")):
+    csv = os.path.join(work, f"p_{name}.csv")
+    with open(csv, "w") as f:
+        f.write("id,material,radius,x,y,z,vx,vy,vz\n" + row + "\n")
+    text = CSV_CASE.format(csv=csv)
+    if ok:
+        path = os.path.join(work, name + ".nml")
+        with open(path, "w") as f:
+            f.write(text)
+        r, _ = run(["--check", path], name)
+        check(r.returncode == 0 and words in r.stdout,
+              f"{name}: exit {r.returncode}, {r.stderr.strip()} (radius {words} expected)")
+    else:
+        bad(name, text, "particle_file", "file", words)
+
 # the memory estimate of --check is within a factor of 2 of the peak resident size on a
 # large mesh (issue 30, item 8: a plane of 18 million triangles reached 5.9 GB with 1.4 GB
 # estimated, and a plane's corners on the stack crashed it): a plane of a million triangles
@@ -399,4 +492,5 @@ r, _ = run([], "noargs")
 check(r.returncode == 2 and "usage" in r.stderr.lower() + "--help", "no arguments")
 r, _ = run(["--frobnicate"], "badoption")
 check(r.returncode == 2 and "unknown option" in r.stderr, "unknown option")
+check_bad_cases()
 finish()

@@ -1,0 +1,166 @@
+! SPDX-License-Identifier: BSD-3-Clause
+!> Rotation of rigid bodies with three principal moments of inertia (doc/theory.md, section
+!> 5.1). A body's state: its orientation, the unit quaternion q = (q0, q1, q2, q3) that turns
+!> body-frame vectors into lab-frame ones (v_lab = q v_body q*), and its angular momentum L in
+!> the lab frame; the principal axes are the body frame's axes. The angular velocity w in the
+!> lab frame is a function of (q, L) alone (rigid_omega), so that a restart from (q, L) gives
+!> the same bits.
+!> The kick (L += h T) and the free rotation of Dullweber, Leimkuhler & McLachlan (1997) are
+!> arranged as dem_integrate's kick and kick_drift: symplectic Euler does kick_drift(h, h),
+!> velocity Verlet kick_drift(h/2, h), then the torques, then kick(h/2).
+module dem_rigid
+    use dem_kinds, only: wp, ip
+    use dem_vector, only: cross
+    implicit none
+    private
+    public :: rigid_kick, rigid_kick_drift
+    public :: rigid_free_rotation, rigid_omega
+    public :: quat_product, quat_conjugate, quat_to_lab, quat_to_body, quat_normalise
+
+contains
+
+    !> L += h T, then w from the new L, for n bodies.
+    subroutine rigid_kick(n, h, inv_inertia, t, q, l, w)
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: h                        !! time increment [s]
+        real(wp), intent(in) :: inv_inertia(3, n)        !! inverse principal moments [1/(kg m2)]
+        real(wp), intent(in) :: t(3, n)                  !! torque, lab frame [N m]
+        real(wp), intent(in) :: q(4, n)                  !! orientation (unit quaternion)
+        real(wp), intent(inout) :: l(3, n)               !! angular momentum, lab frame [kg m2/s]
+        real(wp), intent(out) :: w(3, n)                 !! angular velocity, lab frame [rad/s]
+        integer(ip) :: i
+        !$acc parallel loop default(present)
+        do i = 1, n
+            l(:, i) = l(:, i) + h * t(:, i)
+            w(:, i) = rigid_omega(q(:, i), inv_inertia(:, i), l(:, i))
+        end do
+    end subroutine rigid_kick
+
+    !> The kick L += h T, then the free rotation over h_drift and w from the new (q, L), for n
+    !> bodies in one pass.
+    subroutine rigid_kick_drift(n, h, h_drift, inv_inertia, t, q, l, w)
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: h, h_drift               !! time increments [s]
+        real(wp), intent(in) :: inv_inertia(3, n)        !! inverse principal moments [1/(kg m2)]
+        real(wp), intent(in) :: t(3, n)                  !! torque, lab frame [N m]
+        real(wp), intent(inout) :: q(4, n)               !! orientation (unit quaternion)
+        real(wp), intent(inout) :: l(3, n)               !! angular momentum, lab frame [kg m2/s]
+        real(wp), intent(out) :: w(3, n)                 !! angular velocity, lab frame [rad/s]
+        integer(ip) :: i
+        !$acc parallel loop default(present)
+        do i = 1, n
+            l(:, i) = l(:, i) + h * t(:, i)
+            call rigid_free_rotation(h_drift, inv_inertia(:, i), l(:, i), q(:, i))
+            w(:, i) = rigid_omega(q(:, i), inv_inertia(:, i), l(:, i))
+        end do
+    end subroutine rigid_kick_drift
+
+    !> The free rotation of one body over h: the symmetric splitting into exact rotations about
+    !> the principal axes 1 (h/2), 2 (h/2), 3 (h), 2 (h/2), 1 (h/2). Each turns the body-frame
+    !> angular momentum by -h_k L_k / I_k about axis k, and the body by +h_k L_k / I_k about it;
+    !> the lab-frame L is left as it is (it is a constant of the free rotation). q is
+    !> normalised at the end.
+    pure subroutine rigid_free_rotation(h, inv_inertia, l, q)
+        !$acc routine seq
+        real(wp), intent(in) :: h                        !! time increment [s]
+        real(wp), intent(in) :: inv_inertia(3)           !! inverse principal moments [1/(kg m2)]
+        real(wp), intent(in) :: l(3)                     !! angular momentum, lab frame
+        real(wp), intent(inout) :: q(4)                  !! orientation (unit quaternion)
+        real(wp) :: lb(3)
+        lb = quat_to_body(q, l)
+        call axis_rotation(1, 0.5_wp * h, inv_inertia(1), lb, q)
+        call axis_rotation(2, 0.5_wp * h, inv_inertia(2), lb, q)
+        call axis_rotation(3, h, inv_inertia(3), lb, q)
+        call axis_rotation(2, 0.5_wp * h, inv_inertia(2), lb, q)
+        call axis_rotation(1, 0.5_wp * h, inv_inertia(1), lb, q)
+        q = quat_normalise(q)
+    end subroutine rigid_free_rotation
+
+    !> The exact flow of the kinetic energy of axis k alone, L_k^2 / (2 I_k), over h: the angle
+    !> phi = h L_k / I_k; the body-frame L turns by -phi about axis k, the body by +phi
+    !> (q = q (cos(phi/2), sin(phi/2) e_k)).
+    pure subroutine axis_rotation(k, h, inv_inertia_k, lb, q)
+        !$acc routine seq
+        integer, intent(in) :: k                         !! the principal axis, 1 to 3
+        real(wp), intent(in) :: h, inv_inertia_k
+        real(wp), intent(inout) :: lb(3), q(4)
+        real(wp) :: phi, c, s, li, lj, r(4)
+        integer :: i, j
+        i = modulo(k, 3) + 1
+        j = modulo(k + 1, 3) + 1
+        phi = h * lb(k) * inv_inertia_k
+        c = cos(phi)
+        s = sin(phi)
+        li = lb(i)
+        lj = lb(j)
+        lb(i) = c * li + s * lj
+        lb(j) = c * lj - s * li
+        r = 0.0_wp
+        r(1) = cos(0.5_wp * phi)
+        r(k + 1) = sin(0.5_wp * phi)
+        q = quat_product(q, r)
+    end subroutine axis_rotation
+
+    !> The lab-frame angular velocity w = R(q) (I^-1 R(q)^T L) of one body.
+    pure function rigid_omega(q, inv_inertia, l) result(w)
+        !$acc routine seq
+        real(wp), intent(in) :: q(4)                     !! orientation (unit quaternion)
+        real(wp), intent(in) :: inv_inertia(3)           !! inverse principal moments [1/(kg m2)]
+        real(wp), intent(in) :: l(3)                     !! angular momentum, lab frame
+        real(wp) :: w(3)                                 !! [rad/s]
+        w = quat_to_lab(q, inv_inertia * quat_to_body(q, l))
+    end function rigid_omega
+
+    !> The quaternion product a b.
+    pure function quat_product(a, b) result(c)
+        !$acc routine seq
+        real(wp), intent(in) :: a(4), b(4)
+        real(wp) :: c(4)
+        c(1) = a(1) * b(1) - a(2) * b(2) - a(3) * b(3) - a(4) * b(4)
+        c(2) = a(1) * b(2) + a(2) * b(1) + a(3) * b(4) - a(4) * b(3)
+        c(3) = a(1) * b(3) - a(2) * b(4) + a(3) * b(1) + a(4) * b(2)
+        c(4) = a(1) * b(4) + a(2) * b(3) - a(3) * b(2) + a(4) * b(1)
+    end function quat_product
+
+    !> The conjugate q* = (q0, -q1, -q2, -q3) (the inverse of a unit quaternion).
+    pure function quat_conjugate(q) result(c)
+        !$acc routine seq
+        real(wp), intent(in) :: q(4)
+        real(wp) :: c(4)
+        c = [q(1), -q(2), -q(3), -q(4)]
+    end function quat_conjugate
+
+    !> A body-frame vector in the lab frame, q v q* = v + 2 q0 (u x v) + 2 u x (u x v) with
+    !> u = (q1, q2, q3), for a unit q.
+    pure function quat_to_lab(q, v) result(r)
+        !$acc routine seq
+        real(wp), intent(in) :: q(4), v(3)
+        real(wp) :: r(3)
+        r = rotate(q(1), q(2:4), v)
+    end function quat_to_lab
+
+    !> A lab-frame vector in the body frame, q* v q (the rotation by q*), for a unit q.
+    pure function quat_to_body(q, v) result(r)
+        !$acc routine seq
+        real(wp), intent(in) :: q(4), v(3)
+        real(wp) :: r(3)
+        r = rotate(q(1), -q(2:4), v)
+    end function quat_to_body
+
+    !> v + 2 q0 (u x v) + 2 u x (u x v).
+    pure function rotate(q0, u, v) result(r)
+        !$acc routine seq
+        real(wp), intent(in) :: q0, u(3), v(3)
+        real(wp) :: r(3), c(3)
+        c = cross(u, v)
+        r = v + 2.0_wp * (q0 * c + cross(u, c))
+    end function rotate
+
+    !> q / |q|.
+    pure function quat_normalise(q) result(r)
+        !$acc routine seq
+        real(wp), intent(in) :: q(4)
+        real(wp) :: r(4)
+        r = q / sqrt(q(1)**2 + q(2)**2 + q(3)**2 + q(4)**2)
+    end function quat_normalise
+end module dem_rigid
