@@ -2,13 +2,13 @@
 !> The contact model (doc/theory.md, sections 1-3 and 15): the constants of every material pair
 !> for the kernels, with an integer id per sub-model (normal: Hertz or linear; tangential:
 !> Mindlin's spring or its Coulomb-capped variant; rolling: none, CDT or EPSD2; cohesion:
-!> none or sJKR), the kinematics of one contact, particle-particle or particle-wall alike
-!> (contact_kinematics: overlap, levers, relative velocity at the contact point), the law over
-!> a block of contacts (law_lanes: the sub-models' stages of dem_contact_hm and
-!> dem_contact_hooke in turn), the rolling and cohesion laws of a contact (contact_extra), its
-!> torque (contact_torque), and each law's elastic energy and time scales (diagnostics,
-!> `--check` and the bound on dt). A new normal law is a module beside dem_contact_hooke and
-!> a case in law_lanes, contact_model_build, normal_energy and the time scales here.
+!> none or sJKR), the law over a block of contacts (law_lanes: the sub-models' stages of
+!> dem_contact_hm and dem_contact_hooke in turn), the rolling and cohesion laws of a contact,
+!> particle-particle or particle-wall alike (contact_extra), and each law's elastic energy
+!> and time scales (diagnostics, `--check` and the bound on dt). The kinematics and torque of
+!> a contact are the kernels' own (dem_contact_kinematics.inc). A new normal law is a module
+!> beside dem_contact_hooke and a case in law_lanes, contact_model_build, normal_energy and
+!> the time scales here.
 module dem_contact_model
     use dem_kinds, only: wp, ip
     use dem_materials, only: materials_t, contact_options_t, effective_moduli, damping_ratio, &
@@ -27,7 +27,7 @@ module dem_contact_model
     private
     public :: contact_model_t, contact_model_build, law_lanes, law_force, normal_energy, &
               pair_contact_time, pair_critical_dt, pair_squeeze_dt
-    public :: contact_kinematics, wall_point_velocity, contact_extra, contact_torque
+    public :: contact_extra
 
     !> The kernels' constants per material pair (i, j), symmetric; the sub-models are those
     !> of `opts` (%normal, %tangential).
@@ -116,54 +116,6 @@ contains
         cm%cohesion = any(cm%kcoh > 0.0_wp)
     end subroutine contact_model_build
 
-    !> The kinematics of a contact of body i with its partner j, a sphere or a wall (as a
-    !> body of radius 0 that does not rotate about its contact point: r_j = 0, w_j = 0), given
-    !> the unit normal n from i to the partner and the distance from i's centre to the
-    !> partner's centre or contact point (each kernel computes them its own way): the overlap
-    !> d = (R_i + R_j) - dist, the levers R - shift d of the two rotations (the branch vectors
-    !> (R_i - shift d) n and -(R_j - shift d) n) and the relative velocity at the contact
-    !> point, v_rel = (v_i - u_j) + ((R_i - shift d) w_i + (R_j - shift d) w_j) x n, u_j the
-    !> partner's velocity at the contact point (a sphere's v_j; a wall's
-    !> wall_point_velocity) (doc/theory.md, section 2.1).
-    pure subroutine contact_kinematics(nrm, dist, r_i, r_j, shift, v_i, w_i, u_j, w_j, &
-                                       overlap, vrel)
-        !$acc routine seq
-        real(wp), intent(in) :: nrm(3)          !! unit normal from i to the partner
-        real(wp), intent(in) :: dist            !! [m]
-        real(wp), intent(in) :: r_i, r_j        !! radii (a wall: r_j = 0) [m]
-        real(wp), intent(in) :: shift           !! levers R - shift d [-]
-        real(wp), intent(in) :: v_i(3), w_i(3)  !! i's velocity [m/s], angular velocity [rad/s]
-        real(wp), intent(in) :: u_j(3)          !! the partner's velocity there [m/s]
-        real(wp), intent(in) :: w_j(3)          !! a sphere's angular velocity (a wall: 0)
-        real(wp), intent(out) :: overlap        !! d [m]
-        real(wp), intent(out) :: vrel(3)        !! [m/s]
-        real(wp) :: li, lj, ws1, ws2, ws3
-        overlap = (r_i + r_j) - dist
-        li = r_i - shift * overlap
-        lj = r_j - shift * overlap
-        ws1 = li * w_i(1) + lj * w_j(1)
-        ws2 = li * w_i(2) + lj * w_j(2)
-        ws3 = li * w_i(3) + lj * w_j(3)
-        vrel(1) = (v_i(1) - u_j(1)) + (ws2 * nrm(3) - ws3 * nrm(2))
-        vrel(2) = (v_i(2) - u_j(2)) + (ws3 * nrm(1) - ws1 * nrm(3))
-        vrel(3) = (v_i(3) - u_j(3)) + (ws1 * nrm(2) - ws2 * nrm(1))
-    end subroutine contact_kinematics
-
-    !> The velocity of a wall at point q: v_w + w_w x (q - c), c a point of its rotation axis
-    !> [m/s].
-    pure function wall_point_velocity(q, wall_v, wall_w, wall_c) result(u)
-        !$acc routine seq
-        real(wp), intent(in) :: q(3)        !! [m]
-        real(wp), intent(in) :: wall_v(3)   !! the wall's translation velocity [m/s]
-        real(wp), intent(in) :: wall_w(3)   !! its angular velocity [rad/s]
-        real(wp), intent(in) :: wall_c(3)   !! a point of its rotation axis [m]
-        real(wp) :: u(3), d(3)
-        d = q - wall_c
-        u(1) = wall_v(1) + (wall_w(2) * d(3) - wall_w(3) * d(2))
-        u(2) = wall_v(2) + (wall_w(3) * d(1) - wall_w(1) * d(3))
-        u(3) = wall_v(3) + (wall_w(1) * d(2) - wall_w(2) * d(1))
-    end function wall_point_velocity
-
     !> The laws a material pair may add to a contact after the contact law (doc/theory.md,
     !> section 15): the rolling torque `tr` on i of the pair's rolling model (0 without one;
     !> EPSD2's spring `mr` in and out), then the sJKR cohesion, fn less k times the contact
@@ -196,19 +148,6 @@ contains
             end if
         end if
     end subroutine contact_extra
-
-    !> The torque of a contact's tangential force F_t on a body whose centre is `lever` from
-    !> the contact point along -n: lever n x F_t [N m].
-    pure function contact_torque(nrm, ft, lever) result(t)
-        !$acc routine seq
-        real(wp), intent(in) :: nrm(3)   !! unit normal from the body to its partner
-        real(wp), intent(in) :: ft(3)    !! tangential force on the body [N]
-        real(wp), intent(in) :: lever    !! [m] (1: n x F_t itself)
-        real(wp) :: t(3)
-        t(1) = lever * (nrm(2) * ft(3) - nrm(3) * ft(2))
-        t(2) = lever * (nrm(3) * ft(1) - nrm(1) * ft(3))
-        t(3) = lever * (nrm(1) * ft(2) - nrm(2) * ft(1))
-    end function contact_torque
 
     !> The contact law over lanes 1..m of `lane` (its law_columns; dem_contact_hm): in: the
     !> overlap [m], unit normal from i to its partner, relative velocity v_i - v_partner at

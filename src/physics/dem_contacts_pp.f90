@@ -13,8 +13,7 @@ module dem_contacts_pp
                               lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
                               lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
                               lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
-    use dem_contact_model, only: contact_model_t, law_lanes, contact_kinematics, contact_extra, &
-                                 contact_torque
+    use dem_contact_model, only: contact_model_t, law_lanes, contact_extra
     use dem_materials, only: contact_options_t, rolling_none, rolling_epsd2
     use dem_particles, only: particles_t
     use dem_neighbors, only: neighbors_t
@@ -61,7 +60,9 @@ contains
     !> into lanes, their kinematics computed (contact_kinematics, from the normal and distance
     !> computed here) and the contact law runs over those lanes at once (law_lanes). The lever
     !> of a particle's rotation in the relative velocity is R - shift_v d, in the torque
-    !> R - shift_t d (0: the radius; 1/2: the contact point at mid-overlap, as LIGGGHTS).
+    !> R - shift_t d (0: the radius; 1/2: the contact point at mid-overlap, as LIGGGHTS); the
+    !> pass over the lanes takes the radii, and a second pass, with shift_v /= 0 only, the
+    !> shifted levers.
     !> A pair's history is in the slot of the store (dem_contact_store) that slot(p) names:
     !> a contact that begins takes its pair's slot back or, the first time since the lists'
     !> build, the next free one (cleared). With the model's reset_pair_history, a pair's
@@ -125,8 +126,8 @@ contains
         logical :: over
         integer(i8) :: kf(3), kc(3)
         real(wp) :: d1, d2, d3, dist2, dist, inv, fp(3), cp(3), si, sj, g, sv, st_, rsum, msum, &
-                    hr(3), tr(3), nrm(3), ft(3), vrel(3), ov, fn
-        logical :: shifted_t, extra_, reset, clamp_normal, keep_length
+                    hr(3), tr(3), nrm(3), vrel(3), fn, ri, rj, n1, n2, n3, ws1, ws2, ws3
+        logical :: shifted_v, shifted_t, extra_, reset, clamp_normal, keep_length
         real(wp) :: lane(lane_rows, pp_columns)   ! the tile's pairs in contact (one spare)
 
         normal = opts%normal
@@ -136,14 +137,16 @@ contains
         reset = opts%reset_pair_history
         sv = opts%shift_v
         st_ = opts%shift_t
+        shifted_v = sv /= 0.0_wp
         shifted_t = st_ /= 0.0_wp
         extra_ = extra
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, s) &
         !$acc private(over, side, a, b, rsum, msum) &
-        !$acc private(d1, d2, d3, dist2, dist, inv, fp, cp, si, sj, g, nrm, ft, vrel, ov, fn) &
-        !$acc firstprivate(sv, st_, shifted_t, extra_) private(hr, tr, lane)
+        !$acc private(d1, d2, d3, dist2, dist, inv, fp, cp, si, sj, g, nrm, vrel, fn, ri, rj) &
+        !$acc private(n1, n2, n3, ws1, ws2, ws3) &
+        !$acc firstprivate(sv, st_, shifted_v, shifted_t, extra_) private(hr, tr, lane)
         do p0 = 0, n_pairs - 1, tile
             ! the pairs of the tile that overlap, as lanes 1..m (every pair is written to lane
             ! m + 1, and kept by counting it: no branch on the overlap, which a branch predictor
@@ -191,18 +194,21 @@ contains
                 msum = mass(i) + mass(j)
                 g = 1.0_wp / (dist * (rsum * msum))      ! one division for 1/dist, R*, m*
                 inv = (rsum * msum) * g
-                nrm(1) = lane(l, lane_d1) * inv
-                nrm(2) = lane(l, lane_d2) * inv
-                nrm(3) = lane(l, lane_d3) * inv
-                call contact_kinematics(nrm, dist, radius(i), radius(j), sv, v(:, i), w(:, i), &
-                                        v(:, j), w(:, j), ov, vrel)
-                lane(l, lane_n1) = nrm(1)
-                lane(l, lane_n2) = nrm(2)
-                lane(l, lane_n3) = nrm(3)
-                lane(l, lane_ov) = ov
-                lane(l, lane_v1) = vrel(1)
-                lane(l, lane_v2) = vrel(2)
-                lane(l, lane_v3) = vrel(3)
+                n1 = lane(l, lane_d1) * inv
+                n2 = lane(l, lane_d2) * inv
+                n3 = lane(l, lane_d3) * inv
+                lane(l, lane_n1) = n1
+                lane(l, lane_n2) = n2
+                lane(l, lane_n3) = n3
+                lane(l, lane_ov) = rsum - dist
+                ! contact_kinematics at the levers R_i, R_j, written out (with the inlined
+                ! call, gfortran 12's kernel took about 5 % more instructions)
+                ws1 = radius(i) * w(1, i) + radius(j) * w(1, j)
+                ws2 = radius(i) * w(2, i) + radius(j) * w(2, j)
+                ws3 = radius(i) * w(3, i) + radius(j) * w(3, j)
+                lane(l, lane_v1) = v(1, i) - v(1, j) + (ws2 * n3 - ws3 * n2)
+                lane(l, lane_v2) = v(2, i) - v(2, j) + (ws3 * n1 - ws1 * n3)
+                lane(l, lane_v3) = v(3, i) - v(3, j) + (ws1 * n2 - ws2 * n1)
                 a = mat(i)
                 b = mat(j)
                 g = dist * g
@@ -218,6 +224,20 @@ contains
                 lane(l, lane_x2) = hist(2, s)
                 lane(l, lane_x3) = hist(3, s)
             end do
+            if (shifted_v) then     ! the relative velocities again, with levers R - shift_v d
+                do l = 1, m
+                    p = lp(l)
+                    i = pair(1, p)
+                    j = pair(2, p)
+                    ri = radius(i) - sv * lane(l, lane_ov)
+                    rj = radius(j) - sv * lane(l, lane_ov)
+                    call contact_kinematics(lane_normal(lane, l), ri, rj, v(:, i), w(:, i), &
+                                            v(:, j), w(:, j), vrel)
+                    lane(l, lane_v1) = vrel(1)
+                    lane(l, lane_v2) = vrel(2)
+                    lane(l, lane_v3) = vrel(3)
+                end do
+            end if
             call law_lanes(int(m, ip), normal, tangential, clamp_normal, keep_length, dt, &
                            lane(:, 1:law_columns))
             if (extra_) then        ! rolling resistance, cohesion (contact_extra): the torques
@@ -263,10 +283,8 @@ contains
                 hist(1, s) = lane(l, lane_x1)
                 hist(2, s) = lane(l, lane_x2)
                 hist(3, s) = lane(l, lane_x3)
-                nrm = lane_normal(lane, l)
-                ft = lane_tangential(lane, l)
-                fp = -lane(l, lane_fn) * nrm + ft
-                cp = contact_torque(nrm, ft, 1.0_wp)          ! n x F_t (the sums are over R)
+                fp = -lane(l, lane_fn) * lane(l, lane_n1:lane_n3) + lane(l, lane_f1:lane_f3)
+                cp = normal_cross_ft(lane, l)        ! n x F_t (the sums are over R)
                 si = scale(i)
                 do c = 1, 3
                     kf(c) = to_fixed(fp(c) * si)
@@ -294,7 +312,7 @@ contains
             if (shifted_t) then     ! levers R - shift_t d: each torque word replaced by that
                 do l = 1, m         ! of n x F_t (R - shift_t d) / R (the sums are over R)
                     p = lp(l)
-                    cp = contact_torque(lane_normal(lane, l), lane_tangential(lane, l), 1.0_wp)
+                    cp = contact_torque(lane_normal(lane, l), lane(l, lane_f1:lane_f3), 1.0_wp)
                     do side = 1, 2                ! i, then j where this rank owns it
                         i = pair(side, p)
                         if (side == 2 .and. i > n_own) exit
@@ -322,6 +340,8 @@ contains
         end do
     end subroutine pair_kernel
 
+    include 'dem_contact_kinematics.inc'
+
     !> The unit normal of lane l of the kernel's block.
     pure function lane_normal(lane, l) result(nrm)
         !$acc routine seq
@@ -333,16 +353,17 @@ contains
         nrm(3) = lane(l, lane_n3)
     end function lane_normal
 
-    !> The tangential force of lane l of the kernel's block [N].
-    pure function lane_tangential(lane, l) result(ft)
+    !> n x F_t of lane l of the kernel's block: contact_torque at lever 1, written out (as
+    !> contact_kinematics in the pass over the lanes).
+    pure function normal_cross_ft(lane, l) result(cp)
         !$acc routine seq
         real(wp), intent(in) :: lane(lane_rows, pp_columns)
         integer(i8), intent(in) :: l
-        real(wp) :: ft(3)
-        ft(1) = lane(l, lane_f1)
-        ft(2) = lane(l, lane_f2)
-        ft(3) = lane(l, lane_f3)
-    end function lane_tangential
+        real(wp) :: cp(3)
+        cp(1) = lane(l, lane_n2) * lane(l, lane_f3) - lane(l, lane_n3) * lane(l, lane_f2)
+        cp(2) = lane(l, lane_n3) * lane(l, lane_f1) - lane(l, lane_n1) * lane(l, lane_f3)
+        cp(3) = lane(l, lane_n1) * lane(l, lane_f2) - lane(l, lane_n2) * lane(l, lane_f1)
+    end function normal_cross_ft
 
     !> The scale 2^(57 - e) of one-word fixed point for terms and sums within bound < 2^e:
     !> to_fixed(t scale) is t to 2^-57 of the bound, and the sum of such words, converted back

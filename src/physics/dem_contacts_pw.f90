@@ -10,8 +10,7 @@ module dem_contacts_pw
                               lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
                               lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
                               lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
-    use dem_contact_model, only: contact_model_t, law_lanes, contact_kinematics, &
-                                 wall_point_velocity, contact_extra, contact_torque
+    use dem_contact_model, only: contact_model_t, law_lanes, contact_extra
     use dem_materials, only: contact_options_t
     use dem_mesh, only: mesh_t, closest_point_triangle, feature_face
     use dem_particles, only: particles_t
@@ -32,6 +31,10 @@ module dem_contacts_pw
     !> the kernel's own column of its block of lanes, after the law's (dem_contact_hm): the
     !> distance of the contact point from the centre [m]
     integer, parameter :: lane_ld = law_columns + 1
+
+    !> a wall's rotation about the contact point (none: the wall's rotation is in its
+    !> velocity there, wall_point_velocity)
+    real(wp), parameter :: still(3) = 0.0_wp
 
 contains
 
@@ -190,11 +193,28 @@ contains
         end do
     end subroutine history_slots
 
+    include 'dem_contact_kinematics.inc'
+
+    !> The velocity of a wall at point q: v_w + w_w x (q - c), c a point of its rotation axis
+    !> [m/s].
+    pure function wall_point_velocity(q, wall_v, wall_w, wall_c) result(u)
+        !$acc routine seq
+        real(wp), intent(in) :: q(3)        !! [m]
+        real(wp), intent(in) :: wall_v(3)   !! the wall's translation velocity [m/s]
+        real(wp), intent(in) :: wall_w(3)   !! its angular velocity [rad/s]
+        real(wp), intent(in) :: wall_c(3)   !! a point of its rotation axis [m]
+        real(wp) :: u(3), d(3)
+        d = q - wall_c
+        u(1) = wall_v(1) + (wall_w(2) * d(3) - wall_w(3) * d(2))
+        u(2) = wall_v(2) + (wall_w(3) * d(1) - wall_w(1) * d(3))
+        u(3) = wall_v(3) + (wall_w(1) * d(2) - wall_w(2) * d(1))
+    end function wall_point_velocity
+
     !> Add the wall contact forces and torques to every owned particle. `overflow` counts
     !> particles with more separate contacts than the history store holds. Each contact's
     !> normal and distance are computed here, its kinematics by contact_kinematics (the
-    !> wall's velocity at the contact point, wall_point_velocity); the levers of the
-    !> rotation are R - shift_v d and R - shift_t d, as in pp_forces. With `record` (a step
+    !> wall's velocity at the contact point, wall_point_velocity; the wall's lever 0); the
+    !> levers of the rotation are R - shift_v d and R - shift_t d, as in pp_forces. With `record` (a step
     !> whose wall loads a probe reports), each contact's force on the particle and its
     !> contact point go to wload, beside its slot of wtri. In a case whose pairs resist
     !> rolling or cohere, the rolling torque and the sJKR force of the pair's model follow
@@ -274,7 +294,6 @@ contains
         real(wp) :: new_xi(3, max_wall_contacts)
         real(wp) :: nrm(3), vrel(3), ft(3), fi(3), ti(3), dist, r, tol, moved, ov, tr(3), xr(3), &
                     new_xr(3, max_wall_contacts)
-        real(wp) :: still(3)         ! a wall's rotation about the contact point (none)
         logical :: keep(max_wall_candidates), many, over, spring
         ! the block's rows: their lanes first(kr)..last(kr) (none if `idle`: no contact, none
         ! ended); the lanes: the contacts' law (law_lanes) and what follows it
@@ -295,13 +314,12 @@ contains
         shift_v = opts%shift_v
         shift_t = opts%shift_t
         overflow = 0
-        still = 0.0_wp
         spring = n_wall_columns > max_wall_contacts   ! the slots' EPSD2 springs after theirs
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
         !$acc private(kr, k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk, l, m) &
         !$acc private(new_xi, nrm, vrel, ft, fi, ti, dist, r, tol, moved, keep, n_block) &
         !$acc private(slot, lines, first, last, idle, ltri, lslot, lq, lane) &
-        !$acc private(many, over, i, wl, ov, tr, xr, new_xr) firstprivate(spring, still)
+        !$acc private(many, over, i, wl, ov, tr, xr, new_xr) firstprivate(spring)
         do k0 = 0, n_row - 1, rows_per_block
             n_block = min(rows_per_block, n_row - k0)
             ! the lines of the particle data that every row's search for touching triangles
@@ -377,10 +395,11 @@ contains
                     dist = sqrt(sum((q(:, c) - x(:, i))**2))
                     nrm = (q(:, c) - x(:, i)) / dist
                     wl = twall(tri)
-                    call contact_kinematics(nrm, dist, r, 0.0_wp, shift_v, v(:, i), w(:, i), &
+                    ov = r - dist
+                    call contact_kinematics(nrm, r - shift_v * ov, 0.0_wp, v(:, i), w(:, i), &
                                             wall_point_velocity(q(:, c), wall_v(:, wl), &
                                                                 wall_w(:, wl), wall_c(:, wl)), &
-                                            still, ov, vrel)
+                                            still, vrel)
                     b = tmat(tri)
                     lane(m, lane_ld) = dist
                     lane(m, lane_ov) = ov
