@@ -214,16 +214,16 @@ contains
     !> particles with more separate contacts than the history store holds. Each contact's
     !> normal and distance are computed here, its kinematics by contact_kinematics (the
     !> wall's velocity at the contact point, wall_point_velocity; the wall's lever 0); the
-    !> levers of the rotation are R - shift_v d and R - shift_t d, as in pp_forces. With `record` (a step
-    !> whose wall loads a probe reports), each contact's force on the particle and its
-    !> contact point go to wload, beside its slot of wtri. In a case whose pairs resist
-    !> rolling or cohere, the rolling torque and the sJKR force of the pair's model follow
-    !> (contact_extra, as in pp_forces; R* = R, the wall's rotation taken from the
-    !> particle's); the EPSD2 spring of slot s is wxi(:, max_wall_contacts + s). A candidate
-    !> triangle whose slack (dem_neighbors) is more than the particle and the walls have
-    !> moved since the lists' build cannot touch the particle and is not tested. The rows go
-    !> in blocks of rows_per_block, whose particle data are loaded together before the
-    !> block's rows are computed (doc/theory.md, section 9).
+    !> levers of the rotation are R - shift_v d and R - shift_t d, as in pp_forces. With
+    !> `record` (a step whose wall loads a probe reports), each contact's force on the
+    !> particle and its contact point go to wload, beside its slot of wtri. In a case whose
+    !> pairs resist rolling or cohere, the rolling torque and the sJKR force of the pair's
+    !> model follow (contact_extra, as in pp_forces; R* = R, the wall's rotation taken from
+    !> the particle's); the EPSD2 spring of slot s is wxi(:, max_wall_contacts + s). A
+    !> candidate triangle whose slack (dem_neighbors) is more than the particle and the walls
+    !> have moved since the lists' build cannot touch the particle and is not tested. The
+    !> rows go in blocks of rows_per_block, whose particle data are loaded together before
+    !> the block's rows are computed (doc/theory.md, section 9).
     subroutine pw_forces(particles, nb, mesh, cm, cs, dt, record, wload, overflow)
         type(particles_t), intent(inout) :: particles  !! the owned ones: x, v, w, radius,
                                                        !! mass, mat; f, t added to
