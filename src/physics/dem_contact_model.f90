@@ -3,14 +3,17 @@
 !> for the kernels, with an integer id per sub-model (normal: Hertz or linear; tangential:
 !> Mindlin's spring or its Coulomb-capped variant; rolling: none, CDT or EPSD2; cohesion:
 !> none or sJKR), the law over a block of contacts (law_lanes: the sub-models' stages of
-!> dem_contact_hm and dem_contact_hooke in turn), and each law's elastic energy and time
-!> scales (diagnostics, `--check` and the bound on dt). A new normal law is a module beside
-!> dem_contact_hooke and a case in law_lanes, contact_model_build, normal_energy and the
-!> time scales here.
+!> dem_contact_hm and dem_contact_hooke in turn), the rolling and cohesion laws of a contact,
+!> particle-particle or particle-wall alike (contact_extra), and each law's elastic energy
+!> and time scales (diagnostics, `--check` and the bound on dt). The kinematics and torque of
+!> a contact are the kernels' own (dem_contact_kinematics.inc). A new normal law is a module
+!> beside dem_contact_hooke and a case in law_lanes, contact_model_build, normal_energy and
+!> the time scales here.
 module dem_contact_model
     use dem_kinds, only: wp, ip
     use dem_materials, only: materials_t, contact_options_t, effective_moduli, damping_ratio, &
                              rolling_none, rolling_epsd2, normal_hooke, tangential_coulomb
+    use dem_contact_extra, only: rolling_torque, sjkr_area_pair, sjkr_area_wall
     use dem_contact_hm, only: max_lanes, lane_rows, law_columns, lane_ov, lane_n1, lane_n2, &
                               lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, lane_kn, &
                               lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, lane_x3, &
@@ -24,6 +27,7 @@ module dem_contact_model
     private
     public :: contact_model_t, contact_model_build, law_lanes, law_force, normal_energy, &
               pair_contact_time, pair_critical_dt, pair_squeeze_dt
+    public :: contact_extra
 
     !> The kernels' constants per material pair (i, j), symmetric; the sub-models are those
     !> of `opts` (%normal, %tangential).
@@ -111,6 +115,39 @@ contains
         cm%rolling_spring = any(cm%rmodel == rolling_epsd2)
         cm%cohesion = any(cm%kcoh > 0.0_wp)
     end subroutine contact_model_build
+
+    !> The laws a material pair may add to a contact after the contact law (doc/theory.md,
+    !> section 15): the rolling torque `tr` on i of the pair's rolling model (0 without one;
+    !> EPSD2's spring `mr` in and out), then the sJKR cohesion, fn less k times the contact
+    !> area of two spheres (r_j > 0) or of a sphere and a wall (r_j = 0).
+    pure subroutine contact_extra(rmodel, mur, kcoh, rstar, kn, st, overlap, r_i, r_j, dist, &
+                                  nrm, wr, dt, fn, mr, tr)
+        !$acc routine seq
+        integer(ip), intent(in) :: rmodel     !! rolling model (dem_materials)
+        real(wp), intent(in) :: mur           !! rolling friction [-]
+        real(wp), intent(in) :: kcoh          !! cohesion energy density [J/m^3]
+        real(wp), intent(in) :: rstar         !! R* (a wall contact: R) [m]
+        real(wp), intent(in) :: kn, st        !! the pair's stiffnesses (contact_model_t)
+        real(wp), intent(in) :: overlap       !! d [m]
+        real(wp), intent(in) :: r_i, r_j      !! radii (a wall: r_j = 0) [m]
+        real(wp), intent(in) :: dist          !! centre distance (a wall: to the contact) [m]
+        real(wp), intent(in) :: nrm(3)        !! unit normal from i to the partner
+        real(wp), intent(in) :: wr(3)         !! w_i - w_partner [rad/s]
+        real(wp), intent(in) :: dt            !! [s]
+        real(wp), intent(inout) :: fn         !! normal force, repulsive > 0 [N]
+        real(wp), intent(inout) :: mr(3)      !! EPSD2: the spring's torque [N m]
+        real(wp), intent(out) :: tr(3)        !! rolling torque on i [N m]
+        tr = 0.0_wp
+        if (rmodel /= rolling_none) call rolling_torque(rmodel, mur, rstar, kn, st, overlap, &
+                                                        fn, nrm, wr, dt, mr, tr)
+        if (kcoh > 0.0_wp) then
+            if (r_j > 0.0_wp) then
+                fn = fn - kcoh * sjkr_area_pair(r_i, r_j, dist)
+            else
+                fn = fn - kcoh * sjkr_area_wall(r_i, dist)
+            end if
+        end if
+    end subroutine contact_extra
 
     !> The contact law over lanes 1..m of `lane` (its law_columns; dem_contact_hm): in: the
     !> overlap [m], unit normal from i to its partner, relative velocity v_i - v_partner at

@@ -13,10 +13,11 @@ module dem_contacts_pp
                               lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
                               lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
                               lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
-    use dem_contact_model, only: law_lanes
-    use dem_contact_extra, only: rolling_torque, sjkr_area_pair
-    use dem_materials, only: rolling_none, rolling_epsd2
-    use dem_contact_store, only: n_pair_history
+    use dem_contact_model, only: contact_model_t, law_lanes, contact_extra
+    use dem_materials, only: contact_options_t, rolling_none, rolling_epsd2
+    use dem_particles, only: particles_t
+    use dem_neighbors, only: neighbors_t
+    use dem_contact_store, only: contact_store_t, n_pair_history
     implicit none
     private
     public :: pp_forces, pp_scales, fixed_scale
@@ -56,21 +57,43 @@ contains
     !> (doc/theory.md section 1) come from the material pair's table and the two particles'
     !> radii and masses, when it touches: 1/r, R* and m* from one division.
     !> The pairs are taken in tiles of `tile`: the overlapping pairs of a tile are gathered
-    !> into lanes and the contact law runs over those lanes at once (law_lanes). The lever of a
-    !> particle's rotation in the relative velocity is R - shift_v d, in the torque
-    !> R - shift_t d (0: the radius; 1/2: the contact point at mid-overlap, as LIGGGHTS).
+    !> into lanes, their kinematics computed (contact_kinematics, from the normal and distance
+    !> computed here) and the contact law runs over those lanes at once (law_lanes). The lever
+    !> of a particle's rotation in the relative velocity is R - shift_v d, in the torque
+    !> R - shift_t d (0: the radius; 1/2: the contact point at mid-overlap, as LIGGGHTS); the
+    !> pass over the lanes takes the radii, and a second pass, with shift_v /= 0 only, the
+    !> shifted levers.
     !> A pair's history is in the slot of the store (dem_contact_store) that slot(p) names:
     !> a contact that begins takes its pair's slot back or, the first time since the lists'
-    !> build, the next free one (cleared). With `reset`, a pair's history is cleared when its
-    !> contact ends; without, it is kept while the pair is listed (LIGGGHTS 3.8.0) and
-    !> continued by its next contact. With `extra` (a case whose pairs resist rolling or
-    !> cohere), the rolling torque and the sJKR force (dem_contact_extra) of the pair's model
-    !> follow the contact law; the EPSD2 spring is hist(4:6, slot).
-    subroutine pp_forces(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
-                         reach2, normal, tangential, kn_ab, st_ab, gn_ab, gt_ab, mu_ab, &
-                         clamp_normal, keep_length, &
-                         shift_v, shift_t, reset, extra, rmodel_ab, mur_ab, kcoh_ab, dt, gravity, &
-                         slot, hist, n_hist, acc, f, t)
+    !> build, the next free one (cleared). With the model's reset_pair_history, a pair's
+    !> history is cleared when its contact ends; without, it is kept while the pair is listed
+    !> (LIGGGHTS 3.8.0) and continued by its next contact. In a case whose pairs resist
+    !> rolling or cohere, the rolling torque and the sJKR force of the pair's model
+    !> (contact_extra) follow the contact law; the EPSD2 spring is hist(4:6, slot).
+    subroutine pp_forces(particles, nb, cm, cs, dt, gravity)
+        type(particles_t), intent(inout) :: particles  !! owned particles, then ghosts: x, v,
+                                                       !! w, radius, mass, mat; f, t set
+        type(neighbors_t), intent(inout) :: nb      !! the pairs (n_pairs, pair, reach2), the
+                                                    !! scales, the fixed-point sums (acc)
+        type(contact_model_t), intent(in) :: cm     !! the constants and sub-models
+        type(contact_store_t), intent(inout) :: cs  !! the pairs' slots and history
+        real(wp), intent(in) :: dt                  !! [s]
+        real(wp), intent(in) :: gravity(3)          !! [m/s^2]
+        associate (p => particles)
+            call pair_kernel(p%n_own, p%n_own + p%n_ghost, nb%n_pairs, size(cm%kn, 1, ip), &
+                             p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%scale, nb%pair, &
+                             nb%reach2, cm%opts, cm%kn, cm%st, cm%gn, cm%gt, cm%mu, &
+                             cm%rolling .or. cm%cohesion, cm%rmodel, cm%mur, cm%kcoh, dt, &
+                             gravity, cs%slot, cs%hist, cs%n_hist, nb%acc, p%f, p%t)
+        end associate
+    end subroutine pp_forces
+
+    !> pp_forces over plain arrays (explicit-shape dummies: gfortran 12 indexes them from their
+    !> base, and associate-names of the views' components through their descriptors, with
+    !> which the pair loop took about 1.6 times as long).
+    subroutine pair_kernel(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
+                           reach2, opts, kn_ab, st_ab, gn_ab, gt_ab, mu_ab, extra, rmodel_ab, &
+                           mur_ab, kcoh_ab, dt, gravity, slot, hist, n_hist, acc, f, t)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
         integer(ip), intent(in) :: nm             !! materials
@@ -80,12 +103,9 @@ contains
         real(wp), intent(in) :: scale(n_all)      !! fixed-point scales (pp_scales)
         integer(ip), intent(in) :: pair(2, n_pairs)  !! the two particles of a pair
         real(wp), intent(in) :: reach2(n_pairs)      !! (R_i + R_j)^2 of a pair [m^2]
-        integer(ip), intent(in) :: normal, tangential   !! the sub-models (dem_contact_model)
+        type(contact_options_t), intent(in) :: opts  !! the sub-models and switches
         real(wp), intent(in) :: kn_ab(nm, nm), st_ab(nm, nm), mu_ab(nm, nm)  !! stiffnesses, [-]
         real(wp), intent(in) :: gn_ab(nm, nm), gt_ab(nm, nm)  !! damping factors
-        logical, intent(in) :: clamp_normal, keep_length   !! (law_lanes)
-        real(wp), intent(in) :: shift_v, shift_t     !! levers R - shift d [-]
-        logical, intent(in) :: reset                 !! the history cleared when a contact ends
         logical, intent(in) :: extra                 !! some pair resists rolling or coheres
         integer(ip), intent(in) :: rmodel_ab(nm, nm) !! rolling model (dem_materials)
         real(wp), intent(in) :: mur_ab(nm, nm)       !! rolling friction [-]
@@ -100,28 +120,33 @@ contains
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
                                                      !! (zero between calls)
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m] (the owned set)
-        integer(ip) :: c, side, a, b
+        integer(ip) :: c, side, a, b, normal, tangential
         integer(i8) :: i, j, p, p0, s, l, m     ! (64-bit: addresses without sign extensions)
         integer(i8) :: lp(tile + 1)
         logical :: over
         integer(i8) :: kf(3), kc(3)
-        real(wp) :: d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp(3), cp(3), si, sj, g, sv, &
-                    st_, ri, rj, rsum, msum, wr(3), hr(3), tr(3), n1, n2, n3
-        logical :: shifted_v, shifted_t, extra_
+        real(wp) :: d1, d2, d3, dist2, dist, inv, fp(3), cp(3), si, sj, g, sv, st_, rsum, msum, &
+                    hr(3), tr(3), nrm(3), vrel(3), fn, ri, rj, n1, n2, n3, ws1, ws2, ws3
+        logical :: shifted_v, shifted_t, extra_, reset, clamp_normal, keep_length
         real(wp) :: lane(lane_rows, pp_columns)   ! the tile's pairs in contact (one spare)
 
-        sv = shift_v
-        st_ = shift_t
-        shifted_v = shift_v /= 0.0_wp
-        shifted_t = shift_t /= 0.0_wp
+        normal = opts%normal
+        tangential = opts%tangential
+        clamp_normal = opts%clamp_normal
+        keep_length = opts%keep_length
+        reset = opts%reset_pair_history
+        sv = opts%shift_v
+        st_ = opts%shift_t
+        shifted_v = sv /= 0.0_wp
+        shifted_t = st_ /= 0.0_wp
         extra_ = extra
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, s) &
         !$acc private(over, side, a, b, rsum, msum) &
-        !$acc private(d1, d2, d3, dist2, dist, inv, ws1, ws2, ws3, fp, cp, si, sj, g, ri, rj) &
-        !$acc firstprivate(sv, st_, shifted_v, shifted_t, extra_) private(wr, hr, tr, lane) &
-        !$acc private(n1, n2, n3)
+        !$acc private(d1, d2, d3, dist2, dist, inv, fp, cp, si, sj, g, nrm, vrel, fn, ri, rj) &
+        !$acc private(n1, n2, n3, ws1, ws2, ws3) &
+        !$acc firstprivate(sv, st_, shifted_v, shifted_t, extra_) private(hr, tr, lane)
         do p0 = 0, n_pairs - 1, tile
             ! the pairs of the tile that overlap, as lanes 1..m (every pair is written to lane
             ! m + 1, and kept by counting it: no branch on the overlap, which a branch predictor
@@ -158,7 +183,8 @@ contains
                     slot(p) = int(-s, ip)                  ! (begins again: its slot back)
                 end if
             end do
-            ! their normals, overlaps, relative velocities, constants and history
+            ! their normals, overlaps, relative velocities (contact_kinematics), constants and
+            ! history
             do l = 1, m
                 p = lp(l)
                 i = pair(1, p)
@@ -175,6 +201,8 @@ contains
                 lane(l, lane_n2) = n2
                 lane(l, lane_n3) = n3
                 lane(l, lane_ov) = rsum - dist
+                ! contact_kinematics at the levers R_i, R_j, written out (with the inlined
+                ! call, gfortran 12's kernel took about 5 % more instructions)
                 ws1 = radius(i) * w(1, i) + radius(j) * w(1, j)
                 ws2 = radius(i) * w(2, i) + radius(j) * w(2, j)
                 ws3 = radius(i) * w(3, i) + radius(j) * w(3, j)
@@ -203,35 +231,34 @@ contains
                     j = pair(2, p)
                     ri = radius(i) - sv * lane(l, lane_ov)
                     rj = radius(j) - sv * lane(l, lane_ov)
-                    ws1 = ri * w(1, i) + rj * w(1, j)
-                    ws2 = ri * w(2, i) + rj * w(2, j)
-                    ws3 = ri * w(3, i) + rj * w(3, j)
-                    n1 = lane(l, lane_n1)
-                    n2 = lane(l, lane_n2)
-                    n3 = lane(l, lane_n3)
-                    lane(l, lane_v1) = v(1, i) - v(1, j) + (ws2 * n3 - ws3 * n2)
-                    lane(l, lane_v2) = v(2, i) - v(2, j) + (ws3 * n1 - ws1 * n3)
-                    lane(l, lane_v3) = v(3, i) - v(3, j) + (ws1 * n2 - ws2 * n1)
+                    call contact_kinematics(lane_normal(lane, l), ri, rj, v(:, i), w(:, i), &
+                                            v(:, j), w(:, j), vrel)
+                    lane(l, lane_v1) = vrel(1)
+                    lane(l, lane_v2) = vrel(2)
+                    lane(l, lane_v3) = vrel(3)
                 end do
             end if
             call law_lanes(int(m, ip), normal, tangential, clamp_normal, keep_length, dt, &
                            lane(:, 1:law_columns))
-            if (extra_) then        ! rolling resistance, cohesion: the torques into the sums
-                do l = 1, m         ! (over R, as n x F_t), the cohesion into fn
+            if (extra_) then        ! rolling resistance, cohesion (contact_extra): the torques
+                do l = 1, m         ! into the sums (over R, as n x F_t), the cohesion into fn
                     p = lp(l)
                     i = pair(1, p)
                     j = pair(2, p)
                     a = mat(i)
                     b = mat(j)
+                    hr = 0.0_wp
+                    if (rmodel_ab(a, b) == rolling_epsd2) hr = hist(4:6, slot(p))
+                    nrm = lane_normal(lane, l)
+                    fn = lane(l, lane_fn)
+                    call contact_extra(rmodel_ab(a, b), mur_ab(a, b), kcoh_ab(a, b), &
+                                       lane(l, lane_rs), lane(l, lane_kn), lane(l, lane_st), &
+                                       lane(l, lane_ov), radius(i), radius(j), &
+                                       sqrt(lane(l, lane_dd)), nrm, w(:, i) - w(:, j), dt, fn, &
+                                       hr, tr)
+                    lane(l, lane_fn) = fn
+                    if (rmodel_ab(a, b) == rolling_epsd2) hist(4:6, slot(p)) = hr
                     if (rmodel_ab(a, b) /= rolling_none) then
-                        hr = 0.0_wp
-                        if (rmodel_ab(a, b) == rolling_epsd2) hr = hist(4:6, slot(p))
-                        wr = w(:, i) - w(:, j)
-                        call rolling_torque(rmodel_ab(a, b), mur_ab(a, b), lane(l, lane_rs), &
-                                            lane(l, lane_kn), lane(l, lane_st), &
-                                            lane(l, lane_ov), lane(l, lane_fn), &
-                                            lane(l, lane_n1:lane_n3), wr, dt, hr, tr)
-                        if (rmodel_ab(a, b) == rolling_epsd2) hist(4:6, slot(p)) = hr
                         do c = 1, 3
                             kc(c) = to_fixed(tr(c) / radius(i) * scale(i))
                             !$acc atomic update
@@ -245,9 +272,6 @@ contains
                             end do
                         end if
                     end if
-                    if (kcoh_ab(a, b) > 0.0_wp) lane(l, lane_fn) = lane(l, lane_fn) &
-                        - kcoh_ab(a, b) * sjkr_area_pair(radius(i), radius(j), &
-                                                         sqrt(lane(l, lane_dd)))
                 end do
             end if
             ! the history back, and F and n x F_t into both particles' sums
@@ -260,7 +284,7 @@ contains
                 hist(2, s) = lane(l, lane_x2)
                 hist(3, s) = lane(l, lane_x3)
                 fp = -lane(l, lane_fn) * lane(l, lane_n1:lane_n3) + lane(l, lane_f1:lane_f3)
-                cp = normal_cross_ft(lane, l)
+                cp = normal_cross_ft(lane, l)        ! n x F_t (the sums are over R)
                 si = scale(i)
                 do c = 1, 3
                     kf(c) = to_fixed(fp(c) * si)
@@ -288,7 +312,7 @@ contains
             if (shifted_t) then     ! levers R - shift_t d: each torque word replaced by that
                 do l = 1, m         ! of n x F_t (R - shift_t d) / R (the sums are over R)
                     p = lp(l)
-                    cp = normal_cross_ft(lane, l)
+                    cp = contact_torque(lane_normal(lane, l), lane(l, lane_f1:lane_f3), 1.0_wp)
                     do side = 1, 2                ! i, then j where this rank owns it
                         i = pair(side, p)
                         if (side == 2 .and. i > n_own) exit
@@ -314,10 +338,23 @@ contains
             end do
             acc(:, i) = 0
         end do
-    end subroutine pp_forces
+    end subroutine pair_kernel
 
-    !> n x F_t of lane l: the normal and the tangential force of a contact of the kernel's
-    !> block (the torque on either particle over its lever).
+    include 'dem_contact_kinematics.inc'
+
+    !> The unit normal of lane l of the kernel's block.
+    pure function lane_normal(lane, l) result(nrm)
+        !$acc routine seq
+        real(wp), intent(in) :: lane(lane_rows, pp_columns)
+        integer(i8), intent(in) :: l
+        real(wp) :: nrm(3)
+        nrm(1) = lane(l, lane_n1)
+        nrm(2) = lane(l, lane_n2)
+        nrm(3) = lane(l, lane_n3)
+    end function lane_normal
+
+    !> n x F_t of lane l of the kernel's block: contact_torque at lever 1, written out (as
+    !> contact_kinematics in the pass over the lanes).
     pure function normal_cross_ft(lane, l) result(cp)
         !$acc routine seq
         real(wp), intent(in) :: lane(lane_rows, pp_columns)

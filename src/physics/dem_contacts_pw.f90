@@ -10,11 +10,12 @@ module dem_contacts_pw
                               lane_n2, lane_n3, lane_v1, lane_v2, lane_v3, lane_rs, lane_ms, &
                               lane_kn, lane_st, lane_gn, lane_gt, lane_mu, lane_x1, lane_x2, &
                               lane_x3, lane_fn, lane_f1, lane_f2, lane_f3
-    use dem_contact_model, only: law_lanes
-    use dem_contact_extra, only: rolling_torque, sjkr_area_wall
-    use dem_materials, only: rolling_none
-    use dem_mesh, only: closest_point_triangle, feature_face
-    use dem_contact_store, only: max_wall_contacts, n_wall_columns
+    use dem_contact_model, only: contact_model_t, law_lanes, contact_extra
+    use dem_materials, only: contact_options_t
+    use dem_mesh, only: mesh_t, closest_point_triangle, feature_face
+    use dem_particles, only: particles_t
+    use dem_neighbors, only: neighbors_t
+    use dem_contact_store, only: contact_store_t, max_wall_contacts, n_wall_columns
     implicit none
     private
     public :: pw_forces
@@ -30,6 +31,10 @@ module dem_contacts_pw
     !> the kernel's own column of its block of lanes, after the law's (dem_contact_hm): the
     !> distance of the contact point from the centre [m]
     integer, parameter :: lane_ld = law_columns + 1
+
+    !> a wall's rotation about the contact point (none: the wall's rotation is in its
+    !> velocity there, wall_point_velocity)
+    real(wp), parameter :: still(3) = 0.0_wp
 
 contains
 
@@ -188,22 +193,67 @@ contains
         end do
     end subroutine history_slots
 
+    include 'dem_contact_kinematics.inc'
+
+    !> The velocity of a wall at point q: v_w + w_w x (q - c), c a point of its rotation axis
+    !> [m/s].
+    pure function wall_point_velocity(q, wall_v, wall_w, wall_c) result(u)
+        !$acc routine seq
+        real(wp), intent(in) :: q(3)        !! [m]
+        real(wp), intent(in) :: wall_v(3)   !! the wall's translation velocity [m/s]
+        real(wp), intent(in) :: wall_w(3)   !! its angular velocity [rad/s]
+        real(wp), intent(in) :: wall_c(3)   !! a point of its rotation axis [m]
+        real(wp) :: u(3), d(3)
+        d = q - wall_c
+        u(1) = wall_v(1) + (wall_w(2) * d(3) - wall_w(3) * d(2))
+        u(2) = wall_v(2) + (wall_w(3) * d(1) - wall_w(1) * d(3))
+        u(3) = wall_v(3) + (wall_w(1) * d(2) - wall_w(2) * d(1))
+    end function wall_point_velocity
+
     !> Add the wall contact forces and torques to every owned particle. `overflow` counts
-    !> particles with more separate contacts than the history store holds. The levers of the
-    !> rotation are R - shift_v d and R - shift_t d, as in pp_forces. With `record` (a step
-    !> whose wall loads a probe reports), each contact's force on the particle and its
-    !> contact point go to wload, beside its slot of wtri. With `extra`, the rolling torque
-    !> and the sJKR force of the pair's model follow (as in pp_forces; R* = R, the wall's
-    !> rotation taken from the particle's); the EPSD2 spring of slot s is
-    !> wxi(:, max_wall_contacts + s). A candidate triangle whose slack (dem_neighbors) is more
-    !> than the particle and the walls have moved since the lists' build cannot touch the
-    !> particle and is not tested. The rows go in blocks of rows_per_block, whose particle data
-    !> are loaded together before the block's rows are computed (doc/theory.md, section 9).
-    subroutine pw_forces(n_own, n_row, row, n_cand, n_tri, n_wall, nm, x, v, w, radius, mass, &
-                         mat, wstart, wlist, x_ref, wslack, wmove, vert, tmat, twall, wall_v, &
-                         wall_w, wall_c, normal, tangential, kn, st, &
-                         gn, gt, mu, clamp_normal, keep_length, shift_v, shift_t, extra, &
-                         rmodel, mur, kcoh, dt, wtri, wxi, record, n_load, wload, f, t, overflow)
+    !> particles with more separate contacts than the history store holds. Each contact's
+    !> normal and distance are computed here, its kinematics by contact_kinematics (the
+    !> wall's velocity at the contact point, wall_point_velocity; the wall's lever 0); the
+    !> levers of the rotation are R - shift_v d and R - shift_t d, as in pp_forces. With
+    !> `record` (a step whose wall loads a probe reports), each contact's force on the
+    !> particle and its contact point go to wload, beside its slot of wtri. In a case whose
+    !> pairs resist rolling or cohere, the rolling torque and the sJKR force of the pair's
+    !> model follow (contact_extra, as in pp_forces; R* = R, the wall's rotation taken from
+    !> the particle's); the EPSD2 spring of slot s is wxi(:, max_wall_contacts + s). A
+    !> candidate triangle whose slack (dem_neighbors) is more than the particle and the walls
+    !> have moved since the lists' build cannot touch the particle and is not tested. The
+    !> rows go in blocks of rows_per_block, whose particle data are loaded together before
+    !> the block's rows are computed (doc/theory.md, section 9).
+    subroutine pw_forces(particles, nb, mesh, cm, cs, dt, record, wload, overflow)
+        type(particles_t), intent(inout) :: particles  !! the owned ones: x, v, w, radius,
+                                                       !! mass, mat; f, t added to
+        type(neighbors_t), intent(in) :: nb         !! the rows (n_wrow, wrow), their candidate
+                                                    !! triangles (wstart, wlist, wslack), x_ref
+                                                    !! and wall_moved
+        type(mesh_t), intent(in) :: mesh            !! the triangles and the walls' motion
+        type(contact_model_t), intent(in) :: cm     !! the constants and sub-models
+        type(contact_store_t), intent(inout) :: cs  !! the wall contacts' slots and history
+        real(wp), intent(in) :: dt                  !! [s]
+        logical, intent(in) :: record               !! each contact's load into wload
+        real(wp), contiguous, intent(inout) :: wload(:, :, :)  !! (6, max_wall_contacts,
+                                                    !! n_own when recording) [N], [m]
+        integer(ip), intent(out) :: overflow
+        associate (p => particles, m => mesh)
+            call wall_kernel(p%n_own, nb%n_wrow, nb%wrow, size(nb%wlist, kind=ip), m%n_tri, &
+                             m%n_wall, size(cm%kn, 1, ip), p%x, p%v, p%w, p%radius, p%mass, &
+                             p%mat, nb%wstart, nb%wlist, nb%x_ref, nb%wslack, nb%wall_moved, &
+                             m%vert, m%mat, m%wall, m%wall_v, m%wall_w, m%wall_c, cm%opts, &
+                             cm%kn, cm%st, cm%gn, cm%gt, cm%mu, cm%rolling .or. cm%cohesion, &
+                             cm%rmodel, cm%mur, cm%kcoh, dt, cs%wall_tri, cs%wall_xi, record, &
+                             size(wload, 3, ip), wload, p%f, p%t, overflow)
+        end associate
+    end subroutine pw_forces
+
+    !> pw_forces over plain arrays (explicit-shape dummies, as pair_kernel's).
+    subroutine wall_kernel(n_own, n_row, row, n_cand, n_tri, n_wall, nm, x, v, w, radius, &
+                           mass, mat, wstart, wlist, x_ref, wslack, wmove, vert, tmat, twall, &
+                           wall_v, wall_w, wall_c, opts, kn, st, gn, gt, mu, extra, rmodel, &
+                           mur, kcoh, dt, wtri, wxi, record, n_load, wload, f, t, overflow)
         integer(ip), intent(in) :: n_own, n_cand, n_tri, n_wall, nm
         integer(ip), intent(in) :: n_row, row(:)   !! the particles near walls or with wall
                                                    !! history (dem_neighbors)
@@ -220,11 +270,9 @@ contains
         real(wp), intent(in) :: wall_v(3, n_wall)   !! translation velocity of each wall [m/s]
         real(wp), intent(in) :: wall_w(3, n_wall)   !! angular velocity of each wall [rad/s]
         real(wp), intent(in) :: wall_c(3, n_wall)   !! a point of its rotation axis [m]
-        integer(ip), intent(in) :: normal, tangential   !! the sub-models (dem_contact_model)
+        type(contact_options_t), intent(in) :: opts   !! the sub-models and switches
         real(wp), intent(in) :: kn(nm, nm), st(nm, nm), mu(nm, nm)   !! stiffnesses, [-]
         real(wp), intent(in) :: gn(nm, nm), gt(nm, nm)   !! damping factors
-        logical, intent(in) :: clamp_normal, keep_length              !! (law_lanes)
-        real(wp), intent(in) :: shift_v, shift_t                      !! [-]
         logical, intent(in) :: extra              !! some pair resists rolling or coheres
         integer(ip), intent(in) :: rmodel(nm, nm) !! rolling model (dem_materials)
         real(wp), intent(in) :: mur(nm, nm)       !! rolling friction [-]
@@ -244,8 +292,8 @@ contains
         integer(ip) :: slot(max_wall_candidates)
         real(wp) :: q(3, max_wall_candidates), qk(3)
         real(wp) :: new_xi(3, max_wall_contacts)
-        real(wp) :: nrm(3), vrel(3), ft(3), fi(3), ti(3), dist, r, tol, moved, ws(3), d(3), &
-                    lever, tr(3), xr(3), new_xr(3, max_wall_contacts)
+        real(wp) :: nrm(3), vrel(3), ft(3), fi(3), ti(3), dist, r, tol, moved, ov, tr(3), xr(3), &
+                    new_xr(3, max_wall_contacts)
         logical :: keep(max_wall_candidates), many, over, spring
         ! the block's rows: their lanes first(kr)..last(kr) (none if `idle`: no contact, none
         ! ended); the lanes: the contacts' law (law_lanes) and what follows it
@@ -255,14 +303,23 @@ contains
         real(wp) :: lq(3, wall_lanes)
         real(wp) :: lane(lane_rows, lane_ld)
         real(wp), volatile :: lines
+        integer(ip) :: normal, tangential
+        logical :: clamp_normal, keep_length
+        real(wp) :: shift_v, shift_t
 
+        normal = opts%normal
+        tangential = opts%tangential
+        clamp_normal = opts%clamp_normal
+        keep_length = opts%keep_length
+        shift_v = opts%shift_v
+        shift_t = opts%shift_t
         overflow = 0
         spring = n_wall_columns > max_wall_contacts   ! the slots' EPSD2 springs after theirs
         !$acc parallel loop gang vector default(present) reduction(+:overflow) &
         !$acc private(kr, k, c, nc, ns, a, b, tri, feat, new_tri, ctri, fk, q, qk, l, m) &
         !$acc private(new_xi, nrm, vrel, ft, fi, ti, dist, r, tol, moved, keep, n_block) &
         !$acc private(slot, lines, first, last, idle, ltri, lslot, lq, lane) &
-        !$acc private(many, over, i, wl, ws, d, lever, tr, xr, new_xr) firstprivate(spring)
+        !$acc private(many, over, i, wl, ov, tr, xr, new_xr) firstprivate(spring)
         do k0 = 0, n_row - 1, rows_per_block
             n_block = min(rows_per_block, n_row - k0)
             ! the lines of the particle data that every row's search for touching triangles
@@ -337,20 +394,15 @@ contains
                     if (slot(c) > 0) lane(m, lane_x1:lane_x3) = wxi(:, slot(c), i)
                     dist = sqrt(sum((q(:, c) - x(:, i))**2))
                     nrm = (q(:, c) - x(:, i)) / dist
-                    ! minus the wall's velocity at the contact point
                     wl = twall(tri)
-                    lever = r - shift_v * (r - dist)
-                    ws = lever * w(:, i)
-                    d = q(:, c) - wall_c(:, wl)
-                    vrel(1) = v(1, i) + (ws(2) * nrm(3) - ws(3) * nrm(2)) - wall_v(1, wl) &
-                              - (wall_w(2, wl) * d(3) - wall_w(3, wl) * d(2))
-                    vrel(2) = v(2, i) + (ws(3) * nrm(1) - ws(1) * nrm(3)) - wall_v(2, wl) &
-                              - (wall_w(3, wl) * d(1) - wall_w(1, wl) * d(3))
-                    vrel(3) = v(3, i) + (ws(1) * nrm(2) - ws(2) * nrm(1)) - wall_v(3, wl) &
-                              - (wall_w(1, wl) * d(2) - wall_w(2, wl) * d(1))
+                    ov = r - dist
+                    call contact_kinematics(nrm, r - shift_v * ov, 0.0_wp, v(:, i), w(:, i), &
+                                            wall_point_velocity(q(:, c), wall_v(:, wl), &
+                                                                wall_w(:, wl), wall_c(:, wl)), &
+                                            still, vrel)
                     b = tmat(tri)
                     lane(m, lane_ld) = dist
-                    lane(m, lane_ov) = r - dist
+                    lane(m, lane_ov) = ov
                     lane(m, lane_n1:lane_n3) = nrm
                     lane(m, lane_v1:lane_v3) = vrel
                     lane(m, lane_rs) = r
@@ -380,20 +432,16 @@ contains
                     nrm = lane(l, lane_n1:lane_n3)
                     ft = lane(l, lane_f1:lane_f3)
                     dist = lane(l, lane_ld)
-                    if (extra) then          ! rolling resistance, cohesion
+                    if (extra) then          ! rolling resistance, cohesion (contact_extra)
                         wl = twall(tri)
                         b = tmat(tri)
                         xr = 0.0_wp
                         if (spring .and. lslot(l) > 0) xr = wxi(:, max_wall_contacts + lslot(l), i)
-                        if (rmodel(a, b) /= rolling_none) then
-                            call rolling_torque(rmodel(a, b), mur(a, b), r, kn(a, b), &
-                                                st(a, b), r - dist, lane(l, lane_fn), nrm, &
-                                                w(:, i) - wall_w(:, wl), dt, xr, tr)
-                            ti = ti + tr
-                        end if
+                        call contact_extra(rmodel(a, b), mur(a, b), kcoh(a, b), r, kn(a, b), &
+                                           st(a, b), lane(l, lane_ov), r, 0.0_wp, dist, nrm, &
+                                           w(:, i) - wall_w(:, wl), dt, lane(l, lane_fn), xr, tr)
+                        ti = ti + tr
                         new_xr(:, ns + 1) = xr
-                        if (kcoh(a, b) > 0.0_wp) lane(l, lane_fn) = lane(l, lane_fn) &
-                                                 - kcoh(a, b) * sjkr_area_wall(r, dist)
                     end if
                     ns = ns + 1
                     new_tri(ns) = tri
@@ -403,10 +451,7 @@ contains
                         wload(4:6, ns, i) = lq(:, l)
                     end if
                     fi = fi - lane(l, lane_fn) * nrm + ft
-                    lever = r - shift_t * (r - dist)
-                    ti(1) = ti(1) + lever * (nrm(2) * ft(3) - nrm(3) * ft(2))
-                    ti(2) = ti(2) + lever * (nrm(3) * ft(1) - nrm(1) * ft(3))
-                    ti(3) = ti(3) + lever * (nrm(1) * ft(2) - nrm(2) * ft(1))
+                    ti = ti + contact_torque(nrm, ft, r - shift_t * lane(l, lane_ov))
                 end do
                 do c = 1, ns                           ! the contacts into their new slots
                     wtri(c, i) = new_tri(c)
@@ -423,5 +468,5 @@ contains
                 t(:, i) = t(:, i) + ti
             end do
         end do
-    end subroutine pw_forces
+    end subroutine wall_kernel
 end module dem_contacts_pw

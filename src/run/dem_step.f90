@@ -139,15 +139,7 @@ contains
     subroutine particle_contacts(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        associate (p => s%p, nb => s%nb, pc => s%pc, o => s%pc%opts, n => s%p%n_own)
-            call pp_forces(n, n + p%n_ghost, nb%n_pairs, c%mats%n, p%x, p%v, p%w, p%radius, &
-                           p%mass, p%mat, nb%scale, nb%pair, nb%reach2, o%normal, &
-                           o%tangential, pc%kn, pc%st, pc%gn, &
-                           pc%gt, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, o%shift_t, &
-                           o%reset_pair_history, pc%rolling .or. pc%cohesion, pc%rmodel, &
-                           pc%mur, pc%kcoh, c%dt, c%gravity, s%cs%slot, s%cs%hist, s%cs%n_hist, &
-                           nb%acc, p%f, p%t)
-        end associate
+        call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, c%gravity)
     end subroutine particle_contacts
 
     !> The particle-wall contacts of the lists' candidate triangles; at a step whose row
@@ -156,7 +148,7 @@ contains
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
-        integer(ip) :: overflow, n_load
+        integer(ip) :: overflow
         integer :: k
         if (s%loads_due .and. size(s%wload, 3) < s%p%n_own) then   ! room for every particle
             call acc_data(s%wload, acc_exit)
@@ -164,18 +156,8 @@ contains
             allocate(s%wload(6, max_wall_contacts, size(s%p%x, 2)))
             call acc_data(s%wload, acc_create)
         end if
-        n_load = merge(s%p%n_own, 1_ip, s%loads_due)
-        associate (p => s%p, nb => s%nb, pc => s%pc, o => s%pc%opts, m => s%mesh, &
-                   n => s%p%n_own)
-            call pw_forces(n, nb%n_wrow, nb%wrow, size(nb%wlist), m%n_tri, m%n_wall, c%mats%n, &
-                           p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%wstart, nb%wlist, &
-                           nb%x_ref, nb%wslack, nb%wall_moved, m%vert, m%mat, &
-                           m%wall, m%wall_v, m%wall_w, m%wall_c, o%normal, o%tangential, &
-                           pc%kn, pc%st, pc%gn, &
-                           pc%gt, pc%mu, o%clamp_normal, o%keep_length, o%shift_v, &
-                           o%shift_t, pc%rolling .or. pc%cohesion, pc%rmodel, pc%mur, pc%kcoh, &
-                           c%dt, s%cs%wall_tri, s%cs%wall_xi, s%loads_due, n_load, &
-                           s%wload, p%f, p%t, overflow)
+        associate (m => s%mesh, n => s%p%n_own)
+            call pw_forces(s%p, s%nb, m, s%pc, s%cs, c%dt, s%loads_due, s%wload, overflow)
             if (s%loads_due) then
                 do k = 1, size(c%probes)
                     if (c%probes(k)%kind /= probe_wall_load) cycle

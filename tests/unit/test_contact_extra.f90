@@ -14,8 +14,8 @@
 program test_contact_extra
     use dem_kinds, only: wp, ip, i8
     use dem_contact_extra, only: rolling_torque, sjkr_area_pair
-    use dem_contacts_pp, only: pp_forces, pp_scales
-    use dem_contacts_pw, only: pw_forces
+    use dem_contacts_pp, only: pp_scales
+    use dem_test_kernels, only: pp_arrays, pw_arrays
     use dem_contact_store, only: max_wall_contacts, store_history_widths
     use dem_materials, only: rolling_none, rolling_cdt, rolling_epsd2, normal_hertz, &
                              tangential_mindlin
@@ -66,7 +66,7 @@ program test_contact_extra
             xi3 = 0.0_wp
             slot = 0
             n_hist = 0
-            call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
+            call pp_arrays(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
                            [sum(r)**2], hz, mdl, kn, st, zero, zero, mu, .false., .true., 0.0_wp, &
                            0.0_wp, .true., .true., none, zero, kc, dt, no_g, slot, xi3, n_hist, &
                            acc, f, t)
@@ -118,7 +118,7 @@ program test_contact_extra
     xi3 = 0.0_wp
     slot = 0
     n_hist = 0
-    call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, [sum(r)**2], &
+    call pp_arrays(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, [sum(r)**2], &
                    hz, mdl, kn, st, zero, zero, zero, .false., .true., 0.0_wp, 0.0_wp, .true., &
                    .true., model, mur, zero, dt, no_g, slot, xi3, n_hist, acc, f, t)
     call assert_close(t(2, 1), -0.1_wp * rstar * fn_el, 1.0e-9_wp, 'CDT pair: on the turning one')
@@ -145,7 +145,7 @@ program test_contact_extra
     do s = 1, 1000
         f = 0.0_wp
         t = 0.0_wp
-        call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
+        call pp_arrays(2_ip, 2_ip, 1_ip, 1_ip, x, v, w, r, m, [1_ip, 1_ip], scale, pair, &
                        [sum(r)**2], hz, mdl, kn, st, zero, zero, zero, .false., .true., 0.0_wp, &
                        0.0_wp, .true., .true., model, mur, zero, dt, no_g, slot, xi6, n_hist, &
                        acc, f, t)
@@ -173,7 +173,7 @@ contains
         wxi = 0.0_wp
         ff = 0.0_wp
         tt = 0.0_wp
-        call pw_forces(1_ip, 1_ip, [1_ip], plane%n_tri, plane%n_tri, plane%n_wall, 1_ip, &
+        call pw_arrays(1_ip, 1_ip, [1_ip], plane%n_tri, plane%n_tri, plane%n_wall, 1_ip, &
                        reshape([0.0_wp, 0.0_wp, z], [3, 1]), v(:, 1:1), w(:, 1:1), r(1:1), &
                        m(1:1), [1_ip], [1_ip, plane%n_tri + 1], wlist, reshape([0.0_wp, 0.0_wp, &
                        z], [3, 1]), spread(-1.0_wp, 1, plane%n_tri), 0.0_wp, plane%vert, &

@@ -20,7 +20,8 @@ program test_contacts_pp
     use dem_contact_hooke, only: hooke_constants
     use dem_materials, only: damping_ratio, normal_hooke, tangential_coulomb, rolling_epsd2
     use dem_random, only: rng_t, rng_seed, rng_uniform
-    use dem_contacts_pp, only: pp_forces, pp_scales, fixed_scale
+    use dem_contacts_pp, only: pp_scales, fixed_scale
+    use dem_test_kernels, only: pp_arrays
     use dem_contact_model, only: law_force
     use dem_vector, only: cross
     use dem_assert, only: assert_true, assert_close, assert_finish
@@ -82,7 +83,7 @@ program test_contacts_pp
             call pp_scales(n, m(order), accel_bound, nb%scale)
             f = merge(1.0e30_wp, 0.0_wp, trial == 4)
             t = f
-            call pp_forces(n, n, nb%n_pairs, 1_ip, x(:, order), v(:, order), w(:, order), &
+            call pp_arrays(n, n, nb%n_pairs, 1_ip, x(:, order), v(:, order), w(:, order), &
                            r(order), m(order), mat, nb%scale, nb%pair, nb%reach2, normal_hertz, &
                            tangential_mindlin, kn, st, &
                            cn * sqrt(sn), cn * sqrt(st), mu, &
@@ -185,13 +186,13 @@ contains
                     nh = 1
                     ac = 0
                     if (c == 1) then
-                        call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, xs, vs, ws, rs, ms, [1_ip, 1_ip], &
+                        call pp_arrays(2_ip, 2_ip, 1_ip, 1_ip, xs, vs, ws, rs, ms, [1_ip, 1_ip], &
                                        sc, reshape([1_ip, 2_ip], [2, 1]), [sum(rs)**2], normal, &
                                        tangential, k1, s1, gn1, gt1, mu1, .false., .true., lever, &
                                        lever, .true., .true., rm, mur1, kc1, dt, [0.0_wp, 0.0_wp, &
                                        0.0_wp], slot1, ha, nh, ac, fa, ta)
                     else
-                        call pp_forces(2_ip, 2_ip, 1_ip, 1_ip, xs, vs, ws, rs, ms, [1_ip, 1_ip], &
+                        call pp_arrays(2_ip, 2_ip, 1_ip, 1_ip, xs, vs, ws, rs, ms, [1_ip, 1_ip], &
                                        sc, reshape([2_ip, 1_ip], [2, 1]), [sum(rs)**2], normal, &
                                        tangential, k1, s1, gn1, gt1, mu1, .false., .true., lever, &
                                        lever, .true., .true., rm, mur1, kc1, dt, [0.0_wp, 0.0_wp, &

@@ -11,7 +11,7 @@
 program test_contacts_pw
     use dem_kinds, only: wp, ip
     use dem_mesh, only: mesh_t, mesh_add_plane, mesh_append
-    use dem_contacts_pw, only: pw_forces
+    use dem_test_kernels, only: pw_arrays
     use dem_contact_store, only: contact_store_t, max_wall_contacts, store_init, &
                                  store_walls_pack, store_walls_unpack, n_wall_pack_real
     use dem_assert, only: assert_true, assert_close, assert_finish
@@ -179,7 +179,7 @@ contains
         st = 8.0_wp * 0.4e10_wp
         fo = 0.0_wp
         to = 0.0_wp
-        call pw_forces(1_ip, 1_ip, [1_ip], mm%n_tri, mm%n_tri, mm%n_wall, 2_ip, x, v, w, [r], &
+        call pw_arrays(1_ip, 1_ip, [1_ip], mm%n_tri, mm%n_tri, mm%n_wall, 2_ip, x, v, w, [r], &
                        [1.0e-3_wp], &
                        [1_ip], [1_ip, mm%n_tri + 1], wlist, x, spread(-1.0_wp, 1, mm%n_tri), &
                        0.0_wp, mm%vert, mm%mat, mm%wall, &
