@@ -14,6 +14,7 @@ module dem_input
     use dem_input_materials, only: read_materials, read_pairs, read_contact_model
     use dem_input_particles, only: read_particles, read_particle_files
     use dem_input_inserts, only: read_inserts
+    use dem_input_clumps, only: read_clump_templates, read_clumps
     use dem_input_walls, only: read_walls, read_meshes, read_periodic
     use dem_input_probes, only: read_outlets, read_probes
     use dem_case, only: case_t
@@ -24,10 +25,11 @@ module dem_input
 
     !> The groups a case file may hold, in the order an unknown group's message lists them,
     !> each beside the module that reads it (and declares its keys).
-    character(len=*), parameter :: input_groups(13) = [character(len=13) :: &
+    character(len=*), parameter :: input_groups(15) = [character(len=14) :: &
         'run', 'output', &                          ! dem_input_run
         'contact_model', 'material', 'pair', &      ! dem_input_materials
         'particle', 'particle_file', &              ! dem_input_particles
+        'clump_template', 'clump', &                ! dem_input_clumps
         'insert', &                                 ! dem_input_inserts
         'outlet', 'probe', &                        ! dem_input_probes
         'wall_plane', 'periodic', 'wall_mesh']      ! dem_input_walls
@@ -69,16 +71,21 @@ contains
         if (err%failed()) return
         call read_pairs(nf, c, err)
         if (err%failed()) return
+        call read_clump_templates(nf, c, err)
+        if (err%failed()) return
+        call read_clumps(nf, c, err)
+        if (err%failed()) return
         share = [comm%rank, comm%size]
-        if (group_count(nf, 'insert') > 0) share = [0, 1]
+        if (group_count(nf, 'insert') > 0 .or. c%has_clumps) share = [0, 1]
         call read_particles(nf, share, c, err)
         if (err%failed()) return
         call read_particle_files(nf, share, comm, c, err)
         if (err%failed()) return
         call read_inserts(nf, c, err)
         if (err%failed()) return
-        if (c%n_particles == 0 .and. size(c%inserts) == 0) then
-            call fail(nf%path // ': no particles (give &particle, &particle_file or &insert)')
+        if (c%n_particles == 0 .and. size(c%inserts) == 0 .and. .not. c%has_clumps) then
+            call fail(nf%path // ': no particles (give &particle, &particle_file, &clump or ' &
+                      // '&insert)')
             return
         end if
         call read_walls(nf, c, err)
@@ -95,6 +102,14 @@ contains
         call read_outlets(nf, c, err)
         if (err%failed()) return
         call read_probes(nf, c, err)
+        if (err%failed() .or. .not. c%has_clumps) return
+        if (c%periodic%on) then
+            call fail(nf%path // ': &clump: clumps and &periodic axes together are not ' // &
+                      'supported yet')
+        else if (size(c%outlets) > 0) then
+            call fail(nf%path // ': &clump: clumps and &outlet groups together are not ' // &
+                      'supported yet')
+        end if
     contains
         subroutine fail(msg)
             character(len=*), intent(in) :: msg

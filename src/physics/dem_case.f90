@@ -13,6 +13,8 @@ module dem_case
                                  pair_critical_dt, pair_squeeze_dt
     use dem_comm, only: comm_t, comm_sum, comm_max
     use dem_periodic, only: periodic_t
+    use dem_clumps, only: clump_template_t, clump_t
+    use dem_particles, only: body_state_rows
     implicit none
     private
     public :: case_t, time_scales_t, insert_t, id_check_t, case_time_scales, case_summarize, &
@@ -103,6 +105,14 @@ module dem_case
         integer(i8), allocatable :: gid(:)            !< (the particles held, as the others)
         integer(ip), allocatable :: mat(:)
         real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :)
+        ! clumps (dem_clumps): the templates, the clumps as placed, and once they are placed
+        ! (dem_setup) as members among the particles, each row's body and body state
+        ! (dem_particles' rows bs_*; body 0 and zeros: a sphere), allocated with clumps only
+        logical :: has_clumps = .false.               !< some clump is placed
+        type(clump_template_t), allocatable :: templates(:)   !< &clump_template
+        type(clump_t), allocatable :: clumps(:)       !< &clump
+        integer(i8), allocatable :: body(:)
+        real(wp), allocatable :: body_state(:, :)
         type(mesh_t) :: mesh
         type(periodic_t) :: periodic                  !< the periodic axes (&periodic)
         character(len=256) :: periodic_at(3) = ''     !< the place of each axis's group
@@ -145,6 +155,7 @@ contains
     subroutine case_release_particles(c)
         type(case_t), intent(inout) :: c
         deallocate(c%gid, c%mat, c%radius, c%x, c%v, c%w)
+        if (allocated(c%body)) deallocate(c%body, c%body_state)
     end subroutine case_release_particles
 
     !> The summary of the particles that the ranks hold, over all ranks, with the radii and
@@ -376,6 +387,12 @@ contains
         c%x = reshape([c%x(:, 1:n), x], [3, n + size(gid)])
         c%v = reshape([c%v(:, 1:n), v], [3, n + size(gid)])
         c%w = reshape([c%w(:, 1:n), w], [3, n + size(gid)])
+        if (allocated(c%body)) then              ! spheres among clumps
+            c%body = [c%body(1:n), spread(0_i8, 1, size(gid))]
+            c%body_state = reshape([c%body_state(:, 1:n), &
+                                    spread(0.0_wp, 1, body_state_rows * size(gid))], &
+                                   [body_state_rows, n + size(gid)])
+        end if
         c%n_held = n + size(gid)
         c%n_particles = c%n_particles + n_rows
     end subroutine case_append_particles

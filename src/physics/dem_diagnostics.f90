@@ -21,14 +21,18 @@ contains
 
     !> Kinetic (translational, rotational) and gravitational potential energy [J], the
     !> largest speed [m/s] and the mass [kg] of the particles of all ranks (each gives its n
-    !> owned ones); the sums in fixed point, the same on any number of ranks; collective.
+    !> owned ones); the sums in fixed point, the same on any number of ranks; collective. With
+    !> clumps, the rows whose `body` is not 0 (members) give their columns of `terms` instead
+    !> (dem_clumps' clump_energy_terms: each body's energies once).
     subroutine energies(comm, n, mass, inv_inertia, x, v, w, gravity, ke_t, ke_r, pe, vmax, &
-                        mass_total)
+                        mass_total, body, terms)
         type(comm_t), intent(in) :: comm
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: mass(:), inv_inertia(:), x(:, :), v(:, :), w(:, :)
         real(wp), intent(in) :: gravity(3)
         real(wp), intent(out) :: ke_t, ke_r, pe, vmax, mass_total
+        integer(i8), intent(in), optional :: body(:)
+        real(wp), intent(in), optional :: terms(:, :)
         real(wp), allocatable :: e(:, :)
         real(wp) :: sums(4, 1), top(1)
         type(fixed_sum_t) :: fixed
@@ -36,6 +40,13 @@ contains
         allocate(e(4, n))
         top = 0.0_wp
         do i = 1, n
+            if (present(body)) then
+                if (body(i) /= 0) then
+                    e(:, i) = terms(:, i)
+                    top = max(top, norm2(v(:, i)))
+                    cycle
+                end if
+            end if
             e(:, i) = [0.5_wp * mass(i) * dot_product(v(:, i), v(:, i)), &
                        0.5_wp * dot_product(w(:, i), w(:, i)) / inv_inertia(i), &
                        -mass(i) * dot_product(gravity, x(:, i)), mass(i)]

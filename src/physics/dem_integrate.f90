@@ -7,7 +7,7 @@ module dem_integrate
     use dem_kinds, only: wp, ip, i8
     implicit none
     private
-    public :: integrator_euler, integrator_verlet, kick, kick_drift
+    public :: integrator_euler, integrator_verlet, kick, kick_drift, too_fast
 
     integer(ip), parameter :: integrator_euler = 1   !< symplectic Euler (default)
     integer(ip), parameter :: integrator_verlet = 2  !< velocity Verlet

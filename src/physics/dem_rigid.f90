@@ -15,7 +15,8 @@ module dem_rigid
     private
     public :: rigid_kick, rigid_kick_drift
     public :: rigid_free_rotation, rigid_omega
-    public :: quat_product, quat_conjugate, quat_to_lab, quat_to_body, quat_normalise
+    public :: quat_product, quat_conjugate, quat_to_lab, quat_to_body, quat_normalise, &
+              quat_from_matrix
 
 contains
 
@@ -163,4 +164,30 @@ contains
         real(wp) :: r(4)
         r = q / sqrt(q(1)**2 + q(2)**2 + q(3)**2 + q(4)**2)
     end function quat_normalise
+
+    !> The unit quaternion of a rotation matrix r (v_lab = r v_body), by Shepperd's method
+    !> (1978): from the largest of 4 q_k^2 = 1 + r_11 + r_22 + r_33 (k = 0) or
+    !> 1 + 2 r_kk - trace (k = 1, 2, 3), so that no square root is of a small number; q0 >= 0.
+    pure function quat_from_matrix(r) result(q)
+        real(wp), intent(in) :: r(3, 3)
+        real(wp) :: q(4), d(4), s
+        integer :: k, j
+        d = [r(1, 1) + r(2, 2) + r(3, 3), r(1, 1), r(2, 2), r(3, 3)]
+        d(2:4) = 2.0_wp * d(2:4) - d(1)
+        k = maxloc(d, 1)
+        s = 0.5_wp * sqrt(1.0_wp + d(k))        ! |q_(k-1)|
+        select case (k)
+        case (1)
+            q = [s, r(3, 2) - r(2, 3), r(1, 3) - r(3, 1), r(2, 1) - r(1, 2)]
+        case (2)
+            q = [r(3, 2) - r(2, 3), s, r(1, 2) + r(2, 1), r(1, 3) + r(3, 1)]
+        case (3)
+            q = [r(1, 3) - r(3, 1), r(1, 2) + r(2, 1), s, r(2, 3) + r(3, 2)]
+        case default
+            q = [r(2, 1) - r(1, 2), r(1, 3) + r(3, 1), r(2, 3) + r(3, 2), s]
+        end select
+        q(1:4) = merge(q, q / (4.0_wp * s), [(j == k, j = 1, 4)])
+        if (q(1) < 0.0_wp) q = -q
+        q = quat_normalise(q)
+    end function quat_from_matrix
 end module dem_rigid

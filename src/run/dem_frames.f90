@@ -99,7 +99,7 @@ contains
             fr%time = time_of(s, c, s%step)
             fr%step = s%step
             fr%n = n
-            call particles_init(fr%p, n)
+            call particles_init(fr%p, n, allocated(p%body))
             fr%p%n_own = n
             call particles_frame_copy(p, n, order, fr%p, [(a, a = 1, n)])
             if (build_dependent(s) .and. allocated(s%nb%x_ref)) then   ! (dem_rebuild)

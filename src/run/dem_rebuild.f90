@@ -25,6 +25,7 @@ module dem_rebuild
     use dem_periodic, only: periodic_wrap
     use dem_contacts_pp, only: pp_scales
     use dem_diagnostics, only: momentum_sums
+    use dem_clumps, only: clump_reach, clump_index_build
     use dem_acc, only: acc_data, acc_create, acc_enter, acc_exit, acc_to_host, acc_to_device
     implicit none
     private
@@ -119,7 +120,7 @@ contains
                                                  !! parked: not with outlets)
         integer(ip), allocatable :: order(:), kept(:), row_of(:), old_row(:)
         integer(ip) :: m
-        real(wp), allocatable :: pose(:, :, :)
+        real(wp), allocatable :: pose(:, :, :), xd(:, :), rd(:)
         logical :: replay
         ! a list build during the run ends the history of the parted pairs that keep it
         ! (reset_pair_history false, doc/theory.md section 3); not the first build of a run
@@ -147,7 +148,10 @@ contains
             call fill_range(m, order, 1, 1)
         end if
         if (s%halo) then
-            call domain_ghosts(s%dom, s%comm, s%p)
+            if (allocated(s%p%body)) call clump_reach(s%p%n_own, s%p%body, s%p%x, s%p%radius, &
+                                                      s%p%body_x, s%p%body_offset, xd, rd)
+            call domain_ghosts(s%dom, s%comm, s%p, xd, rd)     ! (absent without clumps)
+            if (allocated(xd)) call release_reach(xd, rd)
             call domain_data(s%dom, acc_enter)
             if (s%dom%pb%on) call domain_update(s%dom, s%comm, s%p)   ! the images' positions
         end if
@@ -161,7 +165,8 @@ contains
             call move_alloc(old_row, order)
         end if
         call neighbors_build(s%nb, s%cs, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
-                             s%p%radius, s%mesh, old_index=order)
+                             s%p%radius, s%mesh, old_index=order, body=s%p%body)
+        if (allocated(s%p%body)) call clump_index_build(s%bodies, s%p%n_own, s%p%gid, s%p%body)
         if (replay) call pose_now(s, pose)
         allocate(s%nb%scale(max(1, s%p%n_own + s%p%n_ghost)))
         call acc_data(s%nb%scale, acc_create)
@@ -303,6 +308,7 @@ contains
         integer(i8), allocatable :: hpartner(:)
         real(wp), allocatable :: hxi(:, :)
         logical, allocatable :: drop(:)
+        real(wp), allocatable :: xd(:, :), rd(:)
         real(wp) :: imbalance, before(5), after(5)
         integer(i8) :: load, contacts(1), in_rows
         integer(ip) :: m, n, n_rows, n_stay
@@ -316,19 +322,31 @@ contains
         call comm_sum(s%comm, contacts)
         balance = .not. s%distributed .or. imbalance > s%imbalance_limit * s%balanced &
                   .or. (s%balanced_blind .and. contacts(1) > 0)
+        if (allocated(s%p%body)) call clump_reach(n_rows, s%p%body, s%p%x, s%p%radius, &
+                                                  s%p%body_x, s%p%body_offset, xd, rd)
         if (balance) then
-            call domain_balance(s%dom, s%comm, m, kept, s%p%x, s%p%radius, w, status)
+            if (allocated(xd)) then              ! (clumps: by their centres)
+                call domain_balance(s%dom, s%comm, m, kept, xd, rd, w, status)
+            else
+                call domain_balance(s%dom, s%comm, m, kept, s%p%x, s%p%radius, w, status)
+            end if
             if (comm_any(s%comm, status /= 1)) then
                 call acc_data(w, acc_exit)
                 call acc_data(cnt, acc_exit)
                 call acc_data(kept, acc_exit)
+                if (allocated(xd)) call release_reach(xd, rd)
                 call set_error(err, dem_err_runtime, 'METIS could not partition the blocks ' // &
                                'of space between the ranks')
                 return
             end if
         end if
         call acc_data(w, acc_exit)
-        call domain_destinations(s%dom, s%comm, n_rows, m, kept, s%p%x, bin, drop)
+        if (allocated(xd)) then
+            call domain_destinations(s%dom, s%comm, n_rows, m, kept, xd, bin, drop)
+            call release_reach(xd, rd)
+        else
+            call domain_destinations(s%dom, s%comm, n_rows, m, kept, s%p%x, bin, drop)
+        end if
         call neighbors_row_history(s%nb, s%cs, n_rows, cnt, bin, hstart, hpartner, hxi)
         before = momentum_sums(s%comm, m, kept, s%p%mass, s%p%v)
         call domain_migrate(s%dom, s%comm, s%p, s%cs, bin, drop, hstart, hpartner, hxi, stay, &
@@ -366,6 +384,14 @@ contains
             return
         end if
     end subroutine distribute
+
+    !> The domain's view of a case with clumps (clump_reach) released.
+    subroutine release_reach(xd, rd)
+        real(wp), allocatable, intent(inout) :: xd(:, :), rd(:)
+        call acc_data(xd, acc_exit)
+        call acc_data(rd, acc_exit)
+        deallocate(xd, rd)
+    end subroutine release_reach
 
     !> row_of(k) = the row of the lists that holds owned particle k's history after a
     !> migration: that of the place stay(k) it held for the n_stay that stayed, the n_rows +

@@ -10,12 +10,13 @@ module dem_run_control
     use dem_error, only: error_t, set_error, dem_err_runtime
     use dem_comm, only: comm_any, comm_gather, comm_max
     use dem_case, only: case_t, case_energy_bound
-    use dem_run_state, only: solver_t, time_of, summed, particle_data, stop_wall_time, stop_signal
+    use dem_run_state, only: solver_t, time_of, summed, particle_data, stop_wall_time, stop_signal, &
+                             particle_energies
     use dem_run_output, only: contact_counts, write_checkpoint, write_frame_checkpoint
     use dem_domain, only: domain_update
     use dem_mesh, only: mesh_speed_bound
     use dem_rebuild, only: settle_outlets
-    use dem_diagnostics, only: energies, elastic_energy, first_nonfinite, deep_overlap_id, &
+    use dem_diagnostics, only: elastic_energy, first_nonfinite, deep_overlap_id, &
                                deep_wall_id
     use dem_output, only: output_t
     use dem_frame, only: frame_t, frame_spread
@@ -133,8 +134,7 @@ contains
         end if
         if (s%halo) call domain_update(s%dom, s%comm, s%p)   ! the ghosts' positions
         associate (p => s%p, k => s%p%n_own)
-            call energies(s%comm, k, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, ke_t, &
-                          ke_r, pe, vmax, mass)
+            call particle_energies(s, c, ke_t, ke_r, pe, vmax, mass)
             energy = ke_t + ke_r + elastic_energy(s%comm, k, k + p%n_ghost, &
                 size(s%nb%list, kind=ip), p%x, p%radius, p%mat, s%nb%start, s%nb%list, &
                 c%mats%n, s%pc%opts%normal, s%pc%kn, s%cs%wall_tri, s%mesh)

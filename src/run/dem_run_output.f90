@@ -8,11 +8,11 @@ module dem_run_output
     use dem_error, only: error_t
     use dem_comm, only: comm_sum
     use dem_case, only: case_t
-    use dem_run_state, only: solver_t, time_of, particle_data
+    use dem_run_state, only: solver_t, time_of, particle_data, particle_energies
     use dem_rebuild, only: settle_outlets
     use dem_frames, only: capture, mesh_at
     use dem_domain, only: domain_update
-    use dem_diagnostics, only: energies, count_pp_sides, first_nonfinite, contact_trace
+    use dem_diagnostics, only: count_pp_sides, first_nonfinite, contact_trace
     use dem_output, only: output_t, output_series, output_contact, output_sizes, &
                           output_probes, output_histogram
     use dem_probes, only: probe_values, probe_histogram_counts, probe_histogram, probe_wall_load
@@ -45,8 +45,7 @@ contains
         counts = contact_counts(s)
         call capture(s, c, out, s%good, local=.true.)
         associate (p => s%p, k => s%p%n_own)
-            call energies(s%comm, k, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, ke_t, &
-                          ke_r, pe, vmax, mass)
+            call particle_energies(s, c, ke_t, ke_r, pe, vmax, mass)
             n = k
             call comm_sum(s%comm, n)
             settled = s%step > 0 .and. time_of(s, c, s%step) >= c%settle_time .and. &

@@ -12,6 +12,8 @@ module dem_run_state
     use dem_domain, only: domain_t, domain_data
     use dem_contact_model, only: contact_model_t
     use dem_neighbors, only: neighbors_t, neighbors_free
+    use dem_clumps, only: clump_index_t, clump_index_free, clump_energy_terms
+    use dem_diagnostics, only: energies
     use dem_contact_store, only: contact_store_t, store_pairs_drop, store_walls_data
     use dem_mesh, only: mesh_t
     use dem_output, only: output_t
@@ -22,7 +24,7 @@ module dem_run_state
     implicit none
     private
     public :: solver_t, run_t, time_of, failed_anywhere, summed, device_data, particle_data, &
-              wall_motion_data, release_gone, &
+              wall_motion_data, release_gone, particle_energies, &
               stop_end, stop_settled, stop_wall_time, stop_signal, stop_emptied
 
     ! why solver_run returned without an error
@@ -54,6 +56,7 @@ module dem_run_state
     !> The state of a run.
     type :: solver_t
         type(particles_t) :: p
+        type(clump_index_t) :: bodies  !< the clumps this rank owns (made at each list build)
         type(neighbors_t) :: nb
         type(contact_store_t) :: cs   !< the contacts' history
         type(contact_model_t) :: pc   !< the contact model
@@ -123,6 +126,25 @@ module dem_run_state
 
 contains
 
+    !> The kinetic (translational, rotational) and gravitational energy [J], the largest
+    !> speed [m/s] and the mass [kg] of the owned particles of all ranks, a clump's once
+    !> (dem_diagnostics' energies; the state on the host); collective.
+    subroutine particle_energies(s, c, ke_t, ke_r, pe, vmax, mass)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        real(wp), intent(out) :: ke_t, ke_r, pe, vmax, mass
+        real(wp), allocatable :: terms(:, :)
+        associate (p => s%p, k => s%p%n_own)
+            if (allocated(p%body)) then
+                allocate(terms(4, k))
+                call clump_energy_terms(k, p%gid, p%body, p%body_x, p%body_v, p%body_q, &
+                                        p%body_l, p%body_inv_i, p%body_mass, c%gravity, terms)
+            end if
+            call energies(s%comm, k, p%mass, p%inv_inertia, p%x, p%v, p%w, c%gravity, ke_t, &
+                          ke_r, pe, vmax, mass, p%body, terms)    ! (absent without clumps)
+        end associate
+    end subroutine particle_energies
+
     !> The time of a step [s] (doc/theory.md, section 11).
     pure real(wp) function time_of(s, c, step) result(time)
         type(solver_t), intent(in) :: s
@@ -183,6 +205,7 @@ contains
         end if
         if (op == acc_exit .and. allocated(s%gone)) call release_gone(s)
         if (op == acc_exit .and. s%lists_on_device) then
+            call clump_index_free(s%bodies)
             call neighbors_free(s%nb)
             call store_pairs_drop(s%cs)
             if (s%halo) call domain_data(s%dom, op)

@@ -18,6 +18,8 @@ module dem_setup
     use dem_text, only: itoa, real_text
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_periodic, only: with_images
+    use dem_clumps, only: clump_members
+    use dem_particles, only: body_state_rows
     implicit none
     private
     public :: read_case
@@ -33,9 +35,10 @@ contains
         type(error_t), intent(inout) :: err
         type(comm_t), intent(in) :: comm
         call read_case_file(path, c, err, comm)
-        if (.not. err%failed()) call place_inserts(c, err)  ! (every rank holds all particles)
+        if (.not. err%failed() .and. c%has_clumps) call place_clumps(c)  ! (every rank holds
+        if (.not. err%failed()) call place_inserts(c, err)              ! all particles)
         if (.not. err%failed()) then
-            if (size(c%inserts) > 0) call keep_share(c, comm%rank, comm%size)
+            if (size(c%inserts) > 0 .or. c%has_clumps) call keep_share(c, comm%rank, comm%size)
             call check_ranges(c, comm, err)
         end if
         if (.not. err%failed()) then
@@ -62,6 +65,43 @@ contains
         err%message = err%message // ' (doc/user/input.md, &' // &
                       err%message(amp + 1:amp + n) // ')'
     end subroutine where_to_read
+
+    !> Each &clump's members among the particles, with ids after the largest so far (a
+    !> body's members have consecutive ids, the first of them the body's), and the body
+    !> state of every row (spheres: body 0).
+    subroutine place_clumps(c)
+        type(case_t), intent(inout) :: c
+        integer(i8), allocatable :: gid(:), body(:)
+        integer(ip), allocatable :: mat(:)
+        real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :), state(:, :)
+        integer(i8) :: next_id
+        integer(ip) :: k, n, m, a
+        n = 0
+        do k = 1, size(c%clumps)
+            n = n + size(c%templates(c%clumps(k)%template)%radii, kind=ip)
+        end do
+        allocate(gid(n), body(n), mat(n), radius(n), x(3, n), v(3, n), w(3, n), &
+                 state(body_state_rows, n))
+        next_id = 1
+        if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
+        a = 0
+        do k = 1, size(c%clumps)
+            associate (tpl => c%templates(c%clumps(k)%template))
+                m = size(tpl%radii, kind=ip)
+                call clump_members(tpl, c%clumps(k), next_id + a, gid(a + 1:a + m), &
+                                   body(a + 1:a + m), radius(a + 1:a + m), x(:, a + 1:a + m), &
+                                   v(:, a + 1:a + m), w(:, a + 1:a + m), state(:, a + 1:a + m))
+                mat(a + 1:a + m) = tpl%mat
+                a = a + m
+            end associate
+        end do
+        allocate(c%body(c%n_held), c%body_state(body_state_rows, c%n_held))
+        c%body = 0
+        c%body_state = 0.0_wp
+        call case_append_particles(c, gid, mat, radius, x, v, w, n)
+        c%body(c%n_held - n + 1:) = body
+        c%body_state(:, c%n_held - n + 1:) = state
+    end subroutine place_clumps
 
     !> Each &insert group's spheres at random in its region, clear of all the particles
     !> before them (and of their periodic images), with ids after the largest so far; the
@@ -189,6 +229,10 @@ contains
         c%x = c%x(:, kept)
         c%v = c%v(:, kept)
         c%w = c%w(:, kept)
+        if (allocated(c%body)) then
+            c%body = c%body(kept)
+            c%body_state = c%body_state(:, kept)
+        end if
         c%n_held = size(kept)
     end subroutine keep_share
 

@@ -49,10 +49,16 @@ contains
         integer(ip) :: i, n_mine
         s%comm = comm
         n_mine = c%n_held
-        call particles_init(s%p, n_mine)
+        call particles_init(s%p, n_mine, c%has_clumps)
         do i = 1, n_mine
-            call particles_add(s%p, c%gid(i), c%mat(i), c%radius(i), &
-                               c%mats%density(c%mat(i)), c%x(:, i), c%v(:, i), c%w(:, i))
+            if (c%has_clumps) then
+                call particles_add(s%p, c%gid(i), c%mat(i), c%radius(i), &
+                                   c%mats%density(c%mat(i)), c%x(:, i), c%v(:, i), c%w(:, i), &
+                                   c%body(i), c%body_state(:, i))
+            else
+                call particles_add(s%p, c%gid(i), c%mat(i), c%radius(i), &
+                                   c%mats%density(c%mat(i)), c%x(:, i), c%v(:, i), c%w(:, i))
+            end if
             if (c%gid(i) == c%trace_id) s%trace = s%p%n_own
         end do
         s%trace_id = c%trace_id

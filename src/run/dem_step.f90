@@ -17,6 +17,7 @@ module dem_step
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: pw_forces
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, kick_drift
+    use dem_clumps, only: clumps_move, sphere_gravity
     use dem_mesh, only: mesh_move
     use dem_outlets, only: outlets_mark
     use dem_particles, only: particles_park
@@ -95,6 +96,7 @@ contains
             ! (the guard's count: after the second half)
             call kick_drift(n, 0.5_wp * c%dt, c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, &
                             p%radius, c%max_speed, p%v, p%w, p%x, n_fast)
+            if (allocated(p%body)) call move_bodies(s, c, 0.5_wp * c%dt, c%dt, n_fast)
         end associate
         call timer_stop(s%timers, phase_integrate)
     end subroutine verlet_first_half
@@ -116,16 +118,35 @@ contains
                 call timer_stop(s%timers, phase_output)
                 call kick_drift(n, c%dt, c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%radius, &
                                 c%max_speed, p%v, p%w, p%x, n_fast)
+                if (allocated(p%body)) call move_bodies(s, c, c%dt, c%dt, n_fast)
                 call timer_stop(s%timers, phase_integrate)
             else
                 call kick(n, 0.5_wp * c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%radius, &
                           c%max_speed, p%v, p%w, n_fast)
+                if (allocated(p%body)) call move_bodies(s, c, 0.5_wp * c%dt, 0.0_wp, n_fast)
                 call timer_stop(s%timers, phase_integrate)
                 call write_trace(s, c, s%run%out, time_of(s, c, s%step + 1), err, bad)
             end if
         end associate
         bad = bad .or. n_fast > 0
     end subroutine integrate
+
+    !> The clumps kicked over h and moved over h_drift (dem_clumps, after the spheres'
+    !> kick), their fast members added to n_fast.
+    subroutine move_bodies(s, c, h, h_drift, n_fast)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        real(wp), intent(in) :: h, h_drift
+        integer(i8), intent(inout) :: n_fast
+        integer(i8) :: n_bodies_fast
+        associate (p => s%p, b => s%bodies)
+            call clumps_move(b%n, b%first, b%member, h, h_drift, c%gravity, c%max_speed, p%f, &
+                             p%t, p%radius, p%body_x, p%body_v, p%body_q, p%body_l, &
+                             p%body_inv_i, p%body_mass, p%body_offset, p%x, p%v, p%w, &
+                             n_bodies_fast)
+        end associate
+        n_fast = n_fast + n_bodies_fast
+    end subroutine move_bodies
 
     !> The walls to their pose at `time`, on the device too.
     subroutine walls_move(s, time)
@@ -135,11 +156,17 @@ contains
         call wall_motion_data(s%mesh, acc_to_device)
     end subroutine walls_move
 
-    !> Gravity and the particle-particle contacts of the lists (the forces and torques set).
+    !> Gravity and the particle-particle contacts of the lists (the forces and torques set);
+    !> with clumps, the members' forces without gravity (their bodies take M g).
     subroutine particle_contacts(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, c%gravity)
+        if (.not. allocated(s%p%body)) then
+            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, c%gravity)
+        else                          ! gravity: on the spheres here, on bodies when they move
+            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, [0.0_wp, 0.0_wp, 0.0_wp])
+            call sphere_gravity(s%p%n_own, s%p%body, s%p%mass, c%gravity, s%p%f)
+        end if
     end subroutine particle_contacts
 
     !> The particle-wall contacts of the lists' candidate triangles; at a step whose row

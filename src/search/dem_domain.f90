@@ -551,67 +551,29 @@ contains
     !> rank's particles in increasing order, as a sequential pass gives them), the packing,
     !> and the unpacking of the ghosts received; the host sees the block radii, the counts
     !> and the packed ghosts, for MPI (and the store, when it must grow or shrink).
-    subroutine domain_ghosts(d, comm, p)
+    subroutine domain_ghosts(d, comm, p, xd, rd)
         type(domain_t), intent(inout) :: d
         type(comm_t), intent(in) :: comm
         type(particles_t), intent(inout) :: p
-        integer(ip), allocatable :: per(:), first(:), to(:), from(:), img(:), by_rank(:), &
-                                    start(:), cnt(:)
-        logical, allocatable :: inner(:)
+        !> where the owned particles are for the blocks, and their reach, if not x and radius
+        !> (a clump's members: the sphere about its body's centre that holds each, dem_clumps)
+        real(wp), intent(in), optional :: xd(:, :), rd(:)
         integer(i8), allocatable :: ibuf(:, :), irecv(:, :)
-        real(wp), allocatable :: rbuf(:, :), rrecv(:, :), rnear(:)
-        integer(ip) :: n, m, nr, nb, last(1)
-        real(wp) :: rmax_all
+        real(wp), allocatable :: rbuf(:, :), rrecv(:, :)
+        integer(ip) :: n, m, nr
         n = p%n_own
-        nb = product(d%n)
-        allocate(per(max(1, n)), first(n + 1))
         call acc_data(d%owner, acc_enter)
         call acc_data(d%rmax, acc_create)
-        call acc_data(per, acc_create)
-        call acc_data(first, acc_create)
-        call block_radii(n, nb, d%origin, d%h, d%n, p%x, p%radius, d%rmax)
-        call acc_data(d%rmax, acc_to_host)
-        call comm_max(comm, d%rmax)
-        call acc_data(d%rmax, acc_to_device)
-        rmax_all = maxval(d%rmax)
-        allocate(inner(nb), rnear(nb))
-        call acc_data(inner, acc_create)
-        call acc_data(rnear, acc_create)
-        call inner_blocks(nb, d%n, d%owner, d%rmax, comm%rank, d%h, d%skin, rmax_all, &
-                          d%pb%axis, d%pb%length, inner, rnear)
-        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, inner, rnear, comm%rank, &
-                         d%skin, rmax_all, d%pb%axis, d%pb%lo, d%pb%length, p%x, p%radius, per, &
-                         first, 0, per, per, per)
-        call prefix_sum(n, per, first)
-        call acc_data(first(n + 1:n + 1), acc_to_host)
-        last = first(n + 1:n + 1)
-        m = last(1) - 1
-        if (allocated(d%send)) deallocate(d%send, d%image)
-        allocate(to(max(1, m)), from(max(1, m)), img(max(1, m)), by_rank(max(1, m)), &
-                 start(comm%size + 1), cnt(comm%size), d%send(m), d%image(m))
-        call acc_data(to, acc_create)
-        call acc_data(from, acc_create)
-        call acc_data(img, acc_create)
-        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, inner, rnear, comm%rank, &
-                         d%skin, rmax_all, d%pb%axis, d%pb%lo, d%pb%length, p%x, p%radius, per, &
-                         first, max(1, m), to, from, img)
-        call acc_data(rnear, acc_exit)
-        call acc_data(inner, acc_exit)
-        call acc_data(by_rank, acc_create)
-        call acc_data(start, acc_create)
-        call acc_data(cnt, acc_create)
-        call bin_items(m, comm%size, to, start, by_rank, cnt)
-        call acc_data(start, acc_to_host)
-        d%send_counts = int(start(2:) - start(:comm%size))
-        call acc_data(d%send, acc_create)
-        call gather_items(m, from, by_rank, d%send)
-        call acc_data(d%send, acc_to_host)
-        call acc_data(d%image, acc_create)
-        call gather_items(m, img, by_rank, d%image)
-        call acc_data(d%image, acc_to_host)
+        if (present(xd)) then
+            call ghost_plan(d, comm, n, xd, rd)
+        else
+            call ghost_plan(d, comm, n, p%x, p%radius)
+        end if
+        m = size(d%send, kind=ip)
         allocate(ibuf(particles_pack_ints(p), m), rbuf(particles_pack_reals(p), m))
         call acc_data(ibuf, acc_create)
         call acc_data(rbuf, acc_create)
+        call acc_data(d%send, acc_enter)
         call particles_pack(p, m, d%send, ibuf, rbuf)
         call acc_data(ibuf, acc_to_host)
         call acc_data(rbuf, acc_to_host)
@@ -630,6 +592,71 @@ contains
         call acc_data(irecv, acc_exit)
         call acc_data(rbuf, acc_exit)
         call acc_data(ibuf, acc_exit)
+        call acc_data(d%send, acc_exit)
+        call acc_data(d%rmax, acc_exit)
+        call acc_data(d%owner, acc_exit)
+        if (allocated(d%sbuf)) deallocate(d%sbuf, d%rbuf)
+        allocate(d%sbuf(9, size(d%send)), d%rbuf(9, p%n_ghost))
+    end subroutine domain_ghosts
+
+    !> Which of the owned particles 1..n (at x, of reach radius) go to which rank, as which
+    !> image: d%send (the places, grouped by rank), d%image and d%send_counts, on the host;
+    !> d%rmax the blocks' largest reach. (domain_ghosts; d%owner and d%rmax on the device.)
+    subroutine ghost_plan(d, comm, n, x, radius)
+        type(domain_t), intent(inout) :: d
+        type(comm_t), intent(in) :: comm
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: x(:, :), radius(:)
+        integer(ip), allocatable :: per(:), first(:), to(:), from(:), img(:), by_rank(:), &
+                                    start(:), cnt(:)
+        logical, allocatable :: inner(:)
+        real(wp), allocatable :: rnear(:)
+        integer(ip) :: m, nb, last(1)
+        real(wp) :: rmax_all
+        nb = product(d%n)
+        allocate(per(max(1, n)), first(n + 1))
+        call acc_data(per, acc_create)
+        call acc_data(first, acc_create)
+        call block_radii(n, nb, d%origin, d%h, d%n, x, radius, d%rmax)
+        call acc_data(d%rmax, acc_to_host)
+        call comm_max(comm, d%rmax)
+        call acc_data(d%rmax, acc_to_device)
+        rmax_all = maxval(d%rmax)
+        allocate(inner(nb), rnear(nb))
+        call acc_data(inner, acc_create)
+        call acc_data(rnear, acc_create)
+        call inner_blocks(nb, d%n, d%owner, d%rmax, comm%rank, d%h, d%skin, rmax_all, &
+                          d%pb%axis, d%pb%length, inner, rnear)
+        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, inner, rnear, comm%rank, &
+                         d%skin, rmax_all, d%pb%axis, d%pb%lo, d%pb%length, x, radius, per, &
+                         first, 0, per, per, per)
+        call prefix_sum(n, per, first)
+        call acc_data(first(n + 1:n + 1), acc_to_host)
+        last = first(n + 1:n + 1)
+        m = last(1) - 1
+        if (allocated(d%send)) deallocate(d%send, d%image)
+        allocate(to(max(1, m)), from(max(1, m)), img(max(1, m)), by_rank(max(1, m)), &
+                 start(comm%size + 1), cnt(comm%size), d%send(m), d%image(m))
+        call acc_data(to, acc_create)
+        call acc_data(from, acc_create)
+        call acc_data(img, acc_create)
+        call ghost_ranks(n, nb, d%origin, d%h, d%n, d%owner, d%rmax, inner, rnear, comm%rank, &
+                         d%skin, rmax_all, d%pb%axis, d%pb%lo, d%pb%length, x, radius, per, &
+                         first, max(1, m), to, from, img)
+        call acc_data(rnear, acc_exit)
+        call acc_data(inner, acc_exit)
+        call acc_data(by_rank, acc_create)
+        call acc_data(start, acc_create)
+        call acc_data(cnt, acc_create)
+        call bin_items(m, comm%size, to, start, by_rank, cnt)
+        call acc_data(start, acc_to_host)
+        d%send_counts = int(start(2:) - start(:comm%size))
+        call acc_data(d%send, acc_create)
+        call gather_items(m, from, by_rank, d%send)
+        call acc_data(d%send, acc_to_host)
+        call acc_data(d%image, acc_create)
+        call gather_items(m, img, by_rank, d%image)
+        call acc_data(d%image, acc_to_host)
         call acc_data(d%image, acc_exit)
         call acc_data(d%send, acc_exit)
         call acc_data(cnt, acc_exit)
@@ -640,11 +667,7 @@ contains
         call acc_data(to, acc_exit)
         call acc_data(first, acc_exit)
         call acc_data(per, acc_exit)
-        call acc_data(d%rmax, acc_exit)
-        call acc_data(d%owner, acc_exit)
-        if (allocated(d%sbuf)) deallocate(d%sbuf, d%rbuf)
-        allocate(d%sbuf(9, size(d%send)), d%rbuf(9, p%n_ghost))
-    end subroutine domain_ghosts
+    end subroutine ghost_plan
 
     !> rmax(b) = the largest radius of the particles 1..n in block b (0 if none), by atomic
     !> maxima (the result does not depend on their order).

@@ -211,7 +211,7 @@ contains
     !> are there, and the lists are left there (neighbors_data brings them to the host). The
     !> history of pairs still listed is kept in the store cs, matched by global id;
     !> old_index(i) is where particle i was stored at the last build (identity if absent).
-    subroutine neighbors_build(nb, cs, n_own, n_all, gid, x, radius, mesh, old_index)
+    subroutine neighbors_build(nb, cs, n_own, n_all, gid, x, radius, mesh, old_index, body)
         type(neighbors_t), intent(inout) :: nb
         type(contact_store_t), intent(inout) :: cs
         integer(ip), intent(in) :: n_own       !! owned particles (rows)
@@ -221,6 +221,7 @@ contains
         real(wp), intent(in) :: radius(:)      !! [m]
         type(mesh_t), intent(in) :: mesh
         integer(ip), intent(in), optional :: old_index(:)
+        integer(i8), intent(in), optional :: body(:)   !! of a case with clumps (dem_particles)
         integer(ip), allocatable :: old_start(:), same(:), level(:), cell(:), gstart(:), &
                                     gitem(:), cnt(:), n_of(:, :), off(:), pstart(:)
         integer(ip), allocatable :: old_pref(:), old_slot(:), from(:), kept(:, :)
@@ -311,6 +312,7 @@ contains
                        n_of, off, n_cells, gstart, gitem, nb%start, kept_partners, kept, &
                        n_entries, nb%list)
         call acc_data(kept, acc_exit)
+        if (present(body)) call drop_body_pairs(nb, n_own, body, n_entries)
         call pair_partners(n_own, n_all, n_entries, gid, nb%start, nb%list, nb%partner, &
                            nb%mirror)
 
@@ -520,6 +522,62 @@ contains
             if (.not. fill) out(i) = k
         end do
     end subroutine pair_rows
+
+    !> The entries of the rows that pair two members of one clump taken out of the lists
+    !> (they never touch: dem_clumps): nb%start and nb%list made anew, n_entries their number;
+    !> nb%partner, nb%mirror and nb%pref sized for them. On the device.
+    subroutine drop_body_pairs(nb, n_own, body, n_entries)
+        type(neighbors_t), intent(inout) :: nb
+        integer(ip), intent(in) :: n_own
+        integer(i8), intent(in) :: body(:)
+        integer(ip), intent(inout) :: n_entries
+        integer(ip), allocatable :: cnt(:), start(:), list(:)
+        integer(ip) :: i, e, k
+        allocate(cnt(max(1, n_own)), start(n_own + 1))
+        call acc_data(cnt, acc_create)
+        call acc_data(start, acc_create)
+        !$acc parallel loop gang vector default(present) private(e)
+        do i = 1, n_own
+            cnt(i) = 0
+            do e = nb%start(i), nb%start(i + 1) - 1
+                if (.not. same_body(body(i), body(nb%list(e)))) cnt(i) = cnt(i) + 1
+            end do
+        end do
+        call prefix_sum(n_own, cnt, start)
+        call acc_data(start(n_own + 1:n_own + 1), acc_to_host)
+        n_entries = start(n_own + 1) - 1
+        allocate(list(max(1, n_entries)))
+        call acc_data(list, acc_create)
+        !$acc parallel loop gang vector default(present) private(e, k)
+        do i = 1, n_own
+            k = start(i)
+            do e = nb%start(i), nb%start(i + 1) - 1
+                if (same_body(body(i), body(nb%list(e)))) cycle
+                list(k) = nb%list(e)
+                k = k + 1
+            end do
+        end do
+        call acc_data(cnt, acc_exit)
+        call acc_data(nb%start, acc_exit)
+        call acc_data(nb%list, acc_exit)
+        call acc_data(nb%partner, acc_exit)
+        call acc_data(nb%mirror, acc_exit)
+        call acc_data(nb%pref, acc_exit)
+        deallocate(nb%partner, nb%mirror, nb%pref)
+        call move_alloc(start, nb%start)
+        call move_alloc(list, nb%list)
+        allocate(nb%partner(n_entries), nb%mirror(n_entries), nb%pref(n_entries))
+        call acc_data(nb%partner, acc_create)
+        call acc_data(nb%mirror, acc_create)
+        call acc_data(nb%pref, acc_create)
+    end subroutine drop_body_pairs
+
+    !> Whether two particles of bodies a and b are members of one clump (0: a sphere).
+    pure logical function same_body(a, b)
+        !$acc routine seq
+        integer(i8), intent(in) :: a, b
+        same_body = a == b .and. a /= 0
+    end function same_body
 
     !> A candidate `item` of a row whose k entries so far start at out(first), near enough or
     !> not: with `fill`, into out(first + k) if near; without, into keep(k + 1) either way

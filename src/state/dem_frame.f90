@@ -87,7 +87,7 @@ contains
         order = order_by_id(got%gid(1:n))
         places = [(k, k = 1, n)]
         fr%n = n
-        call frame_particles(fr%p, n)
+        call frame_particles(fr%p, n, allocated(got%body))
         call particles_frame_copy(got, n, order, fr%p, places)
         if (allocated(fr%x_ref)) fr%x_ref = moved(fr%x_ref)
         if (allocated(fr%contacts)) fr%contacts = int(reshape(moved_int(reshape(fr%contacts, &
@@ -108,7 +108,7 @@ contains
             integer(i8), allocatable :: ibuf(:, :), irecv(:, :)
             real(wp), allocatable :: rbuf(:, :), rrecv(:, :)
             integer(ip), allocatable :: idx(:)
-            call frame_particles(b, n)
+            call frame_particles(b, n, allocated(a%body))
             idx = [(k, k = 1, m)]
             call particles_frame_pack(a, m, idx, ibuf, rbuf)
             allocate(irecv(size(ibuf, 1), n), rrecv(size(rbuf, 1), n))
@@ -146,11 +146,13 @@ contains
         count = (comm%rank + 1) * m / comm%size - first
     end subroutine frame_block
 
-    !> Room for n particles in a frame (particles 1..n, the fields zero).
-    subroutine frame_particles(p, n)
+    !> Room for n particles in a frame (particles 1..n, the fields zero; with `clumps`, the
+    !> body fields too).
+    subroutine frame_particles(p, n, clumps)
         type(particles_t), intent(out) :: p
         integer(ip), intent(in) :: n
-        call particles_init(p, n)
+        logical, intent(in) :: clumps
+        call particles_init(p, n, clumps)
         p%n_own = n
     end subroutine frame_particles
 

@@ -15,7 +15,8 @@ module dem_particles
               particles_pack_ints, particles_pack_reals, particles_external, sphere_mass, &
               sphere_inv_inertia, ext_force, ext_torque, ext_beta, ext_fluid_v, ext_impulse, n_ext, &
               particles_fields, field_visitor_t, frame_none, frame_state, frame_force, frame_restart, &
-              particles_frame_copy, particles_frame_pack, particles_frame_unpack, particles_derive
+              particles_frame_copy, particles_frame_pack, particles_frame_unpack, particles_derive, &
+              body_state_rows, bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset
 
     ! rows of particles_t%ext: what a coupled fluid code sets and gets (doc/user/coupling.md)
     integer, parameter :: ext_force = 1      !< 1:3 external force [N]
@@ -24,6 +25,11 @@ module dem_particles
     integer, parameter :: ext_fluid_v = 8    !< 8:10 fluid velocity at the particle [m/s]
     integer, parameter :: ext_impulse = 11   !< 11:13 impulse of all these since the reset [N s]
     integer, parameter :: n_ext = 13
+
+    ! rows of a clump member's body state as one column (the case's, dem_case; particles_add):
+    ! the body fields of particles_t, in this order
+    integer, parameter :: bs_x = 1, bs_v = 4, bs_q = 7, bs_l = 11, bs_inv_i = 14, &
+                          bs_mass = 17, bs_offset = 18, body_state_rows = 20
 
     ! what the frames (snapshots, checkpoints, the final state, the instability guard's last
     ! good state: dem_frame, dem_frames, dem_checkpoint) hold of a field (particles_fields)
@@ -55,6 +61,20 @@ module dem_particles
                                                   !< a checkpoint that holds them to its
                                                   !< restart's first build (dem_frames,
                                                   !< dem_rebuild); unallocated otherwise
+        ! A member sphere of a clump (dem_clumps) carries its body's state, the same bits in
+        ! every member; a sphere has body 0 and zeros there. Unallocated in a case without
+        ! clumps.
+        integer(i8), allocatable :: body(:)       !< the body's id (that of its first
+                                                  !< member), 0: a sphere
+        real(wp), allocatable :: body_x(:, :)     !< the body's centre of mass [m]
+        real(wp), allocatable :: body_v(:, :)     !< its velocity [m/s]
+        real(wp), allocatable :: body_q(:, :)     !< (4, n) its orientation, the unit
+                                                  !< quaternion from body to lab frame
+        real(wp), allocatable :: body_l(:, :)     !< its angular momentum, lab frame [kg m^2/s]
+        real(wp), allocatable :: body_inv_i(:, :) !< its inverse principal moments
+                                                  !< [1/(kg m^2)]
+        real(wp), allocatable :: body_mass(:)     !< its mass [kg]
+        real(wp), allocatable :: body_offset(:, :) !< the member's centre, body frame [m]
     end type particles_t
 
     !> What particles_fields does to the fields of the store: an extension of this type per
@@ -181,6 +201,15 @@ contains
         if (allocated(p%ext)) call visit_field(visit, p%ext, 'external', frame_none)
         if (allocated(p%x_built)) call visit_field(visit, p%x_built, 'list_reference', &
                                                    frame_none)
+        if (.not. allocated(p%body)) return
+        call visit_field(visit, p%body, 'body', frame_state)
+        call visit_field(visit, p%body_q, 'orientation', frame_state)
+        call visit_field(visit, p%body_x, 'body_position', frame_restart)
+        call visit_field(visit, p%body_v, 'body_velocity', frame_restart)
+        call visit_field(visit, p%body_l, 'body_angular_momentum', frame_restart)
+        call visit_field(visit, p%body_inv_i, 'body_inverse_moments', frame_restart)
+        call visit_field(visit, p%body_mass, 'body_mass', frame_restart)
+        call visit_field(visit, p%body_offset, 'body_offset', frame_restart)
     end subroutine particles_fields
 
     subroutine visit_ids(visit, a, name, role)
@@ -271,7 +300,8 @@ contains
     end subroutine particles_frame_unpack
 
     !> The fields of particles first..last derived from their radii and materials (mass,
-    !> inverse mass, inverse moment of inertia), on the host.
+    !> inverse mass, inverse moment of inertia), on the host; a clump's member: its body's
+    !> mass, and no inverse mass or moment (it moves with its body, dem_clumps).
     subroutine particles_derive(p, first, last, density)
         type(particles_t), intent(inout) :: p
         integer(ip), intent(in) :: first, last
@@ -287,16 +317,31 @@ contains
         type(particles_t), intent(inout) :: p
         integer(ip), intent(in) :: i
         real(wp), intent(in) :: density          !! [kg/m^3]
+        if (allocated(p%body)) then
+            if (p%body(i) /= 0) then
+                p%mass(i) = p%body_mass(i)
+                p%inv_mass(i) = 0.0_wp
+                p%inv_inertia(i) = 0.0_wp
+                return
+            end if
+        end if
         p%mass(i) = sphere_mass(p%radius(i), density)
         p%inv_mass(i) = 1.0_wp / p%mass(i)
         p%inv_inertia(i) = sphere_inv_inertia(p%mass(i), p%radius(i))
     end subroutine derive
 
-    !> Allocate room for `capacity` particles, every field zero; the store starts empty.
-    subroutine particles_init(p, capacity)
+    !> Allocate room for `capacity` particles, every field zero (with `clumps`, the body
+    !> fields too); the store starts empty.
+    subroutine particles_init(p, capacity, clumps)
         type(particles_t), intent(out) :: p  !! the store
         integer(ip), intent(in) :: capacity   !! number of particles it can hold
+        logical, intent(in), optional :: clumps  !! the case has clumps (default: none)
         type(resizer_t) :: alloc
+        if (present(clumps)) then
+            if (clumps) allocate(p%body(0), p%body_x(3, 0), p%body_v(3, 0), p%body_q(4, 0), &
+                                 p%body_l(3, 0), p%body_inv_i(3, 0), p%body_mass(0), &
+                                 p%body_offset(3, 0))
+        end if
         alloc = resizer_t(n=0, capacity=capacity)
         call particles_fields(p, alloc)
     end subroutine particles_init
@@ -335,20 +380,40 @@ contains
         call particles_fields(p, device)
     end subroutine particles_data
 
-    !> Append an owned sphere (there are no ghosts while particles are added).
-    subroutine particles_add(p, gid, mat, radius, density, x, v, w)
+    !> Append an owned sphere (there are no ghosts while particles are added); in a store with
+    !> body fields, a clump's member when `body` is given (its id, not 0) with its body state
+    !> (rows bs_*), else a sphere (body 0).
+    subroutine particles_add(p, gid, mat, radius, density, x, v, w, body, state)
         type(particles_t), intent(inout) :: p
         integer(i8), intent(in) :: gid          !! global id
         integer(ip), intent(in) :: mat          !! material index
         real(wp), intent(in) :: radius          !! [m]
         real(wp), intent(in) :: density         !! [kg/m^3]
         real(wp), intent(in) :: x(3), v(3), w(3)  !! position [m], velocity [m/s], [rad/s]
+        integer(i8), intent(in), optional :: body
+        real(wp), intent(in), optional :: state(body_state_rows)
+        real(wp) :: b(body_state_rows)
         integer(ip) :: i
         i = p%n_own + 1
         p%n_own = i
         p%gid(i) = gid
         p%mat(i) = mat
         p%radius(i) = radius
+        if (allocated(p%body)) then
+            p%body(i) = 0
+            b = 0.0_wp
+            if (present(body)) then
+                p%body(i) = body
+                b = state
+            end if
+            p%body_x(:, i) = b(bs_x:bs_x + 2)
+            p%body_v(:, i) = b(bs_v:bs_v + 2)
+            p%body_q(:, i) = b(bs_q:bs_q + 3)
+            p%body_l(:, i) = b(bs_l:bs_l + 2)
+            p%body_inv_i(:, i) = b(bs_inv_i:bs_inv_i + 2)
+            p%body_mass(i) = b(bs_mass)
+            p%body_offset(:, i) = b(bs_offset:bs_offset + 2)
+        end if
         call derive(p, i, density)
         p%x(:, i) = x
         p%v(:, i) = v

@@ -1,0 +1,293 @@
+! SPDX-License-Identifier: BSD-3-Clause
+!> Clumps: rigid bodies made of member spheres (doc/theory.md, section 17). A clump template
+!> is a list of spheres in its own frame, with its mass properties (dem_clump_mass); a clump
+!> is a template placed at a position and orientation. Its members are particles of the
+!> store that carry the body's state (dem_particles: body, body_x, ...), the same bits in each:
+!> they take part in contacts as spheres of the body's mass, never with each other, and move
+!> with their body. Each step, the members' forces and torques about the centre of mass are
+!> summed, in the order of their ids, into the body's, on the rank that owns the body (all of
+!> its members: dem_domain gives them the rank of the body's centre), so that the sums do not
+!> depend on the number of ranks; the body moves as a sphere's centre does and turns by
+!> dem_rigid; its members are put where the body says.
+module dem_clumps
+    use dem_kinds, only: wp, ip, i8
+    use dem_vector, only: cross
+    use dem_rigid, only: rigid_free_rotation, rigid_omega, quat_product, quat_to_lab, &
+                         quat_to_body, quat_from_matrix, quat_normalise
+    use dem_integrate, only: too_fast
+    use dem_clump_mass, only: clump_mass_t
+    use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host, acc_to_device
+    use dem_particles, only: bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset
+    implicit none
+    private
+    public :: clump_template_t, clump_t, clump_index_t, clump_members, clump_index_build, &
+              clump_index_free, clumps_move, clump_energy_terms, sphere_gravity, clump_reach
+
+    !> A clump template: its member spheres and its mass properties.
+    type :: clump_template_t
+        character(len=:), allocatable :: name
+        integer(ip) :: mat = 0                   !< the members' material
+        real(wp), allocatable :: centres(:, :)   !< (3, members) the template's frame [m]
+        real(wp), allocatable :: radii(:)        !< [m]
+        type(clump_mass_t) :: props              !< mass, centre, principal moments and axes
+        real(wp) :: reach = 0.0_wp               !< largest |member centre - centre of mass| +
+                                                 !< its radius [m]
+    end type clump_template_t
+
+    !> A clump as the case places it: its template's frame moved to `position` and turned by
+    !> `orientation` (a unit quaternion, template frame to lab frame).
+    type :: clump_t
+        integer(ip) :: template = 0
+        real(wp) :: position(3) = 0.0_wp          !< of the template's origin [m]
+        real(wp) :: orientation(4) = [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]
+        real(wp) :: velocity(3) = 0.0_wp          !< of the centre of mass [m/s]
+        real(wp) :: angular_velocity(3) = 0.0_wp  !< [rad/s]
+    end type clump_t
+
+    !> The bodies a rank owns: body k's members are member(first(k) .. first(k + 1) - 1), in
+    !> the order of their ids (on the device too, when the particles are there).
+    type :: clump_index_t
+        integer(ip) :: n = 0
+        integer(ip), allocatable :: first(:)
+        integer(ip), allocatable :: member(:)
+    end type clump_index_t
+
+contains
+
+    !> The members of clump `cl` of template `tpl` as particles: ids id0, id0 + 1, ... (the
+    !> body's id is id0), their radii, positions, velocities, angular velocities and body
+    !> state (dem_particles' rows bs_*). The body frame is the template's principal frame:
+    !> q = q_placed q_principal, X = position + R(q_placed) c; L = R I R^T w.
+    subroutine clump_members(tpl, cl, id0, gid, body, radius, x, v, w, state)
+        type(clump_template_t), intent(in) :: tpl
+        type(clump_t), intent(in) :: cl
+        integer(i8), intent(in) :: id0
+        integer(i8), intent(out) :: gid(:), body(:)
+        real(wp), intent(out) :: radius(:), x(:, :), v(:, :), w(:, :), state(:, :)
+        real(wp) :: q(4), xc(3), l(3), inv_i(3), wb(3), r(3)
+        integer :: k
+        q = quat_normalise(quat_product(quat_normalise(cl%orientation), &
+                                        quat_from_matrix(transpose(tpl%props%rotation))))
+        xc = cl%position + quat_to_lab(quat_normalise(cl%orientation), tpl%props%centre)
+        inv_i = 1.0_wp / tpl%props%moments
+        l = quat_to_lab(q, tpl%props%moments * quat_to_body(q, cl%angular_velocity))
+        wb = rigid_omega(q, inv_i, l)
+        do k = 1, size(tpl%radii)
+            gid(k) = id0 + k - 1
+            body(k) = id0
+            radius(k) = tpl%radii(k)
+            r = quat_to_lab(q, tpl%props%positions(:, k))
+            x(:, k) = xc + r
+            v(:, k) = cl%velocity + cross(wb, r)
+            w(:, k) = wb
+            state(bs_x:bs_x + 2, k) = xc
+            state(bs_v:bs_v + 2, k) = cl%velocity
+            state(bs_q:bs_q + 3, k) = q
+            state(bs_l:bs_l + 2, k) = l
+            state(bs_inv_i:bs_inv_i + 2, k) = inv_i
+            state(bs_mass, k) = tpl%props%mass
+            state(bs_offset:bs_offset + 2, k) = tpl%props%positions(:, k)
+        end do
+    end subroutine clump_members
+
+    !> The index of the bodies among the owned particles 1..n (body(i) /= 0: a member): the
+    !> members in the order of their ids, which groups each body's (a body's members have
+    !> consecutive ids, the first the body's). Built on the host, then on the device.
+    subroutine clump_index_build(idx, n, gid, body)
+        type(clump_index_t), intent(inout) :: idx
+        integer(ip), intent(in) :: n
+        integer(i8), intent(inout) :: gid(:), body(:)
+        integer(i8), allocatable :: key(:)
+        integer(ip), allocatable :: at(:), order(:)
+        integer(ip) :: i, k, m
+        call clump_index_free(idx)
+        call acc_data(gid, acc_to_host)
+        call acc_data(body, acc_to_host)
+        at = pack([(i, i = 1, n)], body(1:n) /= 0)
+        key = gid(at)
+        order = sort_order(key)
+        m = size(at, kind=ip)
+        allocate(idx%member(max(1, m)), idx%first(m + 1))
+        idx%n = 0
+        do k = 1, m
+            idx%member(k) = at(order(k))
+            if (k == 1) then
+                idx%n = 1
+                idx%first(1) = 1
+            else if (body(at(order(k))) /= body(at(order(k - 1)))) then
+                idx%n = idx%n + 1
+                idx%first(idx%n) = k
+            end if
+        end do
+        idx%first(idx%n + 1) = m + 1
+        call acc_data(idx%member, acc_create)
+        call acc_data(idx%first, acc_create)
+        call acc_data(idx%member, acc_to_device)
+        call acc_data(idx%first, acc_to_device)
+    end subroutine clump_index_build
+
+    !> The index released (off the device).
+    subroutine clump_index_free(idx)
+        type(clump_index_t), intent(inout) :: idx
+        if (.not. allocated(idx%first)) return
+        call acc_data(idx%member, acc_exit)
+        call acc_data(idx%first, acc_exit)
+        deallocate(idx%member, idx%first)
+        idx%n = 0
+    end subroutine clump_index_free
+
+    !> The indices 1..size(key) in increasing order of key (merge sort).
+    pure function sort_order(key) result(idx)
+        integer(i8), intent(in) :: key(:)
+        integer(ip) :: idx(size(key)), tmp(size(key))
+        integer(ip) :: width, lo, mid, hi, a, b, k, n
+        logical :: take_a
+        n = size(key)
+        idx = [(k, k = 1, n)]
+        width = 1
+        do while (width < n)
+            do lo = 1, n, 2 * width
+                mid = min(lo + width, n + 1)
+                hi = min(lo + 2 * width, n + 1)
+                a = lo
+                b = mid
+                do k = lo, hi - 1
+                    take_a = a < mid
+                    if (take_a .and. b < hi) take_a = key(idx(a)) <= key(idx(b))
+                    if (take_a) then
+                        tmp(k) = idx(a)
+                        a = a + 1
+                    else
+                        tmp(k) = idx(b)
+                        b = b + 1
+                    end if
+                end do
+            end do
+            idx = tmp
+            width = 2 * width
+        end do
+    end function sort_order
+
+    !> The bodies of the index kicked by their forces and torques over h, and, with h_drift >
+    !> 0, moved and turned over h_drift (dem_integrate's kick and kick_drift, for bodies):
+    !> F = M g + sum of the members' forces, T = sum of (x_m - X) x f_m + t_m, each summed in
+    !> the order of the members' ids; V += h F / M, L += h T, then the free rotation of
+    !> (q, L) over h_drift (dem_rigid) and X += h_drift V; the members then take the body's
+    !> state, their centres X + R(q) b_m, their velocities V + w x R(q) b_m and angular
+    !> velocity w (w from q and L). n_fast counts the members whose new speed or rim speed is
+    !> not below `bound` (the speed guard, as dem_integrate's).
+    subroutine clumps_move(nb, first, member, h, h_drift, gravity, bound, f, t, radius, &
+                           body_x, body_v, body_q, body_l, body_inv_i, body_mass, body_offset, &
+                           x, v, w, n_fast)
+        integer(ip), intent(in) :: nb
+        integer(ip), intent(in) :: first(:), member(:)
+        real(wp), intent(in) :: h, h_drift              !! [s]
+        real(wp), intent(in) :: gravity(3)              !! [m/s^2]
+        real(wp), intent(in) :: bound                   !! [m/s]
+        real(wp), intent(in) :: f(:, :), t(:, :)        !! the members' [N], [N m]
+        real(wp), intent(in) :: radius(:)               !! [m]
+        real(wp), intent(inout) :: body_x(:, :), body_v(:, :), body_q(:, :), body_l(:, :)
+        real(wp), intent(in) :: body_inv_i(:, :), body_mass(:), body_offset(:, :)
+        real(wp), intent(inout) :: x(:, :), v(:, :), w(:, :)
+        integer(i8), intent(out) :: n_fast
+        real(wp) :: fb(3), tb(3), xb(3), vb(3), qb(4), lb(3), wb(3), r(3), b2
+        integer(ip) :: k, m, i, i0
+        b2 = bound**2
+        n_fast = 0
+        !$acc parallel loop gang vector default(present) copyin(gravity) &
+        !$acc reduction(+:n_fast) private(fb, tb, xb, vb, qb, lb, wb, r, m, i, i0)
+        do k = 1, nb
+            i0 = member(first(k))
+            xb = body_x(:, i0)
+            fb = 0.0_wp
+            tb = 0.0_wp
+            do m = first(k), first(k + 1) - 1
+                i = member(m)
+                fb = fb + f(:, i)
+                tb = tb + (cross(x(:, i) - xb, f(:, i)) + t(:, i))
+            end do
+            vb = body_v(:, i0) + (h / body_mass(i0)) * (body_mass(i0) * gravity + fb)
+            lb = body_l(:, i0) + h * tb
+            qb = body_q(:, i0)
+            if (h_drift > 0.0_wp) then
+                call rigid_free_rotation(h_drift, body_inv_i(:, i0), lb, qb)
+                xb = xb + h_drift * vb
+            end if
+            wb = rigid_omega(qb, body_inv_i(:, i0), lb)
+            do m = first(k), first(k + 1) - 1
+                i = member(m)
+                r = quat_to_lab(qb, body_offset(:, i))
+                if (h_drift > 0.0_wp) x(:, i) = xb + r
+                v(:, i) = vb + cross(wb, r)
+                w(:, i) = wb
+                body_x(:, i) = xb
+                body_v(:, i) = vb
+                body_q(:, i) = qb
+                body_l(:, i) = lb
+                n_fast = n_fast + too_fast(v(:, i), w(:, i), radius(i), b2)
+            end do
+        end do
+    end subroutine clumps_move
+
+    !> Where the particles 1..n are for the domain (dem_domain: blocks, ranks and ghosts) and
+    !> how far they reach: a sphere at x with its radius; a member at its body's centre, with
+    !> the radius of the sphere about it that holds the member, |b_m| + R, so that all of a
+    !> body's members go to the rank of its centre and every pair that can touch is on the
+    !> ranks of both. On the device (xd and rd created there).
+    subroutine clump_reach(n, body, x, radius, body_x, body_offset, xd, rd)
+        integer(ip), intent(in) :: n
+        integer(i8), intent(in) :: body(:)
+        real(wp), intent(in) :: x(:, :), radius(:), body_x(:, :), body_offset(:, :)
+        real(wp), allocatable, intent(out) :: xd(:, :), rd(:)
+        integer(ip) :: i
+        allocate(xd(3, max(1, n)), rd(max(1, n)))
+        call acc_data(xd, acc_create)
+        call acc_data(rd, acc_create)
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n
+            if (body(i) == 0) then
+                xd(:, i) = x(:, i)
+                rd(i) = radius(i)
+            else
+                xd(:, i) = body_x(:, i)
+                rd(i) = radius(i) + norm2(body_offset(:, i))
+            end if
+        end do
+    end subroutine clump_reach
+
+    !> f += m g for the spheres among particles 1..n (body 0) of a case with clumps, whose
+    !> particle contacts are summed without gravity (the bodies take M g in clumps_move).
+    subroutine sphere_gravity(n, body, mass, gravity, f)
+        integer(ip), intent(in) :: n
+        integer(i8), intent(in) :: body(:)
+        real(wp), intent(in) :: mass(:), gravity(3)
+        real(wp), intent(inout) :: f(:, :)
+        integer(ip) :: i
+        !$acc parallel loop gang vector default(present) copyin(gravity)
+        do i = 1, n
+            if (body(i) == 0) f(:, i) = f(:, i) + mass(i) * gravity
+        end do
+    end subroutine sphere_gravity
+
+    !> The energy terms of dem_diagnostics' energies for the members among particles 1..n
+    !> (body(i) /= 0), on the host: the body's first member (its id the body's) gives the
+    !> body's, [M V^2 / 2, w . L / 2, -M g . X, M], the others zero.
+    subroutine clump_energy_terms(n, gid, body, body_x, body_v, body_q, body_l, body_inv_i, &
+                                  body_mass, gravity, e)
+        integer(ip), intent(in) :: n
+        integer(i8), intent(in) :: gid(:), body(:)
+        real(wp), intent(in) :: body_x(:, :), body_v(:, :), body_q(:, :), body_l(:, :), &
+                                body_inv_i(:, :), body_mass(:), gravity(3)
+        real(wp), intent(inout) :: e(:, :)
+        integer(ip) :: i
+        do i = 1, n
+            if (body(i) == 0) cycle
+            e(:, i) = 0.0_wp
+            if (gid(i) /= body(i)) cycle
+            e(:, i) = [0.5_wp * body_mass(i) * dot_product(body_v(:, i), body_v(:, i)), &
+                       0.5_wp * dot_product(rigid_omega(body_q(:, i), body_inv_i(:, i), &
+                                                        body_l(:, i)), body_l(:, i)), &
+                       -body_mass(i) * dot_product(gravity, body_x(:, i)), body_mass(i)]
+        end do
+    end subroutine clump_energy_terms
+end module dem_clumps
