@@ -200,6 +200,7 @@ contains
         write(output_unit, '(a)') 'case ' // c%source
         write(output_unit, '(a,i0,a,i0,a)') '  particles            ', c%n_particles, &
             ' (wall triangles ', c%mesh%n_tri, ')'
+        if (c%has_clumps) call print_clumps(c)
         write(output_unit, '(a,es12.5,a)') '  total mass           ', c%summary%mass, ' kg'
         do k = 1, 3
             if (.not. c%periodic%axis(k)) cycle
@@ -253,6 +254,24 @@ contains
                 'coming to rest); check series.csv''s kinetic_rotational, or lower dt'
         end if
     end subroutine print_check
+
+    !> The clumps of a case (among its particles: their members), and each template they
+    !> use with its mass properties and reach (dem_clumps).
+    subroutine print_clumps(c)
+        type(case_t), intent(in) :: c
+        integer :: k
+        write(output_unit, '(a,i0,a)') '  clumps               ', size(c%clumps), &
+            ' (their members among the particles)'
+        do k = 1, size(c%templates)
+            if (.not. any(c%clumps%template == k)) cycle
+            associate (t => c%templates(k))
+                write(output_unit, '(a,i0,a,i0,a,es12.5,a,3es12.5,a,es10.3,a)') '    ' // &
+                    t%name // ': ', count(c%clumps%template == k), ' clumps of ', &
+                    size(t%radii), ' spheres, mass ', t%props%mass, &
+                    ' kg, principal moments', t%props%moments, ' kg m^2, reach ', t%reach, ' m'
+            end associate
+        end do
+    end subroutine print_clumps
 
     !> The rolling resistance models the pairs of a case use ('cdt', 'epsd2' or both).
     function rolling_models(c) result(names)

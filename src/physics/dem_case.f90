@@ -14,7 +14,7 @@ module dem_case
     use dem_comm, only: comm_t, comm_sum, comm_max
     use dem_periodic, only: periodic_t
     use dem_clumps, only: clump_template_t, clump_t
-    use dem_particles, only: body_state_rows
+    use dem_particles, only: body_state_rows, bs_mass, bs_l
     implicit none
     private
     public :: case_t, time_scales_t, insert_t, id_check_t, case_time_scales, case_summarize, &
@@ -184,10 +184,18 @@ contains
                 a = c%mat(i)
                 sm%rmin(a) = min(sm%rmin(a), c%radius(i))
                 sm%rmax(a) = max(sm%rmax(a), c%radius(i))
-                m = 4.0_wp / 3.0_wp * pi * c%radius(i)**3 * c%mats%density(a)
-                sm%mass = sm%mass + m
-                sm%spin_energy = sm%spin_energy + 0.2_wp * m * c%radius(i)**2 &
-                                 * dot_product(c%w(:, i), c%w(:, i))
+                if (member(i)) then           ! a clump's: its body's mass and energy, once
+                    if (c%gid(i) == c%body(i)) then
+                        sm%mass = sm%mass + c%body_state(bs_mass, i)
+                        sm%spin_energy = sm%spin_energy + 0.5_wp * &
+                            dot_product(c%w(:, i), c%body_state(bs_l:bs_l + 2, i))
+                    end if
+                else
+                    m = 4.0_wp / 3.0_wp * pi * c%radius(i)**3 * c%mats%density(a)
+                    sm%mass = sm%mass + m
+                    sm%spin_energy = sm%spin_energy + 0.2_wp * m * c%radius(i)**2 &
+                                     * dot_product(c%w(:, i), c%w(:, i))
+                end if
                 sm%speed = max(sm%speed, norm2(c%v(:, i)))
                 sm%rim = max(sm%rim, norm2(c%w(:, i)) * c%radius(i))
                 sm%low = min(sm%low, dot_product(e, c%x(:, i)))
@@ -220,6 +228,13 @@ contains
             sm%mass = sums(1)
             sm%spin_energy = sums(2)
         end associate
+    contains
+        !> Whether row i is a clump's member.
+        logical function member(i)
+            integer(ip), intent(in) :: i
+            member = .false.
+            if (allocated(c%body)) member = c%body(i) /= 0
+        end function member
     end subroutine case_summarize
 
     !> The time from which a run may stop as settled (stop_kinetic_energy): that of a free

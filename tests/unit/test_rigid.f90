@@ -1,7 +1,8 @@
 ! SPDX-License-Identifier: BSD-3-Clause
 !> The rotation of rigid bodies (dem_rigid) against closed forms and conservation laws
 !> (doc/theory.md, section 5.1):
-!> - the quaternion helpers: a rotation and its inverse, the product as composition;
+!> - the quaternion helpers: a rotation and its inverse, the product as composition, the
+!>   quaternion of a rotation matrix;
 !> - free rotation of an asymmetric top (I = 1, 2, 3): the lab-frame angular momentum kept to
 !>   the bit, the energy within the bound of the modified energy and without drift, and the
 !>   period of the body-frame motion that of the Jacobi elliptic solution (Landau & Lifshitz,
@@ -17,7 +18,8 @@
 program test_rigid
     use dem_kinds, only: wp, ip, i8
     use dem_rigid, only: rigid_kick, rigid_kick_drift, rigid_omega, quat_product, &
-                         quat_conjugate, quat_to_lab, quat_to_body, quat_normalise
+                         quat_conjugate, quat_to_lab, quat_to_body, quat_normalise, &
+                         quat_from_matrix
     use dem_integrate, only: kick
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
@@ -32,6 +34,7 @@ program test_rigid
     real(wp), parameter :: pend_theta0 = 1.0_wp, pend_t_end = 4.0_wp
 
     call helpers()
+    call from_matrix()
     call asymmetric_top()
     call jacobi_period([1.0_wp, 0.5_wp, 0.8_wp], 'asymmetric top')
     call jacobi_period([0.1_wp, 1.0_wp, 0.1_wp], 'near the intermediate axis (flips)')
@@ -43,6 +46,30 @@ program test_rigid
     call assert_finish()
 
 contains
+
+    !> quat_from_matrix: the matrix whose columns are the turned axes, q e_k q*, gives q back
+    !> (q0 >= 0), whichever of its components is the largest (each branch of Shepperd's
+    !> method).
+    subroutine from_matrix()
+        real(wp) :: q(4), r(3, 3), back(4), e(3)
+        integer :: k, j
+        do k = 1, 4
+            q = [0.3_wp, -0.2_wp, 0.25_wp, 0.1_wp]
+            q(k) = 0.9_wp * merge(1.0_wp, -1.0_wp, k /= 3)
+            q = quat_normalise(q)
+            if (q(1) < 0.0_wp) q = -q
+            do j = 1, 3
+                e = 0.0_wp
+                e(j) = 1.0_wp
+                r(:, j) = quat_to_lab(q, e)
+            end do
+            back = quat_from_matrix(r)
+            do j = 1, 4
+                call assert_close(back(j), q(j), 0.0_wp, 'quat_from_matrix gives q back', &
+                                  atol=4.0_wp * eps)
+            end do
+        end do
+    end subroutine from_matrix
 
     !> The rotation by q and by q* undo each other; q v q* of a vector about the axis of q is
     !> the vector; a quarter turn about z takes x to y; (a b) v (a b)* = a (b v b*) a*; the
