@@ -492,5 +492,31 @@ r, _ = run([], "noargs")
 check(r.returncode == 2 and "usage" in r.stderr.lower() + "--help", "no arguments")
 r, _ = run(["--frobnicate"], "badoption")
 check(r.returncode == 2 and "unknown option" in r.stderr, "unknown option")
+# clumps (&clump_template, &clump)
+CT = ("&clump_template name = 'd', material = 'glass', "
+      "members = -0.005, 0, 0, 0.006,  0.005, 0, 0, 0.006 /\n")
+CL = "&clump template = 'd', position = 0, 0, 0.1 /\n"
+with open(os.path.join(work, "good_clump.nml"), "w") as f:
+    f.write(GOOD + CT + CL)
+r, d = run(["--check", os.path.join(work, "good_clump.nml")], "good_clump")
+check(r.returncode == 0 and "clumps               1" in r.stdout,
+      f"good clump: --check failed or does not print the clumps: {r.stderr} {r.stdout}")
+bad("clump_unknown_template", GOOD + CT + CL.replace("'d'", "'e'"), "clump", "template")
+bad("clump_orientation", GOOD + CT + CL.replace("/", ", orientation = 1, 1, 0, 0 /"),
+    "clump", "orientation", "unit quaternion")
+bad("clump_position", GOOD + CT + CL.replace("position = 0, 0, 0.1", "velocity = 1, 0, 0"),
+    "clump", "position")
+bad("clump_members_part", GOOD + CT.replace("0.005, 0, 0, 0.006 /", "0.005, 0 /") + CL,
+    "clump_template", "members")
+bad("clump_members_radius", GOOD + CT.replace("0.005, 0, 0, 0.006 /", "0.005, 0, 0, 0 /")
+    + CL, "clump_template", "members", "member 2")
+bad("clump_mass_alone", GOOD + CT.replace("/", ", mass = 1e-3 /") + CL, "clump_template",
+    "mass", "given together")
+bad("clump_template_twice", GOOD + CT + CT + CL, "clump_template", "name")
+bad("clump_rigid", GOOD + "&material name = 'wall', rigid = .true. /\n"
+    + CT.replace("'glass'", "'wall'") + CL, "clump_template", "material", "rigid")
+bad("clump_outlet", GOOD + CT + CL + "&outlet region = 'box', box_min = -1, -1, -1, box_max = 1, 1, 1 /\n",
+    "clump", "", "&outlet")
+
 check_bad_cases()
 finish()
