@@ -1,0 +1,185 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Clumps (&clump_template, &clump; doc/theory.md, section 17) in whole runs.
+
+1. End-on impact: a dimer (two glass spheres of R = 1 mm, centres 1.4 mm apart) falling with
+   its axis vertical at 0.5 m/s onto a rigid plane touches it at one point on the line
+   through its centre of mass: no torque, a one-dimensional impact of the body's mass M on
+   one member's Hertz contact (the law takes the body's mass, as LIGGGHTS does). Side by
+   side, a single sphere of the member's radius with the density that gives it the mass M
+   (the union's mass, computed here from the lens formula, pi (4R + d)(2R - d)^2 / 12 for
+   the overlap) falls the same way: the dimer's rebound velocity must equal the sphere's to
+   1e-9, and the restitution the pair asks for, 0.6, to 1 %. `dem --check` prints the
+   template's mass, which must be the lens formula's to 1e-6.
+2. An elastic, frictionless, off-centre collision of two dimers in zero gravity (e = 1): the
+   kinetic energy (series.csv, translational + rotational, each body once) after the
+   contact equals the energy before, to 2e-4 at dt = 1 us with symplectic Euler, the error
+   halving with dt (first order: the integration's, as for spheres; the Hertz law stores and
+   returns the energy), to 1e-4 with velocity Verlet; the
+   momentum, sum of M (v1 + v2)/2 over the bodies (a dimer's members are symmetric about
+   its centre, so their mean velocity is the body's), is kept to 1e-12 of |M v0|; and the
+   bodies turn (rotational energy after the contact > 1 % of the total).
+3. A pour: 216 dimers of random orientations and a sphere falling onto a plane for 50 ms:
+   final.csv and series.csv byte for byte the same on 1, 2 and 3 ranks; a restart from the
+   checkpoint at 20 ms on 1 and on 2 ranks ends with the same final.csv; a snapshot holds
+   each particle's body id and its body's orientation (unit quaternions).
+usage: test_clumps.py DEM WORKDIR MPIEXEC"""
+import math
+import os
+import random
+import re
+import shutil
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+from regression_util import check, check_close, finish, run_dem, run_ranks, same_file
+
+dem, work, mpiexec = sys.argv[1], sys.argv[2], sys.argv[3]
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+
+R, D, RHO = 1.0e-3, 1.4e-3, 2500.0
+LENS = math.pi * (4 * R + D) * (2 * R - D) ** 2 / 12
+MASS = RHO * (2 * 4.0 / 3.0 * math.pi * R**3 - LENS)
+
+HEAD = """&run dt = 1e-6, t_end = {t_end}, gravity = 0, 0, {g} /
+&output dir = '{name}', interval = {every}{extra} /
+&material name = 'glass', density = {rho}, youngs_modulus = 5e6, poisson_ratio = 0.25 /
+&material name = 'steel', rigid = .true. /
+&pair materials = 'glass', 'glass', restitution = {e}, friction = {mu} /
+&pair materials = 'glass', 'steel', restitution = {e}, friction = {mu} /
+&clump_template name = 'dimer', material = 'glass',
+    members = -{h}, 0, 0, {r},  {h}, 0, 0, {r} /
+"""
+
+
+def write(name, text):
+    path = os.path.join(work, name + ".nml")
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def head(name, t_end, g=0.0, e=0.6, mu=0.3, every=1e-4, extra="", rho=RHO):
+    return HEAD.format(name=name, t_end=t_end, g=g, e=e, mu=mu, every=every, extra=extra,
+                       rho=rho, h=D / 2, r=R)
+
+
+def final(name):
+    return np.genfromtxt(os.path.join(work, name, "final.csv"), delimiter=",", names=True,
+                         dtype=None, encoding="ascii")
+
+
+# 1. end-on impact, beside a sphere of the body's mass
+floor = "&wall_plane material = 'steel', point = 0, 0, 0, normal = 0, 0, 1, half_width = 0.01 /\n"
+s45 = math.sqrt(0.5)
+dimer = write("end_on", head("end_on", 0.004) + floor +
+              f"&clump template = 'dimer', position = 0, 0, {D / 2 + R + 1e-5}, "
+              f"orientation = {s45}, 0, {-s45}, 0, velocity = 0, 0, -0.5 /\n")
+rho_sphere = MASS / (4.0 / 3.0 * math.pi * R**3)
+sphere = write("sphere", head("sphere", 0.004) + floor +
+               f"&material name = 'heavy', density = {rho_sphere!r}, youngs_modulus = 5e6, "
+               "poisson_ratio = 0.25 /\n&pair materials = 'heavy', 'steel', restitution = 0.6, "
+               "friction = 0.3 /\n&pair materials = 'heavy', 'heavy', restitution = 0.6, "
+               f"friction = 0.3 /\n&pair materials = 'heavy', 'glass', restitution = 0.6, "
+               f"friction = 0.3 /\n&particle material = 'heavy', radius = {R}, "
+               f"position = 0, 0, {R + 1e-5}, velocity = 0, 0, -0.5 /\n")
+r = subprocess.run([dem, "--check", dimer], cwd=work, capture_output=True, text=True)
+got = re.search(r"dimer: 1 clumps of 2 spheres, mass\s+(\S+) kg", r.stdout)
+check(got is not None, f"dem --check prints the template: {r.stdout} {r.stderr}")
+if got:
+    check_close(float(got.group(1)), MASS, 1e-5, "the dimer's mass (lens formula)")
+run_dem(dem, dimer, work)
+run_dem(dem, sphere, work)
+fd, fs = final("end_on"), final("sphere")
+if fd.size == 2 and fs.size == 1:
+    vd = float(np.mean(fd["vz"]))
+    vs = float(fs["vz"])
+    check_close(vd, vs, 1e-9, "the end-on dimer rebounds as the sphere of its mass")
+    check_close(vd / 0.5, 0.6, 0.01, "the end-on dimer's restitution")
+    check(np.allclose(fd["vx"], 0, atol=1e-12) and np.allclose(fd["wy"], 0, atol=1e-9),
+          f"no torque at an end-on impact: {fd}")
+
+# 2. an elastic, frictionless, off-centre collision of two dimers, at two steps and with
+# velocity Verlet
+pair = ("&clump template = 'dimer', position = -0.003, 0, 0, velocity = 1, 0, 0 /\n"
+        "&clump template = 'dimer', position = 0.0005, 0.0015, 0, "
+        f"orientation = {s45}, 0, 0, {s45} /\n")
+e0 = 0.5 * MASS * 1.0**2
+gain = {}
+for name, dt in (("collide", "1e-6"), ("collide_half", "5e-7"),
+                 ("collide_verlet", "1e-6, integrator = 'velocity_verlet'")):
+    run_dem(dem, write(name, head(name, 0.006, e=1.0, mu=0.0, every=5e-5).replace(
+        "dt = 1e-6", "dt = " + dt) + pair), work)
+    series = np.genfromtxt(os.path.join(work, name, "series.csv"), delimiter=",", names=True)
+    ek = series["kinetic_translational"] + series["kinetic_rotational"]
+    check_close(ek[0], e0, 1e-12, f"{name}: the kinetic energy at the start (M v0^2 / 2)")
+    check(series["contacts_pp"][-1] == 0 and max(series["contacts_pp"]) > 0,
+          f"{name}: the dimers met and parted")
+    check(series["kinetic_rotational"][-1] > 0.01 * e0,
+          f"{name}: the off-centre collision turns them")
+    gain[name] = ek[-1] / e0 - 1
+print("energy after the collision, relative:", gain)
+check(abs(gain["collide"]) < 2e-4 and abs(gain["collide_verlet"]) < 1e-4,
+      f"the kinetic energy kept by the elastic collision: {gain}")
+check(1.8 < gain["collide"] / gain["collide_half"] < 2.2,
+      f"its error halves with the step (first order, to conservation): {gain}")
+fc = final("collide")
+if fc.size == 4:
+    p = np.zeros(3)
+    for body in (fc[fc["id"] <= 2], fc[fc["id"] > 2]):
+        p += MASS * np.array([np.mean(body[c]) for c in ("vx", "vy", "vz")])
+    check(np.linalg.norm(p - [MASS * 1.0, 0, 0]) <= 1e-12 * MASS,
+          f"the momentum kept: {p} against {[MASS, 0, 0]}")
+
+# 3. a pour, on 1, 2 and 3 ranks, restarted
+rng = random.Random(3)
+lines = [head("pour", 0.05, g=-9.81, every=0.005, extra=", checkpoint_interval = 0.02, "
+              "checkpoint_keep = 5, snapshot_interval = 0.05", rho=RHO),
+         floor.replace("0.01 /", "0.1 /"),
+         "&particle material = 'glass', radius = 0.0012, position = 0, 0, 0.03 /\n"]
+for i in range(6):
+    for j in range(6):
+        for k in range(6):
+            a = rng.uniform(0, math.pi)
+            u = [rng.gauss(0, 1) for _ in range(3)]
+            n = math.sqrt(sum(c * c for c in u))
+            q = [math.cos(a / 2)] + [math.sin(a / 2) * c / n for c in u]
+            lines.append(f"&clump template = 'dimer', position = {-0.015 + 0.006 * i:.6f}, "
+                         f"{-0.015 + 0.006 * j:.6f}, {0.005 + 0.005 * k:.6f}, "
+                         f"orientation = {q[0]!r}, {q[1]!r}, {q[2]!r}, {q[3]!r}, "
+                         f"velocity = {rng.uniform(-0.1, 0.1):.4f}, 0, 0 /\n")
+text = "".join(lines)
+for ranks in (1, 2, 3):
+    name = f"pour_{ranks}"
+    case = write(name, text.replace("dir = 'pour'", f"dir = '{name}'"))
+    run_ranks(mpiexec, dem, case, ranks, work)
+    if ranks > 1:
+        for f in ("final.csv", "series.csv"):
+            same_file(os.path.join(work, "pour_1", f), os.path.join(work, name, f),
+                      f"the pour on {ranks} ranks")
+ckpt = os.path.join(work, "pour_1", "checkpoints", "checkpoint_000000020000.h5")
+check(os.path.exists(ckpt), "the pour's checkpoint at 20 ms")
+for ranks in (1, 2):
+    name = f"pour_restart_{ranks}"
+    case = write(name, text.replace("dir = 'pour'", f"dir = '{name}'"))
+    run_ranks(mpiexec, dem, case, ranks, work, "--restart", ckpt)
+    same_file(os.path.join(work, "pour_1", "final.csv"), os.path.join(work, name, "final.csv"),
+              f"the pour restarted on {ranks} ranks")
+snaps = sorted(f for f in os.listdir(os.path.join(work, "pour_1", "snapshots"))
+               if f.endswith(".h5"))
+check(len(snaps) > 0, "the pour wrote snapshots")
+if snaps:
+    with h5py.File(os.path.join(work, "pour_1", "snapshots", snaps[-1]), "r") as h:
+        body = h["particles/body"][...]
+        q = h["particles/orientation"][...]
+        ids = h["particles/id"][...]
+    check(np.count_nonzero(body) == 432 and len(set(body[body > 0])) == 216,
+          "each member's body id in the snapshot")
+    check(np.allclose(np.linalg.norm(q[body > 0], axis=-1), 1, atol=1e-12),
+          f"the orientations unit quaternions: shape {q.shape}")
+    check(set(body[body > 0]) <= set(ids), "a body's id is one of its members' ids")
+
+finish()
