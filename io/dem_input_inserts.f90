@@ -65,7 +65,11 @@ contains
         real(wp) :: duration             ! inflow: or for [s], > 0
         integer(i8) :: insert_every      ! inflow: steps between insertions, >= 1, default
                                          ! the time to move a diameter (dem_setup)
-        namelist /insert/ n, material, radius_distribution, radius_min, radius_max, &
+        character(len=name_len) :: template  ! clumps of this &clump_template instead of
+                                         ! spheres (their material its; the radii: their
+                                         ! reach, default the template's; not an inflow)
+        real(wp) :: orientation(4)       ! the clumps' unit quaternion, default at random
+        namelist /insert/ n, material, template, orientation, radius_distribution, radius_min, radius_max, &
             radius_mean, radius_sd, radii, fractions, fraction_by, region, box_min, box_max, &
             face_center, face_normal, face_axis, face_width, cylinder_base, cylinder_radius, &
             cylinder_height, mesh_file, mesh_scale, velocity, velocity_spread, seed, start, end, &
@@ -110,6 +114,8 @@ contains
             end = unset
             duration = unset
             insert_every = 0
+            template = ''
+            orientation = unset
             do while (group_reading(nf, 'insert', k, io, at, err))
                 if (io%unit == 0) read(io%text, nml=insert, iostat=io%ios, iomsg=io%msg)
                 if (io%unit /= 0) write(io%unit, nml=insert, iostat=io%ios, iomsg=io%msg)
@@ -121,9 +127,22 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'n': must be >= 1")
                 return
             end if
-            if (.not. check_memory(c, at, 'n', real(n, wp), 0.0_wp, 0.0_wp, err)) return
-            im = find_material(c, material, at, err, particles=.true.)
-            if (im == 0) return
+            if (len_trim(template) > 0) then
+                if (.not. template_of(g)) return
+                im = c%templates(g%template)%mat
+                if (radius_min == unset .and. radius_distribution == 'uniform') &
+                    radius_min = c%templates(g%template)%reach
+            else
+                if (any(orientation /= unset)) then
+                    call set_error(err, dem_err_input, at // ": key 'orientation': for " // &
+                                   "clumps (give 'template')")
+                    return
+                end if
+                im = find_material(c, material, at, err, particles=.true.)
+                if (im == 0) return
+            end if
+            if (.not. check_memory(c, at, 'n', real(n, wp) * members(g), 0.0_wp, 0.0_wp, err)) &
+                return
             if (.not. size_of(dist)) return
             radius_max = dist%r_max
             if (.not. check_vector(at, velocity, 'velocity', .false., err)) return
@@ -190,6 +209,45 @@ contains
             c%inserts = [c%inserts, g]
         end do
     contains
+        !> The template of a group of clumps into gi, and their orientation if given; false
+        !> with err set when it is not a template's name, a material is given too, the
+        !> orientation is not a unit quaternion, or the group is an inflow.
+        logical function template_of(gi) result(ok)
+            type(insert_t), intent(inout) :: gi
+            integer :: j
+            ok = .false.
+            do j = 1, size(c%templates)
+                if (c%templates(j)%name == trim(template)) gi%template = j
+            end do
+            if (gi%template == 0) then
+                call set_error(err, dem_err_input, at // ": key 'template': '" // &
+                               trim(template) // "' is not a &clump_template's name")
+            else if (len_trim(material) > 0) then
+                call set_error(err, dem_err_input, at // ": key 'material': clumps are of " // &
+                               "their template's material (give 'template' or 'material')")
+            else if (gi%inflow) then
+                call set_error(err, dem_err_input, at // ": key 'template': clumps are not " // &
+                               'inserted during a run yet (an inflow)')
+            else if (any(orientation /= unset)) then
+                if (.not. (all(ieee_is_finite(orientation)) .and. &
+                           abs(norm2(orientation) - 1.0_wp) <= 1.0e-6_wp)) then
+                    call set_error(err, dem_err_input, at // ": key 'orientation': not a " // &
+                                   'unit quaternion (q0, q1, q2, q3)')
+                else
+                    gi%orientation = orientation / norm2(orientation)
+                end if
+            end if
+            ok = .not. err%failed()
+            c%has_clumps = c%has_clumps .or. ok
+        end function template_of
+
+        !> The particles each of a group's n makes: a clump's members, or 1.
+        real(wp) function members(gi)
+            type(insert_t), intent(in) :: gi
+            members = 1.0_wp
+            if (gi%template > 0) members = real(size(c%templates(gi%template)%radii), wp)
+        end function members
+
         !> The face a stream enters by (region 'face', an inflow group with a velocity into
         !> it; dem_setup makes it the slab behind it); false with err set when a key is
         !> missing or out of range.

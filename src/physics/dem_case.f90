@@ -44,6 +44,9 @@ module dem_case
         real(wp) :: velocity(3) = 0.0_wp              !< [m/s]
         real(wp) :: velocity_spread(3) = 0.0_wp       !< each component +- this [m/s]
         integer(i8) :: seed = 1
+        integer(ip) :: template = 0                   !< clumps of this template (their
+                                                      !< radii: the clumps' reach), 0: spheres
+        real(wp) :: orientation(4) = 0.0_wp           !< the clumps', 0: at random
         character(len=:), allocatable :: at           !< the group's place in the file
         ! inflow (a rate given): inserted during the run from start to end, every `every`
         ! steps, up to rate (start .. t) particles, or mass_rate (start .. t) kilograms

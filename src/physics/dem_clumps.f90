@@ -42,6 +42,9 @@ module dem_clumps
         real(wp) :: orientation(4) = [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]
         real(wp) :: velocity(3) = 0.0_wp          !< of the centre of mass [m/s]
         real(wp) :: angular_velocity(3) = 0.0_wp  !< [rad/s]
+        real(wp) :: scale = 1.0_wp                !< of the template's lengths (&insert's
+                                                  !< size distributions): its mass s^3,
+                                                  !< its moments s^5
     end type clump_t
 
     !> The bodies a rank owns: body k's members are member(first(k) .. first(k + 1) - 1), in
@@ -57,26 +60,29 @@ contains
     !> The members of clump `cl` of template `tpl` as particles: ids id0, id0 + 1, ... (the
     !> body's id is id0), their radii, positions, velocities, angular velocities and body
     !> state (dem_particles' rows bs_*). The body frame is the template's principal frame:
-    !> q = q_placed q_principal, X = position + R(q_placed) c; L = R I R^T w.
+    !> q = q_placed q_principal, X = position + R(q_placed) s c; L = R I R^T w; the template's
+    !> lengths scaled by s = cl%scale (its mass by s^3, its moments by s^5).
     subroutine clump_members(tpl, cl, id0, gid, body, radius, x, v, w, state)
         type(clump_template_t), intent(in) :: tpl
         type(clump_t), intent(in) :: cl
         integer(i8), intent(in) :: id0
         integer(i8), intent(out) :: gid(:), body(:)
         real(wp), intent(out) :: radius(:), x(:, :), v(:, :), w(:, :), state(:, :)
-        real(wp) :: q(4), xc(3), l(3), inv_i(3), wb(3), r(3)
+        real(wp) :: q(4), xc(3), l(3), inv_i(3), wb(3), r(3), s, moments(3)
         integer :: k
+        s = cl%scale
         q = quat_normalise(quat_product(quat_normalise(cl%orientation), &
                                         quat_from_matrix(transpose(tpl%props%rotation))))
-        xc = cl%position + quat_to_lab(quat_normalise(cl%orientation), tpl%props%centre)
-        inv_i = 1.0_wp / tpl%props%moments
-        l = quat_to_lab(q, tpl%props%moments * quat_to_body(q, cl%angular_velocity))
+        xc = cl%position + quat_to_lab(quat_normalise(cl%orientation), s * tpl%props%centre)
+        moments = s**5 * tpl%props%moments
+        inv_i = 1.0_wp / moments
+        l = quat_to_lab(q, moments * quat_to_body(q, cl%angular_velocity))
         wb = rigid_omega(q, inv_i, l)
         do k = 1, size(tpl%radii)
             gid(k) = id0 + k - 1
             body(k) = id0
-            radius(k) = tpl%radii(k)
-            r = quat_to_lab(q, tpl%props%positions(:, k))
+            radius(k) = s * tpl%radii(k)
+            r = quat_to_lab(q, s * tpl%props%positions(:, k))
             x(:, k) = xc + r
             v(:, k) = cl%velocity + cross(wb, r)
             w(:, k) = wb
@@ -85,8 +91,8 @@ contains
             state(bs_q:bs_q + 3, k) = q
             state(bs_l:bs_l + 2, k) = l
             state(bs_inv_i:bs_inv_i + 2, k) = inv_i
-            state(bs_mass, k) = tpl%props%mass
-            state(bs_offset:bs_offset + 2, k) = tpl%props%positions(:, k)
+            state(bs_mass, k) = s**3 * tpl%props%mass
+            state(bs_offset:bs_offset + 2, k) = s * tpl%props%positions(:, k)
         end do
     end subroutine clump_members
 

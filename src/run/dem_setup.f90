@@ -13,12 +13,13 @@ module dem_setup
                         case_speed_bound, case_energy_speed, case_append_particles, &
                         case_settle_time
     use dem_insert, only: insert_random, insert_velocities, region_face, region_slab
-    use dem_random, only: rng_t, rng_seed
+    use dem_random, only: rng_t, rng_seed, rng_uniform
     use dem_input, only: read_case_file
     use dem_text, only: itoa, real_text
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_periodic, only: with_images
-    use dem_clumps, only: clump_members
+    use dem_clumps, only: clump_members, clump_t
+    use dem_rigid, only: quat_to_lab
     use dem_particles, only: body_state_rows
     implicit none
     private
@@ -35,8 +36,8 @@ contains
         type(error_t), intent(inout) :: err
         type(comm_t), intent(in) :: comm
         call read_case_file(path, c, err, comm)
-        if (.not. err%failed() .and. c%has_clumps) call place_clumps(c)  ! (every rank holds
-        if (.not. err%failed()) call place_inserts(c, err)              ! all particles)
+        if (.not. err%failed() .and. c%has_clumps) call place_clumps(c, 1)  ! (every rank
+        if (.not. err%failed()) call place_inserts(c, err)           ! holds all particles)
         if (.not. err%failed()) then
             if (size(c%inserts) > 0 .or. c%has_clumps) call keep_share(c, comm%rank, comm%size)
             call check_ranges(c, comm, err)
@@ -66,18 +67,19 @@ contains
                       err%message(amp + 1:amp + n) // ')'
     end subroutine where_to_read
 
-    !> Each &clump's members among the particles, with ids after the largest so far (a
-    !> body's members have consecutive ids, the first of them the body's), and the body
-    !> state of every row (spheres: body 0).
-    subroutine place_clumps(c)
+    !> The members of clumps first, first + 1, ... among the particles, with ids after the
+    !> largest so far (a body's members have consecutive ids, the first of them the body's),
+    !> and the body state of every row (spheres: body 0).
+    subroutine place_clumps(c, first)
         type(case_t), intent(inout) :: c
+        integer(ip), intent(in) :: first
         integer(i8), allocatable :: gid(:), body(:)
         integer(ip), allocatable :: mat(:)
         real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :), state(:, :)
         integer(i8) :: next_id
         integer(ip) :: k, n, m, a
         n = 0
-        do k = 1, size(c%clumps)
+        do k = first, size(c%clumps)
             n = n + size(c%templates(c%clumps(k)%template)%radii, kind=ip)
         end do
         allocate(gid(n), body(n), mat(n), radius(n), x(3, n), v(3, n), w(3, n), &
@@ -85,7 +87,7 @@ contains
         next_id = 1
         if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
         a = 0
-        do k = 1, size(c%clumps)
+        do k = first, size(c%clumps)
             associate (tpl => c%templates(c%clumps(k)%template))
                 m = size(tpl%radii, kind=ip)
                 call clump_members(tpl, c%clumps(k), next_id + a, gid(a + 1:a + m), &
@@ -95,9 +97,11 @@ contains
                 a = a + m
             end associate
         end do
-        allocate(c%body(c%n_held), c%body_state(body_state_rows, c%n_held))
-        c%body = 0
-        c%body_state = 0.0_wp
+        if (.not. allocated(c%body)) then
+            allocate(c%body(c%n_held), c%body_state(body_state_rows, c%n_held))
+            c%body = 0
+            c%body_state = 0.0_wp
+        end if
         call case_append_particles(c, gid, mat, radius, x, v, w, n)
         c%body(c%n_held - n + 1:) = body
         c%body_state(:, c%n_held - n + 1:) = state
@@ -139,10 +143,13 @@ contains
                 next_id = 1
                 if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
                 if (.not. ids_left(g, next_id, real(n, wp), err)) return
-                call case_append_particles(c, [(next_id + i, i = 0, n - 1)], spread(g%mat, 1, n), &
-                                           r, x, insert_velocities(rng, g%velocity, &
-                                                                   g%velocity_spread, n), &
-                                           spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n), n)
+                if (g%template > 0) then
+                    call insert_clumps(c, k, rng, n, x, r)
+                else
+                    call case_append_particles(c, [(next_id + i, i = 0, n - 1)], &
+                        spread(g%mat, 1, n), r, x, insert_velocities(rng, g%velocity, &
+                        g%velocity_spread, n), spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n), n)
+                end if
                 c%rng_state = rng%state
                 deallocate(x, r)
             end associate
@@ -215,6 +222,44 @@ contains
             every = max(1_i8, nint(min(t / c%dt, 1.0e18_wp), i8))   ! (no overflow)
         end function default_every
     end subroutine place_inserts
+
+    !> &insert group k's n clumps, their reach spheres (centres x, radii r) placed: each
+    !> the template scaled by r / its reach about its centre of mass at x, turned by the
+    !> group's orientation or a uniformly random one (Shoemake 1992: from three uniform
+    !> numbers u, (sqrt(1 - u1) sin 2 pi u2, sqrt(1 - u1) cos 2 pi u2, sqrt(u1) sin 2 pi u3,
+    !> sqrt(u1) cos 2 pi u3)), drawn after the velocities; then their members made.
+    subroutine insert_clumps(c, k, rng, n, x, r)
+        type(case_t), intent(inout) :: c
+        integer(ip), intent(in) :: k
+        type(rng_t), intent(inout) :: rng
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: x(:, :), r(:)
+        real(wp), parameter :: two_pi = 2.0_wp * acos(-1.0_wp)
+        real(wp) :: v(3, n), q(4), u(3), s
+        type(clump_t) :: added(n)
+        type(insert_t) :: g
+        integer(ip) :: i, first
+        g = c%inserts(k)
+        v = insert_velocities(rng, g%velocity, g%velocity_spread, n)
+        associate (tpl => c%templates(g%template))
+            do i = 1, n
+                q = g%orientation
+                if (all(q == 0.0_wp)) then
+                    u = [rng_uniform(rng), rng_uniform(rng), rng_uniform(rng)]
+                    q = [sqrt(1.0_wp - u(1)) * sin(two_pi * u(2)), &
+                         sqrt(1.0_wp - u(1)) * cos(two_pi * u(2)), &
+                         sqrt(u(1)) * sin(two_pi * u(3)), sqrt(u(1)) * cos(two_pi * u(3))]
+                end if
+                s = r(i) / tpl%reach
+                added(i) = clump_t(template=g%template, position=x(:, i) - &
+                                   quat_to_lab(q, s * tpl%props%centre), orientation=q, &
+                                   velocity=v(:, i), scale=s)
+            end do
+        end associate
+        first = size(c%clumps, kind=ip) + 1
+        c%clumps = [c%clumps, added]
+        call place_clumps(c, first)
+    end subroutine insert_clumps
 
     !> Keep of all the case's particles (held here) every ranks-th from rank + 1 on.
     subroutine keep_share(c, rank, ranks)
