@@ -22,6 +22,11 @@
    final.csv and series.csv byte for byte the same on 1, 2 and 3 ranks; a restart from the
    checkpoint at 20 ms on 1 and on 2 ranks ends with the same final.csv; a snapshot holds
    each particle's body id and its body's orientation (unit quaternions).
+4. &insert of 120 clumps of a three-sphere template (random orientations, reach from 1.5 to
+   2.5 mm) among 30 spheres: the same final.csv on 1 and 2 ranks; at the start each body's
+   radii and member distances are the template's times one scale, the scaled reach (that
+   `dem --check` prints) within the radii asked for, and no particle overlaps another
+   body's.
 usage: test_clumps.py DEM WORKDIR MPIEXEC"""
 import math
 import os
@@ -181,5 +186,57 @@ if snaps:
     check(np.allclose(np.linalg.norm(q[body > 0], axis=-1), 1, atol=1e-12),
           f"the orientations unit quaternions: shape {q.shape}")
     check(set(body[body > 0]) <= set(ids), "a body's id is one of its members' ids")
+
+# 4. &insert of clumps: a three-sphere template at random orientations, its reach scaled
+# by a uniform distribution, among spheres
+tri = ("&clump_template name = 'tri', material = 'glass', members = 0, 0, 0, 0.001,  "
+       "0.0012, 0, 0, 0.0009,  0, 0.0012, 0, 0.0008 /\n")
+ins = (head("{name}", 0.002, g=-9.81, every=0.001) + tri + floor.replace("0.01 /", "0.1 /") +
+       "&insert n = 120, template = 'tri', box_min = -0.015, -0.015, 0.002, "
+       "box_max = 0.015, 0.015, 0.04, radius_min = 0.0015, radius_max = 0.0025 /\n"
+       "&insert n = 30, material = 'glass', radius_min = 0.001, box_min = -0.015, -0.015, "
+       "0.002, box_max = 0.015, 0.015, 0.04 /\n").replace("dt = 1e-6", "dt = 2e-6")
+for ranks in (1, 2):
+    name = f"insert_{ranks}"
+    run_ranks(mpiexec, dem, write(name, ins.replace("{name}", name)), ranks, work)
+same_file(os.path.join(work, "insert_1", "final.csv"), os.path.join(work, "insert_2",
+          "final.csv"), "the inserted clumps on 2 ranks")
+with h5py.File(os.path.join(work, "insert_1", "snapshots", "snapshot_000000000000.h5"),
+               "r") as h:
+    x = h["particles/position"][...]
+    rad = h["particles/radius"][...]
+    body = h["particles/body"][...]
+    ids = h["particles/id"][...]
+if x.shape[0] == 3:
+    x = x.T
+members = np.array([[0, 0, 0], [0.0012, 0, 0], [0, 0.0012, 0]])
+radii = np.array([0.001, 0.0009, 0.0008])
+scales = []
+for b in sorted(set(body[body > 0])):
+    k = np.argsort(ids[body == b])
+    xb, rb = x[body == b][k], rad[body == b][k]
+    s = rb[0] / radii[0]
+    scales.append(s)
+    check(np.allclose(rb, s * radii, rtol=1e-12), f"body {b}: its radii the template's scaled")
+    d = [np.linalg.norm(xb[i] - xb[j]) for i, j in ((0, 1), (0, 2), (1, 2))]
+    want = [s * np.linalg.norm(members[i] - members[j]) for i, j in ((0, 1), (0, 2), (1, 2))]
+    check(np.allclose(d, want, rtol=1e-12), f"body {b}: its members where the template has them")
+check(len(scales) == 120, f"120 clumps inserted: {len(scales)}")
+r = subprocess.run([dem, "--check", os.path.join(work, "insert_1.nml")], cwd=work,
+                   capture_output=True, text=True)
+got = re.search(r"tri: 120 clumps of 3 spheres.* reach\s+(\S+) m", r.stdout)
+check(got is not None, f"dem --check prints the template's reach: {r.stdout}")
+if got:
+    reach = float(got.group(1))
+    check(0.0015 * (1 - 1e-3) <= min(scales) * reach and max(scales) * reach <= 0.0025 *
+          (1 + 1e-3), f"the reach of the clumps within the radii asked for: {min(scales)}, "
+          f"{max(scales)} times {reach}")
+gap = np.inf
+for i in range(len(x)):
+    other = (body != body[i]) | (body == 0)
+    other[i] = False
+    dist = np.linalg.norm(x[other] - x[i], axis=1) - rad[other] - rad[i]
+    gap = min(gap, dist.min())
+check(gap >= 0, f"no particle overlaps another body's at the start: smallest gap {gap}")
 
 finish()
