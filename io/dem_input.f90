@@ -103,13 +103,8 @@ contains
         if (err%failed()) return
         call read_probes(nf, c, err)
         if (err%failed() .or. .not. c%has_clumps) return
-        if (c%periodic%on) then
-            call fail(nf%path // ': &clump: clumps and &periodic axes together are not ' // &
-                      'supported yet')
-        else if (size(c%outlets) > 0) then
-            call fail(nf%path // ': &clump: clumps and &outlet groups together are not ' // &
-                      'supported yet')
-        end if
+        if (c%periodic%on) call fail(nf%path // ': &clump: clumps and &periodic axes ' // &
+                                     'together are not supported yet')
     contains
         subroutine fail(msg)
             character(len=*), intent(in) :: msg

@@ -96,20 +96,27 @@ contains
         end do
     end subroutine clump_members
 
-    !> The index of the bodies among the owned particles 1..n (body(i) /= 0: a member): the
-    !> members in the order of their ids, which groups each body's (a body's members have
-    !> consecutive ids, the first the body's). Built on the host, then on the device.
-    subroutine clump_index_build(idx, n, gid, body)
+    !> The index of the bodies among the owned particles 1..n (body(i) /= 0: a member; not
+    !> those `gone`, out of the run through an outlet): the members in the order of their
+    !> ids, which groups each body's (a body's members have consecutive ids, the first the
+    !> body's). Built on the host, then on the device.
+    subroutine clump_index_build(idx, n, gid, body, gone)
         type(clump_index_t), intent(inout) :: idx
         integer(ip), intent(in) :: n
         integer(i8), intent(inout) :: gid(:), body(:)
+        logical, intent(inout), optional :: gone(:)
         integer(i8), allocatable :: key(:)
         integer(ip), allocatable :: at(:), order(:)
         integer(ip) :: i, k, m
         call clump_index_free(idx)
         call acc_data(gid, acc_to_host)
         call acc_data(body, acc_to_host)
-        at = pack([(i, i = 1, n)], body(1:n) /= 0)
+        if (present(gone)) then
+            call acc_data(gone, acc_to_host)
+            at = pack([(i, i = 1, n)], body(1:n) /= 0 .and. .not. gone(1:n))
+        else
+            at = pack([(i, i = 1, n)], body(1:n) /= 0)
+        end if
         key = gid(at)
         order = sort_order(key)
         m = size(at, kind=ip)

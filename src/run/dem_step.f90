@@ -17,7 +17,7 @@ module dem_step
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: pw_forces
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, kick_drift
-    use dem_clumps, only: clumps_move, sphere_gravity
+    use dem_clumps, only: clumps_move, sphere_gravity, clump_reach, clump_index_build
     use dem_mesh, only: mesh_move
     use dem_outlets, only: outlets_mark
     use dem_particles, only: particles_park
@@ -206,7 +206,9 @@ contains
         s%particles_most = max(s%particles_most, s%p%n_own)
     end subroutine count_step
 
-    !> Take the particles that entered an outlet out of the run: they are counted removed and
+    !> Take the particles that entered an outlet out of the run (a clump's members when its
+    !> centre of mass did: the body leaves whole, and the bodies that stay are indexed anew):
+    !> they are counted removed and
     !> parked at once (particles_park: nothing touches them any more), and compacted away at
     !> the next rebuild, or before the next output (settle_outlets), so that the lists are
     !> not rebuilt for every particle that leaves. The flags stay on the device from step to
@@ -215,6 +217,7 @@ contains
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         integer(i8) :: n_fresh(1)
+        real(wp), allocatable :: xd(:, :), rd(:)
         if (.not. allocated(s%gone)) then
             allocate(s%gone(s%p%n_own), s%fresh(s%p%n_own))
             s%gone = .false.
@@ -222,7 +225,14 @@ contains
             call acc_data(s%fresh, acc_create)
         end if
         associate (p => s%p, n => s%p%n_own)
-            n_fresh = outlets_mark(n, p%x, c%outlets, s%gone, s%fresh)
+            if (allocated(p%body)) then       ! a clump leaves whole, with its centre
+                call clump_reach(n, p%body, p%x, p%radius, p%body_x, p%body_offset, xd, rd)
+                n_fresh = outlets_mark(n, xd, c%outlets, s%gone, s%fresh)
+                call acc_data(xd, acc_exit)
+                call acc_data(rd, acc_exit)
+            else
+                n_fresh = outlets_mark(n, p%x, c%outlets, s%gone, s%fresh)
+            end if
             if (s%comm%size > 1) call comm_sum(s%comm, n_fresh)
             if (n_fresh(1) == 0) return
             s%removed = s%removed + n_fresh(1)
@@ -244,6 +254,7 @@ contains
             end if
             call particles_park(n, s%fresh, p%gid, p%x, p%v, p%w, p%inv_mass, p%inv_inertia)
             call neighbors_moved(s%nb, n, s%fresh, p%x)
+            if (allocated(p%body)) call clump_index_build(s%bodies, n, p%gid, p%body, s%gone)
         end associate
     end subroutine remove_outlet_particles
 

@@ -27,6 +27,9 @@
    radii and member distances are the template's times one scale, the scaled reach (that
    `dem --check` prints) within the radii asked for, and no particle overlaps another
    body's.
+5. An outlet plane below 120 falling dimers: the removed and remaining counts even at every
+   row of series.csv, each dimer left whole with its centre above the plane, the same
+   series.csv on 1 and 2 ranks.
 usage: test_clumps.py DEM WORKDIR MPIEXEC"""
 import math
 import os
@@ -238,5 +241,28 @@ for i in range(len(x)):
     dist = np.linalg.norm(x[other] - x[i], axis=1) - rad[other] - rad[i]
     gap = min(gap, dist.min())
 check(gap >= 0, f"no particle overlaps another body's at the start: smallest gap {gap}")
+
+# 5. an outlet takes clumps out whole: 120 dimers falling through a plane
+out = (head("{name}", 0.04, g=-9.81, every=0.005) +
+       "&insert n = 120, template = 'dimer', box_min = -0.01, -0.01, 0.012, "
+       "box_max = 0.01, 0.01, 0.05 /\n"
+       "&outlet region = 'plane', point = 0, 0, 0.01, normal = 0, 0, -1 /\n")
+for ranks in (1, 2):
+    name = f"outlet_{ranks}"
+    run_ranks(mpiexec, dem, write(name, out.replace("{name}", name)), ranks, work)
+same_file(os.path.join(work, "outlet_1", "series.csv"), os.path.join(work, "outlet_2",
+          "series.csv"), "the outlet on 2 ranks")
+series = np.genfromtxt(os.path.join(work, "outlet_1", "series.csv"), delimiter=",", names=True)
+check(series["removed"][-1] > 10 and series["particles"][-1] > 10,
+      f"some clumps left, some stayed: {series['removed'][-1]}, {series['particles'][-1]}")
+check(np.all(series["removed"] % 2 == 0) and np.all(series["particles"] % 2 == 0),
+      "the removed and the remaining particles: whole dimers at every row")
+fo = final("outlet_1")
+left = {}
+for row in np.atleast_1d(fo):
+    left.setdefault(int(row["id"] - 1) // 2, []).append(row)
+check(all(len(v) == 2 for v in left.values()), "every dimer left has both its members")
+check(all(0.5 * (v[0]["z"] + v[1]["z"]) > 0.01 - 1e-9 for v in left.values()),
+      "the dimers left have their centre above the outlet's plane")
 
 finish()
