@@ -13,7 +13,7 @@ module dem_clumps
     use dem_kinds, only: wp, ip, i8
     use dem_vector, only: cross
     use dem_rigid, only: rigid_free_rotation, rigid_omega, quat_product, quat_to_lab, &
-                         quat_to_body, quat_from_matrix, quat_normalise
+                         quat_to_body, quat_from_matrix, quat_normalise, rotation_matrix
     use dem_integrate, only: too_fast
     use dem_clump_mass, only: clump_mass_t
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host, acc_to_device
@@ -187,28 +187,31 @@ contains
     !> the order of the members' ids; V += h F / M, L += h T, then the free rotation of
     !> (q, L) over h_drift (dem_rigid) and X += h_drift V; the members then take the body's
     !> state, their centres X + R(q) b_m, their velocities V + w x R(q) b_m and angular
-    !> velocity w (w from q and L). n_fast counts the members whose new speed or rim speed is
-    !> not below `bound` (the speed guard, as dem_integrate's).
-    subroutine clumps_move(nb, first, member, h, h_drift, gravity, bound, f, t, radius, &
+    !> velocity w = R(q) I^-1 R(q)^T L. n_fast counts the members whose new speed or rim speed
+    !> is not below `bound` (the speed guard, as dem_integrate's). The vector algebra is
+    !> written out (a call into another module is not inlined). Explicit-shape arrays of the
+    !> store's np places.
+    subroutine clumps_move(nb, first, member, h, h_drift, gravity, bound, np, f, t, radius, &
                            body_x, body_v, body_q, body_l, body_inv_i, body_mass, body_offset, &
                            x, v, w, n_fast)
-        integer(ip), intent(in) :: nb
-        integer(ip), intent(in) :: first(:), member(:)
+        integer(ip), intent(in) :: nb, np
+        integer(ip), intent(in) :: first(nb + 1), member(*)
         real(wp), intent(in) :: h, h_drift              !! [s]
         real(wp), intent(in) :: gravity(3)              !! [m/s^2]
         real(wp), intent(in) :: bound                   !! [m/s]
-        real(wp), intent(in) :: f(:, :), t(:, :)        !! the members' [N], [N m]
-        real(wp), intent(in) :: radius(:)               !! [m]
-        real(wp), intent(inout) :: body_x(:, :), body_v(:, :), body_q(:, :), body_l(:, :)
-        real(wp), intent(in) :: body_inv_i(:, :), body_mass(:), body_offset(:, :)
-        real(wp), intent(inout) :: x(:, :), v(:, :), w(:, :)
+        real(wp), intent(in) :: f(3, np), t(3, np)      !! the members' [N], [N m]
+        real(wp), intent(in) :: radius(np)              !! [m]
+        real(wp), intent(inout) :: body_x(3, np), body_v(3, np), body_q(4, np), body_l(3, np)
+        real(wp), intent(in) :: body_inv_i(3, np), body_mass(np), body_offset(3, np)
+        real(wp), intent(inout) :: x(3, np), v(3, np), w(3, np)
         integer(i8), intent(out) :: n_fast
-        real(wp) :: fb(3), tb(3), xb(3), vb(3), qb(4), lb(3), wb(3), r(3), b2
+        real(wp) :: fb(3), tb(3), xb(3), vb(3), qb(4), lb(3), wb(3), r(3), d(3), rm(3, 3), &
+                    a(3), b2, mb
         integer(ip) :: k, m, i, i0
         b2 = bound**2
         n_fast = 0
         !$acc parallel loop gang vector default(present) copyin(gravity) &
-        !$acc reduction(+:n_fast) private(fb, tb, xb, vb, qb, lb, wb, r, m, i, i0)
+        !$acc reduction(+:n_fast) private(fb, tb, xb, vb, qb, lb, wb, r, d, rm, a, mb, m, i, i0)
         do k = 1, nb
             i0 = member(first(k))
             xb = body_x(:, i0)
@@ -216,22 +219,33 @@ contains
             tb = 0.0_wp
             do m = first(k), first(k + 1) - 1
                 i = member(m)
+                d = x(:, i) - xb
                 fb = fb + f(:, i)
-                tb = tb + (cross(x(:, i) - xb, f(:, i)) + t(:, i))
+                tb(1) = tb(1) + ((d(2) * f(3, i) - d(3) * f(2, i)) + t(1, i))
+                tb(2) = tb(2) + ((d(3) * f(1, i) - d(1) * f(3, i)) + t(2, i))
+                tb(3) = tb(3) + ((d(1) * f(2, i) - d(2) * f(1, i)) + t(3, i))
             end do
-            vb = body_v(:, i0) + (h / body_mass(i0)) * (body_mass(i0) * gravity + fb)
+            mb = body_mass(i0)
+            vb = body_v(:, i0) + (h / mb) * (mb * gravity + fb)
             lb = body_l(:, i0) + h * tb
             qb = body_q(:, i0)
             if (h_drift > 0.0_wp) then
                 call rigid_free_rotation(h_drift, body_inv_i(:, i0), lb, qb)
                 xb = xb + h_drift * vb
             end if
-            wb = rigid_omega(qb, body_inv_i(:, i0), lb)
+            rm = rotation_matrix(qb)
+            a = body_inv_i(:, i0) * [rm(1, 1) * lb(1) + rm(2, 1) * lb(2) + rm(3, 1) * lb(3), &
+                                     rm(1, 2) * lb(1) + rm(2, 2) * lb(2) + rm(3, 2) * lb(3), &
+                                     rm(1, 3) * lb(1) + rm(2, 3) * lb(2) + rm(3, 3) * lb(3)]
+            wb = rm(:, 1) * a(1) + rm(:, 2) * a(2) + rm(:, 3) * a(3)  ! w = R I^-1 R^T L
             do m = first(k), first(k + 1) - 1
                 i = member(m)
-                r = quat_to_lab(qb, body_offset(:, i))
+                r = rm(:, 1) * body_offset(1, i) + rm(:, 2) * body_offset(2, i) &
+                    + rm(:, 3) * body_offset(3, i)
                 if (h_drift > 0.0_wp) x(:, i) = xb + r
-                v(:, i) = vb + cross(wb, r)
+                v(1, i) = vb(1) + (wb(2) * r(3) - wb(3) * r(2))
+                v(2, i) = vb(2) + (wb(3) * r(1) - wb(1) * r(3))
+                v(3, i) = vb(3) + (wb(1) * r(2) - wb(2) * r(1))
                 w(:, i) = wb
                 body_x(:, i) = xb
                 body_v(:, i) = vb
@@ -241,6 +255,7 @@ contains
             end do
         end do
     end subroutine clumps_move
+
 
     !> Where the particles 1..n are for the domain (dem_domain: blocks, ranks and ghosts) and
     !> how far they reach: a sphere at x with its radius; a member at its body's centre, with

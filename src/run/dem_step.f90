@@ -140,8 +140,9 @@ contains
         integer(i8), intent(inout) :: n_fast
         integer(i8) :: n_bodies_fast
         associate (p => s%p, b => s%bodies)
-            call clumps_move(b%n, b%first, b%member, h, h_drift, c%gravity, c%max_speed, p%f, &
-                             p%t, p%radius, p%body_x, p%body_v, p%body_q, p%body_l, &
+            call clumps_move(b%n, b%first, b%member, h, h_drift, c%gravity, c%max_speed, &
+                             size(p%x, 2, ip), p%f, p%t, p%radius, p%body_x, p%body_v, &
+                             p%body_q, p%body_l, &
                              p%body_inv_i, p%body_mass, p%body_offset, p%x, p%v, p%w, &
                              n_bodies_fast)
         end associate

@@ -152,7 +152,8 @@ contains
         t = 0.0_wp
         d0 = norm2(xs(:, 1) - xs(:, 3))
         do step = 1, n
-            call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, g, huge(1.0_wp), f, &
+            call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, g, huge(1.0_wp), &
+                             3_ip, f, &
                              t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
         end do
         do j = 1, 3
@@ -185,7 +186,7 @@ contains
         f(:, 3) = fk
         t(:, 3) = tk
         call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, huge(1.0_wp), &
-                         f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
+                          3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
         want = state(bs_l:bs_l + 2, 1) + h * (cross(x(:, 3) - state(bs_x:bs_x + 2, 1), fk) + tk)
         do j = 1, 3
             call assert_close(bv(j, 1), cl%velocity(j) + h * fk(j) / tpl%props%mass, 1e-13_wp, &
@@ -200,7 +201,7 @@ contains
         f(:, 1) = 5.0_wp * (x(:, 2) - x(:, 1))
         f(:, 2) = -f(:, 1)
         call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, huge(1.0_wp), &
-                         f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
+                          3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
         do j = 1, 3
             call assert_close(bv(j, 1), cl%velocity(j), 1e-14_wp, 'internal forces: V kept')
             call assert_close(bl(j, 1), state(bs_l + j - 1, 1), 1e-12_wp, &
@@ -225,7 +226,8 @@ contains
         d0 = norm2(x(:, 2) - x(:, 3))
         worst = 0.0_wp
         do step = 1, 20000
-            call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, zero, huge(1.0_wp), f, &
+            call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, zero, huge(1.0_wp), &
+                             3_ip, f, &
                              t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
             e = 0.5_wp * dot_product(ws(:, 1), bl(:, 1))
             worst = max(worst, abs(e - e0) / e0)
