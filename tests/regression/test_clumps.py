@@ -30,6 +30,11 @@
 5. An outlet plane below 120 falling dimers: the removed and remaining counts even at every
    row of series.csv, each dimer left whole with its centre above the plane, the same
    series.csv on 1 and 2 ranks.
+6. An oblique, elastic, frictionless impact of a dimer tilted by 45 degrees: its rebound
+   velocity and spin those of rigid-body impact theory (the impulse 2 m_eff v0 at the contact
+   point, 1/m_eff = 1/M + (lever)^2 / I), to 1 %.
+7. A rod of four spheres dropped tilted onto a plane comes to rest flat, each member at R - d,
+   d Hertz's static overlap under a quarter of the rod's weight, to 2 % of d.
 usage: test_clumps.py DEM WORKDIR MPIEXEC"""
 import math
 import os
@@ -264,5 +269,63 @@ for row in np.atleast_1d(fo):
 check(all(len(v) == 2 for v in left.values()), "every dimer left has both its members")
 check(all(0.5 * (v[0]["z"] + v[1]["z"]) > 0.01 - 1e-9 for v in left.values()),
       "the dimers left have their centre above the outlet's plane")
+
+# 6. an oblique impact against rigid-body impact theory: a dimer tilted by 45 degrees about y,
+# stiff (E = 500 MPa: a contact of about 40 us, in which it turns by less than 0.01 rad),
+# elastic (e = 1) and frictionless, falling at v0 = 0.5 m/s onto a plane. Its lower member
+# touches at the contact point c - X = r = (h cos t, 0, -h sin t - R); the impulse J along z
+# with 1/m_eff = 1/M + (h cos t)^2 / I_t (I_t the transverse principal moment, y a principal
+# axis) and J = 2 m_eff v0 gives V_z = -v0 + J/M, w_y = -J h cos t / I_t, V_x = 0.
+t = math.pi / 4
+oblique = (head("oblique", 0.00025, e=1.0, mu=0.0, every=5e-5).replace("dt = 1e-6", "dt = 2e-8")
+           .replace("youngs_modulus = 5e6", "youngs_modulus = 5e8") + floor +
+           f"&clump template = 'dimer', position = 0, 0, {D / 2 * math.sin(t) + R + 1e-6}, "
+           f"orientation = {math.cos(t / 2)!r}, 0, {math.sin(t / 2)!r}, 0, "
+           "velocity = 0, 0, -0.5 /\n")
+r = subprocess.run([dem, "--check", write("oblique", oblique)], cwd=work, capture_output=True,
+                   text=True)
+got = re.search(r"principal moments\s+(\S+)\s+(\S+)\s+(\S+) kg m\^2", r.stdout)
+check(got is not None, f"dem --check prints the principal moments: {r.stdout}")
+run_dem(dem, os.path.join(work, "oblique.nml"), work)
+fob = final("oblique")
+series = np.genfromtxt(os.path.join(work, "oblique", "series.csv"), delimiter=",", names=True)
+check(series["contacts_pw"][-1] == 0 and max(series["contacts_pw"]) > 0,
+      "the oblique dimer touched the plane and left it")
+if got and fob.size == 2:
+    i_t = float(got.group(2))
+    lever = D / 2 * math.cos(t)
+    m_eff = 1.0 / (1.0 / MASS + lever**2 / i_t)
+    j = 2 * m_eff * 0.5
+    vz, wy = float(np.mean(fob["vz"])), float(np.mean(fob["wy"]))
+    print(f"oblique impact: V_z {vz:.6g} (theory {-0.5 + j / MASS:.6g}), w_y {wy:.6g} "
+          f"(theory {-j * lever / i_t:.6g})")
+    check_close(vz, -0.5 + j / MASS, 0.01, "the oblique dimer's rebound V_z (impact theory)")
+    check_close(wy, -j * lever / i_t, 0.01, "its spin w_y (impact theory)")
+    check(abs(float(np.mean(fob["vx"]))) < 1e-9 and abs(float(np.mean(fob["wx"]))) < 1e-9,
+          "no sideways motion or other spin without friction")
+
+# 7. a rod of four spheres resting on a plane: dropped tilted by 10 degrees, it comes to rest
+# lying flat, each member carrying a quarter of the weight: its centre at R - d, d Hertz's
+# static overlap under M g / 4, (3 F / (4 E* sqrt(R)))^(2/3), E* = E / (1 - nu^2) (a rigid
+# plane)
+rod_pos = "-0.0027, 0, 0, 0.001,  -0.0009, 0, 0, 0.001,  0.0009, 0, 0, 0.001,  0.0027, 0, 0, 0.001"
+rod = (head("rod", 0.4, g=-9.81, e=0.3, mu=0.5, every=0.05) + floor +
+       f"&clump_template name = 'rod', material = 'glass', members = {rod_pos} /\n"
+       f"&clump template = 'rod', position = 0, 0, {0.0027 * math.sin(0.1745) + R + 5e-4}, "
+       f"orientation = {math.cos(0.0873)!r}, 0, {math.sin(0.0873)!r}, 0 /\n")
+r = subprocess.run([dem, "--check", write("rod", rod)], cwd=work, capture_output=True, text=True)
+got = re.search(r"rod: 1 clumps of 4 spheres, mass\s+(\S+) kg", r.stdout)
+check(got is not None, f"dem --check prints the rod: {r.stdout}")
+run_dem(dem, os.path.join(work, "rod.nml"), work)
+frod = final("rod")
+if got and frod.size == 4:
+    m_rod = float(got.group(1))
+    e_star = 5e6 / (1 - 0.25**2)
+    d = (3 * m_rod * 9.81 / 4 / (4 * e_star * math.sqrt(R))) ** (2.0 / 3.0)
+    print(f"rod at rest: z {sorted(frod['z'])}, expected {R - d:.9g}")
+    check(np.allclose(frod["z"], R - d, rtol=0, atol=0.02 * d),
+          f"the rod lies flat, each member at R - d: {frod['z']} against {R - d}")
+    check(np.max(np.abs(frod["vz"])) < 1e-4 and np.max(np.abs(frod["wy"])) < 1e-2,
+          "the rod at rest")
 
 finish()
