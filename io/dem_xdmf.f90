@@ -23,15 +23,16 @@ contains
     end function snapshot_file
 
     !> Write `path` for the snapshots of steps `step` at times `time` holding `n` particles
-    !> each, with `n_tri` wall triangles; `force` and `contacts` say whether the snapshots
-    !> hold those fields; `names` are the materials, whose indices the `material` attributes
-    !> hold (an Information element of the domain lists them: "1 name; 2 name; ...").
-    subroutine xdmf_write(path, step, time, n, n_tri, force, contacts, names, err)
+    !> each, with `n_tri` wall triangles; `force`, `contacts` and `clumps` say whether the
+    !> snapshots hold those fields (clumps: each particle's body and its orientation);
+    !> `names` are the materials, whose indices the `material` attributes hold (an
+    !> Information element of the domain lists them: "1 name; 2 name; ...").
+    subroutine xdmf_write(path, step, time, n, n_tri, force, contacts, clumps, names, err)
         character(len=*), intent(in) :: path, names(:)
         integer(i8), intent(in) :: step(:), n(:)
         real(wp), intent(in) :: time(:)
         integer(ip), intent(in) :: n_tri
-        logical, intent(in) :: force, contacts
+        logical, intent(in) :: force, contacts, clumps
         type(error_t), intent(inout) :: err
         integer :: u, ios, k
         character(len=:), allocatable :: h5, table
@@ -73,6 +74,12 @@ contains
                                       itoa(n(k)) // ' 3', 'Float', 8)
             if (contacts) call attribute('contacts', 'Scalar', 'Node', '/particles/contacts', &
                                          itoa(n(k)), 'Int', 4)
+            if (clumps) then
+                call attribute('body', 'Scalar', 'Node', '/particles/body', itoa(n(k)), 'Int', &
+                               8)
+                call attribute('orientation', 'Matrix', 'Node', '/particles/orientation', &
+                               itoa(n(k)) // ' 4', 'Float', 8)
+            end if
             write(u, '(a)') '    </Grid>'
             if (n_tri > 0) then
                 write(u, '(a)') '    <Grid Name="walls" GridType="Uniform">', &

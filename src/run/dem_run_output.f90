@@ -178,7 +178,8 @@ contains
         type(error_t), intent(inout) :: err
         if (s%comm%rank /= 0) return
         call xdmf_write(c%output_dir // '/snapshots.xmf', s%snap_step, s%snap_time, s%snap_n, &
-                        s%mesh%n_tri, c%snapshot_force, c%snapshot_contacts, c%mats%name, err)
+                        s%mesh%n_tri, c%snapshot_force, c%snapshot_contacts, c%has_clumps, &
+                        c%mats%name, err)
     end subroutine write_xdmf
 
     !> A checkpoint of the state now.
