@@ -21,7 +21,8 @@ module dem_clumps
     implicit none
     private
     public :: clump_template_t, clump_t, clump_index_t, clump_members, clump_index_build, &
-              clump_index_free, clumps_move, clump_energy_terms, sphere_gravity, clump_reach
+              clump_index_free, clumps_move, clump_energy_terms, sphere_gravity, clump_reach, &
+              clump_probe_view
 
     !> A clump template: its member spheres and its mass properties.
     type :: clump_template_t
@@ -282,6 +283,36 @@ contains
             end if
         end do
     end subroutine clump_reach
+
+    !> The masses and positions the probes weigh particles 1..n by (dem_probes): a sphere's
+    !> own; a clump's first member (its id the body's) the body's mass at its centre of mass,
+    !> its other members nothing there, so that a clump counts once, at its centre, in a centre
+    !> of mass. On the device where the particles are (pm, px created there).
+    subroutine clump_probe_view(n, gid, body, mass, x, body_mass, body_x, pm, px)
+        integer(ip), intent(in) :: n
+        integer(i8), intent(in) :: gid(:), body(:)
+        real(wp), intent(in) :: mass(:), x(:, :), body_mass(:), body_x(:, :)
+        real(wp), allocatable, intent(inout) :: pm(:), px(:, :)
+        integer(ip) :: i
+        if (allocated(pm)) then
+            call acc_data(pm, acc_exit)
+            call acc_data(px, acc_exit)
+            deallocate(pm, px)
+        end if
+        allocate(pm(max(1, n)), px(3, max(1, n)))
+        call acc_data(pm, acc_create)
+        call acc_data(px, acc_create)
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n
+            if (body(i) == 0) then
+                pm(i) = mass(i)
+                px(:, i) = x(:, i)
+            else
+                pm(i) = merge(body_mass(i), 0.0_wp, gid(i) == body(i))
+                px(:, i) = body_x(:, i)
+            end if
+        end do
+    end subroutine clump_probe_view
 
     !> f += m g for the spheres among particles 1..n (body 0) of a case with clumps, whose
     !> particle contacts are summed without gravity (the bodies take M g in clumps_move).

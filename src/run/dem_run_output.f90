@@ -15,6 +15,7 @@ module dem_run_output
     use dem_diagnostics, only: count_pp_sides, first_nonfinite, contact_trace
     use dem_output, only: output_t, output_series, output_contact, output_sizes, &
                           output_probes, output_histogram
+    use dem_clumps, only: clump_probe_view
     use dem_probes, only: probe_values, probe_histogram_counts, probe_histogram, probe_wall_load
     use dem_frame, only: frame_t
     use dem_checkpoint, only: frame_write
@@ -22,7 +23,7 @@ module dem_run_output
     use dem_xdmf, only: xdmf_write, snapshot_file
     use dem_files, only: make_directory
     use dem_timers, only: wall_seconds
-    use dem_acc, only: acc_data, acc_to_host
+    use dem_acc, only: acc_data, acc_to_host, acc_exit
     implicit none
     private
     public :: write_series, contact_counts, write_trace, write_snapshot, write_xdmf, &
@@ -89,7 +90,7 @@ contains
         type(case_t), intent(in) :: c
         type(output_t), intent(inout) :: out
         type(error_t), intent(inout) :: err
-        real(wp), allocatable :: values(:)
+        real(wp), allocatable :: values(:), pm(:), px(:, :)
         integer(i8), allocatable :: counts(:, :)
         real(wp) :: t
         integer :: k
@@ -99,6 +100,11 @@ contains
             do k = 1, size(c%probes)
                 if (c%probes(k)%kind == probe_wall_load) then      ! (from the wall contacts)
                     values = [values, s%wall_loads(:, k)]
+                else if (allocated(p%body)) then        ! (a clump by its centre, once)
+                    call clump_probe_view(n, p%gid, p%body, p%mass, p%x, p%body_mass, &
+                                          p%body_x, pm, px)
+                    values = [values, probe_values(s%comm, c%probes(k), s%run%probed, n, &
+                                                   p%gid, p%mat, pm, px, p%v, p%w)]
                 else
                     values = [values, probe_values(s%comm, c%probes(k), s%run%probed, n, &
                                                    p%gid, p%mat, p%mass, p%x, p%v, p%w)]
@@ -110,6 +116,10 @@ contains
                     c%probes(k)%v_min, c%probes(k)%v_max, counts, err)
             end do
         end associate
+        if (allocated(pm)) then
+            call acc_data(pm, acc_exit)
+            call acc_data(px, acc_exit)
+        end if
         if (s%comm%rank == 0) call output_probes(out, t, s%step, values, err)
     contains
         !> A histogram at time t_h is written at the first row at or after it: this one if the

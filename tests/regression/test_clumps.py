@@ -21,7 +21,9 @@
 3. A pour: 216 dimers of random orientations and a sphere falling onto a plane for 50 ms:
    final.csv and series.csv byte for byte the same on 1, 2 and 3 ranks; a restart from the
    checkpoint at 20 ms on 1 and on 2 ranks ends with the same final.csv; a snapshot holds
-   each particle's body id and its body's orientation (unit quaternions).
+   each particle's body id and its body's orientation (unit quaternions). The probes, against
+   the final checkpoint's bodies: a centre-of-mass probe weighs each clump once at its centre
+   (to 1e-12 m), a count probe counts a clump's members where its centre is.
 4. &insert of 120 clumps of a three-sphere template (random orientations, reach from 1.5 to
    2.5 mm) among 30 spheres: the same final.csv on 1 and 2 ranks; at the start each body's
    radii and member distances are the template's times one scale, the scaled reach (that
@@ -152,7 +154,10 @@ rng = random.Random(3)
 lines = [head("pour", 0.05, g=-9.81, every=0.005, extra=", checkpoint_interval = 0.02, "
               "checkpoint_keep = 5, snapshot_interval = 0.05", rho=RHO),
          floor.replace("0.01 /", "0.1 /"),
-         "&particle material = 'glass', radius = 0.0012, position = 0, 0, 0.03 /\n"]
+         "&particle material = 'glass', radius = 0.0012, position = 0, 0, 0.03 /\n",
+         "&probe name = 'all', kind = 'center_of_mass' /\n",
+         "&probe name = 'low', kind = 'count', region = 'box', box_min = -1, -1, -1, "
+         "box_max = 1, 1, 0.01 /\n"]
 for i in range(6):
     for j in range(6):
         for k in range(6):
@@ -181,6 +186,29 @@ for ranks in (1, 2):
     run_ranks(mpiexec, dem, case, ranks, work, "--restart", ckpt)
     same_file(os.path.join(work, "pour_1", "final.csv"), os.path.join(work, name, "final.csv"),
               f"the pour restarted on {ranks} ranks")
+# the probes against the final checkpoint's bodies: each clump once, at its centre of mass
+last = sorted(f for f in os.listdir(os.path.join(work, "pour_1", "checkpoints"))
+              if f.endswith(".h5"))[-1]
+with h5py.File(os.path.join(work, "pour_1", "checkpoints", last), "r") as h:
+    body = h["particles/body"][...]
+    ids = h["particles/id"][...]
+    xs = h["particles/position"][...]
+    rs = h["particles/radius"][...]
+    bx = h["particles/body_position"][...]
+    bm = h["particles/body_mass"][...]
+if xs.shape[0] == 3:
+    xs, bx = xs.T, bx.T
+sphere = body == 0
+lead = (body != 0) & (ids == body)
+m = np.concatenate([4.0 / 3.0 * math.pi * rs[sphere] ** 3 * RHO, bm[lead]])
+com = (m[:, None] * np.concatenate([xs[sphere], bx[lead]])).sum(0) / m.sum()
+probes = np.genfromtxt(os.path.join(work, "pour_1", "probes.csv"), delimiter=",", names=True)
+got = [float(probes[f"all_glass_{a}"][-1]) for a in "xyz"]
+check(np.allclose(got, com, rtol=0, atol=1e-12),
+      f"the centre-of-mass probe weighs each clump once, at its centre: {got} against {com}")
+low = np.concatenate([xs[sphere][:, 2], np.repeat(bx[lead][:, 2], 2)])
+check(int(probes["low_glass"][-1]) == int(np.count_nonzero(low <= 0.01)),
+      "the count probe counts a clump's members where its centre of mass is")
 snaps = sorted(f for f in os.listdir(os.path.join(work, "pour_1", "snapshots"))
                if f.endswith(".h5"))
 check(len(snaps) > 0, "the pour wrote snapshots")
