@@ -427,6 +427,13 @@ contains
             call h5_close(h, err)
             return
         end if
+        if (h5_exists(h, '/particles/body')) then
+            call set_error(err, dem_err_input, path // ': holds clumps (/particles/body): a ' // &
+                'particle file gives spheres; a run with clumps continues from its checkpoint ' // &
+                '(dem --restart CHECKPOINT CASE)')
+            call h5_close(h, err)
+            return
+        end if
         n_rows = int(dims(1), ip)
         first = 0
         n = dims(1)

@@ -179,15 +179,17 @@ contains
     end subroutine output_contact
 
     !> final.csv in directory `dir`: the particles of every rank, one row each, in the order
-    !> given (by id), rank 0's first. The ranks append their rows in turn to final.csv.part,
+    !> given (by id), rank 0's first; in a case with clumps a last column `body`, each
+    !> particle's clump (0: a sphere). The ranks append their rows in turn to final.csv.part,
     !> which becomes final.csv once all are written.
-    subroutine output_final(dir, comm, gid, mat, radius, x, v, w, err)
+    subroutine output_final(dir, comm, gid, mat, radius, x, v, w, err, body)
         character(len=*), intent(in) :: dir
         type(comm_t), intent(in) :: comm
         integer(i8), intent(in) :: gid(:)
         character(len=*), intent(in) :: mat(:) !! material names
         real(wp), intent(in) :: radius(:), x(:, :), v(:, :), w(:, :)
         type(error_t), intent(inout) :: err
+        integer(i8), intent(in), optional :: body(:)
         character(len=:), allocatable :: part
         type(cfile_t) :: f
         character(len=400) :: row
@@ -195,7 +197,9 @@ contains
         part = dir // '/final.csv.part'
         do q = 0, comm%size - 1
             if (q == comm%rank) then
-                if (q == 0) then
+                if (q == 0 .and. present(body)) then
+                    call open_csv(part, final_header // ',body', f, err)
+                else if (q == 0) then
                     call open_csv(part, final_header, f, err)
                 else
                     call cfile_open(f, part, .true., err)
@@ -204,6 +208,7 @@ contains
                     if (err%failed()) exit
                     write(row, '(i0,",",a,10(",",' // real_fmt // '))') gid(i), trim(mat(i)), &
                         radius(i), x(:, i), v(:, i), w(:, i)
+                    if (present(body)) write(row(len_trim(row) + 1:), '(",",i0)') body(i)
                     call write_row(f, trim(row), err)
                 end do
                 call close_file(f, err)

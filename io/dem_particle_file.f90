@@ -95,6 +95,14 @@ contains
                 if (field(k) == optional(j)) col(6 + j) = k
             end do
         end do
+        if (any([(field(k) == 'body', k = 1, size(first))])) then
+            call set_error(err, dem_err_input, path // ":1: a column 'body': the file holds " // &
+                'clumps'' members (a final.csv of a run with clumps); a particle file gives ' // &
+                'spheres, and a run with clumps continues from its checkpoint (dem --restart ' // &
+                'CHECKPOINT CASE)')
+            close(u)
+            return
+        end if
         do j = 1, 6
             if (col(j) == 0) then
                 call set_error(err, dem_err_input, path // ":1: the header has no column '" // &

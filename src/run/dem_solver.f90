@@ -319,7 +319,8 @@ contains
             call capture(s, c, s%run%out, fr)
             associate (p => fr%p, n => fr%n)
                 call output_final(c%output_dir, s%comm, p%gid(1:n), c%mats%name(p%mat(1:n)), &
-                                  p%radius(1:n), p%x(:, 1:n), p%v(:, 1:n), p%w(:, 1:n), err)
+                                  p%radius(1:n), p%x(:, 1:n), p%v(:, 1:n), p%w(:, 1:n), err, &
+                                  p%body)             ! (the frame's n; absent without clumps)
             end associate
             bad = failed_anywhere(s, err)
         end if

@@ -37,6 +37,8 @@
    point, 1/m_eff = 1/M + (lever)^2 / I), to 1 %.
 7. A rod of four spheres dropped tilted onto a plane comes to rest flat, each member at R - d,
    d Hertz's static overlap under a quarter of the rod's weight, to 2 % of d.
+8. A run with clumps is not a particle file: its final.csv and its snapshots are refused as
+   &particle_file (exit 2, naming the clumps).
 usage: test_clumps.py DEM WORKDIR MPIEXEC"""
 import math
 import os
@@ -355,5 +357,15 @@ if got and frod.size == 4:
           f"the rod lies flat, each member at R - d: {frod['z']} against {R - d}")
     check(np.max(np.abs(frod["vz"])) < 1e-4 and np.max(np.abs(frod["wy"])) < 1e-2,
           "the rod at rest")
+
+# 8. a run with clumps is not a particle file: its final.csv (a column 'body') and its
+# snapshots (/particles/body) are refused as &particle_file, with exit 2
+for name, source in (("from_final", os.path.join(work, "pour_1", "final.csv")),
+                     ("from_snapshot", os.path.join(work, "pour_1", "snapshots",
+                                                    "snapshot_000000000000.h5"))):
+    case = write(name, head(name, 0.001) + f"&particle_file file = '{source}' /\n")
+    r = subprocess.run([dem, case], cwd=work, capture_output=True, text=True)
+    check(r.returncode == 2 and "clumps" in r.stderr and "&particle_file" in r.stderr,
+          f"{name}: refused, naming the clumps: exit {r.returncode}, {r.stderr}")
 
 finish()
