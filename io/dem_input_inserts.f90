@@ -67,7 +67,7 @@ contains
                                          ! the time to move a diameter (dem_setup)
         character(len=name_len) :: template  ! clumps of this &clump_template instead of
                                          ! spheres (their material its; the radii: their
-                                         ! reach, default the template's; not an inflow)
+                                         ! reach, default the template's)
         real(wp) :: orientation(4)       ! the clumps' unit quaternion, default at random
         namelist /insert/ n, material, template, orientation, radius_distribution, radius_min, radius_max, &
             radius_mean, radius_sd, radii, fractions, fraction_by, region, box_min, box_max, &
@@ -210,8 +210,8 @@ contains
         end do
     contains
         !> The template of a group of clumps into gi, and their orientation if given; false
-        !> with err set when it is not a template's name, a material is given too, the
-        !> orientation is not a unit quaternion, or the group is an inflow.
+        !> with err set when it is not a template's name, a material is given too, or the
+        !> orientation is not a unit quaternion.
         logical function template_of(gi) result(ok)
             type(insert_t), intent(inout) :: gi
             integer :: j
@@ -225,9 +225,6 @@ contains
             else if (len_trim(material) > 0) then
                 call set_error(err, dem_err_input, at // ": key 'material': clumps are of " // &
                                "their template's material (give 'template' or 'material')")
-            else if (gi%inflow) then
-                call set_error(err, dem_err_input, at // ": key 'template': clumps are not " // &
-                               'inserted during a run yet (an inflow)')
             else if (any(orientation /= unset)) then
                 if (.not. (all(ieee_is_finite(orientation)) .and. &
                            abs(norm2(orientation) - 1.0_wp) <= 1.0e-6_wp)) then

@@ -255,20 +255,26 @@ contains
         end if
     end subroutine print_check
 
-    !> The clumps of a case (among its particles: their members), and each template they
-    !> use with its mass properties and reach (dem_clumps).
+    !> The clumps of a case (among its particles: their members; and those its &insert
+    !> groups add during the run), and each template they use with its mass properties and
+    !> reach (dem_clumps).
     subroutine print_clumps(c)
         type(case_t), intent(in) :: c
+        logical :: used
         integer :: k
         write(output_unit, '(a,i0,a)') '  clumps               ', size(c%clumps), &
-            ' (their members among the particles)'
+            ' at the start (their members among the particles)' // &
+            trim(merge(', more by inflow', '                ', &
+                       any(c%inserts%inflow .and. c%inserts%template > 0)))
         do k = 1, size(c%templates)
-            if (.not. any(c%clumps%template == k)) cycle
+            used = any(c%clumps%template == k) .or. any(c%inserts%template == k)
+            if (.not. used) cycle
             associate (t => c%templates(k))
                 write(output_unit, '(a,i0,a,i0,a,es12.5,a,3es12.5,a,es10.3,a)') '    ' // &
                     t%name // ': ', count(c%clumps%template == k), ' clumps of ', &
                     size(t%radii), ' spheres, mass ', t%props%mass, &
-                    ' kg, principal moments', t%props%moments, ' kg m^2, reach ', t%reach, ' m'
+                    ' kg, principal moments', t%props%moments, ' kg m^2, reach ', t%reach, &
+                    ' m (unscaled)'
             end associate
         end do
     end subroutine print_clumps

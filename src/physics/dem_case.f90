@@ -207,7 +207,7 @@ contains
             do i = 1, size(c%inserts)         ! the inflow's particles, to come
                 if (.not. c%inserts(i)%inflow) cycle
                 a = c%inserts(i)%mat
-                sm%rmin(a) = min(sm%rmin(a), c%inserts(i)%size%r_min)
+                sm%rmin(a) = min(sm%rmin(a), c%inserts(i)%size%r_min * smallest_share(i))
                 sm%rmax(a) = max(sm%rmax(a), c%inserts(i)%size%r_max)
                 sm%speed = max(sm%speed, norm2(abs(c%inserts(i)%velocity) + &
                                                c%inserts(i)%velocity_spread))
@@ -232,6 +232,16 @@ contains
             sm%spin_energy = sums(2)
         end associate
     contains
+        !> Of a group of clumps (its radii their reach), the smallest member's radius over the
+        !> reach; 1 for spheres.
+        real(wp) function smallest_share(k)
+            integer, intent(in) :: k
+            smallest_share = 1.0_wp
+            associate (t => c%inserts(k)%template)
+                if (t > 0) smallest_share = minval(c%templates(t)%radii) / c%templates(t)%reach
+            end associate
+        end function smallest_share
+
         !> Whether row i is a clump's member.
         logical function member(i)
             integer(ip), intent(in) :: i

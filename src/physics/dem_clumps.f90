@@ -18,11 +18,12 @@ module dem_clumps
     use dem_clump_mass, only: clump_mass_t
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host, acc_to_device
     use dem_particles, only: bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset
+    use dem_random, only: rng_t, rng_uniform
     implicit none
     private
     public :: clump_template_t, clump_t, clump_index_t, clump_members, clump_index_build, &
               clump_index_free, clumps_move, clump_energy_terms, sphere_gravity, clump_reach, &
-              clump_probe_view
+              clump_probe_view, clumps_in_spheres
 
     !> A clump template: its member spheres and its mass properties.
     type :: clump_template_t
@@ -96,6 +97,34 @@ contains
             state(bs_offset:bs_offset + 2, k) = s * tpl%props%positions(:, k)
         end do
     end subroutine clump_members
+
+    !> Clumps of template `tpl` (index it) in the spheres (centres x, radii r) that an
+    !> insertion placed, with velocities v: each the template scaled by r / its reach about
+    !> its centre of mass at x, turned by `orientation`, or (all zero) by a uniformly random
+    !> rotation from rng (Shoemake 1992: from three uniform numbers u, (sqrt(1 - u1) sin
+    !> 2 pi u2, sqrt(1 - u1) cos 2 pi u2, sqrt(u1) sin 2 pi u3, sqrt(u1) cos 2 pi u3)).
+    function clumps_in_spheres(tpl, it, x, r, v, orientation, rng) result(added)
+        type(clump_template_t), intent(in) :: tpl
+        integer(ip), intent(in) :: it
+        real(wp), intent(in) :: x(:, :), r(:), v(:, :), orientation(4)
+        type(rng_t), intent(inout) :: rng
+        type(clump_t) :: added(size(r))
+        real(wp), parameter :: two_pi = 2.0_wp * acos(-1.0_wp)
+        real(wp) :: q(4), u(3), s
+        integer :: i
+        do i = 1, size(r)
+            q = orientation
+            if (all(q == 0.0_wp)) then
+                u = [rng_uniform(rng), rng_uniform(rng), rng_uniform(rng)]
+                q = [sqrt(1.0_wp - u(1)) * sin(two_pi * u(2)), &
+                     sqrt(1.0_wp - u(1)) * cos(two_pi * u(2)), &
+                     sqrt(u(1)) * sin(two_pi * u(3)), sqrt(u(1)) * cos(two_pi * u(3))]
+            end if
+            s = r(i) / tpl%reach
+            added(i) = clump_t(template=it, position=x(:, i) - quat_to_lab(q, s * &
+                               tpl%props%centre), orientation=q, velocity=v(:, i), scale=s)
+        end do
+    end function clumps_in_spheres
 
     !> The index of the bodies among the owned particles 1..n (body(i) /= 0: a member; not
     !> those `gone`, out of the run through an outlet): the members in the order of their

@@ -16,6 +16,8 @@ module dem_inflow
     use dem_run_state, only: solver_t, time_of, particle_data
     use dem_rebuild, only: rebuild, settle_outlets, new_particles_t
     use dem_acc, only: acc_to_host
+    use dem_clumps, only: clump_template_t, clump_t, clumps_in_spheres, clump_members
+    use dem_particles, only: body_state_rows
     implicit none
     private
     public :: insert_inflow, inflow_to_come
@@ -53,7 +55,9 @@ contains
         call particle_data(s, acc_to_host)
         near = nearby(s, c, due)
         call comm_gather(s%comm, near, all_near)
-        allocate(a%gid(0), a%mat(0), a%radius(0), a%density(0), a%x(3, 0), a%v(3, 0))
+        allocate(a%gid(0), a%mat(0), a%radius(0), a%density(0), a%x(3, 0), a%v(3, 0), &
+                 a%w(3, 0))
+        if (c%has_clumps) allocate(a%body(0), a%state(body_state_rows, 0))
         if (s%comm%rank == 0) then
             old = reshape(all_near, [4, size(all_near) / 4])
             do k = 1, size(c%inserts)
@@ -122,8 +126,10 @@ contains
         end do
     end function nearby
 
-    !> Group k's new spheres up to its goal at time t (rank 0), clear of `old` (x, y, z, r
-    !> columns; the new ones join it), appended to `a`.
+    !> Group k's new spheres, or clumps in the spheres placed for them (dem_clumps'
+    !> clumps_in_spheres: their reach spheres, of mass M (r / reach)^3), up to its goal at
+    !> time t (rank 0), clear of `old` (x, y, z, r columns; the new ones join it), appended
+    !> to `a`.
     subroutine place(s, c, k, t, old, a)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -132,11 +138,15 @@ contains
         real(wp), allocatable, intent(inout) :: old(:, :)
         type(new_particles_t), intent(inout) :: a
         type(rng_t) :: rng
-        real(wp), allocatable :: x(:, :), r(:)
-        real(wp) :: rho, goal
+        real(wp), allocatable :: x(:, :), r(:), v(:, :)
+        type(clump_t), allocatable :: clumps(:)
+        real(wp) :: rho, goal, factor
         integer(ip) :: want, placed, i
         associate (g => c%inserts(k))
             rho = c%mats%density(g%mat)
+            factor = 4.0_wp / 3.0_wp * pi * rho        ! the mass of a sphere of radius r / r^3
+            if (g%template > 0) factor = c%templates(g%template)%props%mass / &
+                                         c%templates(g%template)%reach**3
             if (g%rate > 0.0_wp) then
                 want = int(floor(g%rate * (t - g%start) + 1.0e-9_wp), ip) - &
                        int(s%inflow_count(k), ip)
@@ -144,28 +154,77 @@ contains
             else
                 goal = g%mass_rate * (t - g%start) - s%inflow_mass(k)
                 want = 0
-                if (goal > 0.0_wp) want = int(goal / (4.0_wp / 3.0_wp * pi * rho * &
-                                                      g%size%r_min**3), ip) + 1
+                if (goal > 0.0_wp) want = int(goal / (factor * g%size%r_min**3), ip) + 1
             end if
             if (g%n > 0) want = min(want, int(g%n - s%inflow_count(k), ip))
             if (want <= 0) return
             allocate(x(3, want), r(want))
             rng%state = s%rng_state
             call insert_random(rng, g%region, want, g%size, old(1:3, :), old(4, :), 10000, &
-                               x, r, placed, 4.0_wp / 3.0_wp * pi * rho, goal)
-            a%gid = [a%gid, (s%next_id + i, i = 0, placed - 1)]
-            a%mat = [a%mat, spread(g%mat, 1, placed)]
-            a%radius = [a%radius, r(1:placed)]
-            a%density = [a%density, spread(rho, 1, placed)]
-            a%x = reshape([a%x, x(:, 1:placed)], [3, size(a%gid)])
-            a%v = reshape([a%v, insert_velocities(rng, g%velocity, g%velocity_spread, placed)], &
-                          [3, size(a%gid)])
+                               x, r, placed, factor, goal)
+            v = insert_velocities(rng, g%velocity, g%velocity_spread, placed)
+            if (g%template > 0) then
+                clumps = clumps_in_spheres(c%templates(g%template), g%template, x(:, 1:placed), &
+                                           r(1:placed), v, g%orientation, rng)
+                do i = 1, placed
+                    call add_members(c%templates(g%template), clumps(i), rho, s%next_id, a)
+                end do
+            else
+                call append(a, [(s%next_id + i, i = 0, placed - 1)], spread(g%mat, 1, placed), &
+                            r(1:placed), spread(rho, 1, placed), x(:, 1:placed), v, &
+                            spread([0.0_wp, 0.0_wp, 0.0_wp], 2, placed))
+                s%next_id = s%next_id + placed
+            end if
             s%rng_state = rng%state
             old = reshape([old, [(x(:, i), r(i), i = 1, placed)]], [4, size(old, 2) + placed])
-            s%next_id = s%next_id + placed
             s%inflow_count(k) = s%inflow_count(k) + placed
-            s%inflow_mass(k) = s%inflow_mass(k) + &
-                               sum(4.0_wp / 3.0_wp * pi * rho * r(1:placed)**3)
+            s%inflow_mass(k) = s%inflow_mass(k) + sum(factor * r(1:placed)**3)
         end associate
     end subroutine place
+
+    !> A clump's members (dem_clumps' clump_members) appended to `a`, their ids from id on
+    !> (id moves past them).
+    subroutine add_members(tpl, cl, density, id, a)
+        type(clump_template_t), intent(in) :: tpl
+        type(clump_t), intent(in) :: cl
+        real(wp), intent(in) :: density
+        integer(i8), intent(inout) :: id
+        type(new_particles_t), intent(inout) :: a
+        integer(i8) :: gid(size(tpl%radii)), body(size(tpl%radii))
+        real(wp) :: radius(size(tpl%radii)), x(3, size(tpl%radii)), v(3, size(tpl%radii)), &
+                    w(3, size(tpl%radii)), state(body_state_rows, size(tpl%radii))
+        call clump_members(tpl, cl, id, gid, body, radius, x, v, w, state)
+        call append(a, gid, spread(tpl%mat, 1, size(gid)), radius, &
+                    spread(density, 1, size(gid)), x, v, w, body, state)
+        id = id + size(gid)
+    end subroutine add_members
+
+    !> Particles appended to `a` (in a case with clumps, with their bodies: spheres when
+    !> none is given).
+    subroutine append(a, gid, mat, radius, density, x, v, w, body, state)
+        type(new_particles_t), intent(inout) :: a
+        integer(i8), intent(in) :: gid(:)
+        integer(ip), intent(in) :: mat(:)
+        real(wp), intent(in) :: radius(:), density(:), x(:, :), v(:, :), w(:, :)
+        integer(i8), intent(in), optional :: body(:)
+        real(wp), intent(in), optional :: state(:, :)
+        integer :: n
+        n = size(a%gid) + size(gid)
+        a%gid = [a%gid, gid]
+        a%mat = [a%mat, mat]
+        a%radius = [a%radius, radius]
+        a%density = [a%density, density]
+        a%x = reshape([a%x, x], [3, n])
+        a%v = reshape([a%v, v], [3, n])
+        a%w = reshape([a%w, w], [3, n])
+        if (.not. allocated(a%body)) return
+        if (present(body)) then
+            a%body = [a%body, body]
+            a%state = reshape([a%state, state], [body_state_rows, n])
+        else
+            a%body = [a%body, spread(0_i8, 1, size(gid))]
+            a%state = reshape([a%state, spread(0.0_wp, 1, body_state_rows * size(gid))], &
+                              [body_state_rows, n])
+        end if
+    end subroutine append
 end module dem_inflow

@@ -41,7 +41,9 @@ module dem_rebuild
         integer(i8), allocatable :: gid(:)
         integer(ip), allocatable :: mat(:)
         real(wp), allocatable :: radius(:), density(:)    !< [m], [kg/m^3]
-        real(wp), allocatable :: x(:, :), v(:, :)         !< [m], [m/s]
+        real(wp), allocatable :: x(:, :), v(:, :), w(:, :)  !< [m], [m/s], [rad/s]
+        integer(i8), allocatable :: body(:)               !< in a case with clumps: their
+        real(wp), allocatable :: state(:, :)              !< body and body state (bs_*)
     end type new_particles_t
 
 contains
@@ -241,7 +243,8 @@ contains
         end do
     end subroutine swap_columns
 
-    !> Append `a` to the owned particles, at rest of forces and without contact history:
+    !> Append `a` to the owned particles (with their bodies, in a case with clumps), at rest of
+    !> forces and without contact history:
     !> the ghosts are dropped (the rebuild makes them anew) and the lists get empty rows for
     !> the new particles (neighbors_empty_rows), for the rebuild to carry from. The store
     !> goes through the host.
@@ -257,8 +260,13 @@ contains
         call particles_reserve_on_device(s%p, n)
         call store_walls_reserve_on_device(s%cs, n_old, n)
         do k = 1, size(a%gid)
-            call particles_add(s%p, a%gid(k), a%mat(k), a%radius(k), a%density(k), a%x(:, k), &
-                               a%v(:, k), [0.0_wp, 0.0_wp, 0.0_wp])
+            if (allocated(a%body)) then
+                call particles_add(s%p, a%gid(k), a%mat(k), a%radius(k), a%density(k), &
+                                   a%x(:, k), a%v(:, k), a%w(:, k), a%body(k), a%state(:, k))
+            else
+                call particles_add(s%p, a%gid(k), a%mat(k), a%radius(k), a%density(k), &
+                                   a%x(:, k), a%v(:, k), a%w(:, k))
+            end if
         end do
         s%p%f(:, n_old + 1:n) = 0.0_wp
         s%p%t(:, n_old + 1:n) = 0.0_wp

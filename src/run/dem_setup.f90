@@ -13,13 +13,12 @@ module dem_setup
                         case_speed_bound, case_energy_speed, case_append_particles, &
                         case_settle_time
     use dem_insert, only: insert_random, insert_velocities, region_face, region_slab
-    use dem_random, only: rng_t, rng_seed, rng_uniform
+    use dem_random, only: rng_t, rng_seed
     use dem_input, only: read_case_file
     use dem_text, only: itoa, real_text
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_periodic, only: with_images
-    use dem_clumps, only: clump_members, clump_t
-    use dem_rigid, only: quat_to_lab
+    use dem_clumps, only: clump_members, clump_t, clumps_in_spheres
     use dem_particles, only: body_state_rows
     implicit none
     private
@@ -167,7 +166,8 @@ contains
         end do
         do k = 1, size(c%inserts)                ! the ids of the inflow to come
             if (.not. c%inserts(k)%inflow) cycle
-            if (.not. ids_left(c%inserts(k), c%next_id, inflow_count(c%inserts(k)), err)) return
+            if (.not. ids_left(c%inserts(k), c%next_id, inflow_count(c%inserts(k)) * &
+                               members(c%inserts(k)), err)) return
         end do
         k = findloc(c%inserts%inflow, .true., dim=1)
         c%inflow = k > 0
@@ -188,8 +188,15 @@ contains
                 'largest id before them, ' // itoa(first - 1) // ')')
         end function ids_left
 
+        !> The particles each of a group's spheres makes: a clump's members, or 1.
+        real(wp) function members(g)
+            type(insert_t), intent(in) :: g
+            members = 1.0_wp
+            if (g%template > 0) members = real(size(c%templates(g%template)%radii), wp)
+        end function members
+
         !> The most spheres an inflow inserts up to t_end: rate times its time, or its mass
-        !> in spheres of its smallest radius.
+        !> in spheres of its smallest radius (clumps: in clumps of the smallest reach).
         real(wp) function inflow_count(g) result(count)
             type(insert_t), intent(in) :: g
             real(wp), parameter :: pi = acos(-1.0_wp)
@@ -197,6 +204,10 @@ contains
             span = max(0.0_wp, min(g%end, c%t_end) - g%start)
             if (g%rate > 0.0_wp) then
                 count = g%rate * span + 1.0_wp
+            else if (g%template > 0) then
+                count = g%mass_rate * span / (c%templates(g%template)%props%mass * &
+                                              (g%size%r_min / c%templates(g%template)%reach)**3) &
+                        + 1.0_wp
             else
                 count = g%mass_rate * span / (4.0_wp / 3.0_wp * pi * g%size%r_min**3 * &
                                               c%mats%density(g%mat)) + 1.0_wp
@@ -223,38 +234,21 @@ contains
         end function default_every
     end subroutine place_inserts
 
-    !> &insert group k's n clumps, their reach spheres (centres x, radii r) placed: each
-    !> the template scaled by r / its reach about its centre of mass at x, turned by the
-    !> group's orientation or a uniformly random one (Shoemake 1992: from three uniform
-    !> numbers u, (sqrt(1 - u1) sin 2 pi u2, sqrt(1 - u1) cos 2 pi u2, sqrt(u1) sin 2 pi u3,
-    !> sqrt(u1) cos 2 pi u3)), drawn after the velocities; then their members made.
+    !> &insert group k's n clumps in the spheres placed for them (centres x, radii r: their
+    !> reach spheres; dem_clumps' clumps_in_spheres, the orientations drawn after the
+    !> velocities), then their members made.
     subroutine insert_clumps(c, k, rng, n, x, r)
         type(case_t), intent(inout) :: c
         integer(ip), intent(in) :: k
         type(rng_t), intent(inout) :: rng
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: x(:, :), r(:)
-        real(wp), parameter :: two_pi = 2.0_wp * acos(-1.0_wp)
-        real(wp) :: v(3, n), q(4), u(3), s
-        type(clump_t) :: added(n)
-        type(insert_t) :: g
-        integer(ip) :: i, first
-        g = c%inserts(k)
-        v = insert_velocities(rng, g%velocity, g%velocity_spread, n)
-        associate (tpl => c%templates(g%template))
-            do i = 1, n
-                q = g%orientation
-                if (all(q == 0.0_wp)) then
-                    u = [rng_uniform(rng), rng_uniform(rng), rng_uniform(rng)]
-                    q = [sqrt(1.0_wp - u(1)) * sin(two_pi * u(2)), &
-                         sqrt(1.0_wp - u(1)) * cos(two_pi * u(2)), &
-                         sqrt(u(1)) * sin(two_pi * u(3)), sqrt(u(1)) * cos(two_pi * u(3))]
-                end if
-                s = r(i) / tpl%reach
-                added(i) = clump_t(template=g%template, position=x(:, i) - &
-                                   quat_to_lab(q, s * tpl%props%centre), orientation=q, &
-                                   velocity=v(:, i), scale=s)
-            end do
+        type(clump_t), allocatable :: added(:)
+        integer(ip) :: first
+        associate (g => c%inserts(k))
+            added = clumps_in_spheres(c%templates(g%template), g%template, x, r, &
+                                      insert_velocities(rng, g%velocity, g%velocity_spread, n), &
+                                      g%orientation, rng)
         end associate
         first = size(c%clumps, kind=ip) + 1
         c%clumps = [c%clumps, added]

@@ -39,6 +39,9 @@
    d Hertz's static overlap under a quarter of the rod's weight, to 2 % of d.
 8. A run with clumps is not a particle file: its final.csv and its snapshots are refused as
    &particle_file (exit 2, naming the clumps).
+9. An inflow of clumps (a rate) beside an inflow of spheres (by mass): every clump whole, its
+   members' ids consecutive, no more than rate x time of them; the same final.csv on 1 and 2
+   ranks, and after a restart halfway.
 usage: test_clumps.py DEM WORKDIR MPIEXEC"""
 import math
 import os
@@ -367,5 +370,36 @@ for name, source in (("from_final", os.path.join(work, "pour_1", "final.csv")),
     r = subprocess.run([dem, case], cwd=work, capture_output=True, text=True)
     check(r.returncode == 2 and "clumps" in r.stderr and "&particle_file" in r.stderr,
           f"{name}: refused, naming the clumps: exit {r.returncode}, {r.stderr}")
+
+# 9. inflow of clumps during the run (a rate), among an inflow of spheres by mass: whole
+# clumps only, at most rate x time of them, the same on 1 and 2 ranks, and a restart from
+# the checkpoint halfway ends the same
+flow = (head("{name}", 0.06, g=-9.81, every=0.01, extra=", checkpoint_interval = 0.03, "
+             "checkpoint_keep = 5").replace("dt = 1e-6", "dt = 2e-6") + tri +
+        floor.replace("0.01 /", "0.1 /") +
+        "&insert template = 'tri', box_min = -0.01, -0.01, 0.02, box_max = 0.01, 0.01, 0.03, "
+        "rate = 2000, velocity = 0, 0, -0.5 /\n"
+        "&insert material = 'glass', radius_min = 0.001, box_min = -0.01, -0.01, 0.02, "
+        "box_max = 0.01, 0.01, 0.03, mass_rate = 0.01 /\n")
+for ranks in (1, 2):
+    name = f"inflow_{ranks}"
+    run_ranks(mpiexec, dem, write(name, flow.replace("{name}", name)), ranks, work)
+same_file(os.path.join(work, "inflow_1", "final.csv"), os.path.join(work, "inflow_2",
+          "final.csv"), "the inflow of clumps on 2 ranks")
+ckpt = os.path.join(work, "inflow_1", "checkpoints", "checkpoint_000000015000.h5")
+run_ranks(mpiexec, dem, write("inflow_restart", flow.replace("{name}", "inflow_restart")), 2,
+          work, "--restart", ckpt)
+same_file(os.path.join(work, "inflow_1", "final.csv"), os.path.join(work, "inflow_restart",
+          "final.csv"), "the inflow of clumps restarted halfway on 2 ranks")
+ff = final("inflow_1")
+members = {}
+for row in np.atleast_1d(ff):
+    if row["body"] > 0:
+        members.setdefault(int(row["body"]), []).append(int(row["id"]))
+check(all(sorted(v) == list(range(b, b + 3)) for b, v in members.items()),
+      "every clump of the inflow whole, its members' ids consecutive from the body's")
+check(60 <= len(members) <= 2000 * 0.06 + 1,
+      f"the clumps inserted: {len(members)}, at most rate x time = 120")
+check(np.count_nonzero(ff["body"] == 0) > 10, "the spheres' inflow beside them")
 
 finish()
