@@ -225,7 +225,7 @@ contains
                            body_x, body_v, body_q, body_l, body_inv_i, body_mass, body_offset, &
                            x, v, w, n_fast)
         integer(ip), intent(in) :: nb, np
-        integer(ip), intent(in) :: first(nb + 1), member(*)
+        integer(ip), intent(in) :: first(nb + 1), member(first(nb + 1) - 1)
         real(wp), intent(in) :: h, h_drift              !! [s]
         real(wp), intent(in) :: gravity(3)              !! [m/s^2]
         real(wp), intent(in) :: bound                   !! [m/s]
