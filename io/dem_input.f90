@@ -102,9 +102,6 @@ contains
         call read_outlets(nf, c, err)
         if (err%failed()) return
         call read_probes(nf, c, err)
-        if (err%failed() .or. .not. c%has_clumps) return
-        if (c%periodic%on) call fail(nf%path // ': &clump: clumps and &periodic axes ' // &
-                                     'together are not supported yet')
     contains
         subroutine fail(msg)
             character(len=*), intent(in) :: msg

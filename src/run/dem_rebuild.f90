@@ -22,7 +22,7 @@ module dem_rebuild
                                  store_walls_reserve_on_device
     use dem_cells, only: kept_indices, gather_items
     use dem_storage, only: fill_range
-    use dem_periodic, only: periodic_wrap
+    use dem_periodic, only: periodic_wrap, periodic_wrap_bodies
     use dem_contacts_pp, only: pp_scales
     use dem_diagnostics, only: momentum_sums
     use dem_clumps, only: clump_reach, clump_index_build
@@ -131,8 +131,13 @@ contains
         if (present(added)) call add_particles(s, added)
         replay = allocated(s%p%x_built)          ! a restart's first build: that of the run
         if (replay) call build_pose(s, pose)     ! before it, at its positions and walls
-        if (s%dom%pb%on .and. .not. replay) call periodic_wrap(s%dom%pb, s%p%n_own, .true., &
-                                                               s%p%x)
+        if (s%dom%pb%on .and. .not. replay) then
+            if (allocated(s%p%body)) then            ! (a clump with its centre)
+                call periodic_wrap_bodies(s%dom%pb, s%p%n_own, s%p%body, s%p%x, s%p%body_x)
+            else
+                call periodic_wrap(s%dom%pb, s%p%n_own, .true., s%p%x)
+            end if
+        end if
         if (s%halo .and. s%lists_on_device) call domain_data(s%dom, acc_exit)
         if (s%comm%size > 1) then
             call distribute(s, outlets, row_of, err)

@@ -350,7 +350,10 @@ contains
         if (.not. c%periodic%on) return
         r = maxval(c%summary%rmax)
         do k = 1, size(c%inserts)
-            r = max(r, c%inserts(k)%size%r_max)
+            r = max(r, c%inserts(k)%size%r_max)        ! (of clumps: their reach)
+        end do
+        do k = 1, size(c%clumps)                       ! a clump reaches as far as this
+            r = max(r, c%templates(c%clumps(k)%template)%reach * c%clumps(k)%scale)
         end do
         need = 2.0_wp * (2.0_wp * r + c%skin)
         do a = 1, 3
@@ -361,7 +364,7 @@ contains
             call set_error(err, dem_err_input, trim(c%periodic_at(a)) // ": key 'high': the " &
                 // 'period along ' // 'xyz'(a:a) // ', ' // trim(adjustl(s1)) // ' m, is ' // &
                 'shorter than 2 (2 R + skin) = ' // trim(adjustl(s2)) // ' m (R the largest ' // &
-                'radius): a particle would meet two images of another')
+                'radius, or a clump''s reach): a particle would meet two images of another')
             return
         end do
     end subroutine check_periods

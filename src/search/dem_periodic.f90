@@ -8,10 +8,10 @@
 !> separation, negated, from both sides, as any other pair, and the forces and the contact
 !> history stay exact negatives (the same on any number of ranks).
 module dem_periodic
-    use dem_kinds, only: wp, ip
+    use dem_kinds, only: wp, ip, i8
     implicit none
     private
-    public :: periodic_t, periodic_set, periodic_wrap, image_shift, image_possible, &
+    public :: periodic_t, periodic_set, periodic_wrap, periodic_wrap_bodies, image_shift, image_possible, &
               with_images, no_image, n_images
 
     !> shift codes 0..26 of the images, (s1 + 1) + 3 (s2 + 1) + 9 (s3 + 1), s in {-1, 0, 1}
@@ -73,16 +73,57 @@ contains
             do k = 1, 3
                 if (.not. axis(k)) cycle
                 y = on_grid(x(k, i), u)
-                if (wrap) then
-                    if (y < lo(k) .or. y >= lo(k) + length(k)) &
-                        y = y - length(k) * floor((y - lo(k)) / length(k))
-                    if (y >= lo(k) + length(k)) y = y - length(k)   ! (round-off of the floor)
-                    if (y < lo(k)) y = y + length(k)
-                end if
+                if (wrap) y = wrapped(y, lo(k), length(k))
                 x(k, i) = y
             end do
         end do
     end subroutine periodic_wrap
+
+    !> periodic_wrap's wrap (`wrap` true) in a case with clumps: a member of a body (body(i)
+    !> not 0, its centre body_x(:, i)) is shifted with its body, by the multiple of L that
+    !> brings the body's centre into [lo, lo + L) (x + n L exact on the grid; every member
+    !> computes the same n and the same new centre), so that a body stays whole; a sphere as
+    !> periodic_wrap.
+    subroutine periodic_wrap_bodies(pb, n, body, x, body_x)
+        type(periodic_t), intent(in) :: pb
+        integer(ip), intent(in) :: n
+        integer(i8), intent(in) :: body(:)
+        real(wp), intent(inout) :: x(:, :), body_x(:, :)      !! [m]
+        real(wp) :: lo(3), length(3), u, y, shift
+        logical :: axis(3)
+        integer(ip) :: i, k
+        lo = pb%lo
+        length = pb%length
+        u = pb%unit
+        axis = pb%axis
+        !$acc parallel loop gang vector default(present) copyin(lo, length, axis) &
+        !$acc private(y, shift)
+        do i = 1, n
+            do k = 1, 3
+                if (.not. axis(k)) cycle
+                y = on_grid(x(k, i), u)
+                if (body(i) == 0) then
+                    y = wrapped(y, lo(k), length(k))
+                else
+                    shift = anint((wrapped(body_x(k, i), lo(k), length(k)) - body_x(k, i)) / &
+                                  length(k)) * length(k)
+                    y = y + shift
+                    body_x(k, i) = body_x(k, i) + shift
+                end if
+                x(k, i) = y
+            end do
+        end do
+    end subroutine periodic_wrap_bodies
+
+    !> y brought into [lo, lo + L) by a multiple of L (exactly, for y, lo and L on the grid).
+    pure real(wp) function wrapped(y, lo, length) result(w)
+        !$acc routine seq
+        real(wp), intent(in) :: y, lo, length
+        w = y
+        if (w < lo .or. w >= lo + length) w = w - length * floor((w - lo) / length)
+        if (w >= lo + length) w = w - length        ! (round-off of the floor)
+        if (w < lo) w = w + length
+    end function wrapped
 
     !> The spheres (x, r) and, with periodic axes, their images within `reach` of the box:
     !> each sphere, then its images, in turn (without periodic axes, the spheres alone). On

@@ -42,6 +42,10 @@
 9. An inflow of clumps (a rate) beside an inflow of spheres (by mass): every clump whole, its
    members' ids consecutive, no more than rate x time of them; the same final.csv on 1 and 2
    ranks, and after a restart halfway.
+10. Periodic along x and y: 60 dimers crossing the period about twice at 1 m/s over a
+   frictionless floor, colliding: every dimer whole and rigid at the end, its centre in the
+   period, the momentum along x kept to 1e-12, the same final.csv on 1, 2 and 3 ranks and
+   after a restart.
 usage: test_clumps.py DEM WORKDIR MPIEXEC"""
 import math
 import os
@@ -401,5 +405,53 @@ check(all(sorted(v) == list(range(b, b + 3)) for b, v in members.items()),
 check(60 <= len(members) <= 2000 * 0.06 + 1,
       f"the clumps inserted: {len(members)}, at most rate x time = 120")
 check(np.count_nonzero(ff["body"] == 0) > 10, "the spheres' inflow beside them")
+
+# 10. periodic along x and y: 60 dimers moving at 1 m/s along x above a frictionless floor,
+# crossing the period (20 mm) about twice, colliding with each other: every dimer whole at the
+# end, its centre inside the period, the momentum along x kept (to 1e-12), the same final.csv
+# on 1, 2 and 3 ranks and after a restart
+per = (head("{name}", 0.04, g=-9.81, every=0.01, extra=", checkpoint_interval = 0.02, "
+            "checkpoint_keep = 5").replace("dt = 1e-6", "dt = 2e-6")
+       .replace("'glass', 'steel', restitution = 0.6, friction = 0.3",
+                "'glass', 'steel', restitution = 0.6, friction = 0") +
+       floor.replace("0.01 /", "0.1 /") +
+       "&periodic axis = 'x', low = -0.01, high = 0.01 /\n"
+       "&periodic axis = 'y', low = -0.01, high = 0.01 /\n"
+       "&insert n = 60, template = 'dimer', box_min = -0.01, -0.01, 0.001, "
+       "box_max = 0.01, 0.01, 0.02, velocity = 1, 0, 0, velocity_spread = 0.2, 0.2, 0 /\n")
+for ranks in (1, 2, 3):
+    name = f"periodic_{ranks}"
+    run_ranks(mpiexec, dem, write(name, per.replace("{name}", name)), ranks, work)
+    if ranks > 1:
+        same_file(os.path.join(work, "periodic_1", "final.csv"),
+                  os.path.join(work, name, "final.csv"), f"the periodic clumps on {ranks} ranks")
+run_ranks(mpiexec, dem, write("periodic_restart", per.replace("{name}", "periodic_restart")),
+          2, work, "--restart", os.path.join(work, "periodic_1", "checkpoints",
+                                             "checkpoint_000000010000.h5"))
+same_file(os.path.join(work, "periodic_1", "final.csv"),
+          os.path.join(work, "periodic_restart", "final.csv"), "the periodic clumps restarted")
+fp = final("periodic_1")
+pairs = {}
+for row in np.atleast_1d(fp):
+    pairs.setdefault(int(row["body"]), []).append(row)
+check(len(pairs) == 60 and all(len(v) == 2 for v in pairs.values()), "60 dimers, whole")
+gaps = [np.linalg.norm([v[0][a] - v[1][a] for a in "xyz"]) for v in pairs.values()]
+check(np.allclose(gaps, D, rtol=1e-9), f"every dimer rigid across the period: {min(gaps)}, "
+      f"{max(gaps)}")
+cx = np.array([0.5 * (v[0]["x"] + v[1]["x"]) for v in pairs.values()])
+check(np.all((cx >= -0.01 - 1e-3) & (cx < 0.01 + 1e-3)),
+      "the dimers' centres inside the period (within a step's travel of it)")
+with h5py.File(os.path.join(work, "periodic_1", "snapshots", "snapshot_000000000000.h5"),
+               "r") as h:
+    v0 = h["particles/velocity"][...]
+v0 = v0.T if v0.shape[0] == 3 else v0
+p0 = MASS * v0[:, 0].sum() / 2                      # each dimer's V_x, the mean of its two
+p1 = MASS * float(np.sum(fp["vx"])) / 2
+check(abs(p1 - p0) <= 1e-12 * MASS * 60, f"the momentum along x kept: {p0} -> {p1}")
+series = np.genfromtxt(os.path.join(work, "periodic_1", "series.csv"), delimiter=",", names=True)
+check(max(series["contacts_pp"]) > 0, "the dimers collided")
+r0 = subprocess.run([dem, "--check", os.path.join(work, "periodic_1.nml")], cwd=work,
+                    capture_output=True, text=True)
+check(r0.returncode == 0, f"--check of the periodic case: {r0.stderr}")
 
 finish()

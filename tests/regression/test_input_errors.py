@@ -515,8 +515,6 @@ bad("clump_mass_alone", GOOD + CT.replace("/", ", mass = 1e-3 /") + CL, "clump_t
 bad("clump_template_twice", GOOD + CT + CT + CL, "clump_template", "name")
 bad("clump_rigid", GOOD + "&material name = 'wall', rigid = .true. /\n"
     + CT.replace("'glass'", "'wall'") + CL, "clump_template", "material", "rigid")
-bad("clump_periodic", GOOD + CT + CL + "&periodic axis = 'x', low = -1, high = 1 /\n",
-    "clump", "", "&periodic")
 
 check_bad_cases()
 finish()
