@@ -7,7 +7,7 @@ fix multisphere), from the same initial states and walls. Run from the repositor
                                                       [--only impact|bin]
 
 (`build/dem` from `scripts/install/build plain`; `liggghts` and `mpirun` on the PATH; each
-code runs on one core: about 20 minutes in all for three seeds). Outputs go to
+code runs on one core: about 15 minutes in all for three seeds). Outputs go to
 output/clumps/; the numbers to output/clumps/summary.txt (and standard output), the figures
 to doc/figures/clumps_liggghts_impact.png and doc/figures/clumps_liggghts_bin.png.
 
