@@ -70,11 +70,12 @@ contains
         integer(i8), intent(in) :: id0
         integer(i8), intent(out) :: gid(:), body(:)
         real(wp), intent(out) :: radius(:), x(:, :), v(:, :), w(:, :), state(:, :)
-        real(wp) :: q(4), xc(3), l(3), inv_i(3), wb(3), r(3), s, moments(3)
+        real(wp) :: q(4), xc(3), l(3), inv_i(3), wb(3), r(3), s, moments(3), principal(3, 3)
         integer :: k
         s = cl%scale
+        principal = transpose(tpl%props%rotation)       ! body frame to the template's
         q = quat_normalise(quat_product(quat_normalise(cl%orientation), &
-                                        quat_from_matrix(transpose(tpl%props%rotation))))
+                                        quat_from_matrix(principal)))
         xc = cl%position + quat_to_lab(quat_normalise(cl%orientation), s * tpl%props%centre)
         moments = s**5 * tpl%props%moments
         inv_i = 1.0_wp / moments

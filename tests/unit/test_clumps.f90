@@ -28,6 +28,7 @@ program test_clumps
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     real(wp), parameter :: rho = 2500.0_wp
+    real(wp), parameter :: fast = 1.0e3_wp     !< the speed guard's bound [m/s], not reached
     !> a turn of 0.9 rad about (2, -1, 2)/3
     real(wp), parameter :: q_placed(4) = [cos(0.45_wp), 2.0_wp * sin(0.45_wp) / 3.0_wp, &
                                           -sin(0.45_wp) / 3.0_wp, 2.0_wp * sin(0.45_wp) / 3.0_wp]
@@ -153,7 +154,7 @@ contains
         t = 0.0_wp
         d0 = norm2(xs(:, 1) - xs(:, 3))
         do step = 1, n
-            call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, g, huge(1.0_wp), &
+            call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, g, fast, &
                              3_ip, f, &
                              t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
         end do
@@ -186,7 +187,7 @@ contains
         t = 0.0_wp
         f(:, 3) = fk
         t(:, 3) = tk
-        call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, huge(1.0_wp), &
+        call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, fast, &
                           3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
         want = state(bs_l:bs_l + 2, 1) + h * (cross(x(:, 3) - state(bs_x:bs_x + 2, 1), fk) + tk)
         do j = 1, 3
@@ -201,7 +202,7 @@ contains
         t = 0.0_wp
         f(:, 1) = 5.0_wp * (x(:, 2) - x(:, 1))
         f(:, 2) = -f(:, 1)
-        call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, huge(1.0_wp), &
+        call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, fast, &
                           3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
         do j = 1, 3
             call assert_close(bv(j, 1), cl%velocity(j), 1e-14_wp, 'internal forces: V kept')
@@ -227,7 +228,7 @@ contains
         d0 = norm2(x(:, 2) - x(:, 3))
         worst = 0.0_wp
         do step = 1, 100000
-            call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, zero, huge(1.0_wp), &
+            call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, zero, fast, &
                              3_ip, f, &
                              t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
             e = 0.5_wp * dot_product(ws(:, 1), bl(:, 1))
