@@ -20,7 +20,7 @@ module dem_inflow
     use dem_particles, only: body_state_rows
     implicit none
     private
-    public :: insert_inflow, inflow_to_come
+    public :: insert_inflow, inflow_to_come, inflow_particles
 
     real(wp), parameter :: pi = acos(-1.0_wp)
 
@@ -93,6 +93,24 @@ contains
             end associate
         end do
     end function inflow_to_come
+
+    !> The particles the inflow inserted so far: each group's count times the particles each
+    !> of its insertions makes (a clump's members, or 1).
+    pure integer(i8) function inflow_particles(s, c) result(n)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        integer :: k
+        n = 0
+        if (.not. allocated(s%inflow_count)) return
+        do k = 1, size(c%inserts)
+            if (c%inserts(k)%template > 0) then
+                n = n + s%inflow_count(k) * size(c%templates(c%inserts(k)%template)%radii, &
+                                                  kind=i8)
+            else
+                n = n + s%inflow_count(k)
+            end if
+        end do
+    end function inflow_particles
 
     !> This rank's owned particles, and their periodic images, within twice the largest
     !> radius of the case of the box of a due group's region, as (x, y, z, r) in a row.

@@ -29,6 +29,7 @@ module dem_solver
     use dem_run_output, only: write_trace, write_snapshot, write_xdmf
     use dem_run_control, only: unstable, deep_pair, deep_wall, smallest, overlap_warn
     use dem_step, only: time_step, forces, write_row
+    use dem_inflow, only: inflow_particles
     implicit none
     private
     public :: solver_t, solver_init, solver_prepare, solver_restore, solver_run, solver_start, &
@@ -165,7 +166,7 @@ contains
             s%timers = timers_t()
             r%n0 = solver_particles(s)
             r%removed0 = s%removed
-            if (allocated(s%inflow_count)) r%inserted0 = sum(s%inflow_count)
+            r%inserted0 = inflow_particles(s, c)
             r%next_progress = wall_seconds() + c%progress_interval
             r%last = wall_seconds()
         end associate

@@ -12,7 +12,7 @@ module dem_step
     use dem_case, only: case_t
     use dem_run_state, only: solver_t, time_of, failed_anywhere, wall_motion_data, stop_end
     use dem_rebuild, only: lists_refresh, settle_outlets
-    use dem_inflow, only: insert_inflow, inflow_to_come
+    use dem_inflow, only: insert_inflow, inflow_to_come, inflow_particles
     use dem_forces, only: external_forces
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: pw_forces
@@ -238,7 +238,8 @@ contains
             if (n_fresh(1) == 0) return
             s%removed = s%removed + n_fresh(1)
             s%parked = s%parked + n_fresh(1)
-            s%emptied = s%removed - s%run%removed0 >= s%run%n0 + inserted(s)
+            s%emptied = s%removed - s%run%removed0 >= s%run%n0 + inflow_particles(s, c) - &
+                                                          s%run%inserted0
             if (s%emptied .and. c%inflow) s%emptied = .not. inflow_to_come(s, c)
             if (s%emptied) s%wall_loads = 0.0_wp     ! (its last row: no particle, no load)
             if (allocated(s%removed_ids)) then    ! (a coupled run: their ids, on the host)
@@ -332,13 +333,6 @@ contains
             if (k > 0) due = mod(s%step - s%run%out0, k) == 0
         end function due
     end subroutine outputs_and_control
-
-    !> The particles the inflow inserted since the start of this run (all ranks).
-    pure integer(i8) function inserted(s) result(n)
-        type(solver_t), intent(in) :: s
-        n = 0
-        if (allocated(s%inflow_count)) n = sum(s%inflow_count) - s%run%inserted0
-    end function inserted
 
     !> Whether a row of series.csv and probes.csv is written after step `step`: every
     !> output interval, and at the run's last step.

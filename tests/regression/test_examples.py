@@ -28,6 +28,16 @@ chute    from the committed steady state (the run from rest's end), 0.5 s of flo
          flow's top within two diameters, no slip at the base (|v_b| under a tenth of the
          surface speed) and a residual under a third of a linear profile's; the free exponent
          fitted lies in 1.3 .. 1.9; every particle stays in the run and inside the period.
+clumps   rods of three spheres poured by an inflow: 1000 rods (3000 members) at the end of
+         the inflow, the count at most one insertion behind floor(rate t) members x 3;
+         particles + removed = 3000 at every row after it; `removed` a multiple of 3 at every
+         row (a rod leaves whole) and 0 before the plug moves; the settled bed's packing
+         fraction (the union of the members in a box clear of the walls and the surface)
+         between a loose packing's 0.50 and 0.72, the most any random packing of
+         spherocylinders reaches; more rods lying within 30 degrees of the horizontal than
+         the 0.5 of rods turned at random (0.55: three standard deviations of 1000 random
+         rods); the discharge rate from 0.45 s in Beverloo's band (as the hopper's, D the
+         orifice's side, d the diameter of the sphere of a rod's volume).
 restart  the case straight through on 1 rank, on 2 ranks, and continued on 2 ranks from the
          1-rank run's checkpoint half-way: series.csv, probes.csv, final.csv, snapshots.xmf
          identical byte for byte, and every dataset and attribute of every snapshot bit for
@@ -282,6 +292,37 @@ def chute():
           f"{lin['rms']:.4f}), exponent {free['p']:.2f}")
 
 
+def clumps():
+    run([case("clumps", 0.6, "clumps")])
+    sys.path.insert(0, os.path.join(EXAMPLES, "clumps"))
+    import clumps_numbers as ex           # noqa: E402  (the example's own analysis)
+    v = ex.numbers(os.path.join(work, "clumps"))
+    s, b = v["series"], v["bed"]
+    t, n = s["time"], s["particles"]
+    members = ex.N_RODS * ex.MEMBERS
+    check(n[(t >= ex.END + 0.01) & (t <= ex.OPEN)].min() == members
+          and b["rods"] == ex.N_RODS,
+          f"clumps: {ex.N_RODS} rods, {members} members, once the inflow is done")
+    # one insertion behind at most: every time a reach diameter (4 mm) takes at 1 m/s
+    check(0 <= v["lag"] <= ex.MEMBERS * ex.RATE * 0.0041, f"clumps: the inflow at most one "
+          f"insertion behind floor(rate t) x 3 ({v['lag']:g} members)")
+    check(v["conserved"], "clumps: particles + removed = 3000 at every row after the inflow")
+    check(v["whole"], "clumps: removed a multiple of 3 at every row (a rod leaves whole)")
+    check(v["closed"], "clumps: none removed before the plug moves (0.4 s)")
+    check(s["removed"][-1] > 300, f"clumps: it discharges ({s['removed'][-1]:g} removed)")
+    check(0.50 <= b["phi"] <= 0.72, f"clumps: packing fraction {b['phi']:.3f} of a random "
+          "packing of rods (0.50 to 0.72)")
+    check(b["flat"] > 0.55, f"clumps: {b['flat']:.3f} of the rods lie within 30 degrees of "
+          "the horizontal (0.5 at random)")
+    w = v["rate"] * ex.MASS
+    lo, hi = ex.beverloo(b["phi"], 0.55, 2.9), ex.beverloo(b["phi"], 0.65, 1.3)
+    check(lo <= w <= hi, f"clumps: discharge rate {w * 1e3:.2f} g/s in Beverloo's band "
+          f"{lo * 1e3:.2f} to {hi * 1e3:.2f} g/s")
+    print(f"clumps: packing fraction {b['phi']:.3f}, flat {b['flat']:.3f}, top "
+          f"{b['top'] * 1e3:.1f} mm, rate {v['rate']:.0f} rods/s = {w * 1e3:.2f} g/s (band "
+          f"{lo * 1e3:.2f} to {hi * 1e3:.2f})")
+
+
 def restart():
     one, two, again = (case("restart", 0.3, out) for out in ("one", "two", "again"))
     for path in (one, two, again):                   # half-way: 0.15 s
@@ -315,5 +356,5 @@ def restart():
 
 
 {"pour": pour, "hopper": hopper, "drum": drum, "impact": impact, "chute": chute,
- "restart": restart}[example]()
+ "clumps": clumps, "restart": restart}[example]()
 finish()

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""scripts/post/paraview-snapshot.py on a small run (60 spheres falling into a box), with each
-backend that is installed: ParaView's pvpython (with an Xvfb server when there is no
+"""scripts/post/paraview-snapshot.py on a small run (60 spheres and two clumps falling into a
+box), with each backend that is installed: ParaView's pvpython (with an Xvfb server when there is no
 display) and each Python with a vtk module (this Python, .venv's, /usr/bin/python3; with
 --backend vtk; tried without a display first; a vtk that renders through X, with no display
 and no Xvfb, must stop with a clear error instead); each must write a PNG of the size asked for
@@ -9,6 +9,9 @@ background nor one flat colour) and say how many particles it drew. Also the XDM
 material table: its Information element names the materials of the snapshot's
 /materials/name, in order, and the walls carry their material as a cell attribute. Exits 77
 (CTest's SKIP_RETURN_CODE) when neither backend is found.
+The run holds two clumps of three spheres too (66 particles): each Python's VTK XDMF reader
+must take the orientation as four components a particle (an XDMF 'Matrix' it took as one
+matrix, and for a few thousand particles failed to allocate it).
 usage: test_paraview_snapshot.py DEM WORKDIR"""
 import os
 import shutil
@@ -38,6 +41,10 @@ CASE = """&run dt = 1e-5, t_end = 0.05 /
 &insert n = 60, material = 'glass beads', radius_min = 1.5e-3, radius_max = 2e-3,
         box_min = -0.018, -0.018, 0.002, box_max = 0.018, 0.018, 0.03,
         velocity = 0, 0, -0.5 /
+&clump_template name = 'rod', material = 'glass beads',
+    members = -0.0015, 0, 0, 0.0015,   0, 0, 0, 0.0015,   0.0015, 0, 0, 0.0015 /
+&clump template = 'rod', position = -0.01, 0, 0.035, orientation = 0.8, 0.6, 0, 0 /
+&clump template = 'rod', position = 0.01, 0, 0.035 /
 """
 with open(os.path.join(work, "small.nml"), "w") as f:
     f.write(CASE)
@@ -129,6 +136,21 @@ def backends():
     return found
 
 
+# the orientation array of the last step's particles as VTK's XDMF reader gives it
+READ_ORIENTATION = """
+import sys
+from vtkmodules.vtkIOXdmf2 import vtkXdmfReader
+r = vtkXdmfReader()
+r.SetFileName(sys.argv[1])
+r.UpdateInformation()
+r.UpdateTimeStep(0.05)
+it = r.GetOutputDataObject(0).NewIterator()
+it.InitTraversal()
+a = it.GetCurrentDataObject().GetPointData().GetArray("orientation")
+print(a.GetNumberOfComponents(), a.GetNumberOfTuples())
+"""
+
+
 def draw(cmd, png, env=None):
     return subprocess.run(cmd + [out, "--png", png, "--size", "640", "480"],
                           capture_output=True, text=True, timeout=600, env=env)
@@ -162,7 +184,12 @@ for k, (name, cmd, fallback) in enumerate(found):
           f"{name}: exit {r.returncode}, {png} written: {r.stdout[-1500:]}{r.stderr[-1500:]}")
     if r.returncode != 0 or not os.path.exists(png):
         continue
-    check("60 particles" in r.stdout, f"{name}: says it drew the 60 particles: {r.stdout}")
+    check("66 particles" in r.stdout, f"{name}: says it drew the 66 particles: {r.stdout}")
+    if cmd is not None:               # a Python with vtk: how its XDMF reader takes the index
+        q = subprocess.run([cmd[0], "-c", READ_ORIENTATION, os.path.join(out, "snapshots.xmf")],
+                           capture_output=True, text=True, timeout=300)
+        check(q.stdout.split() == ["4", "66"], f"{name}: the reader takes the orientation as "
+              f"4 components a particle, 66 particles: {q.stdout!r} {q.stderr[-500:]!r}")
     w, h, img = png_pixels(png)
     check((w, h) == (640, 480), f"{name}: {w} x {h} pixels, 640 x 480 asked")
     flat = img.reshape(-1, 3)

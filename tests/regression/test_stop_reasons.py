@@ -34,6 +34,10 @@ the particles have had the time to move.
    inertia: 0/0 in the rotational energy, a floating-point trap in the Debug build and a
    NaN otherwise). The run drains as in part 3, and no floating-point exception is
    signalled.
+7. The inflow of part 4 with clumps: 200 dimers/s (two spheres of radius 2 mm, centres 2 mm
+   apart) for 0.2 s, 40 dimers of 80 members. `removed` counts members while the inflow
+   counts clumps: the run must not stop when 40 members have left, but when the last dimer
+   leaves, at least a fall of 5 cm after the inflow's end, with 0 particles and 80 removed.
 usage: test_stop_reasons.py DEM WORKDIR"""
 import math
 import os
@@ -172,6 +176,27 @@ if m:
           f"5 cm after the inflow's end and before {t_last:.4f} s")
     check(s[-1, 2] == 0 and s[-1, 3] == 40, f"series.csv's last row: 0 particles, 40 removed: "
           f"{s[-1, :4]}")
+# 7. an inflow of clumps through an outlet: emptied when the last clump's members leave
+path = case("inflow_clumps", f"""&run dt = {DT}, t_end = 1.0, expected_speed = 1.5 /
+&output dir = 'output/inflow_clumps', interval = 0.001 /
+{MATERIALS}&clump_template name = 'dimer', material = 'soft',
+    members = -0.001, 0, 0, 0.002,   0.001, 0, 0, 0.002 /
+&insert template = 'dimer', region = 'box', rate = 200, start = 0, end = 0.2,
+    box_min = -0.02, -0.02, 0.05, box_max = 0.02, 0.02, 0.07, seed = 5 /
+&outlet region = 'plane', point = 0, 0, 0, normal = 0, 0, -1 /
+""")
+rc, out, err = run_dem(dem, path, work)
+s = series("inflow_clumps")
+line = last_line(out)
+m = re.search(r"dem: done: the outlets took the last particle out at t = (\S+) s", line)
+check(rc == 0 and m is not None, f"clump inflow drained: exit 0 and the last line says so: "
+      f"{rc}, {line!r}, {err[-300:]!r}")
+if m:
+    t = float(m.group(1))
+    check(t >= 0.2 + math.sqrt(2.0 * 0.05 / G), f"the last dimer left at {t} s, a fall of "
+          "5 cm after the inflow's end or later")
+    check(s[-1, 2] == 0 and s[-1, 3] == 80, f"series.csv's last row: 0 particles, 80 members "
+          f"removed: {s[-1, :4]}")
 # 5. settling with an inflow: not before its last insertion and a fall after it
 path = case("inflow_settle", f"""&run dt = {DT}, t_end = 2.0, stop_kinetic_energy = 1e-5 /
 &output dir = 'output/inflow_settle', interval = 0.01 /
