@@ -142,9 +142,8 @@ contains
         associate (p => s%p, b => s%bodies)
             call clumps_move(b%n, b%first, b%member, h, h_drift, c%gravity, c%max_speed, &
                              size(p%x, 2, ip), p%f, p%t, p%radius, p%body_x, p%body_v, &
-                             p%body_q, p%body_l, &
-                             p%body_inv_i, p%body_mass, p%body_offset, p%x, p%v, p%w, &
-                             n_bodies_fast)
+                             p%body_q, p%body_l, p%body_inv_i, p%body_mass, p%body_offset, &
+                             p%x, p%v, p%w, n_bodies_fast)
         end associate
         n_fast = n_fast + n_bodies_fast
     end subroutine move_bodies
@@ -209,8 +208,8 @@ contains
 
     !> Take the particles that entered an outlet out of the run (a clump's members when its
     !> centre of mass did: the body leaves whole, and the bodies that stay are indexed anew):
-    !> they are counted removed and
-    !> parked at once (particles_park: nothing touches them any more), and compacted away at
+    !> they are counted removed and parked at once (particles_park: nothing touches them any
+    !> more), and compacted away at
     !> the next rebuild, or before the next output (settle_outlets), so that the lists are
     !> not rebuilt for every particle that leaves. The flags stay on the device from step to
     !> step, until that compaction.
