@@ -77,8 +77,8 @@ contains
             if (clumps) then
                 call attribute('body', 'Scalar', 'Node', '/particles/body', itoa(n(k)), 'Int', &
                                8)
-                ! four components a node: as a 'Vector' VTK's and ParaView's XDMF reader
-                ! take them per node ('Matrix' made them fail to allocate and stop)
+                ! four components a node: as a 'Vector' VTK's XDMF reader (ParaView's)
+                ! takes them per node ('Matrix' made it fail to allocate and stop)
                 call attribute('orientation', 'Vector', 'Node', '/particles/orientation', &
                                itoa(n(k)) // ' 4', 'Float', 8)
             end if
