@@ -286,7 +286,7 @@ contains
         end if
         call frame_block(comm, dims(1), first, n)   ! this rank's block of particles (by id)
         fr%n = int(n, ip)
-        call frame_particles(fr%p, fr%n, size(c%templates) > 0)
+        call frame_particles(fr%p, fr%n, size(c%templates) > 0, c%has_fixed, c%bond_reals)
         allocate(fr%wall_tri(max_wall_contacts, n), fr%wall_xi(n_wall_history, n_wall_columns, n))
         reader%h = h
         reader%err = err

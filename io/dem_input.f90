@@ -15,6 +15,7 @@ module dem_input
     use dem_input_particles, only: read_particles, read_particle_files
     use dem_input_inserts, only: read_inserts
     use dem_input_clumps, only: read_clump_templates, read_clumps
+    use dem_input_bonds, only: read_bonds
     use dem_input_walls, only: read_walls, read_meshes, read_periodic
     use dem_input_probes, only: read_outlets, read_probes
     use dem_case, only: case_t
@@ -25,11 +26,12 @@ module dem_input
 
     !> The groups a case file may hold, in the order an unknown group's message lists them,
     !> each beside the module that reads it (and declares its keys).
-    character(len=*), parameter :: input_groups(15) = [character(len=14) :: &
+    character(len=*), parameter :: input_groups(16) = [character(len=14) :: &
         'run', 'output', &                          ! dem_input_run
         'contact_model', 'material', 'pair', &      ! dem_input_materials
         'particle', 'particle_file', &              ! dem_input_particles
         'clump_template', 'clump', &                ! dem_input_clumps
+        'bond', &                                   ! dem_input_bonds
         'insert', &                                 ! dem_input_inserts
         'outlet', 'probe', &                        ! dem_input_probes
         'wall_plane', 'periodic', 'wall_mesh']      ! dem_input_walls
@@ -82,6 +84,8 @@ contains
         call read_particle_files(nf, share, comm, c, err)
         if (err%failed()) return
         call read_inserts(nf, c, err)
+        if (err%failed()) return
+        call read_bonds(nf, c, err)
         if (err%failed()) return
         if (c%n_particles == 0 .and. size(c%inserts) == 0 .and. .not. c%has_clumps) then
             call fail(nf%path // ': no particles (give &particle, &particle_file, &clump or ' &

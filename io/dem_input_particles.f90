@@ -31,7 +31,10 @@ contains
         real(wp) :: position(3)            ! centre [m], required
         real(wp) :: velocity(3)            ! [m/s], default 0
         real(wp) :: angular_velocity(3)    ! [rad/s], default 0
-        namelist /particle/ id, material, radius, position, velocity, angular_velocity
+        logical :: fixed                   ! the particle keeps its velocity and angular
+                                           ! velocity whatever acts on it (a clamp at rest,
+                                           ! or a driven particle), default F
+        namelist /particle/ id, material, radius, position, velocity, angular_velocity, fixed
         type(group_io_t) :: io
         character(len=:), allocatable :: at
         integer :: k, n, im, i
@@ -40,7 +43,7 @@ contains
         c%n_particles = n
         c%n_held = count([(mod(k - 1, share(2)) == share(1), k = 1, n)])
         allocate(c%gid(c%n_held), c%mat(c%n_held), c%radius(c%n_held), c%x(3, c%n_held), &
-                 c%v(3, c%n_held), c%w(3, c%n_held))
+                 c%v(3, c%n_held), c%w(3, c%n_held), c%fixed(c%n_held))
         do k = 1, n
             id = k
             material = ''
@@ -48,6 +51,7 @@ contains
             position = unset
             velocity = 0.0_wp
             angular_velocity = 0.0_wp
+            fixed = .false.
             do while (group_reading(nf, 'particle', k, io, at, err))
                 if (io%unit == 0) read(io%text, nml=particle, iostat=io%ios, iomsg=io%msg)
                 if (io%unit /= 0) write(io%unit, nml=particle, iostat=io%ios, iomsg=io%msg)
@@ -63,8 +67,10 @@ contains
                 call set_error(err, dem_err_input, at // ": key 'id': must be > 0")
                 return
             end if
+            c%has_fixed = c%has_fixed .or. fixed      ! (every rank reads every group)
             if (mod(k - 1, share(2)) /= share(1)) cycle
             i = (k - 1) / share(2) + 1
+            c%fixed(i) = merge(1, 0, fixed)
             c%gid(i) = id
             c%mat(i) = im
             c%radius(i) = radius
@@ -72,6 +78,7 @@ contains
             c%v(:, i) = velocity
             c%w(:, i) = angular_velocity
         end do
+        if (.not. c%has_fixed) deallocate(c%fixed)
     end subroutine read_particles
 
     !> &particle_file (repeated): particles read from a CSV or HDF5 file (dem_particle_file),

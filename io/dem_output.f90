@@ -23,6 +23,8 @@ module dem_output
     character(len=*), parameter :: series_header = &
         'time,step,particles,removed,contacts_pp,contacts_pw,kinetic_translational,' // &
         'kinetic_rotational,potential_gravity,max_speed'
+    !> series.csv's columns of a case with bonds, after series_header's
+    character(len=*), parameter :: bond_header = ',bonds,bonds_broken,bond_energy'
     character(len=*), parameter :: contact_header = &
         'time,overlap,normal_force,tangential_force,x,y,z,vx,vy,vz,wx,wy,wz'
     character(len=*), parameter :: final_header = &
@@ -32,6 +34,7 @@ module dem_output
     !> Open files of a run.
     type :: output_t
         character(len=:), allocatable :: dir
+        logical :: bonds = .false.             !< series.csv has the bonds' columns
         type(cfile_t) :: series
         type(cfile_t) :: contact
         type(cfile_t) :: probes
@@ -44,22 +47,24 @@ contains
     !> probes.csv (when `probe_columns`, its header after time and step, is not empty). With
     !> `keep` (bytes of series.csv, contact.csv and probes.csv at a checkpoint), files at least
     !> that long are cut to it and appended to; otherwise they are started anew.
-    subroutine output_open(out, dir, trace, probe_columns, err, keep)
+    subroutine output_open(out, dir, trace, bonds, probe_columns, err, keep)
         type(output_t), intent(out) :: out
         character(len=*), intent(in) :: dir
         logical, intent(in) :: trace
+        logical, intent(in) :: bonds             !! series.csv has the bonds' columns
         character(len=*), intent(in) :: probe_columns
         type(error_t), intent(inout) :: err
         integer(i8), intent(in), optional :: keep(3)
         integer(i8) :: bytes(3)
         out%dir = dir
+        out%bonds = bonds
         call make_directory(dir, err)
         if (err%failed()) return
         bytes = 0
         if (present(keep)) bytes = keep
-        call output_check(dir, trace, probe_columns, bytes, err)
+        call output_check(dir, trace, bonds, probe_columns, bytes, err)
         if (err%failed()) return
-        call open_csv(dir // '/series.csv', series_header, out%series, err, bytes(1))
+        call open_csv(dir // '/series.csv', series_columns(bonds), out%series, err, bytes(1))
         if (err%failed()) return
         if (trace) call open_csv(dir // '/contact.csv', contact_header, out%contact, err, &
                                  bytes(2))
@@ -71,17 +76,25 @@ contains
     !> The files a run continued from a checkpoint appends to (those at least `keep` bytes
     !> long: series.csv, contact.csv when tracing, probes.csv with `probe_columns`) must have
     !> the run's columns: an input error otherwise, checked before anything is changed.
-    subroutine output_check(dir, trace, probe_columns, keep, err)
+    subroutine output_check(dir, trace, bonds, probe_columns, keep, err)
         character(len=*), intent(in) :: dir
-        logical, intent(in) :: trace
+        logical, intent(in) :: trace, bonds
         character(len=*), intent(in) :: probe_columns
         integer(i8), intent(in) :: keep(3)
         type(error_t), intent(inout) :: err
-        call check_header(dir // '/series.csv', series_header, keep(1), err)
+        call check_header(dir // '/series.csv', series_columns(bonds), keep(1), err)
         if (trace) call check_header(dir // '/contact.csv', contact_header, keep(2), err)
         if (len(probe_columns) > 0) call check_header(dir // '/probes.csv', 'time,step' // &
                                                       probe_columns, keep(3), err)
     end subroutine output_check
+
+    !> The header of series.csv (with `bonds`, the bonds' columns too).
+    function series_columns(bonds) result(header)
+        logical, intent(in) :: bonds
+        character(len=:), allocatable :: header
+        header = series_header
+        if (bonds) header = header // bond_header
+    end function series_columns
 
     !> The lengths of series.csv, contact.csv and probes.csv now [bytes] (0: not open).
     function output_sizes(out) result(bytes)
@@ -152,16 +165,23 @@ contains
 
     !> One row of series.csv.
     subroutine output_series(out, time, step, n, removed, n_pp, n_pw, ke_t, ke_r, pe, vmax, &
-                             err)
+                             err, bonds, bond_energy)
         type(output_t), intent(inout) :: out
         real(wp), intent(in) :: time, ke_t, ke_r, pe, vmax  !! [s], [J], [J], [J], [m/s]
         integer(i8), intent(in) :: step, removed
         integer(ip), intent(in) :: n, n_pp, n_pw
         type(error_t), intent(inout) :: err
-        character(len=320) :: row
+        integer(i8), intent(in), optional :: bonds(2)  !! with bonds: intact, broken
+        real(wp), intent(in), optional :: bond_energy  !! and their energy [J]
+        character(len=420) :: row
+        integer :: k
         if (err%failed()) return
         write(row, '(' // real_fmt // ',5(",",i0),4(",",' // real_fmt // '))') &
             time, step, n, removed, n_pp, n_pw, ke_t, ke_r, pe, vmax
+        if (present(bonds)) then
+            k = len_trim(row)
+            write(row(k + 1:), '(2(",",i0),",",' // real_fmt // ')') bonds, bond_energy
+        end if
         call write_row(out%series, trim(row), err)
     end subroutine output_series
 

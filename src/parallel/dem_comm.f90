@@ -6,6 +6,7 @@ module dem_comm
                        MPI_Finalized, MPI_Comm_dup, MPI_Comm_free, MPI_Comm_rank, &
                        MPI_Comm_size, MPI_Exscan, MPI_Allreduce, MPI_Barrier, &
                        MPI_Reduce_scatter_block, MPI_Gather, MPI_Gatherv, MPI_Bcast, &
+                       MPI_Allgather, MPI_Allgatherv, &
                        MPI_Comm_split_type, MPI_COMM_TYPE_SHARED, MPI_Request, MPI_Status, &
                        MPI_Isend, MPI_Irecv, MPI_Recv, MPI_Waitall, MPI_STATUSES_IGNORE, &
                        MPI_ANY_SOURCE, &
@@ -22,7 +23,8 @@ module dem_comm
     integer, parameter :: tag_data = 0       !< comm_exchange's messages
     public :: comm_t, comm_init, comm_from_handle, comm_free, comm_node_rank, comm_offset, &
               comm_any, comm_xor, comm_barrier, comm_info_null, comm_exchange, comm_counts, &
-              comm_sum, comm_max, comm_gather, comm_broadcast, comm_world, comm_world_end
+              comm_sum, comm_max, comm_gather, comm_broadcast, comm_world, comm_world_end, &
+              comm_allgather
     logical, save :: owns_world = .false.   !< comm_world called MPI_Init
 
     !> Send parts of an array to other ranks and receive theirs (point to point).
@@ -49,6 +51,11 @@ module dem_comm
     interface comm_gather
         module procedure gather_real, gather_i8
     end interface comm_gather
+
+    !> Every rank's array, one after another in rank order, on every rank.
+    interface comm_allgather
+        module procedure allgather_real, allgather_i8
+    end interface comm_allgather
 
     !> A duplicated communicator with its rank and size.
     type :: comm_t
@@ -355,6 +362,28 @@ contains
         call MPI_Gatherv(a, size(a), MPI_INTEGER8, all, counts, starts(counts), MPI_INTEGER8, &
                          0, c%comm)
     end subroutine gather_i8
+
+    subroutine allgather_real(c, a, all)
+        type(comm_t), intent(in) :: c
+        real(wp), intent(in) :: a(:)
+        real(wp), allocatable, intent(out) :: all(:)
+        integer :: counts(0:c%size - 1)
+        call MPI_Allgather(size(a), 1, MPI_INTEGER, counts, 1, MPI_INTEGER, c%comm)
+        allocate(all(sum(counts)))
+        call MPI_Allgatherv(a, size(a), MPI_DOUBLE_PRECISION, all, counts, starts(counts), &
+                            MPI_DOUBLE_PRECISION, c%comm)
+    end subroutine allgather_real
+
+    subroutine allgather_i8(c, a, all)
+        type(comm_t), intent(in) :: c
+        integer(i8), intent(in) :: a(:)
+        integer(i8), allocatable, intent(out) :: all(:)
+        integer :: counts(0:c%size - 1)
+        call MPI_Allgather(size(a), 1, MPI_INTEGER, counts, 1, MPI_INTEGER, c%comm)
+        allocate(all(sum(counts)))
+        call MPI_Allgatherv(a, size(a), MPI_INTEGER8, all, counts, starts(counts), &
+                            MPI_INTEGER8, c%comm)
+    end subroutine allgather_i8
 
     !> Wait until every rank has arrived.
     subroutine comm_barrier(c)

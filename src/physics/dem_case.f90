@@ -14,6 +14,8 @@ module dem_case
     use dem_comm, only: comm_t, comm_sum, comm_max
     use dem_periodic, only: periodic_t
     use dem_clumps, only: clump_template_t, clump_t
+    use dem_bonds, only: bond_model_t
+    use dem_bond_create, only: bond_rule_t
     use dem_particles, only: body_state_rows, bs_mass, bs_l
     implicit none
     private
@@ -116,6 +118,16 @@ module dem_case
         type(clump_t), allocatable :: clumps(:)       !< &clump
         integer(i8), allocatable :: body(:)
         real(wp), allocatable :: body_state(:, :)
+        logical :: has_fixed = .false.                !< some particle is fixed (&particle)
+        integer(ip), allocatable :: fixed(:)          !< 1: fixed; allocated with has_fixed
+        ! bonds (dem_bonds): the rules (&bond), the models of their bonds, and once the
+        ! particles are placed (dem_setup, dem_bond_create) each held particle's bond slots
+        type(bond_rule_t), allocatable :: bond_rules(:)
+        type(bond_model_t) :: bond_models
+        integer(i8) :: n_bonds = 0                    !< at the start, over all ranks
+        integer :: bond_reals = 0                     !< rows of a particle's bond slots
+                                                      !< (bond_rows per slot; 0: no bonds)
+        real(wp), allocatable :: bonds(:, :)          !< (bond_reals, held)
         type(mesh_t) :: mesh
         type(periodic_t) :: periodic                  !< the periodic axes (&periodic)
         character(len=256) :: periodic_at(3) = ''     !< the place of each axis's group
@@ -159,6 +171,8 @@ contains
         type(case_t), intent(inout) :: c
         deallocate(c%gid, c%mat, c%radius, c%x, c%v, c%w)
         if (allocated(c%body)) deallocate(c%body, c%body_state)
+        if (allocated(c%fixed)) deallocate(c%fixed)
+        if (allocated(c%bonds)) deallocate(c%bonds)
     end subroutine case_release_particles
 
     !> The summary of the particles that the ranks hold, over all ranks, with the radii and
@@ -309,13 +323,14 @@ contains
     !> The energy guard's bound [J] for particles of total mass `mass` [kg]: &run max_energy,
     !> or else twice their kinetic energy were they all at the guard's speed, M v_e^2, plus
     !> the rotational energy at the start (doc/theory.md, section 6); none (huge) without
-    !> a speed or a spin.
+    !> a speed or a spin, or with a fixed particle (driven, it may give any energy).
     pure real(wp) function case_energy_bound(c, mass) result(bound)
         type(case_t), intent(in) :: c
         real(wp), intent(in) :: mass
         bound = c%max_energy
         if (bound > 0.0_wp) return
         bound = huge(1.0_wp)
+        if (c%has_fixed) return
         if (c%energy_speed > 0.0_wp .or. c%summary%spin_energy > 0.0_wp) &
             bound = mass * c%energy_speed**2 + c%summary%spin_energy
     end function case_energy_bound
@@ -415,6 +430,7 @@ contains
         c%x = reshape([c%x(:, 1:n), x], [3, n + size(gid)])
         c%v = reshape([c%v(:, 1:n), v], [3, n + size(gid)])
         c%w = reshape([c%w(:, 1:n), w], [3, n + size(gid)])
+        if (allocated(c%fixed)) c%fixed = [c%fixed(1:n), spread(0_ip, 1, size(gid))]
         if (allocated(c%body)) then              ! spheres among clumps
             c%body = [c%body(1:n), spread(0_i8, 1, size(gid))]
             c%body_state = reshape([c%body_state(:, 1:n), &

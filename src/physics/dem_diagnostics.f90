@@ -34,7 +34,7 @@ contains
         integer(i8), intent(in), optional :: body(:)
         real(wp), intent(in), optional :: terms(:, :)
         real(wp), allocatable :: e(:, :)
-        real(wp) :: sums(4, 1), top(1)
+        real(wp) :: sums(4, 1), top(1), rot
         type(fixed_sum_t) :: fixed
         integer(ip) :: i
         allocate(e(4, n))
@@ -47,8 +47,10 @@ contains
                     cycle
                 end if
             end if
-            e(:, i) = [0.5_wp * mass(i) * dot_product(v(:, i), v(:, i)), &
-                       0.5_wp * dot_product(w(:, i), w(:, i)) / inv_inertia(i), &
+            rot = 0.0_wp              ! (a fixed particle's spin, driven, is not counted)
+            if (inv_inertia(i) > 0.0_wp) rot = 0.5_wp * dot_product(w(:, i), w(:, i)) / &
+                                                inv_inertia(i)
+            e(:, i) = [0.5_wp * mass(i) * dot_product(v(:, i), v(:, i)), rot, &
                        -mass(i) * dot_product(gravity, x(:, i)), mass(i)]
             top = max(top, norm2(v(:, i)))
         end do

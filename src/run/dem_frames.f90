@@ -7,7 +7,7 @@ module dem_frames
     use dem_case, only: case_t
     use dem_run_state, only: solver_t, time_of, particle_data
     use dem_particles, only: particles_reserve, particles_frame_copy, particles_derive, &
-                             particles_init, order_by_id
+                             particles_init, order_by_id, particles_bond_reals
     use dem_neighbors, only: neighbors_history, neighbors_set_history, neighbors_data
     use dem_contact_store, only: store_walls_restore, store_pairs_data
     use dem_mesh, only: mesh_t, mesh_move
@@ -99,7 +99,8 @@ contains
             fr%time = time_of(s, c, s%step)
             fr%step = s%step
             fr%n = n
-            call particles_init(fr%p, n, allocated(p%body))
+            call particles_init(fr%p, n, allocated(p%body), allocated(p%fixed), &
+                                particles_bond_reals(p))
             fr%p%n_own = n
             call particles_frame_copy(p, n, order, fr%p, [(a, a = 1, n)])
             if (build_dependent(s) .and. allocated(s%nb%x_ref)) then   ! (dem_rebuild)

@@ -19,7 +19,7 @@ module dem_rebuild
                              neighbors_row_history, neighbors_history_counts, &
                              neighbors_append_rows, neighbors_empty_rows
     use dem_contact_store, only: store_walls_permute, store_pairs_forget_parted, &
-                                 store_walls_reserve_on_device
+                                 store_walls_reserve_on_device, bond_rows, store_bond_partners
     use dem_cells, only: kept_indices, gather_items
     use dem_storage, only: fill_range
     use dem_periodic, only: periodic_wrap, periodic_wrap_bodies
@@ -58,6 +58,8 @@ contains
         logical :: stale
         if (s%dom%pb%on) call periodic_wrap(s%dom%pb, s%p%n_own, .false., s%p%x)
         call neighbors_check(s%nb, s%p%n_own, s%p%x, s%mesh, stale)
+        stale = stale .or. s%bond_broke           ! (its pair may touch now)
+        s%bond_broke = .false.
         if (s%comm%size > 1) stale = comm_any(s%comm, stale)
         if (stale) then
             call rebuild(s, s%parked > 0, err)
@@ -172,8 +174,10 @@ contains
             call move_alloc(old_row, order)
         end if
         call neighbors_build(s%nb, s%cs, s%p%n_own, s%p%n_own + s%p%n_ghost, s%p%gid, s%p%x, &
-                             s%p%radius, s%mesh, old_index=order, body=s%p%body)
+                             s%p%radius, s%mesh, old_index=order, body=s%p%body, &
+                             bonds=s%p%bonds, bond_contact=s%bm%contact)
         if (allocated(s%p%body)) call clump_index_build(s%bodies, s%p%n_own, s%p%gid, s%p%body)
+        if (allocated(s%p%bonds)) call bond_partners(s, err)
         if (replay) call pose_now(s, pose)
         allocate(s%nb%scale(max(1, s%p%n_own + s%p%n_ghost)))
         call acc_data(s%nb%scale, acc_create)
@@ -184,6 +188,34 @@ contains
         if (allocated(s%gone)) call release_gone(s)   ! made anew for the new order
         s%parked = 0
     end subroutine rebuild
+
+    !> The partner of each bond slot of the owned particles among the particles held, owned
+    !> and ghosts (dem_contact_store), for the bond kernel until the next build, on the
+    !> device too; a partner not held (a bond stretched beyond the ghosts' reach) is an error
+    !> on every rank.
+    subroutine bond_partners(s, err)
+        type(solver_t), intent(inout) :: s
+        type(error_t), intent(inout) :: err
+        integer(i8) :: missing(1)
+        integer(ip) :: n_all
+        n_all = s%p%n_own + s%p%n_ghost
+        call acc_data(s%p%gid(1:n_all), acc_to_host)
+        call acc_data(s%p%x(:, 1:n_all), acc_to_host)
+        call acc_data(s%p%bonds(:, 1:n_all), acc_to_host)
+        if (allocated(s%bond_partner)) then
+            call acc_data(s%bond_partner, acc_exit)
+            deallocate(s%bond_partner)
+        end if
+        allocate(s%bond_partner(size(s%p%bonds, 1) / bond_rows, max(1, s%p%n_own)))
+        s%bond_partner = 0
+        call store_bond_partners(s%p%n_own, n_all, size(s%p%bonds, 1) / bond_rows, s%p%gid, &
+                                 s%p%x, s%p%bonds, s%bond_partner, missing(1))
+        call acc_data(s%bond_partner, acc_enter)
+        call comm_sum(s%comm, missing)
+        if (missing(1) > 0) call set_error(err, dem_err_runtime, 'a bonded particle''s ' // &
+            'partner is beyond the ghosts of its rank: the bond stretched further than the ' // &
+            'skin allows (give a larger &run skin)')
+    end subroutine bond_partners
 
     !> Whether a build re-sorts the particles (neighbors_spatial_order): at the first build of
     !> a run, when particles join or an outlet removes some, and else once sort_interval

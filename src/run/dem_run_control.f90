@@ -11,7 +11,7 @@ module dem_run_control
     use dem_comm, only: comm_any, comm_gather, comm_max
     use dem_case, only: case_t, case_energy_bound
     use dem_run_state, only: solver_t, time_of, summed, particle_data, stop_wall_time, stop_signal, &
-                             particle_energies
+                             particle_energies, bond_sums
     use dem_run_output, only: contact_counts, write_checkpoint, write_frame_checkpoint
     use dem_domain, only: domain_update
     use dem_mesh, only: mesh_speed_bound
@@ -126,7 +126,8 @@ contains
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
-        real(wp) :: ke_t, ke_r, pe, vmax, mass, energy
+        real(wp) :: ke_t, ke_r, pe, vmax, mass, energy, e_bonds
+        integer(i8) :: intact
         call particle_data(s, acc_to_host)
         if (comm_any(s%comm, first_nonfinite(s%p%n_own, s%p%x, s%p%v, s%p%w) > 0)) then
             call unstable(s, c, err)
@@ -139,6 +140,10 @@ contains
                 size(s%nb%list, kind=ip), p%x, p%radius, p%mat, s%nb%start, s%nb%list, &
                 c%mats%n, s%pc%opts%normal, s%pc%kn, s%cs%wall_tri, s%mesh)
         end associate
+        if (allocated(s%p%bonds)) then            ! the bonds' elastic energy too
+            call bond_sums(s, intact, e_bonds)
+            energy = energy + e_bonds
+        end if
         if (energy > case_energy_bound(c, mass)) then
             call unstable(s, c, err, [energy, case_energy_bound(c, mass)])
             return
@@ -148,14 +153,14 @@ contains
     end subroutine energy_guard
 
     !> A case that gives its particles no energy but from gravity: no moving wall, inflow,
-    !> cohesion, coupled fluid or &run max_energy (which says that something else does), and
-    !> no periodic axis along which gravity acts.
+    !> cohesion, coupled fluid, fixed (perhaps driven) particle or &run max_energy (which says
+    !> that something else does), and no periodic axis along which gravity acts.
     logical function closed_case(s, c) result(closed)
         type(solver_t), intent(in) :: s
         type(case_t), intent(in) :: c
         closed = c%max_energy == 0.0_wp .and. .not. c%inflow .and. &
                  mesh_speed_bound(s%mesh) == 0.0_wp .and. all(s%pc%kcoh == 0.0_wp) .and. &
-                 .not. allocated(s%p%ext) .and. &
+                 .not. allocated(s%p%ext) .and. .not. c%has_fixed .and. &
                  .not. any(c%periodic%axis .and. c%gravity /= 0.0_wp)
     end function closed_case
 

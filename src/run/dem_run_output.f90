@@ -8,7 +8,7 @@ module dem_run_output
     use dem_error, only: error_t
     use dem_comm, only: comm_sum
     use dem_case, only: case_t
-    use dem_run_state, only: solver_t, time_of, particle_data, particle_energies
+    use dem_run_state, only: solver_t, time_of, particle_data, particle_energies, bond_sums
     use dem_rebuild, only: settle_outlets
     use dem_frames, only: capture, mesh_at
     use dem_domain, only: domain_update
@@ -42,6 +42,8 @@ contains
         type(error_t), intent(inout) :: err
         real(wp) :: ke_t, ke_r, pe, vmax, mass
         integer(i8) :: counts(3), bytes(3), n(1)
+        integer(i8), allocatable :: bonds(:)     ! with bonds: intact, broken (else absent)
+        real(wp), allocatable :: e_bonds         ! and their energy [J]
         logical :: settled
         counts = contact_counts(s)
         call capture(s, c, out, s%good, local=.true.)
@@ -52,9 +54,14 @@ contains
             settled = s%step > 0 .and. time_of(s, c, s%step) >= c%settle_time .and. &
                       ke_t + ke_r < c%stop_kinetic_energy
             if (settled) s%settled_energy = ke_t + ke_r
+            if (allocated(p%bonds)) then
+                allocate(bonds(2), e_bonds)
+                call bond_sums(s, bonds(1), e_bonds)
+                bonds(2) = c%n_bonds - bonds(1)
+            end if
             if (s%comm%rank == 0) call output_series(out, time_of(s, c, s%step), s%step, &
                 int(n(1), ip), s%removed, int(counts(1), ip), int(counts(2), ip), ke_t, ke_r, pe, &
-                vmax, err)
+                vmax, err, bonds, e_bonds)
             call write_probes(s, c, out, err)
         end associate
         if (s%comm%rank == 0) then

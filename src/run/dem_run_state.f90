@@ -13,8 +13,10 @@ module dem_run_state
     use dem_contact_model, only: contact_model_t
     use dem_neighbors, only: neighbors_t, neighbors_free
     use dem_clumps, only: clump_index_t, clump_index_free, clump_energy_terms
+    use dem_bonds, only: bond_model_t, bond_totals
+    use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_add, fixed_sum_total
     use dem_diagnostics, only: energies
-    use dem_contact_store, only: contact_store_t, store_pairs_drop, store_walls_data
+    use dem_contact_store, only: contact_store_t, store_pairs_drop, store_walls_data, bond_rows
     use dem_mesh, only: mesh_t
     use dem_output, only: output_t
     use dem_frame, only: frame_t
@@ -24,7 +26,7 @@ module dem_run_state
     implicit none
     private
     public :: solver_t, run_t, time_of, failed_anywhere, summed, device_data, particle_data, &
-              wall_motion_data, release_gone, particle_energies, &
+              wall_motion_data, release_gone, particle_energies, bond_sums, &
               stop_end, stop_settled, stop_wall_time, stop_signal, stop_emptied
 
     ! why solver_run returned without an error
@@ -57,6 +59,10 @@ module dem_run_state
     type :: solver_t
         type(particles_t) :: p
         type(clump_index_t) :: bodies  !< the clumps this rank owns (made at each list build)
+        type(bond_model_t) :: bm       !< the models of the case's bonds (none: unallocated)
+        integer(ip), allocatable :: bond_partner(:, :)  !< the partner of each bond slot of the
+                                       !< owned particles (made at each list build)
+        logical :: bond_broke = .false.  !< a bond broke since the last list build
         type(neighbors_t) :: nb
         type(contact_store_t) :: cs   !< the contacts' history
         type(contact_model_t) :: pc   !< the contact model
@@ -145,6 +151,34 @@ contains
         end associate
     end subroutine particle_energies
 
+    !> The bonds intact and the elastic energy they hold [J], over all ranks (each bond's
+    !> energy half from each of its particles, summed in fixed point: the same on any number
+    !> of ranks; dem_bonds); the particles on the host. Collective.
+    subroutine bond_sums(s, intact, energy)
+        type(solver_t), intent(in) :: s
+        integer(i8), intent(out) :: intact
+        real(wp), intent(out) :: energy
+        type(fixed_sum_t) :: fixed
+        real(wp), allocatable :: e(:)
+        real(wp) :: sums(1, 1)
+        integer(i8) :: used(1)
+        integer(ip) :: i
+        associate (p => s%p, n => s%p%n_own, m => s%bm)
+            allocate(e(max(1, n)))
+            call bond_totals(n, n + p%n_ghost, size(p%bonds, 1) / bond_rows, size(m%damping), &
+                             p%radius, s%bond_partner, m%radius_ratio, m%shear_ratio, p%bonds, &
+                             used(1), e)
+            call fixed_sum_start(fixed, s%comm, [maxval([0.0_wp, e(1:n)])], n, 1)
+            do i = 1, n
+                call fixed_sum_add(fixed, e(i:i), 1)
+            end do
+        end associate
+        call fixed_sum_total(fixed, s%comm, sums)
+        energy = sums(1, 1)
+        call comm_sum(s%comm, used)
+        intact = used(1) / 2
+    end subroutine bond_sums
+
     !> The time of a step [s] (doc/theory.md, section 11).
     pure real(wp) function time_of(s, c, step) result(time)
         type(solver_t), intent(in) :: s
@@ -200,12 +234,21 @@ contains
         call acc_data(s%pc%rmodel, op)     ! (read by the kernels' rolling and cohesion path)
         call acc_data(s%pc%mur, op)
         call acc_data(s%pc%kcoh, op)
+        if (allocated(s%bm%radius_ratio)) then             ! (read by the bond kernel)
+            call acc_data(s%bm%radius_ratio, op)
+            call acc_data(s%bm%shear_ratio, op)
+            call acc_data(s%bm%damping, op)
+        end if
         if (s%mesh%n_tri > 0) then
             call mesh_data(s%mesh, op)
         end if
         if (op == acc_exit .and. allocated(s%gone)) call release_gone(s)
         if (op == acc_exit .and. s%lists_on_device) then
             call clump_index_free(s%bodies)
+            if (allocated(s%bond_partner)) then
+                call acc_data(s%bond_partner, acc_exit)
+                deallocate(s%bond_partner)
+            end if
             call neighbors_free(s%nb)
             call store_pairs_drop(s%cs)
             if (s%halo) call domain_data(s%dom, op)

@@ -20,6 +20,8 @@ module dem_setup
     use dem_periodic, only: with_images
     use dem_clumps, only: clump_members, clump_t, clumps_in_spheres
     use dem_particles, only: body_state_rows
+    use dem_bond_create, only: bonds_make
+    use dem_contact_store, only: bond_rows
     implicit none
     private
     public :: read_case
@@ -41,6 +43,7 @@ contains
             if (size(c%inserts) > 0 .or. c%has_clumps) call keep_share(c, comm%rank, comm%size)
             call check_ranges(c, comm, err)
         end if
+        if (.not. err%failed() .and. size(c%bond_rules) > 0) call place_bonds(c, comm, err)
         if (.not. err%failed()) then
             call case_summarize(c, comm)
             call drawn_from_particles(c, err)
@@ -255,6 +258,25 @@ contains
         call place_clumps(c, first)
     end subroutine insert_clumps
 
+    !> The bonds of the &bond groups among the particles of all ranks (dem_bond_create): each
+    !> held particle's bond slots, their number and the case's count; collective.
+    subroutine place_bonds(c, comm, err)
+        type(case_t), intent(inout) :: c
+        type(comm_t), intent(in) :: comm
+        type(error_t), intent(inout) :: err
+        character(len=:), allocatable :: message
+        integer :: n_slots
+        associate (n => c%n_held)
+            call bonds_make(c%bond_rules, comm, c%gid(1:n), c%mat(1:n), c%radius(1:n), &
+                            c%x(:, 1:n), c%body, n_slots, c%bonds, c%n_bonds, message)
+        end associate
+        if (len(message) > 0) then
+            call set_error(err, dem_err_input, message)
+            return
+        end if
+        c%bond_reals = bond_rows * n_slots
+    end subroutine place_bonds
+
     !> Keep of all the case's particles (held here) every ranks-th from rank + 1 on.
     subroutine keep_share(c, rank, ranks)
         type(case_t), intent(inout) :: c
@@ -272,6 +294,7 @@ contains
             c%body = c%body(kept)
             c%body_state = c%body_state(:, kept)
         end if
+        if (allocated(c%fixed)) c%fixed = c%fixed(kept)
         c%n_held = size(kept)
     end subroutine keep_share
 

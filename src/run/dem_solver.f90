@@ -47,23 +47,29 @@ contains
         type(solver_t), intent(out) :: s
         type(case_t), intent(in) :: c
         type(comm_t), intent(in) :: comm
-        integer(ip) :: i, n_mine
+        integer(ip) :: i, n_mine, fixed
+        real(wp) :: bonds(c%bond_reals)
         s%comm = comm
         n_mine = c%n_held
-        call particles_init(s%p, n_mine, c%has_clumps)
+        call particles_init(s%p, n_mine, c%has_clumps, c%has_fixed, c%bond_reals)
         do i = 1, n_mine
+            fixed = 0
+            if (c%has_fixed) fixed = c%fixed(i)
+            if (c%bond_reals > 0) bonds = c%bonds(:, i)
             if (c%has_clumps) then
                 call particles_add(s%p, c%gid(i), c%mat(i), c%radius(i), &
                                    c%mats%density(c%mat(i)), c%x(:, i), c%v(:, i), c%w(:, i), &
-                                   c%body(i), c%body_state(:, i))
+                                   c%body(i), c%body_state(:, i), fixed=fixed, bonds=bonds)
             else
                 call particles_add(s%p, c%gid(i), c%mat(i), c%radius(i), &
-                                   c%mats%density(c%mat(i)), c%x(:, i), c%v(:, i), c%w(:, i))
+                                   c%mats%density(c%mat(i)), c%x(:, i), c%v(:, i), c%w(:, i), &
+                                   fixed=fixed, bonds=bonds)
             end if
             if (c%gid(i) == c%trace_id) s%trace = s%p%n_own
         end do
         s%trace_id = c%trace_id
         call contact_model_build(c%mats, c%opts, s%pc)
+        if (c%bond_reals > 0) s%bm = c%bond_models
         s%mesh = c%mesh
         ! the widths of the contact history (3 reals, 6 with EPSD2), process-wide: set again
         ! at each entry into the run (solver_start, _advance, _finish), so that several runs
@@ -133,18 +139,20 @@ contains
             if (s%comm%rank == 0) then  ! the CSV files are rank 0's
                 if (s%restarted) then            ! (nothing changed before the checks)
                     bytes = [s%good%series_bytes, s%good%contact_bytes, s%good%probes_bytes]
-                    call output_check(c%output_dir, s%trace > 0, columns, bytes, err)
+                    call output_check(c%output_dir, s%trace > 0, c%bond_reals > 0, columns, &
+                                      bytes, err)
                     if (.not. err%failed()) call folder_restart(c%output_dir, s%restart_file, &
                                                                 s%step, s%ckpt_step, err)
                     if (.not. err%failed()) call output_open(r%out, c%output_dir, &
-                                                             s%trace > 0, columns, err, bytes)
+                        s%trace > 0, c%bond_reals > 0, columns, err, bytes)
                     if (.not. err%failed() .and. size(s%snap_step) > 0) &
                         call write_xdmf(s, c, err)
                 else
                     call folder_claim(c%output_dir, c%source, c%input_text, &
                                       c%output_overwrite, err)
                     if (.not. err%failed()) &
-                        call output_open(r%out, c%output_dir, s%trace > 0, columns, err)
+                        call output_open(r%out, c%output_dir, s%trace > 0, &
+                                                         c%bond_reals > 0, columns, err)
                 end if
             end if
             if (failed_anywhere(s, err)) return

@@ -28,7 +28,8 @@ module dem_step
                           phase_integrate, phase_output, wall_seconds
     use dem_acc, only: acc_data, acc_enter, acc_create, acc_exit, acc_to_host, acc_to_device
     use dem_probes, only: probe_wall_load, probe_load_values
-    use dem_contact_store, only: max_wall_contacts
+    use dem_contact_store, only: max_wall_contacts, bond_rows
+    use dem_bonds, only: bond_forces
     implicit none
     private
     public :: time_step, forces, write_row
@@ -79,6 +80,7 @@ contains
         call timer_stop(s%timers, phase_neighbors)
         if (err%failed()) return
         call particle_contacts(s, c)
+        if (allocated(s%p%bonds)) call bond_loads(s, c)
         if (allocated(s%p%ext)) call external_forces(s%p%n_own, c%dt, s%p%v, s%p%ext, s%p%f, &
                                                      s%p%t)
         call timer_stop(s%timers, phase_contacts_pp)
@@ -168,6 +170,22 @@ contains
             call sphere_gravity(s%p%n_own, s%p%body, s%p%mass, c%gravity, s%p%f)
         end if
     end subroutine particle_contacts
+
+    !> The bonds' forces and torques added to the contacts' (dem_bonds); a bond that broke
+    !> whose model keeps its pair out of contact lets the next step rebuild the lists, where
+    !> the pair may touch.
+    subroutine bond_loads(s, c)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        integer(i8) :: n_broken
+        associate (p => s%p, m => s%bm)
+            call bond_forces(p%n_own, p%n_own + p%n_ghost, size(p%bonds, 1) / bond_rows, &
+                             size(m%damping), p%gid, p%x, p%v, p%w, p%radius, p%mass, &
+                             s%bond_partner, m%radius_ratio, m%shear_ratio, m%damping, c%dt, &
+                             p%bonds, p%f, p%t, n_broken)
+            if (n_broken > 0 .and. .not. all(m%contact)) s%bond_broke = .true.
+        end associate
+    end subroutine bond_loads
 
     !> The particle-wall contacts of the lists' candidate triangles; at a step whose row
     !> reports wall loads, the wall-load probes' values from them too (collective then).

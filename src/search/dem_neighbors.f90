@@ -15,7 +15,8 @@ module dem_neighbors
     use dem_storage, only: fill_range
     use dem_particles, only: index_of_id
     use dem_mesh, only: mesh_t, closest_point_triangle
-    use dem_contact_store, only: contact_store_t, n_pair_history, max_pair_history, &
+    use dem_contact_store, only: bond_rows, bonded_without_contact, &
+                                 contact_store_t, n_pair_history, max_pair_history, &
                                  store_pairs_take, store_pairs_from, store_pairs_release, &
                                  carry_history, history_counts, history_fill, entry_history, &
                                  sort_history_row
@@ -211,7 +212,8 @@ contains
     !> are there, and the lists are left there (neighbors_data brings them to the host). The
     !> history of pairs still listed is kept in the store cs, matched by global id;
     !> old_index(i) is where particle i was stored at the last build (identity if absent).
-    subroutine neighbors_build(nb, cs, n_own, n_all, gid, x, radius, mesh, old_index, body)
+    subroutine neighbors_build(nb, cs, n_own, n_all, gid, x, radius, mesh, old_index, body, &
+                               bonds, bond_contact)
         type(neighbors_t), intent(inout) :: nb
         type(contact_store_t), intent(inout) :: cs
         integer(ip), intent(in) :: n_own       !! owned particles (rows)
@@ -222,6 +224,9 @@ contains
         type(mesh_t), intent(in) :: mesh
         integer(ip), intent(in), optional :: old_index(:)
         integer(i8), intent(in), optional :: body(:)   !! of a case with clumps (dem_particles)
+        real(wp), intent(in), optional :: bonds(:, :)  !! of a case with bonds (dem_particles)
+        logical, intent(in), optional :: bond_contact(:)  !! of each bond model: its pairs
+                                                          !! touch while bonded
         integer(ip), allocatable :: old_start(:), same(:), level(:), cell(:), gstart(:), &
                                     gitem(:), cnt(:), n_of(:, :), off(:), pstart(:)
         integer(ip), allocatable :: old_pref(:), old_slot(:), from(:), kept(:, :)
@@ -312,7 +317,11 @@ contains
                        n_of, off, n_cells, gstart, gitem, nb%start, kept_partners, kept, &
                        n_entries, nb%list)
         call acc_data(kept, acc_exit)
-        if (present(body)) call drop_body_pairs(nb, n_own, body, n_entries)
+        if (present(body)) call drop_pairs(nb, n_own, n_entries, gid, body=body)
+        if (present(bonds)) then
+            if (.not. all(bond_contact)) call drop_pairs(nb, n_own, n_entries, gid, &
+                                                         bonds=bonds, contact=bond_contact)
+        end if
         call pair_partners(n_own, n_all, n_entries, gid, nb%start, nb%list, nb%partner, &
                            nb%mirror)
 
@@ -523,16 +532,31 @@ contains
         end do
     end subroutine pair_rows
 
-    !> The entries of the rows that pair two members of one clump taken out of the lists
-    !> (they never touch: dem_clumps): nb%start and nb%list made anew, n_entries their number;
-    !> nb%partner, nb%mirror and nb%pref sized for them. On the device.
-    subroutine drop_body_pairs(nb, n_own, body, n_entries)
+    !> The entries of the rows that pair two members of one clump (`body`: they never touch,
+    !> dem_clumps) or two particles bonded by a bond whose model keeps them out of contact
+    !> (`bonds`, n_slots slots per particle, and `contact` of each model: dem_contact_store)
+    !> taken out of the lists: nb%start and nb%list made anew, n_entries their number;
+    !> nb%partner, nb%mirror and nb%pref sized for them. On the device (body, bonds there;
+    !> contact copied in).
+    subroutine drop_pairs(nb, n_own, n_entries, gid, body, bonds, contact)
         type(neighbors_t), intent(inout) :: nb
         integer(ip), intent(in) :: n_own
-        integer(i8), intent(in) :: body(:)
         integer(ip), intent(inout) :: n_entries
+        integer(i8), intent(in) :: gid(:)
+        integer(i8), intent(in), optional :: body(:)
+        real(wp), intent(in), optional :: bonds(:, :)
+        logical, intent(in), optional :: contact(:)
+        logical, allocatable :: drop(:)
         integer(ip), allocatable :: cnt(:), start(:), list(:)
         integer(ip) :: i, e, k
+        allocate(drop(max(1, n_entries)))
+        call acc_data(drop, acc_create)
+        if (present(body)) then
+            call body_drops(n_own, nb%start, nb%list, body, drop)
+        else
+            call bond_drops(n_own, size(bonds, 2, kind=ip), size(bonds, 1) / bond_rows, &
+                            nb%start, nb%list, gid, bonds, contact, drop)
+        end if
         allocate(cnt(max(1, n_own)), start(n_own + 1))
         call acc_data(cnt, acc_create)
         call acc_data(start, acc_create)
@@ -540,7 +564,7 @@ contains
         do i = 1, n_own
             cnt(i) = 0
             do e = nb%start(i), nb%start(i + 1) - 1
-                if (.not. same_body(body(i), body(nb%list(e)))) cnt(i) = cnt(i) + 1
+                if (.not. drop(e)) cnt(i) = cnt(i) + 1
             end do
         end do
         call prefix_sum(n_own, cnt, start)
@@ -552,11 +576,12 @@ contains
         do i = 1, n_own
             k = start(i)
             do e = nb%start(i), nb%start(i + 1) - 1
-                if (same_body(body(i), body(nb%list(e)))) cycle
+                if (drop(e)) cycle
                 list(k) = nb%list(e)
                 k = k + 1
             end do
         end do
+        call acc_data(drop, acc_exit)
         call acc_data(cnt, acc_exit)
         call acc_data(nb%start, acc_exit)
         call acc_data(nb%list, acc_exit)
@@ -570,7 +595,40 @@ contains
         call acc_data(nb%partner, acc_create)
         call acc_data(nb%mirror, acc_create)
         call acc_data(nb%pref, acc_create)
-    end subroutine drop_body_pairs
+    end subroutine drop_pairs
+
+    !> drop(e): entry e pairs two members of one clump.
+    subroutine body_drops(n_own, start, list, body, drop)
+        integer(ip), intent(in) :: n_own
+        integer(ip), intent(in) :: start(:), list(:)
+        integer(i8), intent(in) :: body(:)
+        logical, intent(inout) :: drop(:)
+        integer(ip) :: i, e
+        !$acc parallel loop gang vector default(present) private(e)
+        do i = 1, n_own
+            do e = start(i), start(i + 1) - 1
+                drop(e) = same_body(body(i), body(list(e)))
+            end do
+        end do
+    end subroutine body_drops
+
+    !> drop(e): entry e pairs two particles bonded by a bond that keeps them out of contact.
+    subroutine bond_drops(n_own, n_all, n_slots, start, list, gid, bonds, contact, drop)
+        integer(ip), intent(in) :: n_own, n_all
+        integer, intent(in) :: n_slots
+        integer(ip), intent(in) :: start(:), list(:)
+        integer(i8), intent(in) :: gid(:)
+        real(wp), intent(in) :: bonds(bond_rows, n_slots, n_all)
+        logical, intent(in) :: contact(:)
+        logical, intent(inout) :: drop(:)
+        integer(ip) :: i, e
+        !$acc parallel loop gang vector default(present) copyin(contact) private(e)
+        do i = 1, n_own
+            do e = start(i), start(i + 1) - 1
+                drop(e) = bonded_without_contact(bonds(:, :, i), gid(list(e)), contact)
+            end do
+        end do
+    end subroutine bond_drops
 
     !> Whether two particles of bodies a and b are members of one clump (0: a sphere).
     pure logical function same_body(a, b)

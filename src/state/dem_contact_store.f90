@@ -10,6 +10,11 @@
 !> history has n_wall_columns columns of 3 reals: the displacements of its max_wall_contacts
 !> slots, followed, with EPSD2, by their rolling springs (so that the wall kernel's columns
 !> keep their constant length). store_history_widths sets both once per case.
+!> A bond (dem_bonds; doc/theory.md section 18) is kept by both of its particles, each in one
+!> of its slots of bond_rows reals: the particle field `bonds` (dem_particles), so
+!> that bonds migrate, sort and checkpoint with their particles; the store gives the rows'
+!> meaning, the slots' partners among the particles a rank holds (store_bond_partners, at
+!> each list build) and which pairs the contact law leaves out while they are bonded.
 module dem_contact_store
     use dem_kinds, only: wp, ip, i8
     use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int, &
@@ -24,7 +29,9 @@ module dem_contact_store
               store_init, store_walls_reserve, store_walls_reserve_on_device, store_walls_restore, &
               store_walls_permute, store_walls_pack, store_walls_unpack, store_unique_pairs, &
               carry_history, history_counts, history_fill, entry_slot, entry_history, &
-              sort_history_row, store_history_widths, max_pair_history, n_wall_columns
+              sort_history_row, store_history_widths, max_pair_history, n_wall_columns, &
+              bond_rows, br_partner, br_model, br_kn, br_sigma, br_tau, br_fn, br_fs, br_mt, &
+              br_mb, br_normal, store_bond_partners, bonded_without_contact
 
     integer, parameter :: max_pair_history = 6   !< the most reals per contact
     !> reals per particle pair: xi [m], then the rolling spring's torque [N m] with EPSD2
@@ -36,6 +43,16 @@ module dem_contact_store
     !> reals per packed particle (the triangles travel as reals: exact below 2^53)
     integer, protected :: n_wall_pack_real = (1 + n_wall_history) * max_wall_contacts
     !$acc declare copyin(n_pair_history)
+
+    !> the rows of a bond slot: the partner's id (exact as a real below 2^53; 0: an empty
+    !> slot), the bond's model (its &bond group), its normal stiffness per area k_n [Pa/m],
+    !> tensile and shear strengths [Pa], the normal force F_n [N] (tension > 0), the shear
+    !> force F_s (3) [N] and the twisting and bending moments M_t [N m] and M_b (3) [N m],
+    !> all on the particle of smaller id, and the unit normal of the last step (3), from that
+    !> particle to the other
+    integer, parameter :: bond_rows = 16
+    integer, parameter :: br_partner = 1, br_model = 2, br_kn = 3, br_sigma = 4, br_tau = 5, &
+                          br_fn = 6, br_fs = 7, br_mt = 10, br_mb = 11, br_normal = 14
 
     type :: contact_store_t
         !> the history of each pair p of the lists (of their first particle's side): for a
@@ -68,6 +85,71 @@ contains
         n_wall_pack_real = max_wall_contacts + n_wall_history * n_wall_columns
         !$acc update device(n_pair_history)
     end subroutine store_history_widths
+
+    !> The partner of each bond slot of the owned particles among the n_all particles held
+    !> (owned, then ghosts): partner(k, i) is the place of the particle whose id slot k of
+    !> particle i names, the copy nearest to i where there are several (periodic images), 0
+    !> for an empty slot; `missing` counts the slots whose partner is not held (a bond
+    !> stretched beyond the ghosts' reach). On the host.
+    subroutine store_bond_partners(n_own, n_all, n_slots, gid, x, bonds, partner, missing)
+        integer(ip), intent(in) :: n_own, n_all
+        integer, intent(in) :: n_slots             !! bond slots per particle
+        integer(i8), intent(in) :: gid(n_all)
+        real(wp), intent(in) :: x(3, n_all)
+        real(wp), intent(in) :: bonds(bond_rows, n_slots, n_all)
+        integer(ip), intent(out) :: partner(n_slots, n_own)
+        integer(i8), intent(out) :: missing
+        integer(ip), allocatable :: order(:)
+        integer(ip) :: i, lo, hi, mid, e
+        integer(i8) :: id
+        integer :: k
+        real(wp) :: best, d2
+        order = order_by_id(gid)
+        missing = 0
+        do i = 1, n_own
+            do k = 1, n_slots
+                partner(k, i) = 0
+                id = int(bonds(br_partner, k, i), i8)
+                if (id == 0) cycle
+                lo = 1                           ! the first place in order with gid >= id
+                hi = n_all + 1
+                do while (lo < hi)
+                    mid = (lo + hi) / 2
+                    if (gid(order(mid)) < id) then
+                        lo = mid + 1
+                    else
+                        hi = mid
+                    end if
+                end do
+                best = huge(1.0_wp)
+                do e = lo, n_all
+                    if (gid(order(e)) /= id) exit
+                    d2 = sum((x(:, order(e)) - x(:, i))**2)
+                    if (d2 < best) then
+                        best = d2
+                        partner(k, i) = order(e)
+                    end if
+                end do
+                if (partner(k, i) == 0) missing = missing + 1
+            end do
+        end do
+    end subroutine store_bond_partners
+
+    !> Whether a particle whose bond slots are `slots` is bonded to particle `id` by a bond
+    !> whose model leaves the contact law out (contact(model) false).
+    pure logical function bonded_without_contact(slots, id, contact) result(yes)
+        !$acc routine seq
+        real(wp), intent(in) :: slots(:, :)          !! (bond_rows, slots per particle)
+        integer(i8), intent(in) :: id
+        logical, intent(in) :: contact(:)            !! of each bond model
+        integer :: k
+        yes = .false.
+        do k = 1, size(slots, 2)
+            if (int(slots(br_partner, k), i8) /= id) cycle
+            yes = .not. contact(nint(slots(br_model, k)))
+            return
+        end do
+    end function bonded_without_contact
 
     !> The history of the pairs, xi(:, p) for pair p (on the device; zero: none), becomes
     !> the store's (store_pairs_from, each pair from its own column); xi is freed.

@@ -8,7 +8,8 @@ module dem_frame
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_counts, comm_exchange, comm_max, comm_sum
     use dem_particles, only: particles_t, particles_init, particles_frame_copy, &
-                             particles_frame_pack, particles_frame_unpack, order_by_id
+                             particles_frame_pack, particles_frame_unpack, order_by_id, &
+                             particles_bond_reals
     use dem_contact_store, only: n_pair_history, n_wall_history, n_wall_columns, &
                                  store_unique_pairs
     implicit none
@@ -87,7 +88,8 @@ contains
         order = order_by_id(got%gid(1:n))
         places = [(k, k = 1, n)]
         fr%n = n
-        call frame_particles(fr%p, n, allocated(got%body))
+        call frame_particles(fr%p, n, allocated(got%body), allocated(got%fixed), &
+                             particles_bond_reals(got))
         call particles_frame_copy(got, n, order, fr%p, places)
         if (allocated(fr%x_ref)) fr%x_ref = moved(fr%x_ref)
         if (allocated(fr%contacts)) fr%contacts = int(reshape(moved_int(reshape(fr%contacts, &
@@ -108,7 +110,8 @@ contains
             integer(i8), allocatable :: ibuf(:, :), irecv(:, :)
             real(wp), allocatable :: rbuf(:, :), rrecv(:, :)
             integer(ip), allocatable :: idx(:)
-            call frame_particles(b, n, allocated(a%body))
+            call frame_particles(b, n, allocated(a%body), allocated(a%fixed), &
+                                 particles_bond_reals(a))
             idx = [(k, k = 1, m)]
             call particles_frame_pack(a, m, idx, ibuf, rbuf)
             allocate(irecv(size(ibuf, 1), n), rrecv(size(rbuf, 1), n))
@@ -147,12 +150,13 @@ contains
     end subroutine frame_block
 
     !> Room for n particles in a frame (particles 1..n, the fields zero; with `clumps`, the
-    !> body fields too).
-    subroutine frame_particles(p, n, clumps)
+    !> body fields too; with `fixed`, the fixed flags; bond_reals rows of bond slots).
+    subroutine frame_particles(p, n, clumps, fixed, bond_reals)
         type(particles_t), intent(out) :: p
         integer(ip), intent(in) :: n
-        logical, intent(in) :: clumps
-        call particles_init(p, n, clumps)
+        logical, intent(in) :: clumps, fixed
+        integer, intent(in) :: bond_reals
+        call particles_init(p, n, clumps, fixed, bond_reals)
         p%n_own = n
     end subroutine frame_particles
 

@@ -16,7 +16,8 @@ module dem_particles
               sphere_inv_inertia, ext_force, ext_torque, ext_beta, ext_fluid_v, ext_impulse, n_ext, &
               particles_fields, field_visitor_t, frame_none, frame_state, frame_force, frame_restart, &
               particles_frame_copy, particles_frame_pack, particles_frame_unpack, particles_derive, &
-              body_state_rows, bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset
+              body_state_rows, bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset, &
+              particles_bond_reals
 
     ! rows of particles_t%ext: what a coupled fluid code sets and gets (doc/user/coupling.md)
     integer, parameter :: ext_force = 1      !< 1:3 external force [N]
@@ -75,6 +76,11 @@ module dem_particles
                                                   !< [1/(kg m^2)]
         real(wp), allocatable :: body_mass(:)     !< its mass [kg]
         real(wp), allocatable :: body_offset(:, :) !< the member's centre, body frame [m]
+        ! Unallocated in a case without them: a fixed particle (1) moves at its velocity and
+        ! angular velocity whatever acts on it (a clamp, or a driven particle); a bonded
+        ! particle's bond slots (dem_contact_store's rows, bond_rows per slot; dem_bonds).
+        integer(ip), allocatable :: fixed(:)
+        real(wp), allocatable :: bonds(:, :)
     end type particles_t
 
     !> What particles_fields does to the fields of the store: an extension of this type per
@@ -201,6 +207,8 @@ contains
         if (allocated(p%ext)) call visit_field(visit, p%ext, 'external', frame_none)
         if (allocated(p%x_built)) call visit_field(visit, p%x_built, 'list_reference', &
                                                    frame_none)
+        if (allocated(p%fixed)) call visit_field(visit, p%fixed, 'fixed', frame_state)
+        if (allocated(p%bonds)) call visit_field(visit, p%bonds, 'bonds', frame_restart)
         if (.not. allocated(p%body)) return
         call visit_field(visit, p%body, 'body', frame_state)
         call visit_field(visit, p%body_q, 'orientation', frame_state)
@@ -312,11 +320,20 @@ contains
         end do
     end subroutine particles_derive
 
-    !> Mass, inverse mass and inverse moment of inertia of particle i from its radius.
+    !> Mass, inverse mass and inverse moment of inertia of particle i from its radius (a
+    !> fixed particle's inverses 0: no force or torque changes its velocities).
     subroutine derive(p, i, density)
         type(particles_t), intent(inout) :: p
         integer(ip), intent(in) :: i
         real(wp), intent(in) :: density          !! [kg/m^3]
+        if (allocated(p%fixed)) then
+            if (p%fixed(i) /= 0) then
+                p%mass(i) = sphere_mass(p%radius(i), density)
+                p%inv_mass(i) = 0.0_wp
+                p%inv_inertia(i) = 0.0_wp
+                return
+            end if
+        end if
         if (allocated(p%body)) then
             if (p%body(i) /= 0) then
                 p%mass(i) = p%body_mass(i)
@@ -331,12 +348,21 @@ contains
     end subroutine derive
 
     !> Allocate room for `capacity` particles, every field zero (with `clumps`, the body
-    !> fields too); the store starts empty.
-    subroutine particles_init(p, capacity, clumps)
+    !> fields too; with `fixed`, the fixed flags; with bond_reals > 0, that many rows of
+    !> bond slots); the store starts empty.
+    subroutine particles_init(p, capacity, clumps, fixed, bond_reals)
         type(particles_t), intent(out) :: p  !! the store
         integer(ip), intent(in) :: capacity   !! number of particles it can hold
         logical, intent(in), optional :: clumps  !! the case has clumps (default: none)
+        logical, intent(in), optional :: fixed   !! some particle is fixed (default: none)
+        integer, intent(in), optional :: bond_reals  !! rows of the bonds field (default 0)
         type(resizer_t) :: alloc
+        if (present(fixed)) then
+            if (fixed) allocate(p%fixed(0))
+        end if
+        if (present(bond_reals)) then
+            if (bond_reals > 0) allocate(p%bonds(bond_reals, 0))
+        end if
         if (present(clumps)) then
             if (clumps) allocate(p%body(0), p%body_x(3, 0), p%body_v(3, 0), p%body_q(4, 0), &
                                  p%body_l(3, 0), p%body_inv_i(3, 0), p%body_mass(0), &
@@ -345,6 +371,13 @@ contains
         alloc = resizer_t(n=0, capacity=capacity)
         call particles_fields(p, alloc)
     end subroutine particles_init
+
+    !> The rows of p's bonds field (0: p has none).
+    pure integer function particles_bond_reals(p) result(n)
+        type(particles_t), intent(in) :: p
+        n = 0
+        if (allocated(p%bonds)) n = size(p%bonds, 1)
+    end function particles_bond_reals
 
     !> Room for `need` particles, owned and ghosts (those stored keep their places): the
     !> store grows or shrinks by storage_capacity's rule, so that a rank holds its share.
@@ -383,7 +416,7 @@ contains
     !> Append an owned sphere (there are no ghosts while particles are added); in a store with
     !> body fields, a clump's member when `body` is given (its id, not 0) with its body state
     !> (rows bs_*), else a sphere (body 0).
-    subroutine particles_add(p, gid, mat, radius, density, x, v, w, body, state)
+    subroutine particles_add(p, gid, mat, radius, density, x, v, w, body, state, fixed, bonds)
         type(particles_t), intent(inout) :: p
         integer(i8), intent(in) :: gid          !! global id
         integer(ip), intent(in) :: mat          !! material index
@@ -392,6 +425,10 @@ contains
         real(wp), intent(in) :: x(3), v(3), w(3)  !! position [m], velocity [m/s], [rad/s]
         integer(i8), intent(in), optional :: body
         real(wp), intent(in), optional :: state(body_state_rows)
+        integer(ip), intent(in), optional :: fixed   !! 1: a fixed particle (a store with
+                                                     !! the flags; default 0)
+        real(wp), intent(in), optional :: bonds(:)   !! its bond slots (a store with them;
+                                                     !! default: empty)
         real(wp) :: b(body_state_rows)
         integer(ip) :: i
         i = p%n_own + 1
@@ -399,6 +436,14 @@ contains
         p%gid(i) = gid
         p%mat(i) = mat
         p%radius(i) = radius
+        if (allocated(p%fixed)) then
+            p%fixed(i) = 0
+            if (present(fixed)) p%fixed(i) = fixed
+        end if
+        if (allocated(p%bonds)) then
+            p%bonds(:, i) = 0.0_wp
+            if (present(bonds)) p%bonds(:, i) = bonds
+        end if
         if (allocated(p%body)) then
             p%body(i) = 0
             b = 0.0_wp
@@ -574,7 +619,7 @@ contains
     subroutine resize_vectors(self, a)
         class(resizer_t), intent(inout) :: self
         real(wp), allocatable, intent(inout) :: a(:, :)
-        if (.not. allocated(a)) allocate(a(3, 0))
+        if (.not. allocated(a)) allocate(a(3, 0))     ! (other rows: allocated beforehand)
         call storage_resize(a, self%n, self%capacity)
     end subroutine resize_vectors
 
