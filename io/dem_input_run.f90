@@ -55,9 +55,13 @@ contains
                                     ! default 1.1
         logical :: gpu_aware_mpi    ! in an OpenACC build on several ranks, hand device
                                     ! addresses of the halo buffers to MPI, default false
+        real(wp) :: local_damping   ! Cundall's local damping: each component of a
+                                    ! particle's force and torque less this fraction of its
+                                    ! size against the motion, in [0, 1), default 0 (none;
+                                    ! for quasi-static loading only)
         namelist /run/ dt, t_end, integrator, gravity, expected_speed, skin, allow_unstable, &
             stop_kinetic_energy, max_speed, max_energy, max_overlap, wall_time_limit, &
-            progress_interval, imbalance_limit, gpu_aware_mpi
+            progress_interval, imbalance_limit, gpu_aware_mpi, local_damping
         type(group_io_t) :: io
         character(len=:), allocatable :: at
 
@@ -72,6 +76,7 @@ contains
         stop_kinetic_energy = 0.0_wp
         max_speed = unset
         max_energy = unset
+        local_damping = 0.0_wp
         max_overlap = c%max_overlap
         wall_time_limit = 0.0_wp
         progress_interval = 10.0_wp
@@ -119,6 +124,12 @@ contains
             if (.not. check_positive(at, max_energy, 'max_energy', '[J]', err)) return
             c%max_energy = max_energy
         end if
+        if (.not. in_range(local_damping, 0.0_wp, 1.0_wp, .true., .false.)) then
+            call set_error(err, dem_err_input, at // ": key 'local_damping': must be in " // &
+                           '[0, 1)')
+            return
+        end if
+        c%local_damping = local_damping
         if (.not. in_range(max_overlap, 0.0_wp, 1.0_wp, .false., .true.)) then
             call set_error(err, dem_err_input, at // ": key 'max_overlap': must be in (0, 1]")
             return

@@ -18,6 +18,9 @@ module dem_bond_create
     public :: bond_rule_t, bonds_make, strength_none, strength_weibull, strength_normal
 
     integer, parameter :: strength_none = 0, strength_weibull = 1, strength_normal = 2
+    !> spheres touch to within this share of their radii's sum (the rounding of typed
+    !> positions): such pairs are bonded with gap = 0
+    real(wp), parameter :: touch_tol = 1.0e-9_wp
 
     !> One &bond group: which pairs it bonds and the strengths and stiffness of its bonds.
     type :: bond_rule_t
@@ -177,7 +180,7 @@ contains
                     [(in_rule(i), i = 1, size(gid, kind=ip))])
         m = size(cand, kind=ip)
         if (m < 2) return
-        cell = 2.0_wp * maxval(radius(cand)) + rule%gap
+        cell = 2.0_wp * maxval(radius(cand)) * (1.0_wp + touch_tol) + rule%gap
         origin = minval(x(:, cand), dim=2)
         dims = int((maxval(x(:, cand), dim=2) - origin) / cell, i8) + 1
         allocate(key(m))
@@ -235,7 +238,8 @@ contains
             mj = mat(j)
             if (.not. (matches(rule%mats(1), mi) .and. matches(rule%mats(2), mj) .or. &
                        matches(rule%mats(1), mj) .and. matches(rule%mats(2), mi))) return
-            if (norm2(x(:, j) - x(:, i)) - radius(i) - radius(j) > rule%gap) return
+            if (norm2(x(:, j) - x(:, i)) > (radius(i) + radius(j)) * (1.0_wp + touch_tol) + &
+                rule%gap) return
             if (found == size(na)) then          ! room doubled
                 na = [na, na]
                 nb = [nb, nb]

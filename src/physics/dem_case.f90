@@ -88,6 +88,7 @@ module dem_case
         real(wp) :: max_speed = huge(1.0_wp)          !< instability guard [m/s], huge: not
                                                       !< given (case_speed_bound)
         real(wp) :: max_energy = 0.0_wp               !< energy guard [J], 0: case_energy_bound
+        real(wp) :: local_damping = 0.0_wp            !< Cundall's local damping [-]
         real(wp) :: energy_speed = 0.0_wp             !< its speed (case_energy_speed) [m/s]
         real(wp) :: max_overlap = 0.9_wp              !< overlap guard, of the smaller radius
         real(wp) :: wall_time_limit = 0.0_wp          !< checkpoint and stop before [s], 0: none

@@ -1,12 +1,13 @@
 ! SPDX-License-Identifier: BSD-3-Clause
 !> The forces a coupled fluid sets (doc/theory.md, section 14), added after gravity and the
-!> particle contacts (pp_forces, which start every step's forces from gravity).
+!> particle contacts (pp_forces, which start every step's forces from gravity), and Cundall's
+!> local damping of the forces once all are summed (doc/theory.md, section 18.4).
 module dem_forces
     use dem_kinds, only: wp, ip
     use dem_particles, only: n_ext, ext_force, ext_torque, ext_beta, ext_fluid_v, ext_impulse
     implicit none
     private
-    public :: external_forces
+    public :: external_forces, local_damping
 
 contains
 
@@ -32,4 +33,31 @@ contains
             end do
         end do
     end subroutine external_forces
+
+    !> Cundall's local damping: each component of the owned particles' force and torque less
+    !> alpha times its size, against the component of the velocity (angular velocity), none
+    !> where that is zero: F_j - alpha |F_j| sign(v_j) (Cundall 1987; Potyondy and Cundall
+    !> 2004).
+    subroutine local_damping(n, alpha, v, w, f, t)
+        integer(ip), intent(in) :: n
+        real(wp), intent(in) :: alpha            !! in [0, 1)
+        real(wp), intent(in) :: v(3, n), w(3, n) !! [m/s], [rad/s]
+        real(wp), intent(inout) :: f(3, n), t(3, n)  !! [N], [N m]
+        integer(ip) :: i, j
+        !$acc parallel loop default(present)
+        do i = 1, n
+            do j = 1, 3
+                f(j, i) = f(j, i) - alpha * abs(f(j, i)) * direction(v(j, i))
+                t(j, i) = t(j, i) - alpha * abs(t(j, i)) * direction(w(j, i))
+            end do
+        end do
+    contains
+        pure real(wp) function direction(u)
+            !$acc routine seq
+            real(wp), intent(in) :: u
+            direction = 0.0_wp
+            if (u > 0.0_wp) direction = 1.0_wp
+            if (u < 0.0_wp) direction = -1.0_wp
+        end function direction
+    end subroutine local_damping
 end module dem_forces

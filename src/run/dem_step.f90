@@ -13,7 +13,7 @@ module dem_step
     use dem_run_state, only: solver_t, time_of, failed_anywhere, wall_motion_data, stop_end
     use dem_rebuild, only: lists_refresh, settle_outlets
     use dem_inflow, only: insert_inflow, inflow_to_come, inflow_particles
-    use dem_forces, only: external_forces
+    use dem_forces, only: external_forces, local_damping
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: pw_forces
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, kick_drift
@@ -84,9 +84,12 @@ contains
         if (allocated(s%p%ext)) call external_forces(s%p%n_own, c%dt, s%p%v, s%p%ext, s%p%f, &
                                                      s%p%t)
         call timer_stop(s%timers, phase_contacts_pp)
-        if (s%mesh%n_tri == 0) return
-        call wall_contacts(s, c, err)
-        call timer_stop(s%timers, phase_contacts_pw)
+        if (s%mesh%n_tri > 0) then
+            call wall_contacts(s, c, err)
+            call timer_stop(s%timers, phase_contacts_pw)
+        end if
+        if (c%local_damping > 0.0_wp) call local_damping(s%p%n_own, c%local_damping, s%p%v, &
+                                                         s%p%w, s%p%f, s%p%t)
     end subroutine forces
 
     !> Velocity Verlet's first half: v += F dt / 2m, then x += v dt.
