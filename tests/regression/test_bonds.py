@@ -21,8 +21,12 @@ neighbours, the contact law off while bonded, dt = 1 us.
    the bond breaks in shear when k_s A v t reaches tau_c A, at t = tau_c / (k_s v) (within a
    step), and not before.
 5. A compression wave along a free chain of 101 spheres whose first is driven at 1 mm/s: its
-   front (where the spheres have half the driver's speed) travels at L sqrt(k_n A / m) (the long-wave speed of a chain of masses m and springs k_n A, L
-   apart; within 3 %).
+   front (where the spheres have half the driver's speed) travels at L sqrt(k_n A / m) (the
+   long-wave speed of a chain of masses m and springs k_n A, L apart; within 3 %).
+6. An agglomerate (a ball of spheres on a face-centred cubic lattice, each bonded to its
+   touching neighbours, Weibull strengths, the contact law on) hitting a rigid plane at
+   2 m/s and breaking: the same bits (final.csv, series.csv with its bond columns) on 1, 2, 3
+   and 4 ranks, and from a checkpoint written on 2 ranks halfway and continued on 3.
 usage: test_bonds.py DEM WORKDIR MPIEXEC"""
 import math
 import os
@@ -199,4 +203,60 @@ arrive = [p["time"][np.argmax(p[f"s{k}_vx"] > 0.5 * VW)] for k in (20, 80)]
 c_wave = 60 * L / (arrive[1] - arrive[0])
 check_close(c_wave, L * math.sqrt(KN / M), 0.03, "wave: speed of the front")
 print(f"wave speed {c_wave:.6f} m/s, L sqrt(k/m) = {L * math.sqrt(KN / M):.6f} m/s")
+
+# 6. the agglomerate on 1-4 ranks, and restarted
+a = math.sqrt(2.0) * R                      # FCC: nearest neighbours 2R apart
+RB = 6.0 * R
+pts = [(i * a, j * a, k * a) for i in range(-6, 7) for j in range(-6, 7) for k in range(-6, 7)
+       if (i + j + k) % 2 == 0 and math.sqrt(i * i + j * j + k * k) * a <= RB]
+z0 = RB + 1.5 * R
+agg = "\n".join(f"&particle id = {n + 1}, material = 'm', radius = {R}, position = {x!r}, "
+                 f"{y!r}, {z + z0!r}, velocity = 0, 0, -2.0 /" for n, (x, y, z) in enumerate(pts))
+T_AGG = 2.0e-3
+
+
+def agglomerate(name, t_end):
+    text = case(t_end, 1.0e-4, agg, ", tensile_strength = 2.0e5, shear_strength = 2.0e5, "
+                "strength_distribution = 'weibull', strength_spread = 5, seed = 7",
+                "&material name = 'rigid', rigid = .true. /\n&pair materials = 'm', 'rigid', "
+                "restitution = 0.5, friction = 0.3 /\n&wall_plane material = 'rigid', "
+                "point = 0, 0, 0, normal = 0, 0, 1, half_width = 0.05 /",
+                f", checkpoint_interval = {T_AGG / 2!r}")
+    text = text.replace("contact = .false.", "contact = .true., damping = 0.1")
+    with open(os.path.join(work, name + ".nml"), "w") as f:
+        f.write(text.replace("out_NAME", "out_" + name))
+    return name + ".nml"
+
+
+def on(ranks, *args):
+    r = subprocess.run([mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(ranks),
+                        dem, *args], cwd=work, capture_output=True, text=True, timeout=900)
+    if r.returncode != 0:
+        print(r.stdout, r.stderr)
+    check(r.returncode == 0, f"{' '.join(args)} on {ranks} ranks: exit {r.returncode}")
+
+
+def same(a, b, what):
+    with open(os.path.join(work, a), "rb") as fa, open(os.path.join(work, b), "rb") as fb:
+        check(fa.read() == fb.read(), f"{what}: {b} is {a}")
+
+
+for ranks in (1, 2, 3, 4):
+    on(ranks, agglomerate(f"agg{ranks}", T_AGG))
+s = np.genfromtxt(os.path.join(work, "out_agg1", "series.csv"), delimiter=",", names=True)
+check(s["bonds"][0] > 4 * len(pts) and 0 < s["bonds_broken"][-1] < s["bonds"][0],
+      f"agglomerate: {len(pts)} spheres, {s['bonds'][0]:.0f} bonds, "
+      f"{s['bonds_broken'][-1]:.0f} broken")
+print(f"agglomerate: {len(pts)} spheres, {s['bonds'][0]:.0f} bonds, "
+      f"{s['bonds_broken'][-1]:.0f} broken")
+for ranks in (2, 3, 4):
+    for out in ("final.csv", "series.csv"):
+        same(f"out_agg1/{out}", f"out_agg{ranks}/{out}", f"{ranks} ranks")
+on(2, agglomerate("aggr", T_AGG / 2))
+agglomerate("aggr", T_AGG)
+half = int(round(T_AGG / 2 / DT))
+on(3, "--restart", os.path.join("out_aggr", "checkpoints", f"checkpoint_{half:012d}.h5"),
+   "aggr.nml")
+for out in ("final.csv", "series.csv"):
+    same(f"out_agg1/{out}", f"out_aggr/{out}", "restarted on 3 ranks from 2")
 finish()
