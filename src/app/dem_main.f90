@@ -10,6 +10,7 @@ program dem_main
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
                    solver_particles, solver_particle_steps, solver_parallel_stats, i8
     use dem_case, only: case_memory_mib
+    use dem_contact_store, only: bond_rows
     use dem_comm, only: comm_t, comm_init, comm_free, comm_max, comm_any
     use dem_error, only: set_error, dem_err_stopped
     use dem_acc, only: acc_traffic
@@ -201,6 +202,8 @@ contains
         write(output_unit, '(a,i0,a,i0,a)') '  particles            ', c%n_particles, &
             ' (wall triangles ', c%mesh%n_tri, ')'
         if (c%has_clumps) call print_clumps(c)
+        if (c%n_bonds > 0) write(output_unit, '(a,i0,a,i0,a)') '  bonds                ', &
+            c%n_bonds, ' (at most ', c%bond_reals / bond_rows, ' per particle; &bond)'
         write(output_unit, '(a,es12.5,a)') '  total mass           ', c%summary%mass, ' kg'
         do k = 1, 3
             if (.not. c%periodic%axis(k)) cycle

@@ -15,7 +15,7 @@ module dem_bonds
                                  br_fn, br_fs, br_mt, br_mb, br_normal
     implicit none
     private
-    public :: bond_model_t, bond_forces, bond_totals, bond_energy
+    public :: bond_model_t, bond_forces, bond_totals, bond_energy, bond_step_limit
 
     real(wp), parameter :: pi = acos(-1.0_wp)
 
@@ -227,4 +227,40 @@ contains
             end do
         end do
     end subroutine bond_totals
+
+    !> The step limit of the bonds of particles 1..n (doc/theory.md, section 18.3): the
+    !> smallest of sqrt(m / k_t) and sqrt(I / k_r) over the particles, k_t the sum of their
+    !> bonds' normal and shear stiffnesses k_n A + k_s A, k_r that of their bending, twisting
+    !> and shear-at-the-lever stiffnesses k_n I + k_s J + k_s A R^2 (Itasca's estimate for
+    !> PFC), with the bond's radius from the particle's own radius (at least the bond's) and
+    !> I = 2/5 m R^2; huge without bonds.
+    pure real(wp) function bond_step_limit(n, n_slots, nm, radius, mass, bonds, radius_ratio, &
+                                           shear_ratio) result(dt)
+        integer(ip), intent(in) :: n
+        integer, intent(in) :: n_slots, nm
+        real(wp), intent(in) :: radius(n), mass(n)
+        real(wp), intent(in) :: bonds(bond_rows, n_slots, n)
+        real(wp), intent(in) :: radius_ratio(nm), shear_ratio(nm)
+        real(wp) :: kt, kr, rb, area, inertia, kn, ks
+        integer(ip) :: i
+        integer :: k, m
+        dt = huge(1.0_wp)
+        do i = 1, n
+            kt = 0.0_wp
+            kr = 0.0_wp
+            do k = 1, n_slots
+                if (bonds(br_partner, k, i) == 0.0_wp) cycle
+                m = nint(bonds(br_model, k, i))
+                rb = radius_ratio(m) * radius(i)
+                area = pi * rb**2
+                inertia = 0.25_wp * pi * rb**4
+                kn = bonds(br_kn, k, i)
+                ks = shear_ratio(m) * kn
+                kt = kt + (kn + ks) * area
+                kr = kr + kn * inertia + 2.0_wp * ks * inertia + ks * area * radius(i)**2
+            end do
+            if (kt > 0.0_wp) dt = min(dt, sqrt(mass(i) / kt), &
+                                      sqrt(0.4_wp * mass(i) * radius(i)**2 / kr))
+        end do
+    end function bond_step_limit
 end module dem_bonds

@@ -129,6 +129,7 @@ module dem_case
         integer :: bond_reals = 0                     !< rows of a particle's bond slots
                                                       !< (bond_rows per slot; 0: no bonds)
         real(wp), allocatable :: bonds(:, :)          !< (bond_reals, held)
+        real(wp) :: bond_dt = huge(1.0_wp)            !< the bonds' step limit [s], all ranks
         type(mesh_t) :: mesh
         type(periodic_t) :: periodic                  !< the periodic axes (&periodic)
         character(len=256) :: periodic_at(3) = ''     !< the place of each axis's group
@@ -395,6 +396,12 @@ contains
             ts%bound_name = 'the Rayleigh time of the smallest particle'
         else
             ts%bound_name = 'the step limit of the stiffest contact at the expected speed'
+        end if
+        if (c%bond_dt < ts%bound) then           ! (the bonds' bound holds loaded or not)
+            ts%bound = c%bond_dt
+            ts%packed = c%bond_dt
+            ts%bound_name = 'the step limit of the bonds, sqrt(m / k) of the most bonded ' // &
+                            'particle'
         end if
     contains
         !> Contact time and step limits of material pair (a_, b_).

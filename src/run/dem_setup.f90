@@ -19,7 +19,8 @@ module dem_setup
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_periodic, only: with_images
     use dem_clumps, only: clump_members, clump_t, clumps_in_spheres
-    use dem_particles, only: body_state_rows
+    use dem_particles, only: body_state_rows, sphere_mass
+    use dem_bonds, only: bond_step_limit
     use dem_bond_create, only: bonds_make
     use dem_contact_store, only: bond_rows
     implicit none
@@ -266,6 +267,7 @@ contains
         type(error_t), intent(inout) :: err
         character(len=:), allocatable :: message
         integer :: n_slots
+        real(wp) :: limit(1)
         associate (n => c%n_held)
             call bonds_make(c%bond_rules, comm, c%gid(1:n), c%mat(1:n), c%radius(1:n), &
                             c%x(:, 1:n), c%body, n_slots, c%bonds, c%n_bonds, message)
@@ -275,6 +277,13 @@ contains
             return
         end if
         c%bond_reals = bond_rows * n_slots
+        associate (n => c%n_held, m => c%bond_models)
+            limit = -bond_step_limit(n, n_slots, size(m%damping), c%radius(1:n), &
+                                     sphere_mass(c%radius(1:n), c%mats%density(c%mat(1:n))), &
+                                     c%bonds, m%radius_ratio, m%shear_ratio)
+        end associate
+        call comm_max(comm, limit)
+        c%bond_dt = -limit(1)
     end subroutine place_bonds
 
     !> Keep of all the case's particles (held here) every ranks-th from rank + 1 on.
