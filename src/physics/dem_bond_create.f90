@@ -114,8 +114,9 @@ contains
         n_bonds = k
         do r = 1, size(rules)
             if (count(pr(1:k) == r) > 0) cycle
-            message = rules(r)%at // ': bonds no pair (no two particles of its materials ' // &
-                      'and region are within its gap, or an earlier group bonds them all)'
+            message = rules(r)%at // ": key 'gap': no pair to bond (no two particles of " // &
+                      'its materials and region are this close, or an earlier &bond bonds ' // &
+                      'them all)'
             return
         end do
         n_slots = 0

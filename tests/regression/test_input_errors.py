@@ -515,6 +515,41 @@ bad("clump_mass_alone", GOOD + CT.replace("/", ", mass = 1e-3 /") + CL, "clump_t
 bad("clump_template_twice", GOOD + CT + CT + CL, "clump_template", "name")
 bad("clump_rigid", GOOD + "&material name = 'wall', rigid = .true. /\n"
     + CT.replace("'glass'", "'wall'") + CL, "clump_template", "material", "rigid")
+# bonds (&bond), fixed particles, local damping
+PAIR2 = ("&particle id = 2, material = 'glass', radius = 0.01, position = 0.02, 0, 0.011 /\n"
+         "&particle id = 3, material = 'glass', radius = 0.01, position = 0.1, 0, 0.011 /\n")
+BOND = "&bond modulus = 1e8 /\n"
+with open(os.path.join(work, "good_bond.nml"), "w") as f:
+    f.write(GOOD + PAIR2 + BOND)
+r, d = run(["--check", os.path.join(work, "good_bond.nml")], "good_bond")
+check(r.returncode == 0 and "bonds                1 " in r.stdout,
+      f"good bond: --check failed or does not print the bond: {r.stderr} {r.stdout}")
+with open(os.path.join(work, "pairs_bad.csv"), "w") as f:
+    f.write("id1,id2\n1,2\n1,7\n")
+with open(os.path.join(work, "pairs_text.csv"), "w") as f:
+    f.write("1,2\none,two\n")
+bad("bond_modulus", GOOD + PAIR2 + "&bond /\n", "bond", "modulus")
+bad("bond_material", GOOD + PAIR2 + BOND.replace("/", ", materials = 'glass', 'sand' /"),
+    "bond", "materials", "not a defined material")
+bad("bond_radius_ratio", GOOD + PAIR2 + BOND.replace("/", ", radius_ratio = 1.5 /"), "bond",
+    "radius_ratio")
+bad("bond_distribution", GOOD + PAIR2 + BOND.replace("/", ", strength_distribution = 'gauss' /"),
+    "bond", "strength_distribution")
+bad("bond_spread", GOOD + PAIR2 + BOND.replace("/", ", tensile_strength = 1e5, "
+    "strength_distribution = 'weibull' /"), "bond", "strength_spread")
+bad("bond_region", GOOD + PAIR2 + BOND.replace("/", ", region_min = 0, 0, 0 /"), "bond",
+    "region_max")
+bad("bond_no_pair", GOOD + BOND, "bond", "gap", "no pair to bond")
+bad("bond_file_missing", GOOD + PAIR2 + BOND.replace("/", ", file = 'none.csv' /"), "bond",
+    "file", "none.csv")
+bad("bond_file_id", GOOD + PAIR2 + BOND.replace("/", ", file = 'pairs_bad.csv' /"), "bond",
+    "file", "names no particle")
+bad("bond_file_text", GOOD + PAIR2 + BOND.replace("/", ", file = 'pairs_text.csv' /"), "bond",
+    "file", "pairs_text.csv:2")
+bad("bond_file_and_gap", GOOD + PAIR2 + BOND.replace("/", ", file = 'pairs_bad.csv', "
+    "gap = 0.001 /"), "bond", "file")
+bad("run_local_damping", GOOD.replace("gravity = 0, 0, 0 /", "gravity = 0, 0, 0, "
+    "local_damping = 1.0 /"), "run", "local_damping")
 
 check_bad_cases()
 finish()
