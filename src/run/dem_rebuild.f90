@@ -7,7 +7,7 @@
 module dem_rebuild
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
-    use dem_comm, only: comm_any, comm_max, comm_sum
+    use dem_comm, only: comm_any, comm_max, comm_sum, comm_allgather
     use dem_case, only: case_t
     use dem_run_state, only: solver_t, release_gone, particle_data
     use dem_particles, only: particles_permute, particles_find, particles_add, &
@@ -19,7 +19,8 @@ module dem_rebuild
                              neighbors_row_history, neighbors_history_counts, &
                              neighbors_append_rows, neighbors_empty_rows
     use dem_contact_store, only: store_walls_permute, store_pairs_forget_parted, &
-                                 store_walls_reserve_on_device, bond_rows, store_bond_partners
+                                 store_walls_reserve_on_device, bond_rows, store_bond_partners, &
+                                 store_bonds_forget
     use dem_cells, only: kept_indices, gather_items
     use dem_storage, only: fill_range
     use dem_periodic, only: periodic_wrap, periodic_wrap_bodies
@@ -58,8 +59,8 @@ contains
         logical :: stale
         if (s%dom%pb%on) call periodic_wrap(s%dom%pb, s%p%n_own, .false., s%p%x)
         call neighbors_check(s%nb, s%p%n_own, s%p%x, s%mesh, stale)
-        stale = stale .or. s%bond_broke           ! (its pair may touch now)
-        s%bond_broke = .false.
+        stale = stale .or. s%lists_due
+        s%lists_due = .false.
         if (s%comm%size > 1) stale = comm_any(s%comm, stale)
         if (stale) then
             call rebuild(s, s%parked > 0, err)
@@ -131,6 +132,7 @@ contains
         if (.not. s%pc%opts%reset_pair_history .and. s%lists_on_device) &
             call store_pairs_forget_parted(s%cs, s%nb%n_pairs)
         if (present(added)) call add_particles(s, added)
+        if (outlets .and. allocated(s%p%bonds)) call unbond_parked(s)
         replay = allocated(s%p%x_built)          ! a restart's first build: that of the run
         if (replay) call build_pose(s, pose)     ! before it, at its positions and walls
         if (s%dom%pb%on .and. .not. replay) then
@@ -216,6 +218,21 @@ contains
             'partner is beyond the ghosts of its rank: the bond stretched further than the ' // &
             'skin allows (give a larger &run skin)')
     end subroutine bond_partners
+
+    !> The bonds to the parked particles, of all ranks, taken out of the owned particles'
+    !> slots (dem_contact_store): they leave with their particles. Collective.
+    subroutine unbond_parked(s)
+        type(solver_t), intent(inout) :: s
+        integer(i8), allocatable :: gone(:)
+        integer(ip) :: n
+        n = s%p%n_own
+        call acc_data(s%gone, acc_to_host)
+        call acc_data(s%p%gid(1:n), acc_to_host)
+        call acc_data(s%p%bonds(:, 1:n), acc_to_host)
+        call comm_allgather(s%comm, pack(s%p%gid(1:n), s%gone(1:n)), gone)
+        call store_bonds_forget(n, size(s%p%bonds, 1) / bond_rows, s%p%bonds, gone)
+        call acc_data(s%p%bonds(:, 1:n), acc_to_device)
+    end subroutine unbond_parked
 
     !> Whether a build re-sorts the particles (neighbors_spatial_order): at the first build of
     !> a run, when particles join or an outlet removes some, and else once sort_interval

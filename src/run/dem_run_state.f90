@@ -62,7 +62,8 @@ module dem_run_state
         type(bond_model_t) :: bm       !< the models of the case's bonds (none: unallocated)
         integer(ip), allocatable :: bond_partner(:, :)  !< the partner of each bond slot of the
                                        !< owned particles (made at each list build)
-        logical :: bond_broke = .false.  !< a bond broke since the last list build
+        logical :: lists_due = .false.  !< rebuild the lists at the next step: a bond broke
+                                        !< whose pair may touch, or a bonded particle left
         type(neighbors_t) :: nb
         type(contact_store_t) :: cs   !< the contacts' history
         type(contact_model_t) :: pc   !< the contact model

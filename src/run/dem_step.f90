@@ -186,7 +186,7 @@ contains
                              size(m%damping), p%gid, p%x, p%v, p%w, p%radius, p%mass, &
                              s%bond_partner, m%radius_ratio, m%shear_ratio, m%damping, c%dt, &
                              p%bonds, p%f, p%t, n_broken)
-            if (n_broken > 0 .and. .not. all(m%contact)) s%bond_broke = .true.
+            if (n_broken > 0 .and. .not. all(m%contact)) s%lists_due = .true.
         end associate
     end subroutine bond_loads
 
@@ -275,6 +275,8 @@ contains
                 end if
             end if
             call particles_park(n, s%fresh, p%gid, p%x, p%v, p%w, p%inv_mass, p%inv_inertia)
+            if (allocated(p%bonds)) s%lists_due = .true.    ! (their bonds go before the next
+                                                            ! forces: dem_rebuild)
             call neighbors_moved(s%nb, n, s%fresh, p%x)
             if (allocated(p%body)) call clump_index_build(s%bodies, n, p%gid, p%body, s%gone)
         end associate

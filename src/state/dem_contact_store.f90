@@ -31,7 +31,7 @@ module dem_contact_store
               carry_history, history_counts, history_fill, entry_slot, entry_history, &
               sort_history_row, store_history_widths, max_pair_history, n_wall_columns, &
               bond_rows, br_partner, br_model, br_kn, br_sigma, br_tau, br_fn, br_fs, br_mt, &
-              br_mb, br_normal, store_bond_partners, bonded_without_contact
+              br_mb, br_normal, store_bond_partners, bonded_without_contact, store_bonds_forget
 
     integer, parameter :: max_pair_history = 6   !< the most reals per contact
     !> reals per particle pair: xi [m], then the rolling spring's torque [N m] with EPSD2
@@ -134,6 +134,44 @@ contains
             end do
         end do
     end subroutine store_bond_partners
+
+    !> The bond slots of particles 1..n whose partner is one of the particles `ids` emptied.
+    subroutine store_bonds_forget(n, n_slots, bonds, ids)
+        integer(ip), intent(in) :: n
+        integer, intent(in) :: n_slots
+        real(wp), intent(inout) :: bonds(bond_rows, n_slots, n)
+        integer(i8), intent(in) :: ids(:)
+        integer(i8), allocatable :: sorted(:)
+        integer(ip) :: i
+        integer :: k
+        if (size(ids) == 0) return
+        sorted = ids(order_by_id(ids))
+        do i = 1, n
+            do k = 1, n_slots
+                if (bonds(br_partner, k, i) == 0.0_wp) cycle
+                if (found(int(bonds(br_partner, k, i), i8))) bonds(:, k, i) = 0.0_wp
+            end do
+        end do
+    contains
+        logical function found(id)
+            integer(i8), intent(in) :: id
+            integer(ip) :: lo, hi, mid
+            lo = 1
+            hi = size(sorted, kind=ip)
+            found = .false.
+            do while (lo <= hi)
+                mid = (lo + hi) / 2
+                if (sorted(mid) == id) then
+                    found = .true.
+                    return
+                else if (sorted(mid) < id) then
+                    lo = mid + 1
+                else
+                    hi = mid - 1
+                end if
+            end do
+        end function found
+    end subroutine store_bonds_forget
 
     !> Whether a particle whose bond slots are `slots` is bonded to particle `id` by a bond
     !> whose model leaves the contact law out (contact(model) false).

@@ -27,6 +27,9 @@ neighbours, the contact law off while bonded, dt = 1 us.
    touching neighbours, Weibull strengths, the contact law on) hitting a rigid plane at
    2 m/s and breaking: the same bits (final.csv, series.csv with its bond columns) on 1, 2, 3
    and 4 ranks, and from a checkpoint written on 2 ranks halfway and continued on 3.
+7. A vertical bonded chain falling through an outlet: the bonds of the spheres that leave go
+   with them, and the rest of the chain falls freely on (its top sphere where symplectic
+   Euler puts a free fall, to 1e-12), the same bits on 1 and 2 ranks.
 usage: test_bonds.py DEM WORKDIR MPIEXEC"""
 import math
 import os
@@ -259,4 +262,25 @@ on(3, "--restart", os.path.join("out_aggr", "checkpoints", f"checkpoint_{half:01
    "aggr.nml")
 for out in ("final.csv", "series.csv"):
     same(f"out_agg1/{out}", f"out_aggr/{out}", "restarted on 3 ranks from 2")
+
+# 7. the chain through an outlet
+NC, Z0, T_FALL = 10, 0.005, 0.04
+chain = "\n".join(f"&particle id = {k + 1}, material = 'm', radius = {R}, position = 0, 0, "
+                   f"{Z0 + k * L!r} /" for k in range(NC))
+for ranks in (1, 2):
+    with open(os.path.join(work, f"fall{ranks}.nml"), "w") as f:
+        f.write(case(T_FALL, 1.0e-3, chain + f"\n&probe name = 'top', kind = 'track', "
+                     f"id = {NC} /\n&outlet region = 'plane', point = 0, 0, 0, "
+                     "normal = 0, 0, -1 /").replace("out_NAME", f"out_fall{ranks}"))
+    on(ranks, f"fall{ranks}.nml")
+s = np.genfromtxt(os.path.join(work, "out_fall1", "series.csv"), delimiter=",", names=True)
+p = np.genfromtxt(os.path.join(work, "out_fall1", "probes.csv"), delimiter=",", names=True)
+n_steps = int(round(T_FALL / DT))
+z_top = Z0 + (NC - 1) * L - G * DT**2 * n_steps * (n_steps + 1) / 2     # symplectic Euler
+check(s["particles"][-1] < NC and s["bonds"][-1] == s["particles"][-1] - 1,
+      f"fall: {s['particles'][-1]:.0f} spheres left, {s['bonds'][-1]:.0f} bonds")
+check(abs(p["top_z"][-1] - z_top) <= 1e-12 * abs(z_top) + 1e-15, f"fall: the top sphere at "
+      f"{p['top_z'][-1]!r}, free fall {z_top!r}")
+for out in ("final.csv", "series.csv"):
+    same(f"out_fall1/{out}", f"out_fall2/{out}", "fall on 2 ranks")
 finish()
