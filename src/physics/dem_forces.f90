@@ -34,18 +34,21 @@ contains
         end do
     end subroutine external_forces
 
-    !> Cundall's local damping: each component of the owned particles' force and torque less
+    !> Cundall's local damping: each component of the owned spheres' force and torque less
     !> alpha times its size, against the component of the velocity (angular velocity), none
     !> where that is zero: F_j - alpha |F_j| sign(v_j) (Cundall 1987; Potyondy and Cundall
-    !> 2004).
-    subroutine local_damping(n, alpha, v, w, f, t)
+    !> 2004). Not of the particles that no force moves (inverse mass 0: clumps' members,
+    !> whose forces are only a part of their body's, and fixed particles).
+    subroutine local_damping(n, alpha, v, w, inv_mass, f, t)
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: alpha            !! in [0, 1)
         real(wp), intent(in) :: v(3, n), w(3, n) !! [m/s], [rad/s]
+        real(wp), intent(in) :: inv_mass(n)      !! [1/kg]
         real(wp), intent(inout) :: f(3, n), t(3, n)  !! [N], [N m]
         integer(ip) :: i, j
         !$acc parallel loop default(present)
         do i = 1, n
+            if (inv_mass(i) == 0.0_wp) cycle
             do j = 1, 3
                 f(j, i) = f(j, i) - alpha * abs(f(j, i)) * direction(v(j, i))
                 t(j, i) = t(j, i) - alpha * abs(t(j, i)) * direction(w(j, i))

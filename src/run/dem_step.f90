@@ -89,7 +89,7 @@ contains
             call timer_stop(s%timers, phase_contacts_pw)
         end if
         if (c%local_damping > 0.0_wp) call local_damping(s%p%n_own, c%local_damping, s%p%v, &
-                                                         s%p%w, s%p%f, s%p%t)
+                                                         s%p%w, s%p%inv_mass, s%p%f, s%p%t)
     end subroutine forces
 
     !> Velocity Verlet's first half: v += F dt / 2m, then x += v dt.

@@ -30,6 +30,8 @@ neighbours, the contact law off while bonded, dt = 1 us.
 7. A vertical bonded chain falling through an outlet: the bonds of the spheres that leave go
    with them, and the rest of the chain falls freely on (its top sphere where symplectic
    Euler puts a free fall, to 1e-12), the same bits on 1 and 2 ranks.
+8. A clump (two spheres) hanging by a bond from a fixed sphere comes to rest with the bond
+   stretched by its weight over k_n A (within 1 %).
 usage: test_bonds.py DEM WORKDIR MPIEXEC"""
 import math
 import os
@@ -283,4 +285,13 @@ check(abs(p["top_z"][-1] - z_top) <= 1e-12 * abs(z_top) + 1e-15, f"fall: the top
       f"{p['top_z'][-1]!r}, free fall {z_top!r}")
 for out in ("final.csv", "series.csv"):
     same(f"out_fall1/{out}", f"out_fall2/{out}", "fall on 2 ranks")
+
+# 8. the hanging clump
+out = run("hang", case(0.05, 1.0e-3, line(1) + f"""
+&clump_template name = 'd', material = 'm', members = 0, 0, 0, {R},  0, 0, {-L}, {R} /
+&clump template = 'd', position = 0, 0, {-L} /
+&probe name = 'c', kind = 'track', id = 2 /""", ", damping = 1.0"))
+p = tip_track(out)
+stretch = -(p["c_z"][-1] + 1.5 * L)         # the clump's centre of mass 1.5 L below sphere 0
+check_close(stretch, 2 * M * G / KN, 0.01, "hang: the bond's stretch under the clump")
 finish()
