@@ -165,7 +165,8 @@ contains
         end associate
     end subroutine write_trace
 
-    !> A snapshot of the state now, and the XDMF index updated.
+    !> A snapshot of the state now (in a case with bonds with its intact bonds, and with the
+    !> fragments when asked: dem_bond_graph), and the XDMF index updated.
     subroutine write_snapshot(s, c, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
