@@ -58,7 +58,8 @@ module dem_checkpoint
 
 contains
 
-    !> Write a snapshot (checkpoint false; force and contacts if allocated) or a checkpoint
+    !> Write a snapshot (checkpoint false; force, contacts, fragments and bonds if allocated:
+    !> /bonds/pairs and /bonds/stress_ratio, dem_bond_graph) or a checkpoint
     !> of frame `fr` of case `c`, with the walls in pose `mesh`, to `path`, atomically.
     subroutine frame_write(fr, c, mesh, path, checkpoint, comm, err)
         type(frame_t), intent(inout) :: fr
@@ -97,6 +98,13 @@ contains
         err = writer%err
         if (allocated(fr%contacts)) call h5_write(h, '/particles/contacts', fr%contacts, err, &
                                                   distributed=.true.)
+        if (allocated(fr%fragment)) call h5_write(h, '/particles/fragment', fr%fragment, err, &
+                                                  distributed=.true.)
+        if (allocated(fr%bond_pair)) then
+            call h5_group(h, '/bonds', err)
+            call h5_write(h, '/bonds/pairs', fr%bond_pair, err, distributed=.true.)
+            call h5_write(h, '/bonds/stress_ratio', fr%bond_ratio, err, distributed=.true.)
+        end if
         call h5_group(h, '/walls', err)
         call h5_write(h, '/walls/vertices', corners(mesh, .false.), err)
         call h5_write(h, '/walls/triangles', reshape([(k, k = 0, 3 * mesh%n_tri - 1)], &
@@ -135,6 +143,7 @@ contains
             call h5_write(h_, '/state/snapshot_step', fr%snap_step, err)
             call h5_write(h_, '/state/snapshot_time', fr%snap_time, err)
             call h5_write(h_, '/state/snapshot_particles', fr%snap_n, err)
+            if (c%bond_reals > 0) call h5_write(h_, '/state/snapshot_bonds', fr%snap_bonds, err)
             call h5_write(h_, '/state/checkpoint_step', fr%ckpt_step, err)
             if (allocated(fr%inflow_count)) then
                 call h5_write(h_, '/state/next_id', fr%next_id, err)
@@ -325,6 +334,12 @@ contains
         call read_i8_list('/state/snapshot_step', fr%snap_step)
         call read_i8_list('/state/snapshot_particles', fr%snap_n)
         call read_i8_list('/state/checkpoint_step', fr%ckpt_step)
+        if (.not. err%failed() .and. h5_exists(h, '/state/snapshot_bonds')) then
+            call read_i8_list('/state/snapshot_bonds', fr%snap_bonds)
+        else
+            allocate(fr%snap_bonds(size(fr%snap_n)))
+            fr%snap_bonds = 0
+        end if
         call h5_dims(h, '/state/snapshot_time', dims, err, 1)
         if (.not. err%failed()) then
             allocate(fr%snap_time(dims(1)))
@@ -351,7 +366,7 @@ contains
             else if (fr%step < 0 .or. fr%step0 < 0 .or. fr%step0 > fr%step .or. &
                      .not. (fr%dt > 0.0_wp .and. fr%dt < huge(1.0_wp)) .or. &
                      .not. (fr%time >= 0.0_wp .and. fr%time < huge(1.0_wp)) .or. &
-                     fr%removed < 0) then
+                     fr%removed < 0 .or. size(fr%snap_bonds) /= size(fr%snap_step)) then
                 call set_error(err, dem_err_input, path // ': the run state (step, time, ' // &
                                'dt) is not consistent (damaged file?)')
             end if

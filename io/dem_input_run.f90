@@ -160,12 +160,14 @@ contains
         real(wp) :: snapshot_interval    ! HDF5 snapshots [s], >= 0 (0: none), default t_end/10
         logical :: snapshot_force        ! snapshots hold the force on each particle, default F
         logical :: snapshot_contacts     ! and its number of contacts, default F
+        logical :: snapshot_fragments    ! and its fragment (the smallest id of the bonded
+                                         ! body it is part of), default F
         real(wp) :: checkpoint_interval  ! checkpoints [s], >= 0, default 0 (only at the end
                                          ! and when a run is stopped)
         integer :: checkpoint_keep       ! checkpoints kept, >= 1, default 2
         logical :: overwrite             ! a fresh run replaces another run's outputs, default F
         namelist /output/ dir, interval, trace_id, snapshot_interval, snapshot_force, &
-            snapshot_contacts, checkpoint_interval, checkpoint_keep, overwrite
+            snapshot_contacts, snapshot_fragments, checkpoint_interval, checkpoint_keep, overwrite
         type(group_io_t) :: io
         character(len=:), allocatable :: at
 
@@ -175,6 +177,7 @@ contains
         snapshot_interval = c%t_end / 10.0_wp
         snapshot_force = .false.
         snapshot_contacts = .false.
+        snapshot_fragments = .false.
         checkpoint_interval = 0.0_wp
         checkpoint_keep = 2
         overwrite = .false.
@@ -216,6 +219,7 @@ contains
         c%snapshot_interval = snapshot_interval
         c%snapshot_force = snapshot_force
         c%snapshot_contacts = snapshot_contacts
+        c%snapshot_fragments = snapshot_fragments
         c%checkpoint_interval = checkpoint_interval
         c%checkpoint_keep = checkpoint_keep
         c%output_overwrite = overwrite

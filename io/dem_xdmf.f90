@@ -1,8 +1,9 @@
 ! SPDX-License-Identifier: BSD-3-Clause
 !> The XDMF index of the snapshots (doc/user/output.md): one XML file that ParaView opens
 !> directly, a time series whose every step holds the particles (points carrying radius,
-!> velocity and the other fields, to be drawn with a sphere glyph scaled by radius) and the
-!> walls (a triangle surface), read from the snapshot files. It is rewritten whole after
+!> velocity and the other fields, to be drawn with a sphere glyph scaled by radius), the
+!> walls (a triangle surface) and the intact bonds (lines between the particles' centres,
+!> carrying their stress ratio), read from the snapshot files. It is rewritten whole after
 !> each snapshot, under a temporary name then renamed.
 module dem_xdmf
     use dem_kinds, only: wp, ip, i8
@@ -23,16 +24,18 @@ contains
     end function snapshot_file
 
     !> Write `path` for the snapshots of steps `step` at times `time` holding `n` particles
-    !> each, with `n_tri` wall triangles; `force`, `contacts` and `clumps` say whether the
+    !> and `bonds` intact bonds each (a step without bonds has no bonds grid), with `n_tri`
+    !> wall triangles; `force`, `contacts`, `clumps` and `fragments` say whether the
     !> snapshots hold those fields (clumps: each particle's body and its orientation);
     !> `names` are the materials, whose indices the `material` attributes hold (an
     !> Information element of the domain lists them: "1 name; 2 name; ...").
-    subroutine xdmf_write(path, step, time, n, n_tri, force, contacts, clumps, names, err)
+    subroutine xdmf_write(path, step, time, n, bonds, n_tri, force, contacts, clumps, &
+                          fragments, names, err)
         character(len=*), intent(in) :: path, names(:)
-        integer(i8), intent(in) :: step(:), n(:)
+        integer(i8), intent(in) :: step(:), n(:), bonds(:)
         real(wp), intent(in) :: time(:)
         integer(ip), intent(in) :: n_tri
-        logical, intent(in) :: force, contacts, clumps
+        logical, intent(in) :: force, contacts, clumps, fragments
         type(error_t), intent(inout) :: err
         integer :: u, ios, k
         character(len=:), allocatable :: h5, table
@@ -57,10 +60,8 @@ contains
             write(u, '(a,es24.16e3,a)') '    <Time Value="', time(k), '"/>'
             write(u, '(a)') '    <Grid Name="particles" GridType="Uniform">', &
                 '     <Topology TopologyType="Polyvertex" NumberOfElements="' // &
-                itoa(n(k)) // '" NodesPerElement="1"/>', &
-                '     <Geometry GeometryType="XYZ">', &
-                '      ' // item(h5, '/particles/position', itoa(n(k)) // ' 3', 'Float', 8), &
-                '     </Geometry>'
+                itoa(n(k)) // '" NodesPerElement="1"/>'
+            call geometry()
             call attribute('radius', 'Scalar', 'Node', '/particles/radius', itoa(n(k)), &
                            'Float', 8)
             call attribute('velocity', 'Vector', 'Node', '/particles/velocity', &
@@ -82,7 +83,20 @@ contains
                 call attribute('orientation', 'Vector', 'Node', '/particles/orientation', &
                                itoa(n(k)) // ' 4', 'Float', 8)
             end if
+            if (fragments) call attribute('fragment', 'Scalar', 'Node', '/particles/fragment', &
+                                          itoa(n(k)), 'Int', 8)
             write(u, '(a)') '    </Grid>'
+            if (bonds(k) > 0) then         ! lines between the particles' centres
+                write(u, '(a)') '    <Grid Name="bonds" GridType="Uniform">', &
+                    '     <Topology TopologyType="Polyline" NumberOfElements="' // &
+                    itoa(bonds(k)) // '" NodesPerElement="2">', &
+                    '      ' // item(h5, '/bonds/pairs', itoa(bonds(k)) // ' 2', 'Int', 8), &
+                    '     </Topology>'
+                call geometry()
+                call attribute('stress_ratio', 'Scalar', 'Cell', '/bonds/stress_ratio', &
+                               itoa(bonds(k)), 'Float', 8)
+                write(u, '(a)') '    </Grid>'
+            end if
             if (n_tri > 0) then
                 write(u, '(a)') '    <Grid Name="walls" GridType="Uniform">', &
                     '     <Topology TopologyType="Triangle" NumberOfElements="' // &
@@ -109,6 +123,13 @@ contains
         end if
         call file_rename(path // '.part', path, err)
     contains
+        !> The particles' centres, the points of the particles and of the bonds.
+        subroutine geometry()
+            write(u, '(a)') '     <Geometry GeometryType="XYZ">', &
+                '      ' // item(h5, '/particles/position', itoa(n(k)) // ' 3', 'Float', 8), &
+                '     </Geometry>'
+        end subroutine geometry
+
         subroutine attribute(name, kind, center, dataset, dims, number, precision)
             character(len=*), intent(in) :: name, kind, center, dataset, dims, number
             integer, intent(in) :: precision

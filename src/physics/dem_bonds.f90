@@ -15,7 +15,8 @@ module dem_bonds
                                  br_fn, br_fs, br_mt, br_mb, br_normal
     implicit none
     private
-    public :: bond_model_t, bond_forces, bond_totals, bond_energy, bond_step_limit
+    public :: bond_model_t, bond_forces, bond_totals, bond_energy, bond_step_limit, &
+              bond_stress_ratio
 
     real(wp), parameter :: pi = acos(-1.0_wp)
 
@@ -141,8 +142,7 @@ contains
         row(br_fs:br_fs + 2) = fs
         row(br_mb:br_mb + 2) = mb
         row(br_normal:br_normal + 2) = nrm
-        sigma = row(br_fn) / area + norm2(mb) * rbond / inertia
-        tau = norm2(fs) / area + abs(row(br_mt)) * rbond / polar
+        call bond_stresses(row, rbond, sigma, tau)
         broke = sigma > row(br_sigma) .or. tau > row(br_tau)
         fa = 0.0_wp
         ma = 0.0_wp
@@ -158,6 +158,31 @@ contains
                                        sqrt(istar * kn * inertia) * ws)
         end if
     end subroutine bond_step
+
+    !> The tensile and shear stresses [Pa] at the rim of a bond of radius rbond [m] carrying
+    !> the force and moment of its slot `row` (doc/theory.md, section 18.1):
+    !> sigma = F_n / A + |M_b| r / I and tau = |F_s| / A + |M_t| r / J.
+    pure subroutine bond_stresses(row, rbond, sigma, tau)
+        !$acc routine seq
+        real(wp), intent(in) :: row(bond_rows), rbond
+        real(wp), intent(out) :: sigma, tau
+        real(wp) :: area, inertia, polar
+        area = pi * rbond**2
+        inertia = 0.25_wp * pi * rbond**4
+        polar = 2.0_wp * inertia
+        sigma = row(br_fn) / area + norm2(row(br_mb:br_mb + 2)) * rbond / inertia
+        tau = norm2(row(br_fs:br_fs + 2)) / area + abs(row(br_mt)) * rbond / polar
+    end subroutine bond_stresses
+
+    !> How near a bond is to breaking [-]: max(sigma / sigma_c, tau / tau_c), its stresses
+    !> (bond_stresses) over its strengths, from its slot, the smaller sphere's radius rmin [m]
+    !> and its model's ratio of the bond's radius to it; it breaks above 1.
+    pure real(wp) function bond_stress_ratio(row, rmin, ratio) result(q)
+        real(wp), intent(in) :: row(bond_rows), rmin, ratio
+        real(wp) :: sigma, tau
+        call bond_stresses(row, ratio * rmin, sigma, tau)
+        q = max(sigma / row(br_sigma), tau / row(br_tau))
+    end function bond_stress_ratio
 
     !> Vector u turned by the rotation that takes unit vector n0 to unit vector n1 (about
     !> n0 x n1), then by angle `twist` about n1 (Rodrigues' formula, doc/theory.md 18.1).

@@ -101,6 +101,7 @@ module dem_case
         real(wp) :: snapshot_interval = 0.0_wp        !< HDF5 snapshots [s], 0: none
         logical :: snapshot_force = .false.           !< snapshots hold forces
         logical :: snapshot_contacts = .false.        !< and contact counts
+        logical :: snapshot_fragments = .false.       !< and fragments (dem_bond_graph)
         real(wp) :: checkpoint_interval = 0.0_wp      !< [s], 0: at the end and at stops only
         integer(ip) :: checkpoint_keep = 2            !< checkpoints kept on disk
         logical :: output_overwrite = .false.         !< a fresh run replaces another's outputs

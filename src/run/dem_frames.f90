@@ -71,6 +71,7 @@ contains
         s%snap_step = fr%snap_step
         s%snap_time = fr%snap_time
         s%snap_n = fr%snap_n
+        s%snap_bonds = fr%snap_bonds
         s%ckpt_step = fr%ckpt_step
         s%restart_file = path
         if (s%mesh%moving) call mesh_move(s%mesh, fr%time)
@@ -134,6 +135,7 @@ contains
         fr%snap_step = s%snap_step
         fr%snap_time = s%snap_time
         fr%snap_n = s%snap_n
+        fr%snap_bonds = s%snap_bonds
     end subroutine capture
 
     !> Forces, torques and contact history of the owned particles `order` (by id) into

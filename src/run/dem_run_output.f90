@@ -19,6 +19,7 @@ module dem_run_output
     use dem_probes, only: probe_values, probe_histogram_counts, probe_histogram, probe_wall_load
     use dem_frame, only: frame_t
     use dem_checkpoint, only: frame_write
+    use dem_bond_graph, only: bond_graph
     use dem_folder, only: checkpoint_file, folder_point_latest, folder_prune
     use dem_xdmf, only: xdmf_write, snapshot_file
     use dem_files, only: make_directory
@@ -164,21 +165,26 @@ contains
         end associate
     end subroutine write_trace
 
-    !> A snapshot of the state now, and the XDMF index updated.
+    !> A snapshot of the state now (in a case with bonds with its intact bonds, and with the
+    !> fragments when asked: dem_bond_graph), and the XDMF index updated.
     subroutine write_snapshot(s, c, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
         type(frame_t) :: fr
         type(output_t) :: none
-        integer(i8) :: n_total(1)
+        integer(i8) :: n_total(2)
         if (err%failed()) return
         call make_directory(c%output_dir // '/snapshots', err)
         if (err%failed()) return
         call settle_outlets(s, err)
         if (err%failed()) return
         call capture(s, c, none, fr)
-        n_total = fr%n
+        if (c%bond_reals > 0 .or. c%snapshot_fragments) &
+            call bond_graph(fr, s%bm, c%snapshot_fragments, s%comm)
+        n_total = 0
+        n_total(1) = fr%n
+        if (allocated(fr%bond_pair)) n_total(2) = size(fr%bond_pair, 2)
         call comm_sum(s%comm, n_total)
         call frame_write(fr, c, mesh_at(s, fr%time), c%output_dir // '/' // &
                          snapshot_file(s%step), .false., s%comm, err)
@@ -186,6 +192,7 @@ contains
         s%snap_step = [pack(s%snap_step, s%snap_step < s%step), s%step]
         s%snap_time = [s%snap_time(1:size(s%snap_step) - 1), fr%time]
         s%snap_n = [s%snap_n(1:size(s%snap_step) - 1), n_total(1)]
+        s%snap_bonds = [s%snap_bonds(1:size(s%snap_step) - 1), n_total(2)]
         call write_xdmf(s, c, err)
     end subroutine write_snapshot
 
@@ -195,8 +202,8 @@ contains
         type(error_t), intent(inout) :: err
         if (s%comm%rank /= 0) return
         call xdmf_write(c%output_dir // '/snapshots.xmf', s%snap_step, s%snap_time, s%snap_n, &
-                        s%mesh%n_tri, c%snapshot_force, c%snapshot_contacts, c%has_clumps, &
-                        c%mats%name, err)
+                        s%snap_bonds, s%mesh%n_tri, c%snapshot_force, c%snapshot_contacts, &
+                        c%has_clumps, c%snapshot_fragments, c%mats%name, err)
     end subroutine write_xdmf
 
     !> A checkpoint of the state now.

@@ -123,6 +123,7 @@ module dem_run_state
         logical, allocatable :: fresh(:) !< those flagged at the last step
         type(frame_t) :: good          !< the last state that passed the instability guard
         integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
+        integer(i8), allocatable :: snap_bonds(:)  !< their intact bonds
         real(wp), allocatable :: snap_time(:)
         integer(i8), allocatable :: ckpt_step(:)             !< checkpoints kept
         character(len=:), allocatable :: restart_file  !< the checkpoint restored

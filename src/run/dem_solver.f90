@@ -95,7 +95,7 @@ contains
             s%inflow_count = 0
             s%inflow_mass = 0.0_wp
         end if
-        allocate(s%snap_step(0), s%snap_n(0), s%snap_time(0), s%ckpt_step(0))
+        allocate(s%snap_step(0), s%snap_n(0), s%snap_bonds(0), s%snap_time(0), s%ckpt_step(0))
     end subroutine solver_init
 
     !> Run to t_end (or until a stop), writing series.csv, contact.csv (when tracing),

@@ -25,6 +25,13 @@ module dem_frame
                                                   !< frames hold (particles_fields; the
                                                   !< derived ones are left at 0)
         integer(ip), allocatable :: contacts(:)   !< contacts of each particle (snapshots)
+        ! the intact bonds (snapshots of a case with bonds; dem_bond_graph)
+        integer(i8), allocatable :: bond_pair(:, :)   !< (2, bonds of this rank's block): the
+                                                      !< rows of each bond's two particles in
+                                                      !< the whole frame (id order, from 0)
+        real(wp), allocatable :: bond_ratio(:)        !< their stress ratios [-]
+        integer(i8), allocatable :: fragment(:)       !< each particle's fragment: the
+                                                      !< smallest id of its bonded body
         ! contact history
         integer(ip), allocatable :: wall_tri(:, :)    !< (slot, particle)
         real(wp), allocatable :: wall_xi(:, :, :)     !< (n_wall_history, column, particle)
@@ -47,6 +54,7 @@ module dem_frame
         integer(i8), allocatable :: snap_step(:)  !< the snapshots written so far
         real(wp), allocatable :: snap_time(:)     !< [s]
         integer(i8), allocatable :: snap_n(:)     !< their particle counts
+        integer(i8), allocatable :: snap_bonds(:) !< and intact bonds (a case with bonds)
         integer(i8), allocatable :: ckpt_step(:)  !< the checkpoints kept so far
         ! inflow (allocated only in a run with inflow)
         integer(i8) :: next_id = 0                !< the id of the next inserted particle
