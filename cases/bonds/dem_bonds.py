@@ -252,7 +252,8 @@ def main():
         print(json.dumps({case: {k: v for k, v in res.items()
                                  if k not in ("targets", "expected")}}, sort_keys=True),
               flush=True)
-    doc = {"code": "dem (this repository), one MPI rank", "runs": results}
+    doc = {"code": "dem (this repository), one MPI rank", "runs": results,
+           "command": " ".join(["cases/bonds/dem_bonds.py"] + sys.argv[1:])}
     if a.out:
         with open(a.out, "w") as f:
             f.write(json.dumps(doc, indent=1, sort_keys=True) + "\n")
