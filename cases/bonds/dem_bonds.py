@@ -80,8 +80,7 @@ def track(ids):
 
 
 def run_dem(dem, work, name, text):
-    """Write `name`.nml in work, run dem on it; the output folder, the wall time [s] and
-    dem's standard output."""
+    """Write `name`.nml in work, run dem on it; the output folder and the wall time [s]."""
     path = os.path.join(work, name + ".nml")
     with open(path, "w") as f:
         f.write(text)
@@ -90,7 +89,7 @@ def run_dem(dem, work, name, text):
     wall = time.perf_counter() - start
     if r.returncode != 0:
         sys.exit(f"dem {path}: exit {r.returncode}\n{r.stdout}\n{r.stderr}")
-    return os.path.join(work, "out_" + name), wall, r.stdout
+    return os.path.join(work, "out_" + name), wall
 
 
 def csv(out, name):
@@ -102,7 +101,7 @@ def beam_static(dem, work):
     tip = bc.N_BEAM
     text = case_text("beam_static", T_STATIC, REST_STEPS * bc.DT, chain(bc.N_BEAM),
                      track([tip]), bc.G, damping=bc.DAMPING_STATIC)
-    out, _, _ = run_dem(dem, work, "beam_static", text)
+    out, _ = run_dem(dem, work, "beam_static", text)
     p = csv(out, "probes.csv")
     z = p[f"s{tip}_z"]
     v = np.array([p[f"s{tip}_v{c}"][-1] for c in "xyz"])
@@ -117,7 +116,7 @@ def beam_vibration(dem, work):
     tip = bc.N_BEAM
     text = case_text("beam_vibration", bc.T_VIBRATION, bc.SAMPLE * bc.DT, chain(bc.N_BEAM),
                      track([tip]), bc.G)
-    out, wall, _ = run_dem(dem, work, "beam_vibration", text)
+    out, wall = run_dem(dem, work, "beam_vibration", text)
     p = csv(out, "probes.csv")
     ts, zs = p["time"], p[f"s{tip}_z"]
     f_cross, f_fft, ncross = bc.frequency(ts, zs)
@@ -162,7 +161,7 @@ def bar(dem, work, case):
                 else f", shear_strength = {bc.STRENGTH!r}")
     text = case_text(name, 1.5 * expected_t, bc.DT, chain(n, vel), track(range(1, n + 1)),
                      0.0, strength)
-    out, _, _ = run_dem(dem, work, name, text)
+    out, _ = run_dem(dem, work, name, text)
     s, p = csv(out, "series.csv"), csv(out, "probes.csv")
     if not np.array_equal(s["time"], p["time"]):
         sys.exit(f"{out}: series.csv and probes.csv have different rows")
