@@ -17,13 +17,12 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))  # Yade runs it by exec
+import bond_cases as bc  # noqa: E402
 import yade_bonds as yb  # noqa: E402
 import yade.config  # noqa: E402
 from yade import O  # noqa: E402
 from yade.wrapper import PyRunner  # noqa: E402
 
-SPEED = 1e-3          # [m/s]
-STRENGTH = 1e5        # [Pa]
 HIST = {"t": None, "forces": None, "break": None}
 
 
@@ -55,22 +54,13 @@ def watch(n):
 
 def main():
     case, opts = yb.parse(("tension", "shear"))
-    if case == "tension":
-        n, vel, sigma_c, tau_c = 5, (SPEED, 0.0, 0.0), STRENGTH, yb.HUGE
-    else:
-        n, vel, sigma_c, tau_c = 2, (0.0, 0.0, SPEED), yb.HUGE, STRENGTH
-    t = yb.bond_targets(yb.R, 1.0, yb.YOUNG, 1.0, sigma_c, tau_c)
+    t, n, vel, expected_f, expected_t = bc.bar_targets(case)
     yb.build_chain(n, t, (0.0, 0.0, 0.0), 0.0, opts["dt"], not opts["total"],
                    [PyRunner(iterPeriod=1, command=f"watch({n})")])
     for b in (O.bodies[0], O.bodies[n - 1]):
         b.state.blockedDOFs = "xyzXYZ"
     O.bodies[n - 1].state.vel = vel
     bond = yb.bond_phys(t)
-    if case == "tension":
-        expected_f, stiff = t["Fn_break"], t["kn"]
-    else:
-        expected_f, stiff = t["Fs_break"], t["ks"]
-    expected_t = (n - 1) * expected_f / stiff / SPEED
     O.run(int(3 * expected_t / O.dt), True)
     if HIST["break"] is None:
         sys.exit("no bond broke")

@@ -7,39 +7,19 @@ contacts (CohFrictMat, Ip2_CohFrictMat_CohFrictMat_CohFrictPhys,
 Law2_ScGeom6D_CohFrictPhys_CohesionMoment) whose stiffnesses and strengths are chosen to be
 those of a parallel bond of radius lambda*R (see README.md, "Matching the parameters")."""
 import json
-import math
 import sys
 
+from bond_cases import DENSITY, DT, R
 from yade import O, utils
 from yade.wrapper import (Bo1_Sphere_Aabb, CohFrictMat, ForceResetter,
                           Ig2_Sphere_Sphere_ScGeom6D, InsertionSortCollider,
                           InteractionLoop, Ip2_CohFrictMat_CohFrictMat_CohFrictPhys,
                           Law2_ScGeom6D_CohFrictPhys_CohesionMoment, NewtonIntegrator)
 
-R = 1e-3             # sphere radius [m]
-DENSITY = 2500.0     # [kg/m^3]
-YOUNG = 1e8          # bond modulus E [Pa]
-HUGE = 1e20          # a strength that is never reached [Pa]
-
-
-def bond_targets(radius, lam, young, kratio, sigma_c, tau_c):
-    """The parallel bond between two spheres of `radius` touching (L0 = 2 radius): its area,
-    moments of area and the four pair stiffnesses and two break forces that Yade must match."""
-    rb = lam * radius
-    area = math.pi * rb**2
-    inertia = math.pi * rb**4 / 4.0
-    polar = math.pi * rb**4 / 2.0
-    kn_area = young / (2.0 * radius)          # normal stiffness per area, E / L0
-    ks_area = kn_area / kratio
-    return {"bond_radius": rb, "A": area, "I": inertia, "J": polar, "L0": 2.0 * radius,
-            "kn": kn_area * area, "ks": ks_area * area,
-            "kr": kn_area * inertia, "ktw": ks_area * polar,
-            "Fn_break": sigma_c * area, "Fs_break": tau_c * area}
-
 
 def yade_material(radius, t):
     """CohFrictMat values that give the pair stiffnesses and adhesions in `t` (from
-    bond_targets) for two equal spheres of `radius`. Yade 2023.02a, equal radii and one
+    bond_cases.bond_targets) for two equal spheres of `radius`. Yade 2023.02a, equal radii and one
     material: kn = young*R, ks = poisson*kn, kr = alphaKr*ks*R^2, ktw = alphaKtw*ks*R^2,
     normalAdhesion = normalCohesion*R^2, shearAdhesion = shearCohesion*R^2."""
     young = t["kn"] / radius
@@ -90,14 +70,10 @@ def bond_phys(t):
     return {"yade": got, "ratio_to_target": {k: got[k] / want[k] for k in got}}
 
 
-def mass():
-    return DENSITY * 4.0 / 3.0 * math.pi * R**3
-
-
 def parse(choices):
     """`SCRIPT CASE [--out FILE] [--dt DT] [--total]` from sys.argv (as Yade passes them)."""
     args = sys.argv[1:]
-    opts = {"out": None, "dt": 1e-6, "total": False}
+    opts = {"out": None, "dt": DT, "total": False}
     if not args or args[0] not in choices:
         sys.exit(f"usage: yade -n -x -j1 {sys.argv[0]} {'|'.join(choices)} "
                  "[--out FILE] [--dt SECONDS] [--total]")
