@@ -10,7 +10,6 @@
 !> whose tensile or shear stress exceeds its strength breaks, for good.
 module dem_bonds
     use dem_kinds, only: wp, ip, i8
-    use dem_vector, only: cross
     use dem_contact_store, only: bond_rows, br_partner, br_model, br_kn, br_sigma, br_tau, &
                                  br_fn, br_fs, br_mt, br_mb, br_normal
     implicit none
@@ -189,12 +188,19 @@ contains
     pure function turn(u, n0, n1, twist) result(r)
         !$acc routine seq
         real(wp), intent(in) :: u(3), n0(3), n1(3), twist
-        real(wp) :: r(3), axis(3), c
+        real(wp) :: r(3), axis(3), c, sn, cs, t2
         c = dot_product(n0, n1)
         axis = cross(n0, n1)
         r = c * u + cross(axis, u) + dot_product(axis, u) / (1.0_wp + c) * axis
-        r = cos(twist) * r + sin(twist) * cross(n1, r) + &
-            (1.0_wp - cos(twist)) * dot_product(n1, r) * n1
+        if (abs(twist) < 1.0e-2_wp) then       ! (the series to rounding: x^7 / 5040 < 2e-18)
+            t2 = twist**2
+            sn = twist * (1.0_wp - t2 / 6.0_wp * (1.0_wp - t2 / 20.0_wp))
+            cs = 1.0_wp - t2 / 2.0_wp * (1.0_wp - t2 / 12.0_wp * (1.0_wp - t2 / 30.0_wp))
+        else
+            sn = sin(twist)
+            cs = cos(twist)
+        end if
+        r = cs * r + sn * cross(n1, r) + (1.0_wp - cs) * dot_product(n1, r) * n1
     end function turn
 
     !> u less its component along the unit vector n.
@@ -288,4 +294,14 @@ contains
                                       sqrt(0.4_wp * mass(i) * radius(i)**2 / kr))
         end do
     end function bond_step_limit
+
+    !> u x v, here (a call into dem_vector is not inlined).
+    pure function cross(u, v) result(w)
+        !$acc routine seq
+        real(wp), intent(in) :: u(3), v(3)
+        real(wp) :: w(3)
+        w(1) = u(2) * v(3) - u(3) * v(2)
+        w(2) = u(3) * v(1) - u(1) * v(3)
+        w(3) = u(1) * v(2) - u(2) * v(1)
+    end function cross
 end module dem_bonds
