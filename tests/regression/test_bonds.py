@@ -32,6 +32,8 @@ neighbours, the contact law off while bonded, dt = 1 us.
    Euler puts a free fall, to 1e-12), the same bits on 1 and 2 ranks.
 8. A clump (two spheres) hanging by a bond from a fixed sphere comes to rest with the bond
    stretched by its weight over k_n A (within 1 %).
+9. A bonded pair, stretched and spinning, across a periodic boundary (the partner its nearest
+   image) holds the energy of the same pair away from the boundary, row by row (1e-6).
 usage: test_bonds.py DEM WORKDIR MPIEXEC"""
 import math
 import os
@@ -294,4 +296,18 @@ out = run("hang", case(0.05, 1.0e-3, line(1) + f"""
 p = tip_track(out)
 stretch = -(p["c_z"][-1] + 1.5 * L)         # the clump's centre of mass 1.5 L below sphere 0
 check_close(stretch, 2 * M * G / KN, 0.01, "hang: the bond's stretch under the clump")
+
+# 9. the pair across a periodic boundary
+energies = []
+for name, x0, periodic in (("flat", 0.0045, ""),
+                           ("periodic", 0.0095, "&periodic axis = 'x', low = 0.0, high = 0.0105 /")):
+    pair = (f"&particle id = 1, material = 'm', radius = {R}, position = {x0!r}, 0, 0, "
+            "velocity = 0.01, 0.002, 0, angular_velocity = 0, 0, 5 /\n"
+            f"&particle id = 2, material = 'm', radius = {R}, position = {x0 + L!r}, 0, 0, "
+            f"velocity = 0.01, -0.002, 0 /\n{periodic}")
+    out = run(name, case(0.02, 1.0e-3, pair, ", gap = 1.0e-4").replace("-9.81", "0"))
+    energies.append(np.genfromtxt(os.path.join(out, "series.csv"), delimiter=",",
+                                  names=True)["bond_energy"])
+check(energies[0][1:].min() > 0 and np.allclose(energies[1], energies[0], rtol=1e-6, atol=0),
+      f"periodic: the bond's energy {energies[1][-3:]} against {energies[0][-3:]}")
 finish()
