@@ -47,8 +47,8 @@ def packing(n, phi, radius, seed, tol=1e-6, max_iter=20000):
 
 
 def write(path, x, r, material="grain", lift=None, speed=0.0):
-    """The particle file (10 digits); with `lift`, the ball raised so that its lowest point is `lift`
-    above z = 0, every sphere moving at `speed` down."""
+    """The particle file (10 digits); with `lift`, the ball raised so that its lowest point
+    is `lift` above z = 0, every sphere moving at `speed` down."""
     x = x.copy()
     head = "id,material,radius,x,y,z"
     if lift is not None:
