@@ -14,7 +14,7 @@ module dem_input
     use dem_input_materials, only: read_materials, read_pairs, read_contact_model
     use dem_input_particles, only: read_particles, read_particle_files
     use dem_input_inserts, only: read_inserts
-    use dem_input_clumps, only: read_clump_templates, read_clumps
+    use dem_input_clumps, only: read_clump_templates, read_clumps, read_clump_files
     use dem_input_bonds, only: read_bonds
     use dem_input_walls, only: read_walls, read_meshes, read_periodic
     use dem_input_probes, only: read_outlets, read_probes
@@ -26,11 +26,11 @@ module dem_input
 
     !> The groups a case file may hold, in the order an unknown group's message lists them,
     !> each beside the module that reads it (and declares its keys).
-    character(len=*), parameter :: input_groups(16) = [character(len=14) :: &
+    character(len=*), parameter :: input_groups(17) = [character(len=14) :: &
         'run', 'output', &                          ! dem_input_run
         'contact_model', 'material', 'pair', &      ! dem_input_materials
         'particle', 'particle_file', &              ! dem_input_particles
-        'clump_template', 'clump', &                ! dem_input_clumps
+        'clump_template', 'clump', 'clump_file', &  ! dem_input_clumps
         'bond', &                                   ! dem_input_bonds
         'insert', &                                 ! dem_input_inserts
         'outlet', 'probe', &                        ! dem_input_probes
@@ -77,6 +77,8 @@ contains
         if (err%failed()) return
         call read_clumps(nf, c, err)
         if (err%failed()) return
+        call read_clump_files(nf, c, err)
+        if (err%failed()) return
         share = [comm%rank, comm%size]
         if (group_count(nf, 'insert') > 0 .or. c%has_clumps) share = [0, 1]
         call read_particles(nf, share, c, err)
@@ -88,8 +90,8 @@ contains
         call read_bonds(nf, c, err)
         if (err%failed()) return
         if (c%n_particles == 0 .and. size(c%inserts) == 0 .and. .not. c%has_clumps) then
-            call fail(nf%path // ': no particles (give &particle, &particle_file, &clump or ' &
-                      // '&insert)')
+            call fail(nf%path // ': no particles (give &particle, &particle_file, &clump, ' &
+                      // '&clump_file or &insert)')
             return
         end if
         call read_walls(nf, c, err)

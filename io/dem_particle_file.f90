@@ -8,7 +8,7 @@
 module dem_particle_file
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
-    use dem_text, only: read_line, without_bom, excerpt
+    use dem_text, only: read_line, without_bom, excerpt, is_integer, is_real
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_files, only: input_file_problem
     use dem_checkpoint, only: snapshot_read_particles
@@ -262,38 +262,6 @@ contains
             if (b > 0) last(k) = first(k) + b - 2
         end do
     end subroutine split
-
-    !> True if `s` is wholly an integer: an optional sign and digits.
-    pure logical function is_integer(s)
-        character(len=*), intent(in) :: s
-        integer :: a
-        a = 1
-        if (len(s) > 0) then
-            if (s(1:1) == '+' .or. s(1:1) == '-') a = 2
-        end if
-        is_integer = len(s) >= a .and. verify(s(a:), '0123456789') == 0
-    end function is_integer
-
-    !> True if `s` is wholly a real number: an optional sign, digits with at most one decimal
-    !> point (at least one digit), and an optional exponent (e, E, d or D, an optional sign,
-    !> digits).
-    pure logical function is_real(s)
-        character(len=*), intent(in) :: s
-        integer :: e, a
-        is_real = .false.
-        e = scan(s, 'eEdD')
-        if (e == 0) e = len(s) + 1
-        if (e < len(s) + 1) then
-            if (.not. is_integer(s(e + 1:))) return
-        end if
-        a = 1
-        if (e > 1) then
-            if (s(1:1) == '+' .or. s(1:1) == '-') a = 2
-        end if
-        if (verify(s(a:e - 1), '0123456789.') /= 0) return
-        is_real = scan(s(a:e - 1), '0123456789') > 0 .and. &
-                  index(s(a:e - 1), '.') == index(s(a:e - 1), '.', back=.true.)
-    end function is_real
 
     !> For a missing file that is a run's final state (final.csv): what makes it. The
     !> benchmark cases' preparations write output/benchmark/prepare_<case>[_<stage>]/, which

@@ -1,10 +1,11 @@
 ! SPDX-License-Identifier: BSD-3-Clause
-!> Text: reading files line by line, writing numbers.
+!> Text: reading files line by line, recognising numbers in them, writing numbers.
 module dem_text
     use dem_kinds, only: wp, i8
     implicit none
     private
-    public :: read_line, itoa, real_text, duration_text, step_file, without_bom, excerpt
+    public :: read_line, itoa, real_text, duration_text, step_file, without_bom, excerpt, &
+              is_integer, is_real
 
     !> itoa(k): an integer (default or 64-bit) as text, without blanks.
     interface itoa
@@ -52,6 +53,38 @@ contains
         e = s
         if (len(s) > 60) e = s(1:40) // '... (' // itoa_i8(int(len(s), i8)) // ' characters)'
     end function excerpt
+
+    !> True if `s` is wholly an integer: an optional sign and digits.
+    pure logical function is_integer(s)
+        character(len=*), intent(in) :: s
+        integer :: a
+        a = 1
+        if (len(s) > 0) then
+            if (s(1:1) == '+' .or. s(1:1) == '-') a = 2
+        end if
+        is_integer = len(s) >= a .and. verify(s(a:), '0123456789') == 0
+    end function is_integer
+
+    !> True if `s` is wholly a real number: an optional sign, digits with at most one decimal
+    !> point (at least one digit), and an optional exponent (e, E, d or D, an optional sign,
+    !> digits).
+    pure logical function is_real(s)
+        character(len=*), intent(in) :: s
+        integer :: e, a
+        is_real = .false.
+        e = scan(s, 'eEdD')
+        if (e == 0) e = len(s) + 1
+        if (e < len(s) + 1) then
+            if (.not. is_integer(s(e + 1:))) return
+        end if
+        a = 1
+        if (e > 1) then
+            if (s(1:1) == '+' .or. s(1:1) == '-') a = 2
+        end if
+        if (verify(s(a:e - 1), '0123456789.') /= 0) return
+        is_real = scan(s(a:e - 1), '0123456789') > 0 .and. &
+                  index(s(a:e - 1), '.') == index(s(a:e - 1), '.', back=.true.)
+    end function is_real
 
     pure function itoa_i8(k) result(s)
         integer(i8), intent(in) :: k

@@ -299,9 +299,8 @@ contains
                     cq, disc, s, p(3)
         integer :: count, i, j, k, side
 
-        ! room for the extremes, the poles, two per pair and two per triple
-        allocate(list(2 + 2 * size(r) + size(r) * (size(r) - 1) &
-                      + size(r) * (size(r) - 1) * (size(r) - 2) / 3))
+        ! room for the extremes and the poles; more as heights are found (add_height)
+        allocate(list(2 + 2 * size(r)))
         count = 2
         list(1) = minval(c(3, :) - r)
         list(2) = maxval(c(3, :) + r)
@@ -318,8 +317,7 @@ contains
                 rc = sqrt(max(r(i)**2 - t**2, 0.0_wp))
                 u = [0.0_wp, 0.0_wp, 1.0_wp] - n(3) * n
                 if (norm2(u) <= 1e-12_wp) then
-                    count = count + 1
-                    list(count) = c(3, i) + t * n(3)
+                    call add_height(c(3, i) + t * n(3), list, count)
                     cycle
                 end if
                 u = u / norm2(u)
@@ -362,15 +360,29 @@ contains
     !> Adds the height of the point p to list(:count) unless p lies inside a sphere.
     pure subroutine add_exposed(p, c, r, list, count)
         real(wp), intent(in) :: p(3), c(:,:), r(:)
-        real(wp), intent(inout) :: list(:)
+        real(wp), allocatable, intent(inout) :: list(:)
         integer, intent(inout) :: count
         integer :: m
         do m = 1, size(r)
             if (sum((p - c(:, m))**2) < (r(m) * (1.0_wp - 1e-9_wp))**2) return
         end do
-        count = count + 1
-        list(count) = p(3)
+        call add_height(p(3), list, count)
     end subroutine add_exposed
+
+    !> Appends z to list(:count), the list grown (doubled) when full.
+    pure subroutine add_height(z, list, count)
+        real(wp), intent(in) :: z
+        real(wp), allocatable, intent(inout) :: list(:)
+        integer, intent(inout) :: count
+        real(wp), allocatable :: longer(:)
+        if (count == size(list)) then
+            allocate(longer(2 * size(list)))
+            longer(:count) = list(:count)
+            call move_alloc(longer, list)
+        end if
+        count = count + 1
+        list(count) = z
+    end subroutine add_height
 
     !> The integrals of 1, x, y, x^2, x y, y^2 over the union of the disks that the plane at
     !> height z cuts from the spheres: by the divergence theorem, int f dA = (1/(n+2)) times the
@@ -380,17 +392,24 @@ contains
         real(wp), intent(in) :: c(:,:), r(:), z
         real(wp), intent(out) :: m(6)
         real(wp) :: rho(size(r)), lo(2 * size(r)), hi(2 * size(r)), dist, phi, half, pos
-        integer :: i, j, nb
+        integer :: cut(size(r)), n_cut, a, b, i, j, nb
         logical :: covered
 
         m = 0.0_wp
         rho = sqrt(max(r**2 - (z - c(3, :))**2, 0.0_wp))
+        n_cut = 0                               ! the spheres the plane cuts, in order
         do i = 1, size(r)
             if (rho(i) <= 0.0_wp) cycle
+            n_cut = n_cut + 1
+            cut(n_cut) = i
+        end do
+        do a = 1, n_cut
+            i = cut(a)
             nb = 0
             covered = .false.
-            do j = 1, size(r)
-                if (j == i .or. rho(j) <= 0.0_wp) cycle
+            do b = 1, n_cut
+                j = cut(b)
+                if (j == i) cycle
                 dist = hypot(c(1, j) - c(1, i), c(2, j) - c(2, i))
                 if (dist >= rho(i) + rho(j)) cycle
                 ! disk i inside disk j (of two equal disks, the later one is inside)

@@ -44,7 +44,9 @@ contains
             if (size(c%inserts) > 0 .or. c%has_clumps) call keep_share(c, comm%rank, comm%size)
             call check_ranges(c, comm, err)
         end if
-        if (.not. err%failed() .and. size(c%bond_rules) > 0) call place_bonds(c, comm, err)
+        if (.not. err%failed()) then      ! (else bond_rules may be unallocated: not read)
+            if (size(c%bond_rules) > 0) call place_bonds(c, comm, err)
+        end if
         if (.not. err%failed()) then
             call case_summarize(c, comm)
             call drawn_from_particles(c, err)

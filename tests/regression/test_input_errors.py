@@ -515,6 +515,47 @@ bad("clump_mass_alone", GOOD + CT.replace("/", ", mass = 1e-3 /") + CL, "clump_t
 bad("clump_template_twice", GOOD + CT + CT + CL, "clump_template", "name")
 bad("clump_rigid", GOOD + "&material name = 'wall', rigid = .true. /\n"
     + CT.replace("'glass'", "'wall'") + CL, "clump_template", "material", "rigid")
+# clumps from files (&clump_template file, &clump_file)
+for name, text in (("members_bad.csv", "x,y,z,radius\n-0.005 0 0 0.006\n0.005, 0, 0\n"),
+                   ("members_radius.csv", "-0.005,0,0,0.006\n0.005,0,0,-1\n"),
+                   ("clumps_good.csv", "d,0,0,0.1,1,0,0,0\n"),
+                   ("clumps_bad.csv", "template,x,y,z,q0,q1,q2,q3\nd,0,0,0.1,1,0,0,0\n"
+                                      "d,0,0,one,1,0,0,0\n"),
+                   ("clumps_columns.csv", "d 0 0 0.1 1 0 0 0 0 0 0 0 0 0\n"),
+                   ("clumps_template.csv", "\nd,0,0,0.1,1,0,0,0\ne,0,0,0.2,1,0,0,0\n"),
+                   ("clumps_quaternion.csv", "d,0,0,0.1,1,0,0,0\nd,0,0,0.2,1,1,0,0\n")):
+    with open(os.path.join(work, name), "w") as f:
+        f.write(text)
+CTF = "&clump_template name = 'd', material = 'glass', file = 'members.csv' /\n"
+CF = "&clump_file file = 'clumps_good.csv' /\n"
+with open(os.path.join(work, "members.csv"), "w") as f:
+    f.write("x,y,z,radius\n-0.005,0,0,0.006\n0.005,0,0,0.006\n")
+with open(os.path.join(work, "good_clump_files.nml"), "w") as f:
+    f.write(GOOD + CTF + CF)
+r, d = run(["--check", os.path.join(work, "good_clump_files.nml")], "good_clump_files")
+check(r.returncode == 0 and "clumps               1" in r.stdout,
+      f"good clump files: --check failed or does not print the clumps: {r.stderr} {r.stdout}")
+bad("clump_members_file_missing", GOOD + CTF.replace("members.csv", "none.csv") + CL,
+    "clump_template", "file", "none.csv: the members file does not exist")
+bad("clump_members_file_line", GOOD + CTF.replace("members.csv", "members_bad.csv") + CL,
+    "clump_template", "file", "members_bad.csv:3: 3 values; 4 are expected")
+bad("clump_members_file_radius", GOOD + CTF.replace("members.csv", "members_radius.csv")
+    + CL, "clump_template", "file", "members_radius.csv:2: column 'radius'")
+bad("clump_members_and_file", GOOD + CT.replace("/", ", file = 'members.csv' /") + CL,
+    "clump_template", "members", "not both")
+bad("clump_no_members", GOOD + "&clump_template name = 'd', material = 'glass' /\n" + CL,
+    "clump_template", "file", "is required")
+bad("clump_file_missing", GOOD + CT + CF.replace("clumps_good", "none"), "clump_file",
+    "file", "none.csv: the clumps file does not exist")
+bad("clump_file_no_file", GOOD + CT + "&clump_file /\n", "clump_file", "file", "required")
+bad("clump_file_number", GOOD + CT + CF.replace("good", "bad"), "clump_file", "file",
+    "clumps_bad.csv:3: column 'z': 'one' is not a finite number")
+bad("clump_file_columns", GOOD + CT + CF.replace("good", "columns"), "clump_file", "file",
+    "clumps_columns.csv:1: 14 values; 8 are expected")
+bad("clump_file_template", GOOD + CT + CF.replace("good", "template"), "clump_file", "file",
+    "clumps_template.csv:3: column 'template': 'e' is not a &clump_template's name")
+bad("clump_file_quaternion", GOOD + CT + CF.replace("good", "quaternion"), "clump_file",
+    "file", "clumps_quaternion.csv:2: columns 'q0' to 'q3': not a unit quaternion")
 # bonds (&bond), fixed particles, local damping
 PAIR2 = ("&particle id = 2, material = 'glass', radius = 0.01, position = 0.02, 0, 0.011 /\n"
          "&particle id = 3, material = 'glass', radius = 0.01, position = 0.1, 0, 0.011 /\n")

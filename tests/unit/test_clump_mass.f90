@@ -6,7 +6,8 @@
 !> tetrahedron of spheres whose lenses do not meet (four spheres less six lenses), turned
 !> arbitrarily, and a thousand times smaller. A tetrahedron whose lenses meet: isotropic by
 !> symmetry, and its volume and second moment against a brute-force sum over columns. Twenty
-!> overlapping members turned: the tensor turns with them (the slices cut another way). The
+!> overlapping members turned: the tensor turns with them (the slices cut another way). 1331
+!> spheres apart on a lattice (the sum of spheres, by the parallel-axis theorem). The
 !> Jacobi eigen-decomposition against a matrix of known eigenvalues; the
 !> body frame; user-given mass properties and the errors of bad ones.
 program test_clump_mass
@@ -27,6 +28,7 @@ program test_clump_mass
     type(error_t) :: err
     real(wp) :: e(3), q(3,3), c(3,20), r(20), ms, tetra(3,4), v, j2, expected(3,3)
     real(wp) :: values(3), vectors(3,3), a(3,3)
+    real(wp), allocatable :: big_c(:, :)
     integer :: k
 
     e = [1.0_wp, 2.0_wp, 2.0_wp] / 3.0_wp
@@ -103,6 +105,19 @@ program test_clump_mass
     call assert_close(norm2(turned%moments - props%moments), 0.0_wp, 0.0_wp, &
                       'twenty members turned: principal moments', atol=1e-9_wp * props%moments(3))
     call check_frame('twenty members', props, c)
+
+    ! 11^3 = 1331 spheres apart on a cubic lattice of spacing 3 r (a members file's many):
+    ! N m_s, and about the centre N 2/5 m_s r^2 + m_s sum (y^2 + z^2), 121 x 110 (3 r)^2 for
+    ! each of y^2 and z^2
+    allocate(big_c(3, 1331))
+    do k = 1, 1331
+        big_c(:, k) = 0.3_wp * [mod(k - 1, 11) - 5, mod((k - 1) / 11, 11) - 5, (k - 1) / 121 - 5]
+    end do
+    call clump_mass_compute(big_c, [(0.1_wp, k = 1, 1331)], rho, props, err)
+    ms = 4.0_wp / 3.0_wp * pi * 0.1_wp**3 * rho
+    call check_union('1331 spheres apart', props, 1331.0_wp * ms, [0.0_wp, 0.0_wp, 0.0_wp], &
+                     (1331.0_wp * 0.4_wp * ms * 0.1_wp**2 + 2.0_wp * ms * 121.0_wp * 110.0_wp &
+                      * 0.3_wp**2) * identity())
 
     ! Jacobi: A = Q diag(5, 1, 2) Q^T
     a = matmul(q, matmul(diagonal([5.0_wp, 1.0_wp, 2.0_wp]), transpose(q)))
