@@ -15,6 +15,7 @@ module dem_coupling
                                            c_ptr, c_loc, c_null_ptr, c_intptr_t
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use dem_kinds, only: wp, ip, i8
+    use dem_version, only: dem_version_string
     use dem_error, only: error_t, set_error, dem_err_input, dem_err_runtime
     use dem_comm, only: comm_t, comm_from_handle, comm_free, comm_counts, comm_exchange, &
                         comm_sum, comm_world, comm_world_end, comm_any, comm_max
@@ -44,7 +45,7 @@ module dem_coupling
               dem_coupling_removed_count, dem_coupling_removed, dem_coupling_set_force_by_id, &
               dem_coupling_set_drag_by_id, dem_coupling_views, dem_coupling_device_views, &
               dem_coupling_deposit_cells, dem_coupling_mpi_world, dem_coupling_mpi_finalize, &
-              dem_coupling_status
+              dem_coupling_status, dem_coupling_version
 
     !> A coupled run between coupling_init and coupling_finalize.
     type :: run_t
@@ -73,6 +74,9 @@ module dem_coupling
     integer(c_intptr_t) :: c_runs_made = 0       !< the handles given so far
     real(wp) :: empty(0), empty3(3, 0)           !< stand-ins for arrays the C caller gave
     integer(i8) :: empty_ids(0)                  !< as NULL (refused)
+    !> The version, null-terminated, for dem_coupling_version.
+    character(kind=c_char), target :: c_version(len(dem_version_string) + 1) = &
+        transfer(dem_version_string // c_null_char, 'v', len(dem_version_string) + 1)
 
 contains
 
@@ -1168,6 +1172,13 @@ contains
             bind(C, name='dem_coupling_mpi_world')
         comm_f = comm_world()
     end function dem_coupling_mpi_world
+
+    !> The version of the solver (dem_version_string), a null-terminated string the library
+    !> keeps: the caller does not free it.
+    type(c_ptr) function dem_coupling_version() result(version) &
+            bind(C, name='dem_coupling_version')
+        version = c_loc(c_version)
+    end function dem_coupling_version
 
     !> Finalise MPI if dem_coupling_mpi_world initialised it (and it is not finalised yet).
     subroutine dem_coupling_mpi_finalize() bind(C, name='dem_coupling_mpi_finalize')

@@ -50,8 +50,8 @@ typedef struct dem_coupling dem_coupling;
 int dem_coupling_init(dem_coupling **run, const char *file, int comm_f, char *message,
                       int message_len);
 
-/* The version of the solver (src/base/dem_version.f90); in the shared library libdem.so
- * only (src/api/dem_shared.c), not in the static libraries. */
+/* The version of the solver (src/base/dem_version.f90), a null-terminated string the
+ * library keeps (do not free it). */
 const char *dem_coupling_version(void);
 
 /* The Fortran handle of MPI_COMM_WORLD, initialising MPI if nobody has (for a caller with

@@ -1,22 +1,33 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """find_package(dem) works for a fluid code: this build is installed into WORKDIR/prefix, and
-tests/consumer (a Fortran and a C program, built with CMake against dem::dem only) is
-configured, built and run against the install: the C program's coupling checks pass on 2
-ranks, and the Fortran program advances ten fluid steps to t = 1e-3 s. The shared library
-libdem.so is installed and exports the functions of dem_coupling.h, and nothing else.
+tests/consumer, copied to a temporary folder outside the source tree (so the template needs
+nothing of the tree), is configured, built and run against the install on 2 ranks:
+- fluid_c (C, dem::dem_shared) and fluid_c_static (C, dem::dem) advance four free spheres,
+  with the buoyancy of a fluid of density rho_f set as their force, by ten fluid steps of
+  1e-4 s: t = 1e-3 s, all four particles, and their vertical velocity the exact
+  -g (1 - rho_f / rho_p) t of a constant acceleration (symplectic Euler integrates it without
+  error), to 1e-9; the version they print is the one of src/base/dem_version.f90;
+- fluid_f (Fortran, dem::dem) reaches t = 1e-3 s.
+Every function dem_coupling.h declares (parsed from the installed header's prototypes: the
+bind(C) functions of dem_coupling.f90) links with both dem::dem and dem::dem_shared (a
+generated C program takes the address of each), every dem_coupling_* call doc/user/coupling.md names is declared there, the
+CMakeLists.txt that page shows is the template's, and libdem.so exports the functions of
+dem_coupling.h and nothing else.
 usage: test_package.py DEM WORKDIR BUILD_DIR MPIEXEC"""
 import os
 import re
 import shutil
 import subprocess
 import sys
+import tempfile
 
-from regression_util import ROOT, check, finish
+from regression_util import ROOT, check, check_close, finish
 
 dem, work, build, mpiexec = (os.path.abspath(a) for a in sys.argv[1:5])
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
 prefix = os.path.join(work, "prefix")
+G, RHO_P, RHO_F, T = 9.81, 2500.0, 1000.0, 1e-3     # fluid.c's g and rho_f, its ten steps
 
 
 def step(what, cmd, cwd=work):
@@ -25,6 +36,13 @@ def step(what, cmd, cwd=work):
     if r.returncode != 0:
         finish()
     return r.stdout
+
+
+def declared_functions(header):
+    """The functions a C header declares: its prototypes, comments left out."""
+    with open(header) as f:
+        text = re.sub(r"/\*.*?\*/|//[^\n]*", " ", f.read(), flags=re.S)
+    return set(re.findall(r"\b(dem_coupling_\w+)\s*\([^;{}]*\)\s*;", text))
 
 
 step("install", ["cmake", "--install", build, "--prefix", prefix])
@@ -41,28 +59,106 @@ for f in os.listdir(os.path.join(prefix, "lib", "cmake", "dem")):
             text = g.read()
         check("/usr/" not in text and ROOT not in text and build not in text,
               f"{f} holds no absolute path of the build machine")
+
+header = os.path.join(prefix, "include", "dem", "dem_coupling.h")
+declared = declared_functions(header)
+with open(os.path.join(ROOT, "src", "api", "dem_coupling.f90")) as f:
+    bound = set(re.findall(r"bind\(C, name='(dem_coupling_\w+)'\)", f.read()))
+check(declared == bound, f"the header declares the bind(C) functions of dem_coupling.f90: "
+      f"not declared {sorted(bound - declared)}, not bound {sorted(declared - bound)}")
+with open(os.path.join(ROOT, "doc", "user", "coupling.md")) as f:
+    page = f.read()
+documented = set(re.findall(r"\b(dem_coupling_\w+)\(", page))
+# the CMakeLists.txt the page shows is the template's (without its heading comments)
+block = re.search(r"## Building against it\n.*?```cmake\n(.*?)```", page, re.S)
+with open(os.path.join(ROOT, "tests", "consumer", "CMakeLists.txt")) as f:
+    template = re.sub(r"\A(#[^\n]*\n)+", "", f.read())
+check(block is not None and block.group(1) == template,
+      "coupling.md shows tests/consumer/CMakeLists.txt as it is")
+check(documented <= declared, f"the calls coupling.md names are declared in dem_coupling.h: "
+      f"not declared {sorted(documented - declared)}")
 # the shared library: exactly the C interface (the functions the header declares)
 library = os.path.join(prefix, "lib", "libdem.so")
 check(os.path.exists(library), "installed lib/libdem.so")
-with open(os.path.join(ROOT, "src", "api", "dem_coupling.h")) as f:
-    declared = set(re.findall(r"\b(dem_coupling_\w+)\(", f.read()))
 symbols = step("the library's symbols", ["nm", "-D", "--defined-only", library])
 exported = {line.split()[-1] for line in symbols.splitlines()
             if len(line.split()) == 3 and line.split()[1] in "TDBR"}
 check(exported == declared, f"libdem.so exports the header's {len(declared)} functions: "
       f"missing {sorted(declared - exported)}, more {sorted(exported - declared)}")
+
 cache = open(os.path.join(build, "CMakeCache.txt")).read().splitlines()
 setting = {k.split(":")[0]: v for k, _, v in (line.partition("=") for line in cache) if ":" in k}
-consumer = os.path.join(work, "consumer")
-step("configure the consumer", ["cmake", "-S", os.path.join(ROOT, "tests", "consumer"), "-B",
-                                consumer, "-G", "Ninja", f"-Ddem_DIR={prefix}/lib/cmake/dem",
-                                f"-DCMAKE_Fortran_COMPILER={setting['CMAKE_Fortran_COMPILER']}",
-                                f"-DCMAKE_BUILD_TYPE={setting['CMAKE_BUILD_TYPE']}"])
-step("build the consumer", ["cmake", "--build", consumer])
-mpirun = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", "2"]
-out = step("the C coupling checks on 2 ranks", mpirun + [os.path.join(consumer, "fluid_c")])
-check("all checks passed" in out, f"fluid_c: {out}")
-case = os.path.join(work, "coupling_c_2.nml")           # the case fluid_c wrote
-out = step("the Fortran fluid code", mpirun + [os.path.join(consumer, "fluid_f"), case])
-check("t =  1.00000E-03 s" in out, f"fluid_f: {out}")
+
+
+def cmake_project(source, binary):
+    """Configure and build the CMake project `source` in `binary` against the install."""
+    step(f"configure {os.path.basename(source)}",
+         ["cmake", "-S", source, "-B", binary, "-G", "Ninja", f"-Ddem_DIR={prefix}/lib/cmake/dem",
+          f"-DCMAKE_C_COMPILER={setting['CMAKE_C_COMPILER']}",
+          f"-DCMAKE_Fortran_COMPILER={setting['CMAKE_Fortran_COMPILER']}",
+          f"-DCMAKE_BUILD_TYPE={setting['CMAKE_BUILD_TYPE']}"])
+    step(f"build {os.path.basename(source)}", ["cmake", "--build", binary])
+
+
+with tempfile.TemporaryDirectory(prefix="dem_consumer_") as outside:
+    check(not os.path.realpath(outside).startswith(os.path.realpath(ROOT) + os.sep),
+          f"{outside} is outside the source tree")
+    # every declared function links, with each target
+    links = os.path.join(outside, "links")
+    os.makedirs(links)
+    names = sorted(declared)
+    with open(os.path.join(links, "links.c"), "w") as f:
+        f.write('#include <stdio.h>\n#include "dem_coupling.h"\n'
+                "typedef void (*function)(void);\n"
+                "static volatile function calls[] = {\n"
+                + "".join(f"    (function){name},\n" for name in names)
+                + "};\nint main(void)\n{\n    int n = 0;\n"
+                "    for (size_t k = 0; k < sizeof calls / sizeof calls[0]; k++) "
+                "n += calls[k] != 0;\n"
+                '    printf("%d functions\\n", n);\n    return 0;\n}\n')
+    with open(os.path.join(links, "CMakeLists.txt"), "w") as f:
+        f.write("cmake_minimum_required(VERSION 3.20)\nproject(links LANGUAGES C Fortran)\n"
+                "find_package(dem REQUIRED)\n"
+                "add_executable(links_shared links.c)\n"
+                "target_link_libraries(links_shared PRIVATE dem::dem_shared)\n"
+                "add_executable(links_static links.c)\n"
+                "target_link_libraries(links_static PRIVATE dem::dem)\n"
+                "set_target_properties(links_static PROPERTIES LINKER_LANGUAGE Fortran)\n")
+    cmake_project(links, os.path.join(outside, "links-build"))
+    for target in ("links_shared", "links_static"):
+        out = step(target, [os.path.join(outside, "links-build", target)])
+        check(out.strip() == f"{len(names)} functions",
+              f"{target}: the {len(names)} functions of dem_coupling.h link: {out}")
+
+    # the template, copied out of the tree
+    consumer = os.path.join(outside, "consumer")
+    shutil.copytree(os.path.join(ROOT, "tests", "consumer"), consumer)
+    cmake_project(consumer, os.path.join(outside, "consumer-build"))
+    with open(os.path.join(ROOT, "src", "base", "dem_version.f90")) as f:
+        version = re.search(r"dem_version_string = '([^']+)'", f.read()).group(1)
+    mpirun = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", "2"]
+    for program in ("fluid_c", "fluid_c_static", "fluid_f"):
+        case = os.path.join(work, f"{program}.nml")
+        with open(case, "w") as f:
+            f.write(f"&run dt = 2.5e-5, t_end = 1.0, gravity = 0, 0, -{G} /\n"
+                    f"&output dir = '{work}/{program}', interval = 0.5 /\n"
+                    f"&material name = 'glass', density = {RHO_P}, youngs_modulus = 1e7, "
+                    "poisson_ratio = 0.25 /\n"
+                    "&pair materials = 'glass', 'glass', restitution = 0.5, friction = 0.3 /\n"
+                    + "".join(f"&particle id = {k + 1}, material = 'glass', radius = 1e-3, "
+                              f"position = {0.01 * k}, 0, 0 /\n" for k in range(4)))
+        out = step(f"{program} on 2 ranks",
+                   mpirun + [os.path.join(outside, "consumer-build", program), case])
+        if program == "fluid_f":
+            check("t =  1.00000E-03 s" in out, f"fluid_f: {out}")
+            continue
+        m = re.search(r"dem (\S+), t = (\S+) s, (\d+) particles, mean vertical velocity (\S+)",
+                      out)
+        check(m is not None, f"{program} prints its line: {out}")
+        if m:
+            check(m.group(1) == version, f"{program}: version {m.group(1)}, expected {version}")
+            check(m.group(2) == "1.00000e-03", f"{program}: t = {m.group(2)}")
+            check(m.group(3) == "4", f"{program}: {m.group(3)} particles, expected 4")
+            check_close(float(m.group(4)), -G * (1.0 - RHO_F / RHO_P) * T, 1e-9,
+                        f"{program}: the spheres' vertical velocity")
 finish()
