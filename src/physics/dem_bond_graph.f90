@@ -10,7 +10,7 @@ module dem_bond_graph
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_allgather, comm_offset
     use dem_frame, only: frame_t
-    use dem_particles, only: particles_bond_reals
+    use dem_particles, only: particles_bond_reals, sorted_position
     use dem_bonds, only: bond_model_t, bond_stress_ratio
     use dem_contact_store, only: bond_rows, br_partner, br_model
     implicit none
@@ -47,7 +47,7 @@ contains
                 row = fr%p%bonds((k - 1) * bond_rows + 1:k * bond_rows, a)
                 partner = nint(row(br_partner), i8)
                 if (partner <= fr%p%gid(a)) cycle      ! empty or broken, or held from b
-                b = row_of(ids, partner)
+                b = sorted_position(ids, partner)
                 if (b == 0) cycle                      ! (its partner left the run)
                 nb = nb + 1
                 pair(:, nb) = [first + a - 1, b - 1]
@@ -72,26 +72,6 @@ contains
             fr%fragment(a) = ids(find(root, first + a))
         end do
     end subroutine bond_graph
-
-    !> The position of id v in the increasing ids (0: absent), by bisection.
-    pure integer(i8) function row_of(ids, v) result(pos)
-        integer(i8), intent(in) :: ids(:), v
-        integer(i8) :: lo, hi, mid
-        pos = 0
-        lo = 1
-        hi = size(ids, kind=i8)
-        do while (lo <= hi)
-            mid = (lo + hi) / 2
-            if (ids(mid) == v) then
-                pos = mid
-                return
-            else if (ids(mid) < v) then
-                lo = mid + 1
-            else
-                hi = mid - 1
-            end if
-        end do
-    end function row_of
 
     !> The root of i's set, the path on the way halved.
     integer(i8) function find(root, i) result(r)

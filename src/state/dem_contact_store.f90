@@ -19,7 +19,7 @@ module dem_contact_store
     use dem_kinds, only: wp, ip, i8
     use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int, &
                            fill_range
-    use dem_particles, only: order_by_id
+    use dem_particles, only: order_by_id, sorted_position
     use dem_acc, only: acc_data, acc_to_host, acc_exit, acc_enter, acc_create
     implicit none
     private
@@ -149,28 +149,10 @@ contains
         do i = 1, n
             do k = 1, n_slots
                 if (bonds(br_partner, k, i) == 0.0_wp) cycle
-                if (found(int(bonds(br_partner, k, i), i8))) bonds(:, k, i) = 0.0_wp
+                if (sorted_position(sorted, int(bonds(br_partner, k, i), i8)) > 0) &
+                    bonds(:, k, i) = 0.0_wp
             end do
         end do
-    contains
-        logical function found(id)
-            integer(i8), intent(in) :: id
-            integer(ip) :: lo, hi, mid
-            lo = 1
-            hi = size(sorted, kind=ip)
-            found = .false.
-            do while (lo <= hi)
-                mid = (lo + hi) / 2
-                if (sorted(mid) == id) then
-                    found = .true.
-                    return
-                else if (sorted(mid) < id) then
-                    lo = mid + 1
-                else
-                    hi = mid - 1
-                end if
-            end do
-        end function found
     end subroutine store_bonds_forget
 
     !> Whether a particle whose bond slots are `slots` is bonded to particle `id` by a bond

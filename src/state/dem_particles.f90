@@ -17,7 +17,7 @@ module dem_particles
               particles_fields, field_visitor_t, frame_none, frame_state, frame_force, frame_restart, &
               particles_frame_copy, particles_frame_pack, particles_frame_unpack, particles_derive, &
               body_state_rows, bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset, &
-              particles_bond_reals
+              particles_bond_reals, sorted_position
 
     ! rows of particles_t%ext: what a coupled fluid code sets and gets (doc/user/coupling.md)
     integer, parameter :: ext_force = 1      !< 1:3 external force [N]
@@ -750,6 +750,26 @@ contains
             end if
         end do
     end function index_of_id
+
+    !> The position of id in the increasing ids `sorted` (0: absent), by bisection.
+    pure integer(ip) function sorted_position(sorted, id) result(pos)
+        integer(i8), intent(in) :: sorted(:), id
+        integer(ip) :: lo, hi, mid
+        pos = 0
+        lo = 1
+        hi = size(sorted, kind=ip)
+        do while (lo <= hi)
+            mid = (lo + hi) / 2
+            if (sorted(mid) == id) then
+                pos = mid
+                return
+            else if (sorted(mid) < id) then
+                lo = mid + 1
+            else
+                hi = mid - 1
+            end if
+        end do
+    end function sorted_position
 
     !> The indices 1..size(gid) in increasing order of gid (merge sort, stable).
     function order_by_id(gid) result(idx)
