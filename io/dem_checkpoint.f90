@@ -135,6 +135,7 @@ contains
             call h5_write(h_, '/state/step0', fr%step0, err)
             call h5_write(h_, '/state/dt', fr%dt, err)
             call h5_write(h_, '/state/removed', fr%removed, err)
+            if (allocated(fr%outflow)) call h5_write(h_, '/state/outflow', fr%outflow, err)
             call h5_write(h_, '/state/settled', merge(1_ip, 0_ip, fr%settled), err)
             call h5_write(h_, '/state/rng_state', fr%rng_state, err)
             call h5_write(h_, '/state/series_bytes', fr%series_bytes, err)
@@ -325,6 +326,13 @@ contains
         call h5_read(h, '/state/step0', fr%step0, err)
         call h5_read(h, '/state/dt', fr%dt, err)
         call h5_read(h, '/state/removed', fr%removed, err)
+        if (.not. err%failed() .and. h5_exists(h, '/state/outflow')) then
+            call h5_dims(h, '/state/outflow', dims, err, 1)
+            if (.not. err%failed()) then
+                allocate(fr%outflow(dims(1)))
+                call h5_read(h, '/state/outflow', fr%outflow, err)
+            end if
+        end if
         call h5_read(h, '/state/settled', settled, err)
         fr%settled = settled /= 0
         call h5_read(h, '/state/rng_state', fr%rng_state, err)

@@ -9,11 +9,11 @@ module dem_input_probes
     use dem_namelist_scan, only: nml_file_t
     use dem_input_group, only: group_io_t, group_reading, group_count
     use dem_input_values, only: unset, name_len, in_range, check_vector, check_direction, &
-                                check_memory
+                                check_memory, check_positive
     use dem_case, only: case_t, id_check_t
     use dem_outlets, only: outlet_t, outlet_plane, outlet_box
     use dem_probes, only: probe_t, probe_count, probe_center_of_mass, probe_track, &
-                          probe_histogram, probe_wall_load
+                          probe_histogram, probe_wall_load, probe_region_cylinder
     implicit none
     private
     public :: read_outlets, read_probes
@@ -77,9 +77,16 @@ contains
         type(error_t), intent(inout) :: err
         character(len=name_len) :: name    ! column prefix in probes.csv, required, unique
         character(len=name_len) :: kind    ! 'count' | 'center_of_mass' | 'track' | 'histogram'
-        character(len=name_len) :: region  ! 'all' (default) | 'box'
+        character(len=name_len) :: region  ! 'all' (default) | 'box' | 'cylinder'
         real(wp) :: box_min(3), box_max(3) ! box: corners [m]; a coordinate of +-1e30 leaves
                                            ! the box open on that side
+        real(wp) :: cylinder_base(3)       ! cylinder: centre of its base (a point of its
+                                           ! axis) [m], required
+        real(wp) :: cylinder_axis(3)       ! cylinder: direction of its axis, from the base,
+                                           ! non-zero, default 0, 0, 1
+        real(wp) :: cylinder_radius        ! cylinder: [m], > 0, required
+        real(wp) :: cylinder_height        ! cylinder: its length from the base along the
+                                           ! axis [m], > 0; default: endless both ways
         integer(i8) :: id                  ! track: the particle's id
         real(wp) :: time                   ! histogram: when [s], >= 0, required
         integer :: bins                    ! histogram: bins over [v_min, v_max), default 20
@@ -89,8 +96,8 @@ contains
         character(len=name_len) :: wall    ! wall load: the wall's name, default all walls
         real(wp) :: axis(3)                ! wall load: direction of the torque's axis,
                                            ! non-zero, default 0, 0, 1
-        namelist /probe/ name, kind, region, box_min, box_max, id, time, bins, v_min, v_max, &
-            axis_point, wall, axis
+        namelist /probe/ name, kind, region, box_min, box_max, cylinder_base, cylinder_axis, &
+            cylinder_radius, cylinder_height, id, time, bins, v_min, v_max, axis_point, wall, axis
         type(group_io_t) :: io
         integer :: k
         character(len=:), allocatable :: at
@@ -104,6 +111,10 @@ contains
             region = 'all'
             box_min = unset
             box_max = unset
+            cylinder_base = unset
+            cylinder_axis = [0.0_wp, 0.0_wp, 1.0_wp]
+            cylinder_radius = unset
+            cylinder_height = unset
             id = 0
             time = unset
             bins = 20
@@ -127,6 +138,11 @@ contains
                 call fail("key 'name': '" // trim(name) // "' names another probe too")
                 return
             end if
+            if (name == 'outflow' .and. size(c%outlets) > 0) then
+                call fail("key 'name': 'outflow' is taken by the outlets' columns of " // &
+                          'probes.csv (outflow_<material>)')
+                return
+            end if
             p%name = name
             select case (region)
             case ('all')
@@ -139,9 +155,25 @@ contains
                 end if
                 p%lo = box_min
                 p%hi = box_max
+            case ('cylinder')
+                if (.not. check_vector(at, cylinder_base, 'cylinder_base', .true., err)) return
+                if (.not. check_vector(at, cylinder_axis, 'cylinder_axis', .false., err)) return
+                if (.not. check_direction(at, cylinder_axis, 'cylinder_axis', err)) return
+                if (.not. check_positive(at, cylinder_radius, 'cylinder_radius', '[m]', err)) &
+                    return
+                p%region = probe_region_cylinder
+                p%base = cylinder_base
+                p%cylinder_axis = cylinder_axis
+                p%radius = cylinder_radius
+                if (cylinder_height /= unset) then
+                    if (.not. check_positive(at, cylinder_height, 'cylinder_height', '[m]', &
+                                             err)) return
+                    p%lo(1) = 0.0_wp
+                    p%hi(1) = cylinder_height
+                end if
             case default
                 call fail("key 'region': '" // trim(region) // "' is not known (accepted: " // &
-                          'all, box)')
+                          'all, box, cylinder)')
                 return
             end select
             select case (kind)

@@ -1,10 +1,16 @@
 ! SPDX-License-Identifier: BSD-3-Clause
-!> Outlets: regions where particles leave the simulation (below a plane, outside a box).
+!> Outlets: regions where particles leave the simulation (below a plane, outside a box), and
+!> the mass that leaves through them, per material (the columns outflow_<material> of
+!> probes.csv), summed in fixed point (dem_fixed_sum) so that it is the same on any number of
+!> ranks.
 module dem_outlets
-    use dem_kinds, only: wp, ip
+    use dem_kinds, only: wp, ip, i8
+    use dem_comm, only: comm_t
+    use dem_fixed_sum, only: fixed_sum_t, fixed_sum_start, fixed_sum_total, fixed_split, &
+                             fixed_sum_add_words
     implicit none
     private
-    public :: outlet_t, outlet_plane, outlet_box, outlets_mark
+    public :: outlet_t, outlet_plane, outlet_box, outlets_mark, outlets_mass, outflow_header
 
     integer(ip), parameter :: outlet_plane = 1  !< beyond a plane, on the side its normal points
     integer(ip), parameter :: outlet_box = 2    !< outside an axis-aligned box
@@ -49,6 +55,61 @@ contains
             if (fresh(i)) n_fresh = n_fresh + 1
         end do
     end function outlets_mark
+
+    !> The mass that the fresh particles (outlets_mark) of all ranks take out, per material
+    !> 1..n_mats (collective): the sums of their masses `mass` (a clump's: its body's mass in
+    !> one member, zero in the others) by material, in fixed point: the largest mass and the
+    !> count of fresh particles over the ranks set the scale, the words are summed as
+    !> integers on the device, exact in any order.
+    function outlets_mass(comm, n, n_fresh, fresh, mat, mass, n_mats) result(total)
+        type(comm_t), intent(in) :: comm
+        integer(ip), intent(in) :: n
+        integer, intent(in) :: n_fresh                !! this rank's fresh particles
+        logical, intent(in) :: fresh(n)
+        integer(ip), intent(in) :: mat(n)
+        real(wp), intent(in) :: mass(n)               !! [kg]
+        integer, intent(in) :: n_mats
+        real(wp) :: total(n_mats), sums(1, n_mats), top, scale, scale2
+        type(fixed_sum_t) :: fixed
+        integer(i8) :: h, l, k, r
+        integer(ip) :: i, m
+        top = 0.0_wp
+        !$acc parallel loop gang vector default(present) reduction(max:top)
+        do i = 1, n
+            if (fresh(i)) top = max(top, mass(i))
+        end do
+        call fixed_sum_start(fixed, comm, [top], n_fresh, n_mats)
+        scale = fixed%scale(1)
+        scale2 = fixed%scale2
+        do m = 1, n_mats
+            h = 0
+            l = 0
+            !$acc parallel loop gang vector default(present) copyin(scale, scale2) &
+            !$acc private(k, r) reduction(+:h, l)
+            do i = 1, n
+                if (.not. fresh(i) .or. mat(i) /= m) cycle
+                call fixed_split(mass(i), scale, scale2, k, r)
+                h = h + k
+                l = l + r
+            end do
+            call fixed_sum_add_words(fixed, [h], [l], int(m))
+        end do
+        call fixed_sum_total(fixed, comm, sums)
+        total = sums(1, :)
+    end function outlets_mass
+
+    !> The columns of probes.csv that the outlets give, each preceded by a comma:
+    !> outflow_<material> for the materials `used` by particles.
+    function outflow_header(names, used) result(header)
+        character(len=*), intent(in) :: names(:)   !! material names
+        logical, intent(in) :: used(:)
+        character(len=:), allocatable :: header
+        integer :: m
+        header = ''
+        do m = 1, size(names)
+            if (used(m)) header = header // ',outflow_' // trim(names(m))
+        end do
+    end function outflow_header
 
     !> gone(i) also when x_i is beyond the plane through a with normal b (outlet_plane), or
     !> outside the box of corners a, b (outlet_box).

@@ -6,7 +6,8 @@
 !> at the first output time at or after its time, the particles in its region by their
 !> velocity components about a vertical axis: radial, angular (about the axis) and vertical.
 !> A wall-load probe gives the force of the particles on a wall (or on all walls) and its
-!> torque about a point, from the wall contacts of a force evaluation.
+!> torque about a point, from the wall contacts of a force evaluation. A region is a box or a
+!> cylinder of any axis (probe_region_box, probe_region_cylinder).
 !> Each rank looks at its own particles; counts are summed over the ranks, and centres of
 !> mass and loads in fixed point (dem_fixed_sum), so that the values do not depend on where
 !> the particles are stored. Reductions on the device, at output times; collective.
@@ -23,7 +24,7 @@ module dem_probes
     private
     public :: probe_t, probe_count, probe_center_of_mass, probe_track, probe_histogram, &
               probe_wall_load, probe_header, probe_values, probe_histogram_counts, &
-              probe_load_values
+              probe_load_values, probe_region_box, probe_region_cylinder
 
     integer(ip), parameter :: probe_count = 1           !< particles per material in a region
     integer(ip), parameter :: probe_center_of_mass = 2  !< centre of mass per material
@@ -31,11 +32,21 @@ module dem_probes
     integer(ip), parameter :: probe_histogram = 4       !< velocity histograms at a time
     integer(ip), parameter :: probe_wall_load = 5       !< force and torque on walls
 
-    !> One probe; its region is the box [lo, hi] (the whole space by default).
+    integer(ip), parameter :: probe_region_box = 1       !< the box [lo, hi]
+    integer(ip), parameter :: probe_region_cylinder = 2  !< a cylinder of any axis
+    integer, parameter :: region_size = 9                !< words of a region (region_words)
+
+    !> One probe; its region is the box [lo, hi] (the whole space by default) or the cylinder
+    !> of radius `radius` about the line through `base` along the unit vector `cylinder_axis`,
+    !> between the distances lo(1) and hi(1) from `base` along that axis.
     type :: probe_t
         character(len=32) :: name = ''
         integer(ip) :: kind = probe_count
+        integer(ip) :: region = probe_region_box
         real(wp) :: lo(3) = -huge(1.0_wp), hi(3) = huge(1.0_wp)  !< region [m]
+        real(wp) :: base(3) = 0.0_wp                 !< cylinder: a point of its axis [m]
+        real(wp) :: cylinder_axis(3) = [0.0_wp, 0.0_wp, 1.0_wp]  !< cylinder: unit axis
+        real(wp) :: radius = 0.0_wp                  !< cylinder: radius [m]
         integer(i8) :: id = 0                   !< track: the particle
         real(wp) :: time = 0.0_wp               !< histogram: when [s]
         integer(ip) :: bins = 20                !< histogram: bins over [v_min, v_max)
@@ -99,23 +110,25 @@ contains
         real(wp), intent(in) :: mass(n)
         real(wp), intent(inout) :: x(3, n), v(3, n), w(3, n)   !! (one comes to the host)
         real(wp), allocatable :: values(:), all(:)
-        real(wp) :: sums(4, size(used)), one(10)
+        real(wp) :: sums(4, size(used)), one(10), g(region_size)
         integer(i8) :: counts(size(used)), hi(4), lo(4)
         type(fixed_sum_t) :: fixed
         integer(ip) :: i, m
         select case (p%kind)
         case (probe_count)
+            g = region_words(p)
             do m = 1, size(used)
-                counts(m) = region_count(n, p%lo, p%hi, m, mat, x)
+                counts(m) = region_count(n, p%region, g, m, mat, x)
             end do
             call comm_sum(comm, counts)
             values = pack(real(counts, wp), used)
         case (probe_center_of_mass)            ! sums of m and m x per material
-            call fixed_sum_start(fixed, comm, region_bound(n, p%lo, p%hi, mass, x), int(n), &
+            g = region_words(p)
+            call fixed_sum_start(fixed, comm, region_bound(n, p%region, g, mass, x), int(n), &
                                  size(used))
             do m = 1, size(used)
-                call region_moments(n, p%lo, p%hi, m, mat, mass, x, fixed%scale, fixed%scale2, &
-                                    hi, lo)
+                call region_moments(n, p%region, g, m, mat, mass, x, fixed%scale, &
+                                    fixed%scale2, hi, lo)
                 call fixed_sum_add_words(fixed, hi, lo, int(m))
             end do
             call fixed_sum_total(fixed, comm, sums)
@@ -275,42 +288,67 @@ contains
         lo_sum = [l1, l2, l3, l4, l5, l6]
     end subroutine load_words
 
-    !> True when the point c lies in the box [lo, hi].
-    pure logical function in_box(c, lo, hi) result(inside)
-        !$acc routine seq
-        real(wp), intent(in) :: c(3), lo(3), hi(3)
-        inside = c(1) >= lo(1) .and. c(1) <= hi(1) .and. c(2) >= lo(2) .and. &
-                 c(2) <= hi(2) .and. c(3) >= lo(3) .and. c(3) <= hi(3)
-    end function in_box
+    !> A probe's region as the words in_region reads: the box's corners lo, hi; the
+    !> cylinder's base, unit axis, radius and range along the axis.
+    pure function region_words(p) result(g)
+        type(probe_t), intent(in) :: p
+        real(wp) :: g(region_size)
+        if (p%region == probe_region_cylinder) then
+            g = [p%base, p%cylinder_axis, p%radius, p%lo(1), p%hi(1)]
+        else
+            g = [p%lo, p%hi, 0.0_wp, 0.0_wp, 0.0_wp]
+        end if
+    end function region_words
 
-    !> The particles of material m in the box [lo, hi], a count on the device.
-    integer(i8) function region_count(n, lo, hi, m, mat, x) result(k)
-        integer(ip), intent(in) :: n, m
-        real(wp), intent(in) :: lo(3), hi(3), x(3, n)
+    !> True when the point c lies in a probe's region (region_words g): in the box
+    !> g(1:3) <= c <= g(4:6); in the cylinder, with d = c - b for its base b = g(1:3) and
+    !> h = d . a along its unit axis a = g(4:6), g(8) <= h <= g(9) and
+    !> |d - h a|^2 <= R^2 for its radius R = g(7) (points on the surface are inside).
+    pure logical function in_region(c, shape, g) result(inside)
+        !$acc routine seq
+        real(wp), intent(in) :: c(3), g(region_size)
+        integer(ip), intent(in) :: shape
+        real(wp) :: d(3), h
+        if (shape == probe_region_box) then
+            inside = c(1) >= g(1) .and. c(1) <= g(4) .and. c(2) >= g(2) .and. &
+                     c(2) <= g(5) .and. c(3) >= g(3) .and. c(3) <= g(6)
+        else
+            d = c - g(1:3)
+            h = d(1) * g(4) + d(2) * g(5) + d(3) * g(6)
+            d = d - h * g(4:6)
+            inside = h >= g(8) .and. h <= g(9) .and. &
+                     d(1)**2 + d(2)**2 + d(3)**2 <= g(7)**2
+        end if
+    end function in_region
+
+    !> The particles of material m in a region (in_region), a count on the device.
+    integer(i8) function region_count(n, shape, g, m, mat, x) result(k)
+        integer(ip), intent(in) :: n, m, shape
+        real(wp), intent(in) :: g(region_size), x(3, n)
         integer(ip), intent(in) :: mat(n)
         integer(ip) :: i
         k = 0
-        !$acc parallel loop gang vector default(present) copyin(lo, hi) reduction(+:k)
+        !$acc parallel loop gang vector default(present) copyin(g) reduction(+:k)
         do i = 1, n
-            if (mat(i) == m .and. in_box(x(:, i), lo, hi)) k = k + 1
+            if (mat(i) == m .and. in_region(x(:, i), shape, g)) k = k + 1
         end do
     end function region_count
 
-    !> The largest m and m |x_k| of the particles in the box [lo, hi]: the bounds of the
+    !> The largest m and m |x_k| of the particles in a region (in_region): the bounds of the
     !> centre-of-mass sums' terms; maxima on the device.
-    function region_bound(n, lo, hi, mass, x) result(top)
-        integer(ip), intent(in) :: n
-        real(wp), intent(in) :: lo(3), hi(3), mass(n), x(3, n)
+    function region_bound(n, shape, g, mass, x) result(top)
+        integer(ip), intent(in) :: n, shape
+        real(wp), intent(in) :: g(region_size), mass(n), x(3, n)
         real(wp) :: top(4), t1, t2, t3, t4
         integer(ip) :: i
         t1 = 0.0_wp
         t2 = 0.0_wp
         t3 = 0.0_wp
         t4 = 0.0_wp
-        !$acc parallel loop gang vector default(present) copyin(lo, hi) &
+        !$acc parallel loop gang vector default(present) copyin(g) &
         !$acc reduction(max:t1, t2, t3, t4)
         do i = 1, n
-            if (.not. in_box(x(:, i), lo, hi)) cycle
+            if (.not. in_region(x(:, i), shape, g)) cycle
             t1 = max(t1, mass(i))
             t2 = max(t2, mass(i) * abs(x(1, i)))
             t3 = max(t3, mass(i) * abs(x(2, i)))
@@ -320,10 +358,10 @@ contains
     end function region_bound
 
     !> The fixed-point words (fixed_split) of m and m x, summed over the particles of
-    !> material mt in the box [lo, hi]: integer sums on the device, exact in any order.
-    subroutine region_moments(n, lo, hi, mt, mat, mass, x, scale, scale2, hi_sum, lo_sum)
-        integer(ip), intent(in) :: n, mt
-        real(wp), intent(in) :: lo(3), hi(3), mass(n), x(3, n), scale(4), scale2
+    !> material mt in a region (in_region): integer sums on the device, exact in any order.
+    subroutine region_moments(n, shape, g, mt, mat, mass, x, scale, scale2, hi_sum, lo_sum)
+        integer(ip), intent(in) :: n, mt, shape
+        real(wp), intent(in) :: g(region_size), mass(n), x(3, n), scale(4), scale2
         integer(ip), intent(in) :: mat(n)
         integer(i8), intent(out) :: hi_sum(4), lo_sum(4)
         integer(i8) :: h1, h2, h3, h4, l1, l2, l3, l4, k, r
@@ -336,10 +374,10 @@ contains
         l2 = 0
         l3 = 0
         l4 = 0
-        !$acc parallel loop gang vector default(present) copyin(lo, hi, scale) private(k, r) &
+        !$acc parallel loop gang vector default(present) copyin(g, scale) private(k, r) &
         !$acc reduction(+:h1, h2, h3, h4, l1, l2, l3, l4)
         do i = 1, n
-            if (mat(i) /= mt .or. .not. in_box(x(:, i), lo, hi)) cycle
+            if (mat(i) /= mt .or. .not. in_region(x(:, i), shape, g)) cycle
             call fixed_split(mass(i), scale(1), scale2, k, r)
             h1 = h1 + k
             l1 = l1 + r
@@ -372,7 +410,8 @@ contains
         integer(i8), allocatable :: flat(:)
         allocate(counts(0:p%bins + 1, 3), flat(3 * (p%bins + 2)))
         call acc_data(flat, acc_create)
-        call histogram_bins(n, p%lo, p%hi, p%axis, p%v_min, p%v_max, p%bins, x, v, flat)
+        call histogram_bins(n, p%region, region_words(p), p%axis, p%v_min, p%v_max, p%bins, &
+                            x, v, flat)
         call acc_data(flat, acc_to_host)
         call acc_data(flat, acc_exit)
         call comm_sum(comm, flat)
@@ -381,9 +420,9 @@ contains
 
     !> The kernel of probe_histogram_counts: flat(k + 1 + (c - 1) (bins + 2)) for bin k of
     !> component c.
-    subroutine histogram_bins(n, lo, hi, axis, v_min, v_max, bins, x, v, flat)
-        integer(ip), intent(in) :: n, bins
-        real(wp), intent(in) :: lo(3), hi(3), axis(3), v_min, v_max, x(3, n), v(3, n)
+    subroutine histogram_bins(n, shape, g, axis, v_min, v_max, bins, x, v, flat)
+        integer(ip), intent(in) :: n, bins, shape
+        real(wp), intent(in) :: g(region_size), axis(3), v_min, v_max, x(3, n), v(3, n)
         integer(i8), intent(inout) :: flat(3 * (bins + 2))
         real(wp) :: rn, er(2), comp(3), width
         integer(ip) :: i, c, k
@@ -392,10 +431,10 @@ contains
         do k = 1, 3 * (bins + 2)
             flat(k) = 0
         end do
-        !$acc parallel loop gang vector default(present) copyin(lo, hi, axis) &
+        !$acc parallel loop gang vector default(present) copyin(g, axis) &
         !$acc private(rn, er, comp, c, k)
         do i = 1, n
-            if (.not. in_box(x(:, i), lo, hi)) cycle
+            if (.not. in_region(x(:, i), shape, g)) cycle
             rn = sqrt((x(1, i) - axis(1))**2 + (x(2, i) - axis(2))**2)
             er(1) = 1.0_wp
             er(2) = 0.0_wp

@@ -59,6 +59,9 @@ contains
             s%step0 = fr%step
         end if
         s%removed = fr%removed
+        if (allocated(fr%outflow) .and. allocated(s%outflow)) then
+            if (size(fr%outflow) == size(s%outflow)) s%outflow = fr%outflow
+        end if
         s%settled = fr%settled
         s%rng_state = fr%rng_state
         if (allocated(fr%inflow_count) .and. allocated(s%inflow_count)) then
@@ -119,6 +122,7 @@ contains
         fr%step0 = s%step0
         fr%dt = c%dt
         fr%removed = s%removed
+        if (allocated(s%outflow)) fr%outflow = s%outflow
         fr%settled = s%settled
         fr%rng_state = s%rng_state
         if (allocated(s%inflow_count)) then

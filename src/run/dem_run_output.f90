@@ -128,6 +128,7 @@ contains
             call acc_data(pm, acc_exit)
             call acc_data(px, acc_exit)
         end if
+        if (allocated(s%outflow)) values = [values, pack(s%outflow, s%run%probed)]
         if (s%comm%rank == 0) call output_probes(out, t, s%step, values, err)
     contains
         !> A histogram at time t_h is written at the first row at or after it: this one if the

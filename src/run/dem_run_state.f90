@@ -75,6 +75,8 @@ module dem_run_state
         integer(i8) :: sorted_step = 0 !< the step of the last spatial sort (a list build's)
         integer(i8) :: removed = 0     !< particles removed by outlets
         integer(i8), allocatable :: removed_ids(:)  !< their ids on this rank, when allocated
+        real(wp), allocatable :: outflow(:)  !< the mass of each material they took out [kg]
+                                             !< (all ranks; allocated in a case with outlets)
         logical :: settled = .false.   !< the kinetic energy fell below stop_kinetic_energy
         real(wp) :: settled_energy = 0.0_wp  !< the kinetic energy then [J]
         logical :: emptied = .false.   !< the outlets took every particle out

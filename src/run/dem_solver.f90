@@ -16,6 +16,7 @@ module dem_solver
     use dem_integrate, only: integrator_verlet
     use dem_output, only: output_open, output_check, output_final, output_close
     use dem_probes, only: probe_header, probe_wall_load
+    use dem_outlets, only: outflow_header
     use dem_frame, only: frame_t
     use dem_folder, only: folder_claim, folder_restart, folder_sync, folder_missing_snapshot, &
                           folder_prune
@@ -90,6 +91,10 @@ contains
         s%step = 0
         s%rng_state = c%rng_state
         s%next_id = c%next_id
+        if (size(c%outlets) > 0) then
+            allocate(s%outflow(c%mats%n))
+            s%outflow = 0.0_wp
+        end if
         if (c%inflow) then
             allocate(s%inflow_count(size(c%inserts)), s%inflow_mass(size(c%inserts)))
             s%inflow_count = 0
@@ -134,6 +139,7 @@ contains
             do k = 1, size(c%probes)
                 columns = columns // probe_header(c%probes(k), c%mats%name, r%probed)
             end do
+            if (allocated(s%outflow)) columns = columns // outflow_header(c%mats%name, r%probed)
             if (.not. failed_anywhere(s, err)) call solver_prepare(s, c, err)
             if (err%failed()) return
             if (s%comm%rank == 0) then  ! the CSV files are rank 0's

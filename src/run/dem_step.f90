@@ -17,9 +17,10 @@ module dem_step
     use dem_contacts_pp, only: pp_forces
     use dem_contacts_pw, only: pw_forces
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, kick_drift
-    use dem_clumps, only: clumps_move, sphere_gravity, clump_reach, clump_index_build
+    use dem_clumps, only: clumps_move, sphere_gravity, clump_reach, clump_index_build, &
+                          clump_probe_view
     use dem_mesh, only: mesh_move
-    use dem_outlets, only: outlets_mark
+    use dem_outlets, only: outlets_mark, outlets_mass
     use dem_particles, only: particles_park
     use dem_neighbors, only: neighbors_moved
     use dem_run_output, only: write_series, write_trace, write_snapshot, write_checkpoint
@@ -238,7 +239,8 @@ contains
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         integer(i8) :: n_fresh(1)
-        real(wp), allocatable :: xd(:, :), rd(:)
+        integer :: mine
+        real(wp), allocatable :: xd(:, :), rd(:), pm(:), px(:, :)
         if (.not. allocated(s%gone)) then
             allocate(s%gone(s%p%n_own), s%fresh(s%p%n_own))
             s%gone = .false.
@@ -254,9 +256,21 @@ contains
             else
                 n_fresh = outlets_mark(n, p%x, c%outlets, s%gone, s%fresh)
             end if
+            mine = int(n_fresh(1))
             if (s%comm%size > 1) call comm_sum(s%comm, n_fresh)
             if (n_fresh(1) == 0) return
             s%removed = s%removed + n_fresh(1)
+            if (allocated(p%body)) then       ! (a clump's mass once, in its first member)
+                call clump_probe_view(n, p%gid, p%body, p%mass, p%x, p%body_mass, p%body_x, &
+                                      pm, px)
+                s%outflow = s%outflow + outlets_mass(s%comm, n, mine, s%fresh, p%mat, pm, &
+                                                     size(s%outflow))
+                call acc_data(pm, acc_exit)
+                call acc_data(px, acc_exit)
+            else
+                s%outflow = s%outflow + outlets_mass(s%comm, n, mine, s%fresh, p%mat, p%mass, &
+                                                     size(s%outflow))
+            end if
             s%parked = s%parked + n_fresh(1)
             s%emptied = s%removed - s%run%removed0 >= s%run%n0 + inflow_particles(s, c) - &
                                                           s%run%inserted0

@@ -46,6 +46,8 @@ module dem_frame
         integer(i8) :: step0 = 0                  !< steps count in dt from here
         real(wp) :: dt = 0.0_wp                   !< [s]
         integer(i8) :: removed = 0                !< particles removed by outlets
+        real(wp), allocatable :: outflow(:)       !< their mass per material [kg] (a case
+                                                  !< with outlets)
         logical :: settled = .false.
         integer(i8) :: rng_state = 0              !< the case's random generator
         integer(i8) :: series_bytes = 0           !< length of series.csv at this step
