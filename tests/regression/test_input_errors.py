@@ -415,6 +415,24 @@ bad("divisions_memory", sub("half_width = 0.1 /", "half_width = 0.1, divisions =
     "wall_plane", "divisions", "MiB of this machine")
 bad("bins_range", GOOD + "&probe name = 'h', kind = 'histogram', time = 0, v_min = 0, "
     "v_max = 1, bins = 2000000000 /\n", "probe", "bins", "1 .. 10000000")
+# cylinder probe regions, and the outlets' columns of probes.csv
+CYL = GOOD + "&probe name = 'c', kind = 'count', region = 'cylinder', "
+bad("cylinder_no_base", CYL + "cylinder_radius = 0.1 /\n", "probe", "cylinder_base", "required")
+bad("cylinder_no_radius", CYL + "cylinder_base = 0, 0, 0 /\n", "probe", "cylinder_radius",
+    "required")
+bad("cylinder_radius", CYL + "cylinder_base = 0, 0, 0, cylinder_radius = -1 /\n", "probe",
+    "cylinder_radius", "must be > 0")
+bad("cylinder_axis", CYL + "cylinder_base = 0, 0, 0, cylinder_radius = 1, "
+    "cylinder_axis = 0, 0, 0 /\n", "probe", "cylinder_axis", "non-zero")
+bad("cylinder_nan_base", CYL + "cylinder_base = 0, NaN, 0, cylinder_radius = 1 /\n", "probe",
+    "cylinder_base", "finite")
+bad("cylinder_height", CYL + "cylinder_base = 0, 0, 0, cylinder_radius = 1, "
+    "cylinder_height = 0 /\n", "probe", "cylinder_height", "must be > 0")
+bad("probe_region", GOOD + "&probe name = 'c', kind = 'count', region = 'sphere' /\n", "probe",
+    "region", "all, box, cylinder")
+bad("probe_outflow_name", GOOD + "&outlet region = 'plane', point = 0, 0, -1, "
+    "normal = 0, 0, -1 /\n&probe name = 'outflow', kind = 'count' /\n", "probe", "name",
+    "outflow_<material>")
 bad("insert_memory", GOOD + INS.replace("n = 5", "n = 2000000000") + "radius_min = 1e-3 /\n",
     "insert", "n", "MiB of this machine")
 bad("insert_behind_wall", GOOD + INS.replace("0.03, box_max", "-0.02, box_max") +

@@ -14,13 +14,12 @@ in the box.
    cumulative sums are carried exactly), on 2 ranks.
 3. A cylinder probe (tilted axis, a height range) counts, in every row, the particles of each
    material whose centre lies in the cylinder, counted here from the row's snapshot.
-4. Bad input of the new keys (and a probe named 'outflow' beside outlets) is refused naming the file, the group and the key.
+(Bad input of the new keys: test_input_errors.py.)
 usage: test_outflow.py DEM WORKDIR MPIEXEC"""
 import filecmp
 import math
 import os
 import shutil
-import subprocess
 import sys
 
 import h5py
@@ -131,24 +130,4 @@ check(len(again) > 2 and again[1:] == whole[len(whole) - len(again) + 1:],
       "probes.csv after a restart at t = 0.1 s on 2 ranks: the rows after it, byte for byte")
 check(float(again[1].split(",")[-2]) > 0, "the restart's first row carries the outflow before it")
 
-# 4. bad input
-OK = CASE.format(dir=os.path.join(work, "bad"))
-bad = {"region = 'cylinder', cylinder_radius = 0.01": "key 'cylinder_base'",
-       "region = 'cylinder', cylinder_base = 0, 0, 0": "key 'cylinder_radius'",
-       "region = 'cylinder', cylinder_base = 0, 0, 0, cylinder_radius = -1":
-           "key 'cylinder_radius'",
-       "region = 'cylinder', cylinder_base = 0, 0, 0, cylinder_radius = 1, "
-       "cylinder_axis = 0, 0, 0": "key 'cylinder_axis'",
-       "region = 'cylinder', cylinder_base = 0, 0, 0, cylinder_radius = 1, "
-       "cylinder_height = 0": "key 'cylinder_height'",
-       "region = 'sphere'": "key 'region'"}
-for n, (keys, expect) in enumerate(bad.items()):
-    case = write(f"bad{n}", OK + f"&probe name = 'q', kind = 'count', {keys} /\n")
-    r = subprocess.run([dem, "--check", case], cwd=work, capture_output=True, text=True)
-    check(r.returncode == 2 and f"bad{n}.nml:" in r.stderr and "&probe" in r.stderr and
-          expect in r.stderr, f"bad &probe ({keys}): exit {r.returncode}, {r.stderr.strip()}")
-case = write("bad_name", OK + "&probe name = 'outflow', kind = 'count' /\n")
-r = subprocess.run([dem, "--check", case], cwd=work, capture_output=True, text=True)
-check(r.returncode == 2 and "&probe" in r.stderr and "key 'name'" in r.stderr and
-      "outflow" in r.stderr, f"a probe named 'outflow' beside outlets: {r.stderr.strip()}")
 finish()
