@@ -30,8 +30,9 @@
    `dem --check` prints) within the radii asked for, and no particle overlaps another
    body's.
 5. An outlet plane below 120 falling dimers: the removed and remaining counts even at every
-   row of series.csv, each dimer left whole with its centre above the plane, the same
-   series.csv on 1 and 2 ranks.
+   row of series.csv, the outflow of probes.csv the removed dimers' mass (each once), each
+   dimer left whole with its centre above the plane, the same series.csv and probes.csv on
+   1 and 2 ranks.
 6. An oblique, elastic, frictionless impact of a dimer tilted by 45 degrees: its rebound
    velocity and spin those of rigid-body impact theory (the impulse 2 m_eff v0 at the contact
    point, 1/m_eff = 1/M + (lever)^2 / I), to 1 %.
@@ -299,6 +300,11 @@ check(series["removed"][-1] > 10 and series["particles"][-1] > 10,
       f"some clumps left, some stayed: {series['removed'][-1]}, {series['particles'][-1]}")
 check(np.all(series["removed"] % 2 == 0) and np.all(series["particles"] % 2 == 0),
       "the removed and the remaining particles: whole dimers at every row")
+same_file(os.path.join(work, "outlet_1", "probes.csv"), os.path.join(work, "outlet_2",
+          "probes.csv"), "the outflow on 2 ranks")
+flow = np.genfromtxt(os.path.join(work, "outlet_1", "probes.csv"), delimiter=",", names=True)
+check(np.allclose(flow["outflow_glass"], series["removed"] / 2 * MASS, rtol=1e-5, atol=0),
+      "the outflow: the removed dimers' mass (lens formula), each dimer once, at every row")
 fo = final("outlet_1")
 left = {}
 for row in np.atleast_1d(fo):
