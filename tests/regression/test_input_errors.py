@@ -30,7 +30,7 @@ GOOD = """&run dt = 1e-7, t_end = 1e-5, gravity = 0, 0, 0 /
 def run(args, name):
     d = os.path.join(work, name)
     os.makedirs(d)
-    r = subprocess.run([dem] + args, cwd=d, capture_output=True, text=True, timeout=60)
+    r = subprocess.run([dem] + args, cwd=d, capture_output=True, text=True, timeout=300)
     return r, d
 
 
