@@ -10,7 +10,7 @@ module dem_bond_create
     use dem_kinds, only: wp, ip, i8
     use dem_comm, only: comm_t, comm_allgather
     use dem_random, only: rng_t, rng_seed, rng_uniform
-    use dem_particles, only: order_by_id, index_of_id
+    use dem_particles, only: order_by_id, index_of_id, sorted_first
     use dem_contact_store, only: bond_rows, br_partner, br_model, br_kn, br_sigma, br_tau, &
                                  br_normal
     implicit none
@@ -172,7 +172,7 @@ contains
         integer(ip), allocatable :: cand(:), order(:)
         integer(i8), allocatable :: key(:), sorted(:)
         integer(i8) :: dims(3), c(3), k3(3), kk
-        integer(ip) :: i, j, e, lo, hi, mid, m
+        integer(ip) :: i, j, e, m
         integer :: dx, dy, dz
         real(wp) :: cell, origin(3)
         integer(i8), allocatable :: na(:), nb(:)
@@ -202,17 +202,7 @@ contains
                         k3 = c + [dx, dy, dz]
                         if (any(k3 < 0) .or. any(k3 >= dims)) cycle
                         kk = k3(1) + dims(1) * (k3(2) + dims(2) * k3(3))
-                        lo = 1
-                        hi = m + 1
-                        do while (lo < hi)
-                            mid = (lo + hi) / 2
-                            if (sorted(mid) < kk) then
-                                lo = mid + 1
-                            else
-                                hi = mid
-                            end if
-                        end do
-                        do j = lo, m
+                        do j = sorted_first(sorted, kk), m      ! the cell's particles
                             if (sorted(j) /= kk) exit
                             call try_pair(i, cand(order(j)))
                         end do

@@ -132,8 +132,11 @@ contains
         ! step's normal to this one's, and about the normal by the pair's mean spin
         n0 = row(br_normal:br_normal + 2)
         twist = 0.5_wp * dot_product(wa + wb, nrm) * dt
-        fs = in_plane(turn(row(br_fs:br_fs + 2), n0, nrm, twist), nrm)
-        mb = in_plane(turn(row(br_mb:br_mb + 2), n0, nrm, twist), nrm)
+        fs = row(br_fs:br_fs + 2)
+        mb = row(br_mb:br_mb + 2)
+        call turn(fs, mb, n0, nrm, twist)
+        fs = in_plane(fs, nrm)
+        mb = in_plane(mb, nrm)
         row(br_fn) = row(br_fn) + kn * area * vn * dt
         fs = fs + ks * area * dt * vs
         row(br_mt) = row(br_mt) + ks * polar * wn * dt
@@ -183,15 +186,16 @@ contains
         q = max(sigma / row(br_sigma), tau / row(br_tau))
     end function bond_stress_ratio
 
-    !> Vector u turned by the rotation that takes unit vector n0 to unit vector n1 (about
-    !> n0 x n1), then by angle `twist` about n1 (Rodrigues' formula, doc/theory.md 18.1).
-    pure function turn(u, n0, n1, twist) result(r)
+    !> Vectors u1 and u2 turned by the rotation that takes unit vector n0 to unit vector n1
+    !> (about n0 x n1), then by angle `twist` about n1 (Rodrigues' formula, doc/theory.md
+    !> 18.1).
+    pure subroutine turn(u1, u2, n0, n1, twist)
         !$acc routine seq
-        real(wp), intent(in) :: u(3), n0(3), n1(3), twist
-        real(wp) :: r(3), axis(3), c, sn, cs, t2
+        real(wp), intent(inout) :: u1(3), u2(3)
+        real(wp), intent(in) :: n0(3), n1(3), twist
+        real(wp) :: axis(3), c, sn, cs, t2
         c = dot_product(n0, n1)
         axis = cross(n0, n1)
-        r = c * u + cross(axis, u) + dot_product(axis, u) / (1.0_wp + c) * axis
         if (abs(twist) < 1.0e-2_wp) then       ! (the series to rounding: x^7 / 5040 < 2e-18)
             t2 = twist**2
             sn = twist * (1.0_wp - t2 / 6.0_wp * (1.0_wp - t2 / 20.0_wp))
@@ -200,8 +204,19 @@ contains
             sn = sin(twist)
             cs = cos(twist)
         end if
+        u1 = turned(u1, axis, c, n1, sn, cs)
+        u2 = turned(u2, axis, c, n1, sn, cs)
+    end subroutine turn
+
+    !> u turned about n0 x n1 = axis (c = n0 . n1), then about n1 by the angle of sine sn and
+    !> cosine cs (turn's rotation, once its constants are known).
+    pure function turned(u, axis, c, n1, sn, cs) result(r)
+        !$acc routine seq
+        real(wp), intent(in) :: u(3), axis(3), c, n1(3), sn, cs
+        real(wp) :: r(3)
+        r = c * u + cross(axis, u) + dot_product(axis, u) / (1.0_wp + c) * axis
         r = cs * r + sn * cross(n1, r) + (1.0_wp - cs) * dot_product(n1, r) * n1
-    end function turn
+    end function turned
 
     !> u less its component along the unit vector n.
     pure function in_plane(u, n) result(r)

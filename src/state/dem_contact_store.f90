@@ -19,7 +19,7 @@ module dem_contact_store
     use dem_kinds, only: wp, ip, i8
     use dem_storage, only: storage_capacity, storage_resize, permute_real, permute_int, &
                            fill_range
-    use dem_particles, only: order_by_id, sorted_position
+    use dem_particles, only: order_by_id, sorted_position, sorted_first
     use dem_acc, only: acc_data, acc_to_host, acc_exit, acc_enter, acc_create
     implicit none
     private
@@ -100,30 +100,22 @@ contains
         integer(ip), intent(out) :: partner(n_slots, n_own)
         integer(i8), intent(out) :: missing
         integer(ip), allocatable :: order(:)
-        integer(ip) :: i, lo, hi, mid, e
+        integer(i8), allocatable :: sorted(:)
+        integer(ip) :: i, e
         integer(i8) :: id
         integer :: k
         real(wp) :: best, d2
         order = order_by_id(gid)
+        sorted = gid(order)
         missing = 0
         do i = 1, n_own
             do k = 1, n_slots
                 partner(k, i) = 0
                 id = int(bonds(br_partner, k, i), i8)
                 if (id == 0) cycle
-                lo = 1                           ! the first place in order with gid >= id
-                hi = n_all + 1
-                do while (lo < hi)
-                    mid = (lo + hi) / 2
-                    if (gid(order(mid)) < id) then
-                        lo = mid + 1
-                    else
-                        hi = mid
-                    end if
-                end do
                 best = huge(1.0_wp)
-                do e = lo, n_all
-                    if (gid(order(e)) /= id) exit
+                do e = sorted_first(sorted, id), n_all     ! each copy of id held
+                    if (sorted(e) /= id) exit
                     d2 = sum((x(:, order(e)) - x(:, i))**2)
                     if (d2 < best) then
                         best = d2

@@ -17,7 +17,7 @@ module dem_particles
               particles_fields, field_visitor_t, frame_none, frame_state, frame_force, frame_restart, &
               particles_frame_copy, particles_frame_pack, particles_frame_unpack, particles_derive, &
               body_state_rows, bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset, &
-              particles_bond_reals, sorted_position
+              particles_bond_reals, sorted_position, sorted_first
 
     ! rows of particles_t%ext: what a coupled fluid code sets and gets (doc/user/coupling.md)
     integer, parameter :: ext_force = 1      !< 1:3 external force [N]
@@ -751,24 +751,33 @@ contains
         end do
     end function index_of_id
 
-    !> The position of id in the increasing ids `sorted` (0: absent), by bisection.
-    pure integer(ip) function sorted_position(sorted, id) result(pos)
+    !> The first position in the increasing ids `sorted` whose id is >= id (size + 1: none),
+    !> by bisection.
+    pure integer(ip) function sorted_first(sorted, id) result(lo)
         integer(i8), intent(in) :: sorted(:), id
-        integer(ip) :: lo, hi, mid
-        pos = 0
+        integer(ip) :: hi, mid
         lo = 1
-        hi = size(sorted, kind=ip)
-        do while (lo <= hi)
+        hi = size(sorted, kind=ip) + 1
+        do while (lo < hi)
             mid = (lo + hi) / 2
-            if (sorted(mid) == id) then
-                pos = mid
-                return
-            else if (sorted(mid) < id) then
+            if (sorted(mid) < id) then
                 lo = mid + 1
             else
-                hi = mid - 1
+                hi = mid
             end if
         end do
+    end function sorted_first
+
+    !> The position of id in the increasing ids `sorted` (the first, if it is there more
+    !> than once; 0: absent).
+    pure integer(ip) function sorted_position(sorted, id) result(pos)
+        integer(i8), intent(in) :: sorted(:), id
+        pos = sorted_first(sorted, id)
+        if (pos > size(sorted)) then
+            pos = 0
+        else if (sorted(pos) /= id) then
+            pos = 0
+        end if
     end function sorted_position
 
     !> The indices 1..size(gid) in increasing order of gid (merge sort, stable).
