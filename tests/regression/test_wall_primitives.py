@@ -1,0 +1,78 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Wall primitives (&wall_primitive) against analytical rest positions and &wall_plane.
+
+1. A sphere of radius r inside a cylinder of radius R made of n = 12 facets, gravity sideways
+   towards the middle of a facet: it comes to rest against the facet, its centre at
+   R cos(pi/n) - r from the axis plus the Hertz overlap under its weight (the facet sag
+   R (1 - cos(pi/n)) is the whole difference from a true cylinder).
+2. A sphere bouncing and sliding on a tilted &wall_plane and on a &wall_primitive rectangle
+   of the same plane, turned 30 degrees about its normal and of other sides: the same
+   trajectory (the contact force depends on the plane only).
+usage: test_wall_primitives.py DEM WORKDIR"""
+import math
+import os
+import shutil
+import sys
+
+from regression_util import check, finish, run_dem
+import chung_ooi as co
+
+dem, work = sys.argv[1], os.path.abspath(sys.argv[2])
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+
+r, rho, E, nu, g = 1.0e-3, 2500.0, 1.0e8, 0.2, 9.81
+HEAD = f"""&material name = 'bead', density = {rho}, youngs_modulus = {E}, poisson_ratio = {nu} /
+&material name = 'rigid', rigid = .true. /
+&pair materials = 'bead', 'bead', restitution = 0.3, friction = 0.3 /
+&pair materials = 'bead', 'rigid', restitution = 0.3, friction = 0.3 /
+"""
+
+
+def run(name, text):
+    with open(os.path.join(work, name + ".nml"), "w") as f:
+        f.write(HEAD + text)
+    run_dem(dem, os.path.join(work, name + ".nml"), work)
+    return co.read_csv(os.path.join(work, "output", name, "final.csv"))
+
+
+# 1. rest inside a cylinder
+R, n = 0.01, 12
+phi = math.pi / n   # the middle of the first facet
+gx, gy = g * math.cos(phi), g * math.sin(phi)
+final = run("cylinder", f"""&run dt = 2.0e-6, t_end = 0.3, gravity = {gx}, {gy}, 0 /
+&particle id = 1, material = 'bead', radius = {r}, position = 0, 0, 0 /
+&wall_primitive shape = 'cylinder', material = 'rigid', point = 0, 0, -0.01,
+                axis = 0, 0, 0.02, radius = {R}, resolution = {n} /
+""")
+estar = E / (1 - nu**2)
+weight = co.sphere_mass(rho, r) * g
+overlap = (3 * weight / (4 * estar * math.sqrt(r)))**(2 / 3)
+d = math.hypot(final["x"][0], final["y"][0])
+expected = R * math.cos(phi) - r + overlap
+check(abs(d - expected) <= 0.05 * overlap,
+      f"cylinder: rest at {d:.9g} m from the axis, expected R cos(pi/n) - r + overlap = "
+      f"{expected:.9g} (sag {R * (1 - math.cos(phi)):.3g} m, overlap {overlap:.3g} m)")
+check(abs(math.atan2(final["y"][0], final["x"][0]) - phi) < 1e-6, "cylinder: rests on the facet")
+check(math.hypot(final["vx"][0], final["vy"][0]) < 1e-5, "cylinder: at rest")
+
+# 2. rectangle turned 30 degrees against the plane it lies in
+normal = (0.0, math.sin(0.3), math.cos(0.3))
+start = "&particle id = 1, material = 'bead', radius = 1e-3, position = 0, 0, 0.002, " \
+        "velocity = 0.05, 0.02, -0.1 /\n"
+RUN = "&run dt = 2.0e-6, t_end = 0.05, gravity = 0, 0, -9.81 /\n"
+plane = run("plane", RUN + start + "&wall_plane material = 'rigid', point = 0, 0, 0, normal = "
+            f"{normal[0]}, {normal[1]}, {normal[2]}, half_width = 0.05 /\n")
+a = (math.cos(math.pi / 6), 0.0, 0.0)
+b = (0.0, math.sin(math.pi / 6) * normal[2], -math.sin(math.pi / 6) * normal[1])
+direction = tuple(ai + bi for ai, bi in zip(a, b))
+rect = run("rectangle", RUN + start + "&wall_primitive shape = 'rectangle', material = "
+           f"'rigid', point = 0, 0, 0, normal = {normal[0]}, {normal[1]}, {normal[2]}, "
+           f"direction = {direction[0]}, {direction[1]}, {direction[2]}, "
+           "half_sizes = 0.04, 0.06, resolution = 3 /\n")
+moved = math.dist([plane[k][0] for k in "xyz"], [0.0, 0.0, 0.002])
+check(moved > 0.002, f"rectangle: the sphere slid {moved:.3g} m on the plane")
+for k in ("x", "y", "z", "vx", "vy", "vz"):
+    check(abs(rect[k][0] - plane[k][0]) <= 1e-9 * max(1.0, abs(plane[k][0])) + 1e-12,
+          f"rectangle: {k} = {rect[k][0]!r}, the &wall_plane's {plane[k][0]!r}")
+finish()
