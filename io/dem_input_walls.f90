@@ -1,7 +1,8 @@
 ! SPDX-License-Identifier: BSD-3-Clause
 !> The groups of a case file that bound the particles' space (dem_input): &wall_plane (a
 !> flat square wall), &wall_mesh (a wall read from an STL file, at rest or in rigid motion),
-!> &wall_primitive (a cylinder or rectangle made of triangles, moving as a &wall_mesh can)
+!> &wall_primitive (a cylinder, cone, disc, rectangle or box made of triangles, moving as
+!> a &wall_mesh can)
 !> and &periodic (an axis along which space repeats). Each key is declared once, by its
 !> group's `namelist` statement, documented beside its variable (default, unit, range) and
 !> in doc/user/input.md.
@@ -11,13 +12,15 @@ module dem_input_walls
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_namelist_scan, only: nml_file_t
     use dem_input_group, only: group_io_t, group_reading, group_count
-    use dem_input_values, only: unset, name_len, check_positive, in_range, check_vector, &
+    use dem_input_values, only: unset, name_len, check_positive, check_nonnegative, &
+                                in_range, check_vector, &
                                 check_direction, find_material, relative_to, check_memory
     use dem_case, only: case_t
     use dem_mesh, only: mesh_add_plane, mesh_append, mesh_set_motion, mesh_set_oscillation, &
                         mesh_set_tables
     use dem_stl, only: stl_read
-    use dem_wall_shapes, only: cylinder_triangles, rectangle_triangles, plane_axes
+    use dem_wall_shapes, only: frustum_triangles, annulus_triangles, box_triangles, &
+                               rectangle_triangles, plane_axes
     use dem_text, only: itoa, real_text
     use dem_insert, only: region_face, region_bounds
     use dem_periodic, only: periodic_set
@@ -200,28 +203,34 @@ contains
         type(nml_file_t), intent(in) :: nf
         type(case_t), intent(inout) :: c
         type(error_t), intent(inout) :: err
-        character(len=name_len) :: shape     ! 'cylinder' or 'rectangle', required
+        character(len=name_len) :: shape  ! cylinder, cone, disc, rectangle or box, required
         character(len=name_len) :: material  ! material name, required
-        real(wp) :: point(3)          ! centre (rectangle), centre of the base (cylinder) [m]
-        real(wp) :: axis(3)           ! cylinder: from the base's centre to the top's [m]
-        real(wp) :: radius            ! cylinder: radius [m], > 0
-        real(wp) :: normal(3)         ! rectangle: the side it faces, non-zero
+        real(wp) :: point(3)          ! centre (rectangle, disc), centre of the base (cylinder,
+                                      ! cone) [m]
+        real(wp) :: axis(3)           ! cylinder, cone: from the base's centre to the top's [m]
+        real(wp) :: radius            ! cylinder, disc: radius; cone: at the base [m]
+        real(wp) :: radius_top        ! cone: radius at the top [m], >= 0
+        real(wp) :: inner_radius      ! disc: radius of its hole [m], default 0
+        real(wp) :: normal(3)         ! rectangle, disc: the side it faces, non-zero
         real(wp) :: direction(3)      ! rectangle: along its first side, not along normal
         real(wp) :: half_sizes(2)     ! rectangle: half its sides along direction and
                                       ! normal x direction [m], > 0
-        integer :: resolution         ! facets around (cylinder, >= 3, default 72) or
-                                      ! rectangles along a side (rectangle, default 1)
-        character(len=name_len) :: side  ! cylinder: 'inner' (default) or 'outer'
-        logical :: closed             ! cylinder: with a disc at each end, default false
+        real(wp) :: box_min(3), box_max(3)  ! box: its corners [m], box_max > box_min
+        integer :: resolution         ! facets around (cylinder, cone, disc; >= 3, default 72)
+                                      ! or rectangles along a side (rectangle, box; default 1)
+        character(len=name_len) :: side  ! cylinder, cone, box: 'inner' (default) or 'outer'
+        logical :: closed             ! cylinder, cone: with a disc at each end, default false
         character(len=name_len) :: name  ! the wall's name (for probes), unique, default none
-        namelist /wall_primitive/ shape, material, point, axis, radius, normal, direction, &
-            half_sizes, resolution, side, closed, velocity, velocity_start, velocity_end, &
-            rotation_axis, rotation_point, angular_velocity, rotation_start, rotation_end, &
-            oscillation_amplitude, oscillation_frequency, oscillation_phase, oscillation_start, &
-            oscillation_end, velocity_table_time, velocity_table, angular_velocity_table_time, &
+        namelist /wall_primitive/ shape, material, point, axis, radius, radius_top, &
+            inner_radius, normal, direction, half_sizes, box_min, box_max, resolution, side, &
+            closed, velocity, velocity_start, velocity_end, rotation_axis, rotation_point, &
+            angular_velocity, rotation_start, rotation_end, oscillation_amplitude, &
+            oscillation_frequency, oscillation_phase, oscillation_start, oscillation_end, &
+            velocity_table_time, velocity_table, angular_velocity_table_time, &
             angular_velocity_table, name
         type(group_io_t) :: io
         character(len=:), allocatable :: at
+        real(wp), allocatable :: vert(:, :, :)
         real(wp) :: n(3), a(3), b(3)
         integer :: k, im
 
@@ -231,9 +240,13 @@ contains
             point = unset
             axis = unset
             radius = unset
+            radius_top = unset
+            inner_radius = unset
             normal = unset
             direction = unset
             half_sizes = unset
+            box_min = unset
+            box_max = unset
             resolution = -1
             side = ''
             closed = .false.
@@ -247,42 +260,61 @@ contains
             if (err%failed()) return
             im = find_material(c, material, at, err)
             if (im == 0) return
-            if (.not. check_vector(at, point, 'point', .true., err)) return
             select case (shape)
-            case ('cylinder')
-                if (.not. unused(at, [normal, direction, half_sizes], &
-                                 "'normal', 'direction' and 'half_sizes'", err)) return
+            case ('cylinder', 'cone')
+                if (.not. unused(at, [inner_radius, normal, direction, half_sizes, box_min, &
+                                      box_max], "'inner_radius', 'normal', 'direction', " // &
+                                 "'half_sizes', 'box_min' and 'box_max'", err)) return
+                if (.not. check_vector(at, point, 'point', .true., err)) return
                 if (.not. check_vector(at, axis, 'axis', .true., err)) return
                 n = axis
                 if (.not. check_direction(at, n, 'axis', err)) return
+                if (shape == 'cylinder') then
+                    if (.not. unused(at, [radius_top], "'radius_top'", err)) return
+                    if (.not. check_positive(at, radius, 'radius', '[m]', err)) return
+                    radius_top = radius
+                else
+                    if (.not. check_vector(at, [radius], 'radius', .true., err)) return
+                    if (.not. check_vector(at, [radius_top], 'radius_top', .true., err)) return
+                    if (.not. check_nonnegative(at, radius, 'radius', '[m]', err)) return
+                    if (.not. check_nonnegative(at, radius_top, 'radius_top', '[m]', err)) return
+                    if (max(radius, radius_top) <= 0.0_wp) then
+                        call set_error(err, dem_err_input, at // ": key 'radius_top': " // &
+                                       'radius and radius_top must not both be 0')
+                        return
+                    end if
+                end if
+                if (.not. check_resolution(3, 72, err)) return
+                if (.not. check_side(err)) return
+                vert = frustum_triangles(point, axis, radius, radius_top, resolution, &
+                                         side == 'inner', closed)
+            case ('disc')
+                if (.not. unused(at, [axis, radius_top, direction, half_sizes, box_min, &
+                                      box_max], "'axis', 'radius_top', 'direction', " // &
+                                 "'half_sizes', 'box_min' and 'box_max'", err)) return
+                if (.not. no_side(err)) return
+                if (.not. check_vector(at, point, 'point', .true., err)) return
+                if (.not. check_vector(at, normal, 'normal', .true., err)) return
+                if (.not. check_direction(at, normal, 'normal', err)) return
                 if (.not. check_positive(at, radius, 'radius', '[m]', err)) return
-                if (resolution == -1) resolution = 72
-                if (resolution < 3 .or. resolution > max_divisions) then
-                    call set_error(err, dem_err_input, at // ": key 'resolution': must be " // &
-                                   'in 3 .. ' // itoa(max_divisions) // ' for a cylinder')
+                if (inner_radius == unset) inner_radius = 0.0_wp
+                if (.not. (inner_radius >= 0.0_wp .and. inner_radius < radius)) then
+                    call set_error(err, dem_err_input, at // ": key 'inner_radius': must " // &
+                                   'be >= 0 and less than radius [m]')
                     return
                 end if
-                if (side == '') side = 'inner'
-                if (side /= 'inner' .and. side /= 'outer') then
-                    call set_error(err, dem_err_input, at // ": key 'side': '" // trim(side) // &
-                                   "' is not known (accepted: inner, outer)")
-                    return
-                end if
-                if (.not. wall_name_free(c, at, name, err)) return
-                call mesh_append(c%mesh, cylinder_triangles(point, axis, radius, resolution, &
-                                                            side == 'inner', closed), im)
+                if (.not. check_resolution(3, 72, err)) return
+                vert = annulus_triangles(point, normal, inner_radius, radius, resolution)
             case ('rectangle')
-                if (.not. unused(at, [axis, radius], "'axis' and 'radius'", err)) return
-                if (side /= '' .or. closed) then
-                    call set_error(err, dem_err_input, at // ": keys 'side' and 'closed' " // &
-                                   'are for a cylinder, not a rectangle')
-                    return
-                end if
+                if (.not. unused(at, [axis, radius, radius_top, inner_radius, box_min, &
+                                      box_max], "'axis', 'radius', 'radius_top', " // &
+                                 "'inner_radius', 'box_min' and 'box_max'", err)) return
+                if (.not. no_side(err)) return
+                if (.not. check_vector(at, point, 'point', .true., err)) return
                 if (.not. check_vector(at, normal, 'normal', .true., err)) return
                 if (.not. check_direction(at, normal, 'normal', err)) return
                 if (.not. check_vector(at, direction, 'direction', .true., err)) return
-                n = normal
-                if (norm2(direction - dot_product(direction, n) * n) <= &
+                if (norm2(direction - dot_product(direction, normal) * normal) <= &
                     1.0e-6_wp * norm2(direction)) then
                     call set_error(err, dem_err_input, at // ": key 'direction': must not " // &
                                    'be along normal')
@@ -290,26 +322,70 @@ contains
                 end if
                 if (.not. check_positive(at, half_sizes(1), 'half_sizes', '[m]', err)) return
                 if (.not. check_positive(at, half_sizes(2), 'half_sizes', '[m]', err)) return
-                if (resolution == -1) resolution = 1
-                if (resolution < 1 .or. resolution > max_divisions) then
-                    call set_error(err, dem_err_input, at // ": key 'resolution': must be " // &
-                                   'in 1 .. ' // itoa(max_divisions) // ' for a rectangle')
-                    return
-                end if
+                if (.not. check_resolution(1, 1, err)) return
                 if (.not. check_memory(c, at, 'resolution', 0.0_wp, &
                                        2.0_wp * real(resolution, wp)**2, 0.0_wp, err)) return
-                if (.not. wall_name_free(c, at, name, err)) return
-                call plane_axes(n, direction, a, b)
-                call mesh_append(c%mesh, rectangle_triangles(point, a, b, half_sizes, &
-                                                             resolution), im)
+                call plane_axes(normal, direction, a, b)
+                vert = rectangle_triangles(point, a, b, half_sizes, resolution)
+            case ('box')
+                if (.not. unused(at, [point, axis, radius, radius_top, inner_radius, normal, &
+                                      direction, half_sizes], "'point', 'axis', 'radius', " // &
+                                 "'radius_top', 'inner_radius', 'normal', 'direction' and " // &
+                                 "'half_sizes'", err)) return
+                if (closed) then
+                    call set_error(err, dem_err_input, at // ": key 'closed': a box is " // &
+                                   'closed; the key is for a cylinder or cone')
+                    return
+                end if
+                if (.not. check_vector(at, box_min, 'box_min', .true., err)) return
+                if (.not. check_vector(at, box_max, 'box_max', .true., err)) return
+                if (.not. all(box_max > box_min)) then
+                    call set_error(err, dem_err_input, at // ": key 'box_max': must exceed " // &
+                                   'box_min along each axis [m]')
+                    return
+                end if
+                if (.not. check_resolution(1, 1, err)) return
+                if (.not. check_memory(c, at, 'resolution', 0.0_wp, &
+                                       12.0_wp * real(resolution, wp)**2, 0.0_wp, err)) return
+                if (.not. check_side(err)) return
+                vert = box_triangles(box_min, box_max, resolution, side == 'inner')
             case default
                 call set_error(err, dem_err_input, at // ": key 'shape': '" // trim(shape) // &
-                               "' is not known (accepted: cylinder, rectangle)")
+                               "' is not known (accepted: cylinder, cone, disc, rectangle, box)")
                 return
             end select
+            if (.not. wall_name_free(c, at, name, err)) return
+            call mesh_append(c%mesh, vert, im)
             if (.not. motion_set(c, at, err)) return
             c%mesh%name(c%mesh%n_wall) = name
         end do
+    contains
+        !> resolution, `default` where not given, in lowest .. max_divisions
+        logical function check_resolution(lowest, default, err) result(ok)
+            integer, intent(in) :: lowest, default
+            type(error_t), intent(inout) :: err
+            if (resolution == -1) resolution = default
+            ok = resolution >= lowest .and. resolution <= max_divisions
+            if (.not. ok) call set_error(err, dem_err_input, at // ": key 'resolution': " // &
+                                         'must be in ' // itoa(lowest) // ' .. ' // &
+                                         itoa(max_divisions) // ' for a ' // trim(shape))
+        end function check_resolution
+        !> side: 'inner' where not given, or 'outer'
+        logical function check_side(err) result(ok)
+            type(error_t), intent(inout) :: err
+            if (side == '') side = 'inner'
+            ok = side == 'inner' .or. side == 'outer'
+            if (.not. ok) call set_error(err, dem_err_input, at // ": key 'side': '" // &
+                                         trim(side) // "' is not known (accepted: inner, outer)")
+        end function check_side
+        !> neither side nor closed given (a flat shape)
+        logical function no_side(err) result(ok)
+            type(error_t), intent(inout) :: err
+            ok = side == '' .and. .not. closed
+            if (.not. ok) call set_error(err, dem_err_input, at // ": keys 'side' and " // &
+                                         "'closed' are for a cylinder, cone or box, not a " // &
+                                         trim(shape))
+        end function no_side
     end subroutine read_primitives
 
     !> False, with `err` set, where one of the keys `keys` (their values `values`, unset when

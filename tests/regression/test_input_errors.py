@@ -284,7 +284,7 @@ RECT = ("&wall_primitive material = 'steel', shape = 'rectangle', point = 0, 0, 
         "normal = 0, 0, 1, direction = 1, 0, 0, ")
 for name, text, key, words in (
         ("primitive_shape", "&wall_primitive material = 'steel', shape = 'sphere', "
-         "point = 0, 0, 0 /", "shape", "accepted: cylinder, rectangle"),
+         "point = 0, 0, 0 /", "shape", "accepted: cylinder, cone, disc, rectangle, box"),
         ("primitive_cylinder_no_axis", CYL + "radius = 0.1 /", "axis", "required"),
         ("primitive_cylinder_zero_axis", CYL + "axis = 0, 0, 0, radius = 0.1 /", "axis", ""),
         ("primitive_cylinder_radius", CYL + "axis = 0, 0, 1, radius = -0.1 /", "radius", ""),
@@ -302,7 +302,20 @@ for name, text, key, words in (
         ("primitive_rectangle_radius", RECT + "half_sizes = 0.1, 0.1, radius = 0.1 /", "radius",
          "not used by this shape"),
         ("primitive_rectangle_closed", RECT + "half_sizes = 0.1, 0.1, closed = .true. /", "closed",
-         "for a cylinder")):
+         "for a cylinder, cone or box"),
+        ("primitive_cone_radii", CYL.replace("cylinder", "cone") + "axis = 0, 0, 1, radius = 0, "
+         "radius_top = 0 /", "radius_top", "not both be 0"),
+        ("primitive_cone_no_top", CYL.replace("cylinder", "cone") + "axis = 0, 0, 1, "
+         "radius = 0.1 /", "radius_top", "required"),
+        ("primitive_cylinder_top", CYL + "axis = 0, 0, 1, radius = 0.1, radius_top = 0.2 /",
+         "radius_top", "not used by this shape"),
+        ("primitive_disc_hole", "&wall_primitive material = 'steel', shape = 'disc', point = "
+         "0, 0, -0.05, normal = 0, 0, 1, radius = 0.1, inner_radius = 0.1 /", "inner_radius",
+         "less than radius"),
+        ("primitive_box_corners", "&wall_primitive material = 'steel', shape = 'box', "
+         "box_min = -1, -1, -1, box_max = 1, -1, 1 /", "box_max", "exceed box_min"),
+        ("primitive_box_closed", "&wall_primitive material = 'steel', shape = 'box', "
+         "box_min = -1, -1, -1, box_max = 1, 1, 1, closed = .true. /", "closed", "is closed")):
     bad(name, GOOD + text + "\n", "wall_primitive", key, words)
 bad("unknown_variant", GOOD + "&contact_model variant = 'lammps' /\n", "contact_model",
     "variant", "accepted: dem, liggghts, mercurydpm, yade")

@@ -8,6 +8,13 @@
 2. A sphere bouncing and sliding on a tilted &wall_plane and on a &wall_primitive rectangle
    of the same plane, turned 30 degrees about its normal and of other sides: the same
    trajectory (the contact force depends on the plane only).
+3. A sphere in a box (side 'inner'), frictionless, gravity along -(1, 1, 1): it rests in the
+   corner, r less the Hertz overlap under m g / sqrt(3) from each face.
+4. On an annulus in z = 0: a sphere over the ring rests at z = r less the overlap under its
+   weight, one over the hole falls through.
+5. A sphere in a cone of half-angle 45 degrees, apex down, n = 6 facets: it rests on the
+   axis at the height r / sin(a') of the inscribed pyramid's half-angle a',
+   tan a' = tan(45 deg) cos(pi/n) (8 % above the true cone's r / sin(45 deg)).
 usage: test_wall_primitives.py DEM WORKDIR"""
 import math
 import os
@@ -29,9 +36,9 @@ HEAD = f"""&material name = 'bead', density = {rho}, youngs_modulus = {E}, poiss
 """
 
 
-def run(name, text):
+def run(name, text, head=HEAD):
     with open(os.path.join(work, name + ".nml"), "w") as f:
-        f.write(HEAD + text)
+        f.write(head + text)
     run_dem(dem, os.path.join(work, name + ".nml"), work)
     return co.read_csv(os.path.join(work, "output", name, "final.csv"))
 
@@ -75,4 +82,39 @@ check(moved > 0.002, f"rectangle: the sphere slid {moved:.3g} m on the plane")
 for k in ("x", "y", "z", "vx", "vy", "vz"):
     check(abs(rect[k][0] - plane[k][0]) <= 1e-9 * max(1.0, abs(plane[k][0])) + 1e-12,
           f"rectangle: {k} = {rect[k][0]!r}, the &wall_plane's {plane[k][0]!r}")
+# 3. the corner of a box, frictionless (with friction the three forces are indeterminate)
+final = run("box", f"""&run dt = 2.0e-6, t_end = 0.3, gravity = {-g / math.sqrt(3)}, {-g / math.sqrt(3)}, {-g / math.sqrt(3)} /
+&particle id = 1, material = 'bead', radius = {r}, position = 0.005, 0.005, 0.005 /
+&wall_primitive shape = 'box', material = 'rigid', box_min = 0, 0, 0, box_max = 0.01, 0.01, 0.01 /
+""", HEAD.replace("friction = 0.3", "friction = 0.0"))
+face = (3 * weight / math.sqrt(3) / (4 * estar * math.sqrt(r)))**(2 / 3)
+for k in "xyz":
+    check(abs(final[k][0] - (r - face)) <= 0.05 * face,
+          f"box: {k} = {final[k][0]:.9g}, expected r - overlap = {r - face:.9g}")
+
+# 4. an annulus: a ring and a hole
+final = run("annulus", f"""&run dt = 2.0e-6, t_end = 0.2, gravity = 0, 0, {-g}, max_energy = 1 /
+&particle id = 1, material = 'bead', radius = {r}, position = 0.006, 0, 0.002 /
+&particle id = 2, material = 'bead', radius = {r}, position = -0.0001, 0, 0.002 /
+&wall_primitive shape = 'disc', material = 'rigid', point = 0, 0, 0, normal = 0, 0, 1,
+                radius = 0.01, inner_radius = 0.003 /
+""")
+rows = {int(i): j for j, i in enumerate(final["id"])}
+check(abs(final["z"][rows[1]] - (r - overlap)) <= 0.05 * overlap,
+      f"annulus: z = {final['z'][rows[1]]:.9g} on the ring, expected {r - overlap:.9g}")
+check(final["z"][rows[2]] < -0.05, f"annulus: z = {final['z'][rows[2]]:.3g} through the hole")
+
+# 5. a cone, apex down, of 6 facets (a sphere at the apex touches each: at most 8 wall contacts)
+n = 6
+half = math.atan(math.cos(math.pi / n))
+final = run("cone", f"""&run dt = 2.0e-6, t_end = 0.2, gravity = 0, 0, {-g} /
+&particle id = 1, material = 'bead', radius = {r}, position = 0, 0, 0.004 /
+&wall_primitive shape = 'cone', material = 'rigid', point = 0, 0, 0, axis = 0, 0, 0.01,
+                radius = 0, radius_top = 0.01, resolution = {n} /
+""")
+expected = r / math.sin(half)
+check(abs(final["z"][0] - expected) <= 1e-4 * r,
+      f"cone: z = {final['z'][0]:.9g}, expected r / sin(a') = {expected:.9g} "
+      f"(true cone: {r / math.sin(math.pi / 4):.9g})")
+check(math.hypot(final["x"][0], final["y"][0]) < 1e-9, "cone: on the axis")
 finish()
