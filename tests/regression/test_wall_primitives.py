@@ -15,6 +15,8 @@
 5. A sphere in a cone of half-angle 45 degrees, apex down, n = 6 facets: it rests on the
    axis at the height r / sin(a') of the inscribed pyramid's half-angle a',
    tan a' = tan(45 deg) cos(pi/n) (8 % above the true cone's r / sin(45 deg)).
+6. Motion: a closed cylinder (side 'outer') moving at V along its axis into a sphere at rest,
+   without gravity: elastic and frictionless, the sphere leaves at 2 V, as from a &wall_mesh.
 usage: test_wall_primitives.py DEM WORKDIR"""
 import math
 import os
@@ -117,4 +119,14 @@ check(abs(final["z"][0] - expected) <= 1e-4 * r,
       f"cone: z = {final['z'][0]:.9g}, expected r / sin(a') = {expected:.9g} "
       f"(true cone: {r / math.sin(math.pi / 4):.9g})")
 check(math.hypot(final["x"][0], final["y"][0]) < 1e-9, "cone: on the axis")
+
+# 6. a moving closed cylinder pushes a sphere with its end
+V = 0.5
+final = run("moving", f"""&run dt = 2.0e-6, t_end = 0.02, gravity = 0, 0, 0 /
+&particle id = 1, material = 'bead', radius = {r}, position = 0, 0, {r + 1e-5} /
+&wall_primitive shape = 'cylinder', material = 'rigid', point = 0, 0, -0.01, axis = 0, 0, 0.01,
+                radius = 0.005, side = 'outer', closed = .true., velocity = 0, 0, {V} /
+""", HEAD.replace("restitution = 0.3, friction = 0.3", "restitution = 1.0, friction = 0.0"))
+check(abs(final["vz"][0] - 2 * V) <= 2e-3 * 2 * V,
+      f"moving cylinder: sphere leaves at {final['vz'][0]:.9g} m/s, expected 2 V = {2 * V}")
 finish()
