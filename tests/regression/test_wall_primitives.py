@@ -4,7 +4,8 @@
 1. A sphere of radius r inside a cylinder of radius R made of n = 12 facets, gravity sideways
    towards the middle of a facet: it comes to rest against the facet, its centre at
    R cos(pi/n) - r from the axis plus the Hertz overlap under its weight (the facet sag
-   R (1 - cos(pi/n)) is the whole difference from a true cylinder).
+   R (1 - cos(pi/n)) is the whole difference from a true cylinder); a wall_load probe on the
+   named cylinder reads the sphere's weight.
 2. A sphere bouncing and sliding on a tilted &wall_plane and on a &wall_primitive rectangle
    of the same plane, turned 30 degrees about its normal and of other sides: the same
    trajectory (the contact force depends on the plane only).
@@ -18,6 +19,7 @@
 6. Motion: a closed cylinder (side 'outer') moving at V along its axis into a sphere at rest,
    without gravity: elastic and frictionless, the sphere leaves at 2 V, as from a &wall_mesh.
 usage: test_wall_primitives.py DEM WORKDIR"""
+import csv
 import math
 import os
 import shutil
@@ -51,8 +53,10 @@ phi = math.pi / n   # the middle of the first facet
 gx, gy = g * math.cos(phi), g * math.sin(phi)
 final = run("cylinder", f"""&run dt = 2.0e-6, t_end = 0.3, gravity = {gx}, {gy}, 0 /
 &particle id = 1, material = 'bead', radius = {r}, position = 0, 0, 0 /
+&output interval = 0.01 /
 &wall_primitive shape = 'cylinder', material = 'rigid', point = 0, 0, -0.01,
-                axis = 0, 0, 0.02, radius = {R}, resolution = {n} /
+                axis = 0, 0, 0.02, radius = {R}, resolution = {n}, name = 'tube' /
+&probe name = 'tube', kind = 'wall_load', wall = 'tube' /
 """)
 estar = E / (1 - nu**2)
 weight = co.sphere_mass(rho, r) * g
@@ -64,6 +68,12 @@ check(abs(d - expected) <= 0.05 * overlap,
       f"{expected:.9g} (sag {R * (1 - math.cos(phi)):.3g} m, overlap {overlap:.3g} m)")
 check(abs(math.atan2(final["y"][0], final["x"][0]) - phi) < 1e-6, "cylinder: rests on the facet")
 check(math.hypot(final["vx"][0], final["vy"][0]) < 1e-5, "cylinder: at rest")
+with open(os.path.join(work, "output", "cylinder", "probes.csv")) as f:
+    rows = list(csv.DictReader(f))
+for k, gk in (("x", gx), ("y", gy)):
+    load = float(rows[-1]["tube_f" + k])
+    check(abs(load - weight / g * gk) <= 1e-3 * weight,
+          f"cylinder: wall load {k} {load:.9g} N, the weight's {weight / g * gk:.9g} N")
 
 # 2. rectangle turned 30 degrees against the plane it lies in
 normal = (0.0, math.sin(0.3), math.cos(0.3))
