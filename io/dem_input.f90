@@ -16,7 +16,7 @@ module dem_input
     use dem_input_inserts, only: read_inserts
     use dem_input_clumps, only: read_clump_templates, read_clumps, read_clump_files
     use dem_input_bonds, only: read_bonds
-    use dem_input_walls, only: read_walls, read_meshes, read_periodic
+    use dem_input_walls, only: read_walls, read_meshes, read_primitives, read_periodic
     use dem_input_probes, only: read_outlets, read_probes
     use dem_case, only: case_t
     use dem_comm, only: comm_t
@@ -26,7 +26,7 @@ module dem_input
 
     !> The groups a case file may hold, in the order an unknown group's message lists them,
     !> each beside the module that reads it (and declares its keys).
-    character(len=*), parameter :: input_groups(17) = [character(len=14) :: &
+    character(len=*), parameter :: input_groups(18) = [character(len=14) :: &
         'run', 'output', &                          ! dem_input_run
         'contact_model', 'material', 'pair', &      ! dem_input_materials
         'particle', 'particle_file', &              ! dem_input_particles
@@ -34,7 +34,7 @@ module dem_input
         'bond', &                                   ! dem_input_bonds
         'insert', &                                 ! dem_input_inserts
         'outlet', 'probe', &                        ! dem_input_probes
-        'wall_plane', 'periodic', 'wall_mesh']      ! dem_input_walls
+        'wall_plane', 'periodic', 'wall_mesh', 'wall_primitive']  ! dem_input_walls
 
 contains
 
@@ -97,6 +97,8 @@ contains
         call read_walls(nf, c, err)
         if (err%failed()) return
         call read_meshes(nf, c, err)
+        if (err%failed()) return
+        call read_primitives(nf, c, err)
         if (err%failed()) return
         call read_run(nf, c, err)
         if (err%failed()) return

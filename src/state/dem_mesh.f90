@@ -5,6 +5,7 @@
 module dem_mesh
     use dem_kinds, only: wp, ip
     use dem_vector, only: cross
+    use dem_wall_shapes, only: rectangle_triangles
     implicit none
     private
     public :: mesh_t, table_t, mesh_append, mesh_add_plane, mesh_set_motion, &
@@ -329,9 +330,7 @@ contains
         real(wp), intent(in) :: half_width   !! half the side of the square [m]
         integer(ip), intent(in) :: divisions !! squares along each side
         integer(ip), intent(in) :: mat       !! material index
-        real(wp) :: n(3), a(3), b(3), h
-        real(wp), allocatable :: vert(:, :, :), corner(:, :, :)   ! (not on the stack)
-        integer(ip) :: i, j, k
+        real(wp) :: n(3), a(3), b(3)
 
         n = normal / norm2(normal)
         ! in-plane axes a, b with a x b = n
@@ -342,29 +341,8 @@ contains
         end if
         a = a / norm2(a)
         b = cross(n, a)
-        h = 2.0_wp * half_width / divisions
-        allocate(corner(3, 0:divisions, 0:divisions))
-        do j = 0, divisions
-            do i = 0, divisions
-                corner(:, i, j) = point + (i * h - half_width) * a + (j * h - half_width) * b
-            end do
-        end do
-
-        allocate(vert(3, 3, 2 * divisions**2))
-        k = 0
-        do j = 0, divisions - 1
-            do i = 0, divisions - 1
-                ! counter-clockwise seen from the side the normal points to
-                vert(:, 1, k + 1) = corner(:, i, j)
-                vert(:, 2, k + 1) = corner(:, i + 1, j)
-                vert(:, 3, k + 1) = corner(:, i + 1, j + 1)
-                vert(:, 1, k + 2) = corner(:, i, j)
-                vert(:, 2, k + 2) = corner(:, i + 1, j + 1)
-                vert(:, 3, k + 2) = corner(:, i, j + 1)
-                k = k + 2
-            end do
-        end do
-        call mesh_append(m, vert, mat)
+        call mesh_append(m, rectangle_triangles(point, a, b, [half_width, half_width], &
+                                                divisions), mat)
     end subroutine mesh_add_plane
 
     !> Closest point q of triangle (a, b, c) to point p, and whether it lies inside the face,

@@ -279,6 +279,44 @@ for name, keys, key, words in (
         ("angular_table_long", "angular_velocity_table_time = 0, 0.1, "
          "angular_velocity_table = 1, 2, 3", "angular_velocity_table", "1 value(s) per time")):
     bad(name, GOOD + MESH + keys + " /\n", "wall_mesh", key, words)
+CYL = "&wall_primitive material = 'steel', shape = 'cylinder', point = 0, 0, 0, "
+RECT = ("&wall_primitive material = 'steel', shape = 'rectangle', point = 0, 0, -0.05, "
+        "normal = 0, 0, 1, direction = 1, 0, 0, ")
+for name, text, key, words in (
+        ("primitive_shape", "&wall_primitive material = 'steel', shape = 'sphere', "
+         "point = 0, 0, 0 /", "shape", "accepted: cylinder, cone, disc, rectangle, box"),
+        ("primitive_cylinder_no_axis", CYL + "radius = 0.1 /", "axis", "required"),
+        ("primitive_cylinder_zero_axis", CYL + "axis = 0, 0, 0, radius = 0.1 /", "axis", ""),
+        ("primitive_cylinder_radius", CYL + "axis = 0, 0, 1, radius = -0.1 /", "radius", ""),
+        ("primitive_cylinder_resolution", CYL + "axis = 0, 0, 1, radius = 0.1, resolution = 2 /",
+         "resolution", "3 .."),
+        ("primitive_cylinder_side", CYL + "axis = 0, 0, 1, radius = 0.1, side = 'both' /", "side",
+         "accepted: inner, outer"),
+        ("primitive_cylinder_normal", CYL + "axis = 0, 0, 1, radius = 0.1, normal = 0, 0, 1 /", "normal",
+         "not used by this shape"),
+        ("primitive_cylinder_motion", CYL + "axis = 0, 0, 1, radius = 0.1, rotation_axis = 0, 0, 0 /",
+         "rotation_axis", ""),
+        ("primitive_rectangle_direction", RECT.replace("direction = 1, 0, 0", "direction = 0, 0, 2")
+         + "half_sizes = 0.1, 0.1 /", "direction", "along normal"),
+        ("primitive_rectangle_sizes", RECT + "half_sizes = 0.1 /", "half_sizes", ""),
+        ("primitive_rectangle_radius", RECT + "half_sizes = 0.1, 0.1, radius = 0.1 /", "radius",
+         "not used by this shape"),
+        ("primitive_rectangle_closed", RECT + "half_sizes = 0.1, 0.1, closed = .true. /", "closed",
+         "for a cylinder, cone or box"),
+        ("primitive_cone_radii", CYL.replace("cylinder", "cone") + "axis = 0, 0, 1, radius = 0, "
+         "radius_top = 0 /", "radius_top", "not both be 0"),
+        ("primitive_cone_no_top", CYL.replace("cylinder", "cone") + "axis = 0, 0, 1, "
+         "radius = 0.1 /", "radius_top", "required"),
+        ("primitive_cylinder_top", CYL + "axis = 0, 0, 1, radius = 0.1, radius_top = 0.2 /",
+         "radius_top", "not used by this shape"),
+        ("primitive_disc_hole", "&wall_primitive material = 'steel', shape = 'disc', point = "
+         "0, 0, -0.05, normal = 0, 0, 1, radius = 0.1, inner_radius = 0.1 /", "inner_radius",
+         "less than radius"),
+        ("primitive_box_corners", "&wall_primitive material = 'steel', shape = 'box', "
+         "box_min = -1, -1, -1, box_max = 1, -1, 1 /", "box_max", "exceed box_min"),
+        ("primitive_box_closed", "&wall_primitive material = 'steel', shape = 'box', "
+         "box_min = -1, -1, -1, box_max = 1, 1, 1, closed = .true. /", "closed", "is closed")):
+    bad(name, GOOD + text + "\n", "wall_primitive", key, words)
 bad("unknown_variant", GOOD + "&contact_model variant = 'lammps' /\n", "contact_model",
     "variant", "accepted: dem, liggghts, mercurydpm, yade")
 bad("unknown_lever", GOOD + "&contact_model variant = 'liggghts', lever_torque = 'rim' /\n",
