@@ -10,6 +10,8 @@ program dem_main
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
                    solver_particles, solver_particle_steps, solver_parallel_stats, i8
     use dem_case, only: case_memory_mib
+    use dem_insert, only: region_mesh, region_cylinder, region_face, mesh_open_edges
+    use dem_text, only: itoa
     use dem_contact_store, only: bond_rows
     use dem_comm, only: comm_t, comm_init, comm_free, comm_max, comm_any
     use dem_error, only: set_error, dem_err_stopped
@@ -206,6 +208,7 @@ contains
             c%n_bonds, ' (at most ', c%bond_reals / bond_rows, ' per particle; &bond)'
         write(output_unit, '(a,es12.5,a)') '  total mass           ', c%summary%mass, ' kg'
         call print_scene(c)
+        call print_regions(c)
         do k = 1, 3
             if (.not. c%periodic%axis(k)) cycle
             write(output_unit, '(a,es12.5,a,es12.5,a)') '  periodic along ' // 'xyz'(k:k) // &
@@ -288,6 +291,31 @@ contains
                 'the largest particle: are the radii in millimetres? lengths are in metres'
         end if
     end subroutine print_scene
+
+    !> The region of each &insert group, closed (a mesh: no edge of one triangle only; a box,
+    !> a cylinder) or a face.
+    subroutine print_regions(c)
+        type(case_t), intent(in) :: c
+        integer :: k
+        character(len=:), allocatable :: what
+        do k = 1, size(c%inserts)
+            associate (reg => c%inserts(k)%region)
+                select case (reg%kind)
+                case (region_mesh)
+                    what = 'mesh of ' // itoa(size(reg%vert, 3)) // ' triangles, ' // &
+                           trim(merge('closed    ', 'not closed', mesh_open_edges(reg%vert) == 0))
+                case (region_cylinder)
+                    what = 'cylinder, closed'
+                case (region_face)
+                    what = 'face (an inflow through it)'
+                case default
+                    what = 'box, closed'
+                end select
+            end associate
+            write(output_unit, '(a)') '  insert region        ' // what // ' (' // &
+                c%inserts(k)%at // ')'
+        end do
+    end subroutine print_regions
 
     !> The clumps of a case (among its particles: their members; and those its &insert
     !> groups add during the run), and each template they use with its mass properties and

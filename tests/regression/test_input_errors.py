@@ -488,6 +488,32 @@ for name, text, words, warning in (
     else:
         check("warning" not in r.stdout, f"{name}: a warning: {r.stdout}")
 
+# an &insert region = 'mesh' must be a closed surface: a cube of 12 triangles is, and --check
+# says so; the same cube without its lid (its 2 top triangles) has the 4 edges of its rim in
+# one triangle only, and is refused
+CUBE = [((0, 0, 0), (1, 1, 0), (1, 0, 0)), ((0, 0, 0), (0, 1, 0), (1, 1, 0)),
+        ((0, 0, 1), (1, 0, 1), (1, 1, 1)), ((0, 0, 1), (1, 1, 1), (0, 1, 1)),
+        ((0, 0, 0), (1, 0, 0), (1, 0, 1)), ((0, 0, 0), (1, 0, 1), (0, 0, 1)),
+        ((0, 1, 0), (1, 1, 1), (1, 1, 0)), ((0, 1, 0), (0, 1, 1), (1, 1, 1)),
+        ((0, 0, 0), (0, 0, 1), (0, 1, 1)), ((0, 0, 0), (0, 1, 1), (0, 1, 0)),
+        ((1, 0, 0), (1, 1, 1), (1, 0, 1)), ((1, 0, 0), (1, 1, 0), (1, 1, 1))]
+for name, tris in (("cube", CUBE), ("cube_open", CUBE[:2] + CUBE[4:])):
+    with open(os.path.join(work, name + ".stl"), "w") as f:
+        f.write("solid c\n" + "".join(
+            " facet normal 0 0 0\n  outer loop\n" + "".join(
+                f"   vertex {x * 0.04 - 0.02} {y * 0.04 - 0.02} {z * 0.04 + 0.03}\n"
+                for x, y, z in t) + "  endloop\n endfacet\n" for t in tris) + "endsolid c\n")
+MESH_INS = ("&insert n = 5, material = 'glass', radius_min = 1e-3, region = 'mesh', "
+            "mesh_file = '{}' /\n")
+path = os.path.join(work, "good_mesh_region.nml")
+with open(path, "w") as f:
+    f.write(GOOD + MESH_INS.format(os.path.join(work, "cube.stl")))
+r, _ = run(["--check", path], "good_mesh_region")
+check(r.returncode == 0 and "insert region        mesh of 12 triangles, closed (" in r.stdout,
+      f"a closed mesh region: --check exit {r.returncode}, {r.stderr.strip()} {r.stdout}")
+bad("mesh_region_open", GOOD + MESH_INS.format(os.path.join(work, "cube_open.stl")), "insert",
+    "mesh_file", "the surface is not closed (4 edges belong to one triangle only)")
+
 # particle files: every field read whole, at any length, and wholly a number
 CSV_CASE = sub("&particle material = 'glass', radius = 0.01, position = 0, 0, 0.011, "
                "velocity = 0, 0, -1 /", "&particle_file file = '{csv}' /")
