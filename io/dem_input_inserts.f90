@@ -16,7 +16,8 @@ module dem_input_inserts
     use dem_stl, only: stl_read
     use dem_insert, only: region_t, region_box, region_cylinder, region_mesh, region_face, &
                           size_dist_t, size_normal, size_lognormal, size_dist_uniform, &
-                          size_dist_normal, size_dist_discrete, size_window
+                          size_dist_normal, size_dist_discrete, size_window, mesh_open_edges
+    use dem_text, only: itoa
     implicit none
     private
     public :: read_inserts
@@ -189,6 +190,13 @@ contains
                 call stl_read(relative_to(nf%path, trim(mesh_file)), mesh_scale, reg%vert, err)
                 if (err%failed()) then
                     err%message = at // ": key 'mesh_file': " // err%message
+                    return
+                end if
+                if (mesh_open_edges(reg%vert) > 0) then
+                    call set_error(err, dem_err_input, at // ": key 'mesh_file': the surface " &
+                        // 'is not closed (' // itoa(mesh_open_edges(reg%vert)) // ' edges ' &
+                        // 'belong to one triangle only): close it, or spheres are placed ' // &
+                        'outside it')
                     return
                 end if
             case ('face')

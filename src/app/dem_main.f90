@@ -10,6 +10,8 @@ program dem_main
                    checkpoint_latest, n_phases, phase_names, timer_seconds, wall_seconds, &
                    solver_particles, solver_particle_steps, solver_parallel_stats, i8
     use dem_case, only: case_memory_mib
+    use dem_insert, only: region_mesh, region_cylinder, region_face, mesh_open_edges
+    use dem_text, only: itoa
     use dem_contact_store, only: bond_rows
     use dem_comm, only: comm_t, comm_init, comm_free, comm_max, comm_any
     use dem_error, only: set_error, dem_err_stopped
@@ -205,6 +207,8 @@ contains
         if (c%n_bonds > 0) write(output_unit, '(a,i0,a,i0,a)') '  bonds                ', &
             c%n_bonds, ' (at most ', c%bond_reals / bond_rows, ' per particle; &bond)'
         write(output_unit, '(a,es12.5,a)') '  total mass           ', c%summary%mass, ' kg'
+        call print_scene(c)
+        call print_regions(c)
         do k = 1, 3
             if (.not. c%periodic%axis(k)) cycle
             write(output_unit, '(a,es12.5,a,es12.5,a)') '  periodic along ' // 'xyz'(k:k) // &
@@ -257,6 +261,61 @@ contains
                 'coming to rest); check series.csv''s kinetic_rotational, or lower dt'
         end if
     end subroutine print_check
+
+    !> The scene's extent beside the particles' sizes, and a warning where the two look like
+    !> lengths in different units (doc/user/running.md, "dem --check").
+    subroutine print_scene(c)
+        type(case_t), intent(in) :: c
+        real(wp), parameter :: scene_diameters = 1.0e4_wp   !< above: a warning
+        real(wp) :: lo(3), hi(3), r_min, r_max, span
+        r_min = minval(c%summary%rmin)
+        r_max = maxval(c%summary%rmax)
+        if (r_max > 0.0_wp) write(output_unit, '(a,es12.5,a,es12.5,a)') &
+            '  particle radii       ', r_min, ' to ', r_max, ' m'
+        if (all(c%summary%box_lo <= c%summary%box_hi)) &
+            write(output_unit, '(a,3es12.4,a,3es12.4,a)') '  particles within     ', &
+                c%summary%box_lo, ' to', c%summary%box_hi, ' m'
+        if (c%mesh%n_tri == 0) return
+        lo = minval(minval(c%mesh%ref, dim=2), dim=2)
+        hi = maxval(maxval(c%mesh%ref, dim=2), dim=2)
+        span = norm2(hi - lo)
+        write(output_unit, '(a,3es12.4,a,3es12.4,a)') '  walls within         ', lo, ' to', &
+            hi, ' m'
+        if (r_max <= 0.0_wp) return
+        if (span > scene_diameters * 2.0_wp * r_max) then
+            write(output_unit, '(a,es10.3,a)') '  warning: the walls span', &
+                span / (2.0_wp * r_max), ' diameters of the largest particle (more than 1e4): ' &
+                // 'is a file in millimetres? give its scale (&wall_stl scale = 1e-3)'
+        else if (span < 2.0_wp * r_max) then
+            write(output_unit, '(a)') '  warning: the walls span less than the diameter of ' // &
+                'the largest particle: are the radii in millimetres? lengths are in metres'
+        end if
+    end subroutine print_scene
+
+    !> The region of each &insert group, closed (a mesh: no edge of one triangle only; a box,
+    !> a cylinder) or a face.
+    subroutine print_regions(c)
+        type(case_t), intent(in) :: c
+        integer :: k
+        character(len=:), allocatable :: what
+        do k = 1, size(c%inserts)
+            associate (reg => c%inserts(k)%region)
+                select case (reg%kind)
+                case (region_mesh)
+                    what = 'mesh of ' // itoa(size(reg%vert, 3)) // ' triangles, ' // &
+                           trim(merge('closed    ', 'not closed', mesh_open_edges(reg%vert) == 0))
+                case (region_cylinder)
+                    what = 'cylinder, closed'
+                case (region_face)
+                    what = 'face (an inflow through it)'
+                case default
+                    what = 'box, closed'
+                end select
+            end associate
+            write(output_unit, '(a)') '  insert region        ' // what // ' (' // &
+                c%inserts(k)%at // ')'
+        end do
+    end subroutine print_regions
 
     !> The clumps of a case (among its particles: their members; and those its &insert
     !> groups add during the run), and each template they use with its mass properties and

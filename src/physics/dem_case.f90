@@ -34,6 +34,8 @@ module dem_case
         real(wp) :: spin_energy = 0.0_wp    !< initial rotational kinetic energy [J]
         real(wp) :: low = 0.0_wp            !< lowest and highest centre along gravity [m]
         real(wp) :: high = 0.0_wp
+        real(wp) :: box_lo(3) = 0.0_wp      !< the box of the particles and of the inflow's
+        real(wp) :: box_hi(3) = 0.0_wp      !< regions (huge, -huge if none) [m]
     end type summary_t
 
     !> An &insert group as read: n spheres to be placed at random in a region, clear of the
@@ -185,7 +187,7 @@ contains
         type(case_t), intent(inout) :: c
         type(comm_t), intent(in) :: comm
         real(wp), parameter :: pi = acos(-1.0_wp)
-        real(wp) :: e(3), g, big(2 * c%mats%n + 4), sums(2), lo(3), hi(3), corner(3), m
+        real(wp) :: e(3), g, big(2 * c%mats%n + 10), sums(2), lo(3), hi(3), corner(3), m
         integer(ip) :: i, a
         integer :: k
         associate (sm => c%summary)
@@ -197,6 +199,8 @@ contains
             sm%spin_energy = 0.0_wp
             sm%low = huge(1.0_wp)
             sm%high = -huge(1.0_wp)
+            sm%box_lo = huge(1.0_wp)
+            sm%box_hi = -huge(1.0_wp)
             g = norm2(c%gravity)
             e = 0.0_wp
             if (g > 0.0_wp) e = c%gravity / g
@@ -220,6 +224,8 @@ contains
                 sm%rim = max(sm%rim, norm2(c%w(:, i)) * c%radius(i))
                 sm%low = min(sm%low, dot_product(e, c%x(:, i)))
                 sm%high = max(sm%high, dot_product(e, c%x(:, i)))
+                sm%box_lo = min(sm%box_lo, c%x(:, i) - c%radius(i))
+                sm%box_hi = max(sm%box_hi, c%x(:, i) + c%radius(i))
             end do
             do i = 1, size(c%inserts)         ! the inflow's particles, to come
                 if (.not. c%inserts(i)%inflow) cycle
@@ -229,13 +235,15 @@ contains
                 sm%speed = max(sm%speed, norm2(abs(c%inserts(i)%velocity) + &
                                                c%inserts(i)%velocity_spread))
                 call region_bounds(c%inserts(i)%region, lo, hi)
+                sm%box_lo = min(sm%box_lo, lo)
+                sm%box_hi = max(sm%box_hi, hi)
                 do k = 0, 7                   ! (the corners of the region's box)
                     corner = merge(hi, lo, [btest(k, 0), btest(k, 1), btest(k, 2)])
                     sm%low = min(sm%low, dot_product(e, corner))
                     sm%high = max(sm%high, dot_product(e, corner))
                 end do
             end do
-            big = [-sm%rmin, sm%rmax, sm%speed, -sm%low, sm%high, sm%rim]
+            big = [-sm%rmin, sm%rmax, sm%speed, -sm%low, sm%high, sm%rim, -sm%box_lo, sm%box_hi]
             call comm_max(comm, big)
             sm%rmin = -big(1:c%mats%n)
             sm%rmax = big(c%mats%n + 1:2 * c%mats%n)
@@ -243,6 +251,8 @@ contains
             sm%low = -big(2 * c%mats%n + 2)
             sm%high = big(2 * c%mats%n + 3)
             sm%rim = big(2 * c%mats%n + 4)
+            sm%box_lo = -big(2 * c%mats%n + 5:2 * c%mats%n + 7)
+            sm%box_hi = big(2 * c%mats%n + 8:2 * c%mats%n + 10)
             sums = [sm%mass, sm%spin_energy]
             call comm_sum(comm, sums)
             sm%mass = sums(1)

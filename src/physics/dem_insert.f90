@@ -12,7 +12,7 @@ module dem_insert
     implicit none
     private
     public :: region_t, region_box, region_cylinder, region_mesh, region_face, region_bounds, &
-              region_slab, insert_random, insert_velocities
+              region_slab, mesh_open_edges, insert_random, insert_velocities
     public :: size_dist_t, size_uniform, size_normal, size_lognormal, size_discrete, &
               size_dist_uniform, size_dist_normal, size_dist_discrete, size_window, size_draw
 
@@ -108,6 +108,83 @@ contains
             hi = region%hi
         end select
     end subroutine region_bounds
+
+    !> The edges of a triangle mesh that belong to one triangle only (corners matched on a
+    !> grid of a millionth of the mesh's diagonal, so that rounding closes no gap and opens
+    !> none): none where the surface is closed, each of whose edges two triangles share.
+    pure integer function mesh_open_edges(vert) result(n_open)
+        real(wp), intent(in) :: vert(:, :, :)     !! (xyz, corner, triangle)
+        real(wp), allocatable :: e(:, :)          ! (both ends, edge), the lesser end first
+        integer, allocatable :: order(:), merged(:)
+        integer :: t, k, j, n, width, lo, mid, hi, a, b, run
+        real(wp) :: low(3), cell
+        n = 3 * size(vert, 3)
+        low = minval(minval(vert, dim=2), dim=2)
+        cell = 1.0e-6_wp * norm2(maxval(maxval(vert, dim=2), dim=2) - low)
+        if (cell <= 0.0_wp) cell = 1.0_wp
+        allocate(e(6, n), order(n), merged(n))
+        do t = 1, size(vert, 3)
+            do k = 1, 3
+                j = 3 * (t - 1) + k
+                e(:, j) = anint([vert(:, k, t) - low, vert(:, mod(k, 3) + 1, t) - low] / cell)
+                if (before(e(4:6, j), e(1:3, j))) e(:, j) = [e(4:6, j), e(1:3, j)]
+            end do
+        end do
+        order = [(j, j = 1, n)]
+        width = 1
+        do while (width < n)                      ! bottom-up merge sort of the edges
+            do lo = 1, n, 2 * width
+                mid = min(lo + width - 1, n)
+                hi = min(lo + 2 * width - 1, n)
+                a = lo
+                b = mid + 1
+                do j = lo, hi
+                    if (b > hi) then
+                        merged(j) = order(a)
+                        a = a + 1
+                    else if (a <= mid) then
+                        if (.not. before(e(:, order(b)), e(:, order(a)))) then
+                            merged(j) = order(a)
+                            a = a + 1
+                            cycle
+                        end if
+                        merged(j) = order(b)
+                        b = b + 1
+                    else
+                        merged(j) = order(b)
+                        b = b + 1
+                    end if
+                end do
+            end do
+            order = merged
+            width = 2 * width
+        end do
+        n_open = 0
+        run = 1
+        do j = 2, n + 1                           ! the runs of equal edges, those of one
+            if (j <= n) then
+                if (all(e(:, order(j)) == e(:, order(j - 1)))) then
+                    run = run + 1
+                    cycle
+                end if
+            end if
+            if (run == 1) n_open = n_open + 1
+            run = 1
+        end do
+    contains
+        !> p comes before q (lexicographically).
+        pure logical function before(p, q)
+            real(wp), intent(in) :: p(:), q(:)
+            integer :: i
+            before = .false.
+            do i = 1, size(p)
+                if (p(i) /= q(i)) then
+                    before = p(i) < q(i)
+                    return
+                end if
+            end do
+        end function before
+    end function mesh_open_edges
 
     !> Radii uniform in [r_min, r_max].
     pure function size_dist_uniform(r_min, r_max) result(d)

@@ -497,6 +497,61 @@ with open(path, "w") as f:
 r, _ = run(["--check", path], "good_touching")
 check(r.returncode == 0, f"an &insert box touching a wall: --check failed: {r.stderr}")
 
+# --check prints the particles' radii and the box of the particles and of the walls, and warns
+# where the walls span more than 1e4 diameters of the largest particle (a file in millimetres)
+# or less than one (radii in millimetres); the good case's plane, 0.2 m square, spans
+# 0.2 sqrt(2) = 0.2828 m, 14.1 diameters of its sphere
+for name, text, words, warning in (
+        ("scene_good", GOOD, ["particle radii        1.00000E-02 to  1.00000E-02 m",
+                              "walls within          -1.0000E-01 -1.0000E-01  0.0000E+00 to"
+                              "  1.0000E-01  1.0000E-01  0.0000E+00 m",
+                              "particles within      -1.0000E-02 -1.0000E-02  1.0000E-03 to"],
+         None),
+        # the plane 200 m square: 282.84 m over 0.02 m diameters
+        ("scene_mm", sub("half_width = 0.1", "half_width = 100"), [],
+         "the walls span 1.414E+04 diameters"),
+        # a sphere of radius 2 above the 0.2 m square
+        ("scene_radius_mm", sub("radius = 0.01, position = 0, 0, 0.011",
+                                "radius = 2, position = 0, 0, 2.5"), [],
+         "the walls span less than the diameter of the largest particle")):
+    path = os.path.join(work, name + ".nml")
+    with open(path, "w") as f:
+        f.write(text)
+    r, _ = run(["--check", path], name)
+    check(r.returncode == 0, f"{name}: --check exit {r.returncode}: {r.stderr.strip()}")
+    for w in words:
+        check(w in r.stdout, f"{name}: --check does not print '{w}': {r.stdout}")
+    if warning:
+        check("warning: " + warning in r.stdout, f"{name}: no warning '{warning}': {r.stdout}")
+    else:
+        check("warning" not in r.stdout, f"{name}: a warning: {r.stdout}")
+
+# an &insert region = 'mesh' must be a closed surface: a cube of 12 triangles is, and --check
+# says so; the same cube without its lid (its 2 top triangles) has the 4 edges of its rim in
+# one triangle only, and is refused
+CUBE = [((0, 0, 0), (1, 1, 0), (1, 0, 0)), ((0, 0, 0), (0, 1, 0), (1, 1, 0)),
+        ((0, 0, 1), (1, 0, 1), (1, 1, 1)), ((0, 0, 1), (1, 1, 1), (0, 1, 1)),
+        ((0, 0, 0), (1, 0, 0), (1, 0, 1)), ((0, 0, 0), (1, 0, 1), (0, 0, 1)),
+        ((0, 1, 0), (1, 1, 1), (1, 1, 0)), ((0, 1, 0), (0, 1, 1), (1, 1, 1)),
+        ((0, 0, 0), (0, 0, 1), (0, 1, 1)), ((0, 0, 0), (0, 1, 1), (0, 1, 0)),
+        ((1, 0, 0), (1, 1, 1), (1, 0, 1)), ((1, 0, 0), (1, 1, 0), (1, 1, 1))]
+for name, tris in (("cube", CUBE), ("cube_open", CUBE[:2] + CUBE[4:])):
+    with open(os.path.join(work, name + ".stl"), "w") as f:
+        f.write("solid c\n" + "".join(
+            " facet normal 0 0 0\n  outer loop\n" + "".join(
+                f"   vertex {x * 0.04 - 0.02} {y * 0.04 - 0.02} {z * 0.04 + 0.03}\n"
+                for x, y, z in t) + "  endloop\n endfacet\n" for t in tris) + "endsolid c\n")
+MESH_INS = ("&insert n = 5, material = 'glass', radius_min = 1e-3, region = 'mesh', "
+            "mesh_file = '{}' /\n")
+path = os.path.join(work, "good_mesh_region.nml")
+with open(path, "w") as f:
+    f.write(GOOD + MESH_INS.format(os.path.join(work, "cube.stl")))
+r, _ = run(["--check", path], "good_mesh_region")
+check(r.returncode == 0 and "insert region        mesh of 12 triangles, closed (" in r.stdout,
+      f"a closed mesh region: --check exit {r.returncode}, {r.stderr.strip()} {r.stdout}")
+bad("mesh_region_open", GOOD + MESH_INS.format(os.path.join(work, "cube_open.stl")), "insert",
+    "mesh_file", "the surface is not closed (4 edges belong to one triangle only)")
+
 # particle files: every field read whole, at any length, and wholly a number
 CSV_CASE = sub("&particle material = 'glass', radius = 0.01, position = 0, 0, 0.011, "
                "velocity = 0, 0, -1 /", "&particle_file file = '{csv}' /")
