@@ -14,7 +14,6 @@ module dem_clumps
     use dem_vector, only: cross
     use dem_rigid, only: rigid_free_rotation, rigid_omega, quat_product, quat_to_lab, &
                          quat_to_body, quat_from_matrix, quat_normalise, rotation_matrix
-    use dem_integrate, only: too_fast
     use dem_clump_mass, only: clump_mass_t
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host, acc_to_device
     use dem_particles, only: bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset
@@ -237,12 +236,13 @@ contains
         real(wp), intent(inout) :: x(3, np), v(3, np), w(3, np)
         integer(i8), intent(out) :: n_fast
         real(wp) :: fb(3), tb(3), xb(3), vb(3), qb(4), lb(3), wb(3), r(3), d(3), rm(3, 3), &
-                    a(3), b2, mb
+                    a(3), b2, mb, w2
         integer(ip) :: k, m, i, i0
         b2 = bound**2
         n_fast = 0
         !$acc parallel loop gang vector default(present) copyin(gravity) &
-        !$acc reduction(+:n_fast) private(fb, tb, xb, vb, qb, lb, wb, r, d, rm, a, mb, m, i, i0)
+        !$acc reduction(+:n_fast) &
+        !$acc private(fb, tb, xb, vb, qb, lb, wb, r, d, rm, a, mb, w2, m, i, i0)
         do k = 1, nb
             i0 = member(first(k))
             xb = body_x(:, i0)
@@ -261,14 +261,18 @@ contains
             lb = body_l(:, i0) + h * tb
             qb = body_q(:, i0)
             if (h_drift > 0.0_wp) then
-                call rigid_free_rotation(h_drift, body_inv_i(:, i0), lb, qb)
+                call rigid_free_rotation(h_drift, body_inv_i(:, i0), lb, qb, a)
                 xb = xb + h_drift * vb
+                rm = rotation_matrix(qb)
+            else
+                rm = rotation_matrix(qb)
+                a = [rm(1, 1) * lb(1) + rm(2, 1) * lb(2) + rm(3, 1) * lb(3), &
+                     rm(1, 2) * lb(1) + rm(2, 2) * lb(2) + rm(3, 2) * lb(3), &
+                     rm(1, 3) * lb(1) + rm(2, 3) * lb(2) + rm(3, 3) * lb(3)]   ! R^T L
             end if
-            rm = rotation_matrix(qb)
-            a = body_inv_i(:, i0) * [rm(1, 1) * lb(1) + rm(2, 1) * lb(2) + rm(3, 1) * lb(3), &
-                                     rm(1, 2) * lb(1) + rm(2, 2) * lb(2) + rm(3, 2) * lb(3), &
-                                     rm(1, 3) * lb(1) + rm(2, 3) * lb(2) + rm(3, 3) * lb(3)]
-            wb = rm(:, 1) * a(1) + rm(:, 2) * a(2) + rm(:, 3) * a(3)  ! w = R I^-1 R^T L
+            a = body_inv_i(:, i0) * a
+            wb = rm(:, 1) * a(1) + rm(:, 2) * a(2) + rm(:, 3) * a(3)  ! w = R I^-1 L_body
+            w2 = wb(1)**2 + wb(2)**2 + wb(3)**2
             do m = first(k), first(k + 1) - 1
                 i = member(m)
                 r = rm(:, 1) * body_offset(1, i) + rm(:, 2) * body_offset(2, i) &
@@ -282,7 +286,8 @@ contains
                 body_v(:, i) = vb
                 body_q(:, i) = qb
                 body_l(:, i) = lb
-                n_fast = n_fast + too_fast(v(:, i), w(:, i), radius(i), b2)
+                if (v(1, i)**2 + v(2, i)**2 + v(3, i)**2 >= b2 .or. w2 * radius(i)**2 >= b2) &
+                    n_fast = n_fast + 1
             end do
         end do
     end subroutine clumps_move
