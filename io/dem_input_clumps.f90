@@ -15,7 +15,7 @@ module dem_input_clumps
     use dem_input_values, only: unset, name_len, check_vector, find_material, relative_to
     use dem_text, only: itoa, real_text, read_line, without_bom, excerpt, is_real
     use dem_files, only: input_file_problem
-    use dem_case, only: case_t
+    use dem_case, only: case_t, case_add_origin
     use dem_clumps, only: clump_template_t, clump_t
     use dem_clump_mass, only: clump_mass_compute, clump_mass_given
     implicit none
@@ -173,8 +173,10 @@ contains
         type(group_io_t) :: io
         character(len=:), allocatable :: at, why
         integer :: k, it
+        integer(ip) :: origin
 
         allocate(c%clumps(group_count(nf, 'clump')))
+        origin = case_add_origin(c, 'a member of the clump of the &clump group ', '')
         do k = 1, size(c%clumps)
             template = ''
             position = unset
@@ -204,6 +206,8 @@ contains
                 return
             end if
             c%clumps(k) = placed(it, position, orientation, velocity, angular_velocity)
+            c%clumps(k)%origin = origin
+            c%clumps(k)%line = k
         end do
     end subroutine read_clumps
 
@@ -239,6 +243,8 @@ contains
                 err%message = at // ": key 'file': " // err%message
                 return
             end if
+            added%origin = case_add_origin(c, 'a member of the clump of line ', ' of ' // &
+                                           relative_to(nf%path, trim(file)) // ' (&clump_file)')
             c%clumps = [c%clumps, added]
         end do
         c%has_clumps = size(c%clumps) > 0       ! (those of the &clump groups too)
@@ -375,6 +381,7 @@ contains
             end if
             n = n + 1
             clumps(n) = placed(it, val(2:4), val(5:8), val(9:11), val(12:14))
+            clumps(n)%line = lineno
         end do
         close(u)
         if (err%failed()) return

@@ -10,8 +10,8 @@ module dem_input_particles
     use dem_input_group, only: group_io_t, group_reading, group_count
     use dem_input_values, only: unset, name_len, check_positive, check_vector, find_material, &
                                 relative_to
-    use dem_case, only: case_t, case_append_particles
-    use dem_comm, only: comm_t
+    use dem_case, only: case_t, case_append_particles, case_add_origin
+    use dem_comm, only: comm_t, comm_any
     use dem_particle_file, only: read_particle_file
     implicit none
     private
@@ -38,12 +38,15 @@ contains
         type(group_io_t) :: io
         character(len=:), allocatable :: at
         integer :: k, n, im, i
+        integer(ip) :: origin
 
         n = group_count(nf, 'particle')
+        origin = case_add_origin(c, 'the &particle group ', '')
         c%n_particles = n
         c%n_held = count([(mod(k - 1, share(2)) == share(1), k = 1, n)])
         allocate(c%gid(c%n_held), c%mat(c%n_held), c%radius(c%n_held), c%x(3, c%n_held), &
-                 c%v(3, c%n_held), c%w(3, c%n_held), c%fixed(c%n_held))
+                 c%v(3, c%n_held), c%w(3, c%n_held), c%fixed(c%n_held), c%origin(c%n_held), &
+                 c%line(c%n_held))
         do k = 1, n
             id = k
             material = ''
@@ -72,6 +75,8 @@ contains
             i = (k - 1) / share(2) + 1
             c%fixed(i) = merge(1, 0, fixed)
             c%gid(i) = id
+            c%origin(i) = origin
+            c%line(i) = k
             c%mat(i) = im
             c%radius(i) = radius
             c%x(:, i) = position
@@ -93,10 +98,10 @@ contains
         namelist /particle_file/ file
         type(group_io_t) :: io
         integer :: k
-        integer(ip) :: n_rows
+        integer(ip) :: n_rows, origin
         character(len=:), allocatable :: at
         integer(i8), allocatable :: gid(:)
-        integer(ip), allocatable :: mat(:)
+        integer(ip), allocatable :: mat(:), lines(:)
         real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :)
 
         do k = 1, group_count(nf, 'particle_file')
@@ -112,12 +117,20 @@ contains
             end if
             call read_particle_file(relative_to(nf%path, trim(file)), c%mats%name, &
                                     c%mats%rigid, comm, share(2) == 1, gid, mat, radius, x, v, &
-                                    w, n_rows, err)
+                                    w, n_rows, err, lines)
             if (err%failed()) then
                 err%message = at // ": key 'file': " // err%message
                 return
             end if
-            call case_append_particles(c, gid, mat, radius, x, v, w, n_rows)
+            if (.not. comm_any(comm, any(lines == 0))) then   ! CSV: each row's line
+                origin = case_add_origin(c, 'line ', ' of ' // &
+                                         relative_to(nf%path, trim(file)) // ' (&particle_file)')
+            else                                    ! an HDF5 file: the id says which
+                origin = case_add_origin(c, '', 'the particle of that id in ' // &
+                                         relative_to(nf%path, trim(file)) // ' (&particle_file)')
+            end if
+            call case_append_particles(c, gid, mat, radius, x, v, w, n_rows, &
+                                       spread(origin, 1, size(gid)), lines)
         end do
     end subroutine read_particle_files
 end module dem_input_particles

@@ -103,6 +103,7 @@ contains
             if (.not. inserts_in_front(c, at, point, normal, half_width, err)) return
             call mesh_add_plane(c%mesh, point, normal, half_width, divisions, im)
             c%mesh%name(c%mesh%n_wall) = name
+            call label_wall(c, '&wall_plane group ', k)
         end do
     end subroutine read_walls
 
@@ -194,6 +195,7 @@ contains
             call mesh_append(c%mesh, vert, im)
             if (.not. motion_set(c, at, err)) return
             c%mesh%name(c%mesh%n_wall) = name
+            call label_wall(c, '&wall_mesh group ', k)
         end do
     end subroutine read_meshes
 
@@ -358,6 +360,7 @@ contains
             call mesh_append(c%mesh, vert, im)
             if (.not. motion_set(c, at, err)) return
             c%mesh%name(c%mesh%n_wall) = name
+            call label_wall(c, '&wall_primitive group ', k)
         end do
     contains
         !> resolution, `default` where not given, in lowest .. max_divisions
@@ -577,4 +580,16 @@ contains
             v_out = values(:, 1:n)
         end if
     end function read_table
+
+    !> Record the group of the case's last wall (case_t's wall_groups): `group` and its number.
+    subroutine label_wall(c, group, k)
+        type(case_t), intent(inout) :: c
+        character(len=*), intent(in) :: group
+        integer, intent(in) :: k
+        character(len=40), allocatable :: more(:)
+        allocate(more(c%mesh%n_wall))
+        if (allocated(c%wall_groups)) more(1:size(c%wall_groups)) = c%wall_groups
+        write(more(c%mesh%n_wall), '(a, i0)') group, k
+        call move_alloc(more, c%wall_groups)
+    end subroutine label_wall
 end module dem_input_walls

@@ -28,9 +28,10 @@ contains
     !> rank's share of its n_rows: of a CSV file rows r + 1, r + 1 + P, ... (rank r of P,
     !> every rank reading and checking all rows), of an HDF5 file the r-th of P consecutive
     !> blocks (each rank reading its own). `names` are the materials a row may name (not
-    !> those `rigid`, which are for walls); mat(k) is the index of row k's material in them.
+    !> those `rigid`, which are for walls); mat(k) is the index of row k's material in them,
+    !> lines(k) its line in a CSV file (0 in an HDF5 file).
     subroutine read_particle_file(path, names, rigid, comm, whole, gid, mat, radius, x, v, w, &
-                                  n_rows, err)
+                                  n_rows, err, lines)
         character(len=*), intent(in) :: path
         character(len=*), intent(in) :: names(:)
         logical, intent(in) :: rigid(:)
@@ -41,6 +42,7 @@ contains
         real(wp), allocatable, intent(out) :: radius(:), x(:, :), v(:, :), w(:, :)
         integer(ip), intent(out) :: n_rows
         type(error_t), intent(inout) :: err
+        integer(ip), allocatable, intent(out) :: lines(:)
         character(len=:), allocatable :: line, text
         integer, allocatable :: first(:), last(:)
         character(len=16) :: num
@@ -63,6 +65,7 @@ contains
                 call snapshot_read_particles(path, names, gid, mat, radius, x, v, w, n_rows, &
                                              err, comm)
             end if
+            if (allocated(gid)) allocate(lines(size(gid)), source=0_ip)
             if (err%failed()) then
                 err%code = dem_err_input
             else if (comm_any(comm, any(rigid(mat)))) then
@@ -73,7 +76,7 @@ contains
         end if
         share = [comm%rank, comm%size]
         if (whole) share = [0, 1]
-        allocate(gid(0), mat(0), radius(0), x(3, 0), v(3, 0), w(3, 0))
+        allocate(gid(0), mat(0), radius(0), x(3, 0), v(3, 0), w(3, 0), lines(0))
         open(newunit=u, file=path, status='old', action='read', iostat=ios)
         if (ios /= 0) then
             call set_error(err, dem_err_input, path // ': cannot open the particle file')
@@ -178,6 +181,7 @@ contains
             n = n + 1
             if (n > size(gid)) call grow(max(1024, 2 * n))
             gid(n) = id
+            lines(n) = int(lineno, ip)
             mat(n) = m
             radius(n) = val(1)
             x(:, n) = val(2:4)
@@ -202,19 +206,21 @@ contains
         subroutine grow(cap)
             integer, intent(in) :: cap
             integer(i8), allocatable :: g2(:)
-            integer(ip), allocatable :: m2(:)
+            integer(ip), allocatable :: m2(:), l2(:)
             real(wp), allocatable :: r2(:), x2(:, :), v2(:, :), w2(:, :)
             integer :: keep
             keep = min(n, size(gid))
-            allocate(g2(cap), m2(cap), r2(cap), x2(3, cap), v2(3, cap), w2(3, cap))
+            allocate(g2(cap), m2(cap), l2(cap), r2(cap), x2(3, cap), v2(3, cap), w2(3, cap))
             g2(1:keep) = gid(1:keep)
             m2(1:keep) = mat(1:keep)
+            l2(1:keep) = lines(1:keep)
             r2(1:keep) = radius(1:keep)
             x2(:, 1:keep) = x(:, 1:keep)
             v2(:, 1:keep) = v(:, 1:keep)
             w2(:, 1:keep) = w(:, 1:keep)
             call move_alloc(g2, gid)
             call move_alloc(m2, mat)
+            call move_alloc(l2, lines)
             call move_alloc(r2, radius)
             call move_alloc(x2, x)
             call move_alloc(v2, v)

@@ -6,7 +6,7 @@ sets of spheres over the bonds left in the run's end checkpoint (/particles/bond
 first value is the partner's id, 0 when empty; doc/user/output.md), their masses from the
 radii; the broken bonds are the pairs made that the checkpoint no longer holds.
 
-usage: python3 examples/agglomerate/fragments.py [RUN] [--png FILE]   (RUN: output/agglomerate)"""
+usage: .venv/bin/python examples/agglomerate/fragments.py [RUN] [--png FILE]   (RUN: output/agglomerate)"""
 import argparse
 import glob
 import math

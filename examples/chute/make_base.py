@@ -12,7 +12,7 @@
             random spheres of Silbert et al. (2001): a regular one lets the first layers
             order and slide.
 
-usage: python3 examples/chute/make_base.py"""
+usage: .venv/bin/python examples/chute/make_base.py"""
 import os
 import random
 import sys

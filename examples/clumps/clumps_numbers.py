@@ -15,7 +15,7 @@ The figure: the members of the rods (drawn to scale), coloured by rod, at rest b
 during the discharge (the rods whose centre is within 1.5 mm of y = 0, seen along y), and the rods discharged against
 time.
 
-usage: python3 examples/clumps/clumps_numbers.py [RUN] [--png FILE]   (RUN: output/clumps)"""
+usage: .venv/bin/python examples/clumps/clumps_numbers.py [RUN] [--png FILE]   (RUN: output/clumps)"""
 import argparse
 import glob
 import math

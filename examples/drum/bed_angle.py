@@ -6,7 +6,7 @@ bed's surface (a bed that fills a circular segment has its centre of mass on the
 axis of symmetry, which is normal to the surface), the dynamic angle of repose. Also the
 power the drum draws, -angular_velocity x the torque of the beads on it about its axis.
 
-usage: python3 examples/drum/bed_angle.py [RUN] [--png FILE]   (RUN: output/drum)"""
+usage: .venv/bin/python examples/drum/bed_angle.py [RUN] [--png FILE]   (RUN: output/drum)"""
 import argparse
 import math
 

@@ -9,7 +9,7 @@ from the last snapshot before the plug moves, times the beads' density), D = 12 
 orifice, d = 2 mm the spheres, C = 0.58 and k = 1.5 (and the band the literature's constants
 give, C 0.55 to 0.65, k 1.3 to 2.9).
 
-usage: python3 examples/hopper/flow_rate.py [RUN] [--png FILE]   (RUN: output/hopper)"""
+usage: .venv/bin/python examples/hopper/flow_rate.py [RUN] [--png FILE]   (RUN: output/hopper)"""
 import argparse
 import glob
 import math

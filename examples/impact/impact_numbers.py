@@ -5,7 +5,7 @@
 particles (kinetic, translational and rotational, plus potential: series.csv), which the
 impact dissipates.
 
-usage: python3 examples/impact/impact_numbers.py [RUN] [--png FILE]   (RUN: output/impact)"""
+usage: .venv/bin/python examples/impact/impact_numbers.py [RUN] [--png FILE]   (RUN: output/impact)"""
 import argparse
 import csv
 import math

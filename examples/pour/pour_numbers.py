@@ -4,7 +4,7 @@
 schedule floor(rate t) up to rate x (end - start) = 3000, the force of the beads on the walls
 against their weight, and the bed's solid fraction at the end.
 
-usage: python3 examples/pour/pour_numbers.py [RUN] [--png FILE]   (RUN: output/pour)"""
+usage: .venv/bin/python examples/pour/pour_numbers.py [RUN] [--png FILE]   (RUN: output/pour)"""
 import argparse
 import csv
 import math

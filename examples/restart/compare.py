@@ -7,7 +7,7 @@ the same: the text files byte for byte, the snapshots dataset by dataset, bit fo
 bytes of an HDF5 file written on 2 ranks differ from those of one written on 1 in HDF5's own
 layout of the file, not in what it holds).
 
-usage: python3 examples/restart/compare.py [--png FILE]   (from the repository root)"""
+usage: .venv/bin/python examples/restart/compare.py [--png FILE]   (from the repository root)"""
 import argparse
 import filecmp
 import glob

@@ -21,7 +21,8 @@ module dem_case
     private
     public :: case_t, time_scales_t, insert_t, id_check_t, case_time_scales, case_summarize, &
               case_particle_materials, case_speed_bound, case_energy_speed, case_energy_bound, &
-              case_release_particles, case_append_particles, case_settle_time, case_memory_mib
+              case_release_particles, case_append_particles, case_settle_time, case_memory_mib, &
+              origin_t, case_add_origin, case_origin_text
 
     !> What the time scales and the checks need of the particles of all ranks
     !> (case_summarize).
@@ -67,6 +68,13 @@ module dem_case
         integer(i8) :: id = 0
         character(len=:), allocatable :: message
     end type id_check_t
+
+    !> Where particles of a case were given: a group (`before` 'the &particle group ', the
+    !> number the group's) or a file (`before` 'line ', the number the line's, `after` ' of
+    !> FILE (&particle_file)'); a number 0 is left out (origin_text).
+    type :: origin_t
+        character(len=:), allocatable :: before, after
+    end type origin_t
 
     !> Everything a run needs to start.
     type :: case_t
@@ -114,6 +122,10 @@ module dem_case
         integer(i8), allocatable :: gid(:)            !< (the particles held, as the others)
         integer(ip), allocatable :: mat(:)
         real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :)
+        ! where each held particle was given, for the start's checks (kept with gid by
+        ! case_release_particles): origins(origin(i)) with the number line(i) (origin_text)
+        type(origin_t), allocatable :: origins(:)
+        integer(ip), allocatable :: origin(:), line(:)
         ! clumps (dem_clumps): the templates, the clumps as placed, and once they are placed
         ! (dem_setup) as members among the particles, each row's body and body state
         ! (dem_particles' rows bs_*; body 0 and zeros: a sphere), allocated with clumps only
@@ -134,6 +146,7 @@ module dem_case
         real(wp), allocatable :: bonds(:, :)          !< (bond_reals, held)
         real(wp) :: bond_dt = huge(1.0_wp)            !< the bonds' step limit [s], all ranks
         type(mesh_t) :: mesh
+        character(len=40), allocatable :: wall_groups(:)  !< the group of each wall of mesh
         type(periodic_t) :: periodic                  !< the periodic axes (&periodic)
         character(len=256) :: periodic_at(3) = ''     !< the place of each axis's group
         type(outlet_t), allocatable :: outlets(:)
@@ -171,10 +184,11 @@ contains
     end function case_particle_materials
 
     !> Free the case's particles (the count stays): once the solver has taken its share of
-    !> them, a rank needs no more than that share (doc/user/parallel.md).
+    !> them, a rank needs no more than that share (doc/user/parallel.md). Their ids and where
+    !> each was given stay (16 bytes a particle), for the messages of the start's checks.
     subroutine case_release_particles(c)
         type(case_t), intent(inout) :: c
-        deallocate(c%gid, c%mat, c%radius, c%x, c%v, c%w)
+        deallocate(c%mat, c%radius, c%x, c%v, c%w)
         if (allocated(c%body)) deallocate(c%body, c%body_state)
         if (allocated(c%fixed)) deallocate(c%fixed)
         if (allocated(c%bonds)) deallocate(c%bonds)
@@ -435,15 +449,18 @@ contains
     end function case_memory_mib
 
     !> Append particles to the case's: those held here, of n_rows of all ranks.
-    subroutine case_append_particles(c, gid, mat, radius, x, v, w, n_rows)
+    subroutine case_append_particles(c, gid, mat, radius, x, v, w, n_rows, origin, line)
         type(case_t), intent(inout) :: c
         integer(i8), intent(in) :: gid(:)
         integer(ip), intent(in) :: mat(:)
         real(wp), intent(in) :: radius(:), x(:, :), v(:, :), w(:, :)
         integer(ip), intent(in) :: n_rows
+        integer(ip), intent(in) :: origin(:), line(:)  !! where each was given (case_t)
         integer(ip) :: n
         n = c%n_held
         c%gid = [c%gid(1:n), gid]
+        c%origin = [c%origin(1:n), origin]
+        c%line = [c%line(1:n), line]
         c%mat = [c%mat(1:n), mat]
         c%radius = [c%radius(1:n), radius]
         c%x = reshape([c%x(:, 1:n), x], [3, n + size(gid)])
@@ -459,4 +476,35 @@ contains
         c%n_held = n + size(gid)
         c%n_particles = c%n_particles + n_rows
     end subroutine case_append_particles
+
+    !> Add a place where particles are given (origin_t) to the case; k is its index.
+    integer(ip) function case_add_origin(c, before, after) result(k)
+        type(case_t), intent(inout) :: c
+        character(len=*), intent(in) :: before, after
+        type(origin_t), allocatable :: more(:)
+        integer(ip) :: j
+        k = 1
+        if (allocated(c%origins)) k = size(c%origins, kind=ip) + 1
+        allocate(more(k))
+        do j = 1, k - 1
+            more(j) = c%origins(j)
+        end do
+        more(k)%before = before
+        more(k)%after = after
+        call move_alloc(more, c%origins)
+    end function case_add_origin
+
+    !> Where a particle was given, in words: origin k with the number `line` (0: left out);
+    !> '' for k = 0.
+    function case_origin_text(c, k, line) result(text)
+        type(case_t), intent(in) :: c
+        integer(ip), intent(in) :: k, line
+        character(len=:), allocatable :: text
+        character(len=16) :: num
+        text = ''
+        if (k <= 0) return
+        write(num, '(i0)') line
+        if (line <= 0) num = ''
+        text = c%origins(k)%before // trim(num) // c%origins(k)%after
+    end function case_origin_text
 end module dem_case

@@ -46,6 +46,7 @@ module dem_clumps
         real(wp) :: scale = 1.0_wp                !< of the template's lengths (&insert's
                                                   !< size distributions): its mass s^3,
                                                   !< its moments s^5
+        integer(ip) :: origin = 0, line = 0       !< where it was given (dem_case's origin_t)
     end type clump_t
 
     !> The bodies a rank owns: body k's members are member(first(k) .. first(k + 1) - 1), in

@@ -15,6 +15,7 @@ module dem_diagnostics
     implicit none
     private
     public :: energies, elastic_energy, count_pp_sides, deep_overlap_id, deep_wall_id, &
+              deepest_wall_overlap, &
               first_nonfinite, contact_trace, momentum_sums
 
 contains
@@ -237,6 +238,49 @@ contains
         end do
         if (id == huge(1_i8)) id = 0
     end function deep_wall_id
+
+    !> The deepest overlap of the owned particle of id `target` with its candidate triangles
+    !> (its radius less the distance to the triangle's closest point), its radius and the
+    !> first triangle of that overlap; tri 0 (overlap and r -huge) if that particle is not
+    !> owned here or has no candidate. Reductions, on the device.
+    subroutine deepest_wall_overlap(n_own, n_cand, n_tri, gid, x, radius, wstart, wlist, vert, &
+                                    target, overlap, r, tri)
+        integer(ip), intent(in) :: n_own, n_cand, n_tri
+        integer(i8), intent(in) :: gid(n_own), target
+        real(wp), intent(in) :: x(3, n_own), radius(n_own), vert(3, 3, n_tri)   !! [m]
+        integer(ip), intent(in) :: wstart(n_own + 1), wlist(n_cand)
+        real(wp), intent(out) :: overlap, r                                     !! [m]
+        integer(ip), intent(out) :: tri
+        integer(ip) :: i, k, t, feature
+        real(wp) :: q(3)
+        overlap = -huge(1.0_wp)
+        r = -huge(1.0_wp)
+        !$acc parallel loop gang vector default(present) private(t, feature, q) &
+        !$acc reduction(max:overlap, r)
+        do i = 1, n_own
+            if (gid(i) /= target) cycle
+            do k = wstart(i), wstart(i + 1) - 1
+                t = wlist(k)
+                call closest_point_triangle(x(:, i), vert(:, 1, t), vert(:, 2, t), &
+                                            vert(:, 3, t), q, feature)
+                overlap = max(overlap, radius(i) - norm2(q - x(:, i)))
+                r = radius(i)
+            end do
+        end do
+        tri = huge(1_ip)
+        !$acc parallel loop gang vector default(present) private(t, feature, q) &
+        !$acc reduction(min:tri)
+        do i = 1, n_own
+            if (gid(i) /= target) cycle
+            do k = wstart(i), wstart(i + 1) - 1
+                t = wlist(k)
+                call closest_point_triangle(x(:, i), vert(:, 1, t), vert(:, 2, t), &
+                                            vert(:, 3, t), q, feature)
+                if (radius(i) - norm2(q - x(:, i)) == overlap) tri = min(tri, t)
+            end do
+        end do
+        if (tri == huge(1_ip)) tri = 0
+    end subroutine deepest_wall_overlap
 
     !> Number of overlapping particle pairs among the owned particles' list entries, counted
     !> from both sides: summed over the ranks, twice the number of contacts. A reduction, on

@@ -9,7 +9,7 @@ module dem_run_control
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_runtime
     use dem_comm, only: comm_any, comm_gather, comm_max
-    use dem_case, only: case_t, case_energy_bound
+    use dem_case, only: case_t, case_energy_bound, case_origin_text
     use dem_run_state, only: solver_t, time_of, summed, particle_data, stop_wall_time, stop_signal, &
                              particle_energies, bond_sums
     use dem_run_output, only: contact_counts, write_checkpoint, write_frame_checkpoint
@@ -17,7 +17,7 @@ module dem_run_control
     use dem_mesh, only: mesh_speed_bound
     use dem_rebuild, only: settle_outlets
     use dem_diagnostics, only: elastic_energy, first_nonfinite, deep_overlap_id, &
-                               deep_wall_id
+                               deep_wall_id, deepest_wall_overlap
     use dem_output, only: output_t
     use dem_frame, only: frame_t, frame_spread
     use dem_folder, only: checkpoint_file
@@ -28,12 +28,16 @@ module dem_run_control
     implicit none
     private
     public :: run_control, progress, energy_guard, unstable, deep_pair, deep_wall, smallest, &
-              overlap_warn
+              overlap_warn, wall_overlap_start, wall_overlap_text
 
     !> An overlap during a run deeper than this fraction of the smaller radius (of the radius
     !> against a wall) is reported once (deeper than &run max_overlap stops the run; doc/
-    !> theory.md, section 6); a run's particles start within it.
+    !> theory.md, section 6); a run's pairs of particles start within it.
     real(wp), parameter :: overlap_warn = 0.5_wp
+    !> The largest overlap with a wall, of the radius, that a starting state may hold: a
+    !> settled bed's elastic overlaps are well below it, and a deeper one sets free at the
+    !> first step more energy than the case holds (doc/theory.md, section 13).
+    real(wp), parameter :: wall_overlap_start = 0.01_wp
     !> The energy balance's room, a fraction of the energy a closed case can set free
     !> (balance_guard; doc/theory.md, section 6).
     real(wp), parameter :: balance_room = 0.25_wp
@@ -256,6 +260,47 @@ contains
         id = smallest(s, deep_wall_id(s%p%n_own, size(s%nb%wlist, kind=ip), s%mesh%n_tri, &
             s%p%gid, s%p%x, s%p%radius, s%nb%wstart, s%nb%wlist, s%mesh%vert, depth))
     end function deep_wall
+
+    !> The start's error for particle `id`, which overlaps a wall by more than
+    !> wall_overlap_start of its radius: where the particle was given (case_t's origins), the
+    !> wall (its name and group), the overlap and what to do. Collective.
+    function wall_overlap_text(s, c, id) result(text)
+        type(solver_t), intent(in) :: s
+        type(case_t), intent(in) :: c
+        integer(i8), intent(in) :: id
+        character(len=:), allocatable :: text, wall, origin
+        character(len=16) :: share
+        real(wp) :: deep(3)
+        integer(i8) :: at(2)
+        integer(ip) :: tri, i
+        call deepest_wall_overlap(s%p%n_own, size(s%nb%wlist, kind=ip), s%mesh%n_tri, s%p%gid, &
+            s%p%x, s%p%radius, s%nb%wstart, s%nb%wlist, s%mesh%vert, id, deep(1), deep(2), tri)
+        deep(3) = -1.0_wp
+        if (tri > 0) deep(3) = s%mesh%wall(tri)
+        call comm_max(s%comm, deep)
+        at = 0
+        if (allocated(c%gid)) then
+            do i = 1, size(c%gid, kind=ip)
+                if (c%gid(i) == id) at = [int(c%origin(i), i8), int(c%line(i), i8)]
+            end do
+        end if
+        call comm_max(s%comm, at)
+        origin = case_origin_text(c, int(at(1), ip), int(at(2), ip))
+        if (len(origin) > 0) origin = ' (' // origin // ')'
+        wall = 'a wall'
+        if (deep(3) > 0.0_wp) then
+            i = nint(deep(3), ip)
+            wall = 'the wall'
+            if (len_trim(s%mesh%name(i)) > 0) wall = wall // " '" // trim(s%mesh%name(i)) // "'"
+            if (allocated(c%wall_groups)) wall = wall // ' of the ' // trim(c%wall_groups(i))
+        end if
+        write(share, '(f16.1)') 100.0_wp * deep(1) / deep(2)
+        text = c%source // ': particle ' // itoa(id) // origin // ' overlaps ' // wall // &
+            ' by ' // real_text(deep(1)) // ' m, ' // trim(adjustl(share)) // ' % of its ' // &
+            'radius, at the start (more than ' // itoa(nint(100 * wall_overlap_start)) // &
+            ' % is taken for a mistake: a sound contact is shallower): move or shrink the ' // &
+            'particles, or move the wall'
+    end function wall_overlap_text
 
     !> The smallest of the ranks' ids > 0 (0 if none has one). Collective.
     integer(i8) function smallest(s, id) result(least)

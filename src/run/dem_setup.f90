@@ -11,7 +11,7 @@ module dem_setup
     use dem_comm, only: comm_t, comm_any, comm_max
     use dem_case, only: case_t, insert_t, time_scales_t, case_time_scales, case_summarize, &
                         case_speed_bound, case_energy_speed, case_append_particles, &
-                        case_settle_time
+                        case_settle_time, case_add_origin
     use dem_insert, only: insert_random, insert_velocities, region_face, region_slab
     use dem_random, only: rng_t, rng_seed
     use dem_input, only: read_case_file
@@ -79,7 +79,7 @@ contains
         type(case_t), intent(inout) :: c
         integer(ip), intent(in) :: first
         integer(i8), allocatable :: gid(:), body(:)
-        integer(ip), allocatable :: mat(:)
+        integer(ip), allocatable :: mat(:), origin(:), line(:)
         real(wp), allocatable :: radius(:), x(:, :), v(:, :), w(:, :), state(:, :)
         integer(i8) :: next_id
         integer(ip) :: k, n, m, a
@@ -88,7 +88,7 @@ contains
             n = n + size(c%templates(c%clumps(k)%template)%radii, kind=ip)
         end do
         allocate(gid(n), body(n), mat(n), radius(n), x(3, n), v(3, n), w(3, n), &
-                 state(body_state_rows, n))
+                 state(body_state_rows, n), origin(n), line(n))
         next_id = 1
         if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
         a = 0
@@ -99,6 +99,8 @@ contains
                                    body(a + 1:a + m), radius(a + 1:a + m), x(:, a + 1:a + m), &
                                    v(:, a + 1:a + m), w(:, a + 1:a + m), state(:, a + 1:a + m))
                 mat(a + 1:a + m) = tpl%mat
+                origin(a + 1:a + m) = c%clumps(k)%origin
+                line(a + 1:a + m) = c%clumps(k)%line
                 a = a + m
             end associate
         end do
@@ -107,7 +109,7 @@ contains
             c%body = 0
             c%body_state = 0.0_wp
         end if
-        call case_append_particles(c, gid, mat, radius, x, v, w, n)
+        call case_append_particles(c, gid, mat, radius, x, v, w, n, origin, line)
         c%body(c%n_held - n + 1:) = body
         c%body_state(:, c%n_held - n + 1:) = state
     end subroutine place_clumps
@@ -121,7 +123,8 @@ contains
         type(rng_t) :: rng
         real(wp), allocatable :: x(:, :), r(:), xa(:, :), ra(:)
         integer(i8) :: next_id
-        integer(ip) :: k, i, n, placed
+        integer(ip) :: k, i, n, placed, origin
+        origin = case_add_origin(c, 'placed by the &insert group ', '')
         do k = 1, size(c%inserts)
             associate (g => c%inserts(k))
                 if (g%inflow) cycle                 ! during the run (dem_inflow)
@@ -149,11 +152,12 @@ contains
                 if (c%n_held > 0) next_id = maxval(c%gid(1:c%n_held)) + 1
                 if (.not. ids_left(g, next_id, real(n, wp), err)) return
                 if (g%template > 0) then
-                    call insert_clumps(c, k, rng, n, x, r)
+                    call insert_clumps(c, k, rng, n, x, r, origin)
                 else
                     call case_append_particles(c, [(next_id + i, i = 0, n - 1)], &
                         spread(g%mat, 1, n), r, x, insert_velocities(rng, g%velocity, &
-                        g%velocity_spread, n), spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n), n)
+                        g%velocity_spread, n), spread([0.0_wp, 0.0_wp, 0.0_wp], 2, n), n, &
+                        spread(origin, 1, n), spread(k, 1, n))
                 end if
                 c%rng_state = rng%state
                 deallocate(x, r)
@@ -242,13 +246,14 @@ contains
 
     !> &insert group k's n clumps in the spheres placed for them (centres x, radii r: their
     !> reach spheres; dem_clumps' clumps_in_spheres, the orientations drawn after the
-    !> velocities), then their members made.
-    subroutine insert_clumps(c, k, rng, n, x, r)
+    !> velocities), then their members made (placed by `origin`, dem_case's origin_t).
+    subroutine insert_clumps(c, k, rng, n, x, r, origin)
         type(case_t), intent(inout) :: c
         integer(ip), intent(in) :: k
         type(rng_t), intent(inout) :: rng
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: x(:, :), r(:)
+        integer(ip), intent(in) :: origin
         type(clump_t), allocatable :: added(:)
         integer(ip) :: first
         associate (g => c%inserts(k))
@@ -257,6 +262,8 @@ contains
                                       g%orientation, rng)
         end associate
         first = size(c%clumps, kind=ip) + 1
+        added%origin = origin
+        added%line = k
         c%clumps = [c%clumps, added]
         call place_clumps(c, first)
     end subroutine insert_clumps
@@ -296,6 +303,8 @@ contains
         integer(ip) :: i
         kept = [(i, i = rank + 1, c%n_held, ranks)]
         c%gid = c%gid(kept)
+        c%origin = c%origin(kept)
+        c%line = c%line(kept)
         c%mat = c%mat(kept)
         c%radius = c%radius(kept)
         c%x = c%x(:, kept)

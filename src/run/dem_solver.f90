@@ -28,7 +28,8 @@ module dem_solver
     use dem_rebuild, only: rebuild, settle_outlets, start_domain
     use dem_frames, only: capture, solver_restore => frame_restore
     use dem_run_output, only: write_trace, write_snapshot, write_xdmf
-    use dem_run_control, only: unstable, deep_pair, deep_wall, smallest, overlap_warn
+    use dem_run_control, only: unstable, deep_pair, deep_wall, smallest, overlap_warn, &
+                               wall_overlap_start, wall_overlap_text
     use dem_step, only: time_step, forces, write_row
     use dem_inflow, only: inflow_particles
     implicit none
@@ -188,9 +189,10 @@ contains
 
     !> Decompose space (several ranks), put the state on the device and build the lists. A
     !> run that does not continue a checkpoint checks its particles first: ids unique, then,
-    !> from the lists, none overlapping a wall by more than half its radius and no two
-    !> overlapping by more than half the smaller radius (an input error naming the smallest
-    !> ids). Collective: on failure, err is set on every rank.
+    !> from the lists, none overlapping a wall by more than wall_overlap_start of its radius
+    !> (an input error naming the particle of smallest id, where it was given and the wall) and
+    !> no two overlapping by more than half the smaller radius (an input error naming the
+    !> smallest ids). Collective: on failure, err is set on every rank.
     subroutine solver_prepare(s, c, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
@@ -207,9 +209,8 @@ contains
         call device_data(s, acc_enter)
         call rebuild(s, .false., err)
         if (err%failed() .or. s%restarted) return
-        ids(1) = deep_wall(s, overlap_warn)
-        if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particle ' // &
-            itoa(ids(1)) // ' overlaps a wall by more than half its radius')
+        ids(1) = deep_wall(s, wall_overlap_start)
+        if (ids(1) > 0) call set_error(err, dem_err_input, wall_overlap_text(s, c, ids(1)))
         if (failed_anywhere(s, err)) return
         ids = deep_pair(s, overlap_warn)
         if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particles ' // &
