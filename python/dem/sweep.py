@@ -29,7 +29,7 @@ def _pieces(text):
     The pieces put together are the text."""
     pieces, tokens, name = [], [], None
     for token in scan(iter(text.splitlines(True))):
-        if name is None and token in ("&", "$"):
+        if name is None and token == "&":
             if tokens:
                 pieces.append([None, "".join(tokens)])
             tokens, name = [token], ""
@@ -48,8 +48,9 @@ def _pieces(text):
 
 
 def _patch(name, piece, values):
-    """The text of the group `name` with `values` (key: value) set by f90nml: an existing key's values
-    replaced in place, a new key added before the '/'; the rest (layout, comments) kept."""
+    """The text of the group `name` with `values` (key: value) set by f90nml: an existing
+    key's values replaced in place, a new key added before the '/'; the rest (layout,
+    comments) kept."""
     out = io.StringIO()
     # f90nml writes a token when it reads the next: the newline makes it write the '/'
     f90nml.Parser().read(io.StringIO(piece + "\n"), {name: values}, out)
