@@ -3,9 +3,10 @@
 
 The library is looked for, in this order, at: the path given to load_library(); the file
 named by the environment variable DEM_LIBRARY; the build folders of the repository this
-package sits in (build/, build-debug/, when it is used from python/ of a source tree);
-lib/ of the Python prefix (cmake --install --prefix into a virtual environment); then
-wherever the dynamic loader finds libdem.so (LD_LIBRARY_PATH, ldconfig: an install under
+package sits in (build/, build-debug/, when it is used from python/ of a source tree); the
+package's own copy (dem/libdem.so, which pip install ./python builds and puts there); lib/
+of the Python prefix (cmake --install --prefix into a virtual environment); then wherever
+the dynamic loader finds libdem.so (LD_LIBRARY_PATH, ldconfig: an install under
 /usr/local)."""
 import atexit
 import ctypes
@@ -76,6 +77,7 @@ def _candidates():
     if os.path.exists(os.path.join(root, "src", "api", "dem_coupling.h")):
         for build in ("build", "build-debug", "build-acc"):
             found.append(os.path.join(root, build, "libdem.so"))
+    found.append(os.path.join(here, "libdem.so"))
     for lib in ("lib", "lib64"):
         found.append(os.path.join(sys.prefix, lib, "libdem.so"))
     name = ctypes.util.find_library("dem")
@@ -112,8 +114,9 @@ def load_library(path=None):
             f.argtypes = argtypes
         _lib, _lib_path = lib, candidate
         return lib
-    raise OSError("dem: cannot load libdem.so (build it with scripts/install/build, then set "
-                  "DEM_LIBRARY to its path, or install it with cmake --install); tried:\n  "
+    raise OSError("dem: cannot load libdem.so (pip install ./python builds it into the "
+                  "package; or build it with scripts/install/build and set DEM_LIBRARY to its "
+                  "path, or install it with cmake --install); tried:\n  "
                   + "\n  ".join(errors))
 
 

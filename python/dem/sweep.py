@@ -1,145 +1,126 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """Parameter sweeps: a case run once per value of namelist keys, each run in a folder of its
 own, a measure taken of each (doc/user/python.md)."""
+import io
 import os
-import re
+
+import f90nml
+from f90nml.scanner import scan
 
 from .run import Run
 
-_KEY = re.compile(r"([A-Za-z_]\w*)\s*=")
+
+def _plain(value):
+    """A value as f90nml writes it: NumPy scalars and arrays as Python numbers and lists,
+    tuples as lists."""
+    if hasattr(value, "tolist"):
+        value = value.tolist()
+    if isinstance(value, tuple):
+        value = list(value)
+    if isinstance(value, list):
+        return [_plain(v) for v in value]
+    return value
 
 
-def _literal(value):
-    """A Python value as a namelist value: strings quoted, logicals .true./.false., lists
-    and tuples as comma-separated values."""
-    if isinstance(value, bool):
-        return ".true." if value else ".false."
-    if isinstance(value, str):
-        return "'" + value.replace("'", "''") + "'"
-    if isinstance(value, (list, tuple)):
-        return ", ".join(_literal(v) for v in value)
-    if hasattr(value, "tolist"):                         # NumPy scalars and arrays
-        return _literal(value.tolist())
-    return repr(value)
+def _pieces(text):
+    """The text cut, by f90nml's scanner (quotes and '!' comments are its tokens), into
+    [name, piece] pairs: a namelist group from its '&name' to its closing '/' (included),
+    name in lower case; the text between groups (comments, blank lines) with name None.
+    The pieces put together are the text."""
+    pieces, tokens, name = [], [], None
+    for token in scan(iter(text.splitlines(True))):
+        if name is None and token == "&":
+            if tokens:
+                pieces.append([None, "".join(tokens)])
+            tokens, name = [token], ""
+            continue
+        tokens.append(token)
+        if name == "" and token.strip():
+            name = token.lower()
+        elif name and token == "/":
+            pieces.append([name, "".join(tokens)])
+            tokens, name = [], None
+    if tokens:
+        if name is not None:
+            raise ValueError(f"namelist group &{name} has no closing '/'")
+        pieces.append([None, "".join(tokens)])
+    return pieces
 
 
-def _groups(text):
-    """(name, start, end) of every namelist group of `text`: text[start:end] runs from just
-    after '&name' to its closing '/' (excluded). Quotes and '!' comments are skipped."""
-    found = []
-    k, n = 0, len(text)
-    while k < n:
-        c = text[k]
-        if c == "!":
-            k = text.find("\n", k)
-            k = n if k < 0 else k
-        elif c == "&":
-            m = re.match(r"&(\w+)", text[k:])
-            start = k + m.end()
-            j, quote = start, None
-            while j < n:
-                d = text[j]
-                if quote:
-                    quote = None if d == quote else quote
-                elif d in "'\"":
-                    quote = d
-                elif d == "!":
-                    j = text.find("\n", j)
-                    j = n if j < 0 else j
-                    continue
-                elif d == "/":
-                    break
-                j += 1
-            found.append((m.group(1).lower(), start, j))
-            k = j + 1
-        else:
-            k += 1
-    return found
+def _patch(name, piece, values):
+    """The text of the group `name` with `values` (key: value) set by f90nml: an existing
+    key's values replaced in place, a new key added before the '/'; the rest (layout,
+    comments) kept."""
+    out = io.StringIO()
+    # f90nml writes a token when it reads the next: the newline makes it write the '/'
+    f90nml.Parser().read(io.StringIO(piece + "\n"), {name: values}, out)
+    return out.getvalue()[:-1]
 
 
-def _outside_quotes(body):
-    """The spans of `body` outside quotes and comments, as a string of the same length with
-    the quoted and commented characters replaced by spaces (to search keys in)."""
-    out, quote, comment = [], None, False
-    for d in body:
-        if comment:
-            comment = d != "\n"
-            out.append(d if not comment else " ")
-        elif quote:
-            quote = None if d == quote else quote
-            out.append(" ")
-        elif d in "'\"":
-            quote = d
-            out.append(" ")
-        elif d == "!":
-            comment = True
-            out.append(" ")
-        else:
-            out.append(d)
-    return "".join(out)
-
-
-def _set_in_group(body, key, value):
-    """The group body with `key = value` (an existing key's values replaced, else added)."""
-    plain = _outside_quotes(body)
-    keys = list(_KEY.finditer(plain))
-    for i, m in enumerate(keys):
-        if m.group(1).lower() == key.lower():
-            end = keys[i + 1].start() if i + 1 < len(keys) else len(body)
-            tail = body[m.end():end]
-            # keep the separator and spacing before the next key
-            stripped = tail.rstrip()
-            sep = ""
-            if i + 1 < len(keys):
-                sep = "," if stripped.endswith(",") else ""
-            return (body[:m.end()] + " " + value + sep + tail[len(stripped):] + body[end:])
-    body = body.rstrip()
-    comma = "," if keys else ""
-    return f"{body}{comma} {key} = {value} "
+def _edit(text, edit):
+    """The text with every group patched by edit(name, group), which gets the group's values
+    as f90nml reads them (a Namelist, keys in lower case) and returns the keys to set (a
+    dict, maybe empty)."""
+    pieces = _pieces(text)
+    for piece in pieces:
+        name = piece[0]
+        if name is not None:
+            values = edit(name, f90nml.reads(piece[1])[name])
+            if values:
+                piece[1] = _patch(name, piece[1], values)
+    return "".join(p for _, p in pieces)
 
 
 def set_values(text, changes):
     """The case text with namelist values changed: `changes` maps 'group.key' to a value
     (a number, string, logical or list) and sets the key in every &group of that name (a
-    group absent from the case is added at the end)."""
+    group absent from the case is added at the end). Comments and layout are kept."""
+    by_group = {}
     for spec, value in changes.items():
         group, _, key = spec.partition(".")
-        if not key:
+        if not key or not group:
             raise ValueError(f"{spec!r}: expected 'group.key', as 'pair.friction'")
-        literal = _literal(value)
-        spans = [s for s in _groups(text) if s[0] == group.lower()]
-        if not spans:
-            text = text.rstrip("\n") + f"\n&{group} {key} = {literal} /\n"
-            continue
-        for name, start, end in reversed(spans):
-            text = text[:start] + _set_in_group(text[start:end], key, literal) + text[end:]
+        by_group.setdefault(group.lower(), {})[key.lower()] = _plain(value)
+    seen = set()
+
+    def edit(name, group):
+        seen.add(name)
+        return by_group.get(name)
+    text = _edit(text, edit)
+    for group, values in by_group.items():
+        if group not in seen:
+            text = text.rstrip("\n") + "\n" + str(f90nml.Namelist({group: values})) + "\n"
     return text
 
 
 def _absolute_files(text, folder):
     """File names of the case (keys `file` and `*_file`) made absolute, relative to
     `folder` (the original case's), so that the case can be written elsewhere."""
-    def absolute(m):
-        name = m.group(3)
-        if os.path.isabs(name):
-            return m.group(0)
-        return f"{m.group(1)}{m.group(2)}{os.path.join(folder, name)}{m.group(2)}"
-    return re.sub(r"(\b\w*file\s*=\s*)(['\"])([^'\"]*)\2", absolute, text, flags=re.I)
+    def edit(name, group):
+        return {key: os.path.join(folder, value) for key, value in group.items()
+                if key.endswith("file") and isinstance(value, str)
+                and not os.path.isabs(value)}
+    return _edit(text, edit)
 
 
 def write_case(case, changes, path, output_dir=None):
     """Write to `path` the case file `case` with `changes` (as set_values), its relative
     file names made absolute, and its &output dir set to `output_dir` when given (with
-    overwrite, so that a sweep can be run again)."""
+    overwrite, so that a sweep can be run again). A case f90nml cannot read raises
+    ValueError naming the file."""
     with open(case) as f:
         text = f.read()
-    text = _absolute_files(text, os.path.dirname(os.path.abspath(case)))
     changes = dict(changes)
     if output_dir is not None:
         changes.setdefault("output.dir", os.path.abspath(output_dir))
         changes.setdefault("output.overwrite", True)
+    try:
+        text = set_values(_absolute_files(text, os.path.dirname(os.path.abspath(case))),
+                          changes)
+    except ValueError as e:
+        raise ValueError(f"{case}: {e}") from None
     with open(path, "w") as f:
-        f.write(set_values(text, changes))
+        f.write(text)
     return path
 
 

@@ -5,6 +5,9 @@ friction spins it up to v = w R), after t_r = 2 v0 / (7 mu g) and the distance
 12 v0^2 / (49 mu g). The namelist editing it rests on is checked on its own."""
 import os
 
+import f90nml
+import pytest
+
 import dem
 from conftest import GLASS, write_case
 
@@ -60,10 +63,26 @@ def test_set_values():
     out = dem.set_values(text, {"pair.friction": 0.25, "run.t_end": 2.0,
                                 "output.dir": "o/p", "run.gravity": (0, 0, -1)})
     assert out.count("friction = 0.25") == 2 and "friction = 0.3" not in out
-    assert "friction = 1 /" in out                                  # the comment
+    assert out.startswith("! a comment with &pair friction = 1 /\n")    # the comment
+    assert "/ ! after\n" in out and "&wall_mesh file = 'x.stl' /\n" in out  # kept as is
     assert "t_end = 2.0" in out and "gravity = 0, 0, -1" in out
-    assert "&output dir = 'o/p' /" in out
     assert "'a/c'" in out and "restitution = 0.5 /" in out
+    # read back by f90nml: the values set, the others as they were, a group added
+    nml = f90nml.reads(out)
+    assert nml["run"]["dt"] == 1e-5 and nml["run"]["t_end"] == 2.0
+    assert nml["run"]["gravity"] == [0, 0, -1]
+    assert [g["friction"] for g in nml["pair"]] == [0.25, 0.25]
+    assert [g["materials"] for g in nml["pair"]] == [["a", "b"], ["a/c", "b"]]
+    assert [g["restitution"] for g in nml["pair"]] == [0.5, 0.5]
+    assert nml["wall_mesh"]["file"] == "x.stl" and nml["output"]["dir"] == "o/p"
+    assert list(dict.fromkeys(nml)) == ["run", "pair", "wall_mesh", "output"]  # added last
+
+
+def test_set_values_refuses_what_it_cannot_read():
+    with pytest.raises(ValueError, match="pair.friction|group.key"):
+        dem.set_values("&run dt = 1 /\n", {"friction": 0.1})
+    with pytest.raises(ValueError, match="&pair"):
+        dem.set_values("&pair friction = 0.3\n", {"pair.friction": 0.1})
 
 
 def test_write_case_makes_file_names_absolute(work):
