@@ -1,6 +1,6 @@
 ! SPDX-License-Identifier: BSD-3-Clause
 !> The forces of one force evaluation as snapshots show them (doc/user/output.md, snapshots;
-!> doc/theory.md, section 21): the contact network, each particle contact once, named by the
+!> doc/theory.md, section 8): the contact network, each particle contact once, named by the
 !> ids of its two particles, with its normal and tangential forces; and the load on each
 !> wall triangle, the sums of its contacts' forces in fixed point, with its pressure and
 !> shear stress. Neither depends on the number of ranks.
