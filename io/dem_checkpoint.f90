@@ -121,7 +121,9 @@ contains
                                                      [3, mesh%n_tri]), err)
         call h5_write(h, '/walls/wall', [(mesh%wall(k), k = 1, mesh%n_tri)], err)
         call h5_write(h, '/walls/material', [(mesh%mat(k), k = 1, mesh%n_tri)], err)
-        if (any(mesh%name /= '')) call h5_write(h, '/walls/name', mesh%name, err)
+        if (allocated(mesh%name)) then
+            if (any(mesh%name /= '')) call h5_write(h, '/walls/name', mesh%name, err)
+        end if
         if (allocated(fr%wall_force)) then
             call h5_write(h, '/walls/force', fr%wall_force, err)
             call h5_write(h, '/walls/pressure', fr%wall_pressure, err)

@@ -215,11 +215,14 @@ contains
         type(solver_t), intent(in) :: s
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
+        character(len=32), allocatable :: walls(:)
         if (s%comm%rank /= 0) return
+        walls = [character(len=32) ::]                 ! (the walls' names: none without walls)
+        if (allocated(s%mesh%name)) walls = s%mesh%name
         call xdmf_write(c%output_dir // '/snapshots.xmf', s%snap_step, s%snap_time, s%snap_n, &
                         s%snap_bonds, s%snap_contacts, s%mesh%n_tri, c%snapshot_force, &
                         c%snapshot_contacts, c%has_clumps, c%snapshot_fragments, &
-                        c%snapshot_wall_stress, c%mats%name, s%mesh%name, err)
+                        c%snapshot_wall_stress, c%mats%name, walls, err)
     end subroutine write_xdmf
 
     !> A checkpoint of the state now.
