@@ -59,7 +59,9 @@ module dem_checkpoint
 contains
 
     !> Write a snapshot (checkpoint false; force, contacts, fragments and bonds if allocated:
-    !> /bonds/pairs and /bonds/stress_ratio, dem_bond_graph) or a checkpoint
+    !> /bonds/pairs and /bonds/stress_ratio, dem_bond_graph; the contact network and the
+    !> wall triangles' loads if allocated: /contacts, /walls/force, dem_force_network) or a
+    !> checkpoint
     !> of frame `fr` of case `c`, with the walls in pose `mesh`, to `path`, atomically.
     subroutine frame_write(fr, c, mesh, path, checkpoint, comm, err)
         type(frame_t), intent(inout) :: fr
@@ -105,12 +107,28 @@ contains
             call h5_write(h, '/bonds/pairs', fr%bond_pair, err, distributed=.true.)
             call h5_write(h, '/bonds/stress_ratio', fr%bond_ratio, err, distributed=.true.)
         end if
+        if (allocated(fr%contact_pair)) then
+            call h5_group(h, '/contacts', err)
+            call h5_write(h, '/contacts/pairs', fr%contact_pair, err, distributed=.true.)
+            call h5_write(h, '/contacts/normal_force', fr%contact_fn, err, distributed=.true.)
+            call h5_write(h, '/contacts/force', fr%contact_force, err, distributed=.true.)
+            call h5_write(h, '/contacts/tangential_force', fr%contact_ft, err, &
+                          distributed=.true.)
+        end if
         call h5_group(h, '/walls', err)
         call h5_write(h, '/walls/vertices', corners(mesh, .false.), err)
         call h5_write(h, '/walls/triangles', reshape([(k, k = 0, 3 * mesh%n_tri - 1)], &
                                                      [3, mesh%n_tri]), err)
         call h5_write(h, '/walls/wall', [(mesh%wall(k), k = 1, mesh%n_tri)], err)
         call h5_write(h, '/walls/material', [(mesh%mat(k), k = 1, mesh%n_tri)], err)
+        if (allocated(mesh%name)) then
+            if (any(mesh%name /= '')) call h5_write(h, '/walls/name', mesh%name, err)
+        end if
+        if (allocated(fr%wall_force)) then
+            call h5_write(h, '/walls/force', fr%wall_force, err)
+            call h5_write(h, '/walls/pressure', fr%wall_pressure, err)
+            call h5_write(h, '/walls/shear', fr%wall_shear, err)
+        end if
         if (checkpoint) call write_state(h)
         call h5_close(h, err)
         call comm_barrier(comm)
@@ -145,6 +163,8 @@ contains
             call h5_write(h_, '/state/snapshot_time', fr%snap_time, err)
             call h5_write(h_, '/state/snapshot_particles', fr%snap_n, err)
             if (c%bond_reals > 0) call h5_write(h_, '/state/snapshot_bonds', fr%snap_bonds, err)
+            if (c%snapshot_network) call h5_write(h_, '/state/snapshot_contacts', &
+                                                  fr%snap_contacts, err)
             call h5_write(h_, '/state/checkpoint_step', fr%ckpt_step, err)
             if (allocated(fr%inflow_count)) then
                 call h5_write(h_, '/state/next_id', fr%next_id, err)
@@ -348,6 +368,12 @@ contains
             allocate(fr%snap_bonds(size(fr%snap_n)))
             fr%snap_bonds = 0
         end if
+        if (.not. err%failed() .and. h5_exists(h, '/state/snapshot_contacts')) then
+            call read_i8_list('/state/snapshot_contacts', fr%snap_contacts)
+        else
+            allocate(fr%snap_contacts(size(fr%snap_n)))
+            fr%snap_contacts = 0
+        end if
         call h5_dims(h, '/state/snapshot_time', dims, err, 1)
         if (.not. err%failed()) then
             allocate(fr%snap_time(dims(1)))
@@ -374,7 +400,8 @@ contains
             else if (fr%step < 0 .or. fr%step0 < 0 .or. fr%step0 > fr%step .or. &
                      .not. (fr%dt > 0.0_wp .and. fr%dt < huge(1.0_wp)) .or. &
                      .not. (fr%time >= 0.0_wp .and. fr%time < huge(1.0_wp)) .or. &
-                     fr%removed < 0 .or. size(fr%snap_bonds) /= size(fr%snap_step)) then
+                     fr%removed < 0 .or. size(fr%snap_bonds) /= size(fr%snap_step) .or. &
+                     size(fr%snap_contacts) /= size(fr%snap_step)) then
                 call set_error(err, dem_err_input, path // ': the run state (step, time, ' // &
                                'dt) is not consistent (damaged file?)')
             end if

@@ -162,12 +162,17 @@ contains
         logical :: snapshot_contacts     ! and its number of contacts, default F
         logical :: snapshot_fragments    ! and its fragment (the smallest id of the bonded
                                          ! body it is part of), default F
+        logical :: snapshot_contact_network  ! snapshots hold each particle contact as a line
+                                             ! with its forces, default F
+        logical :: snapshot_wall_stress  ! and the force, pressure and shear stress on each
+                                         ! wall triangle, default F
         real(wp) :: checkpoint_interval  ! checkpoints [s], >= 0, default 0 (only at the end
                                          ! and when a run is stopped)
         integer :: checkpoint_keep       ! checkpoints kept, >= 1, default 2
         logical :: overwrite             ! a fresh run replaces another run's outputs, default F
         namelist /output/ dir, interval, trace_id, snapshot_interval, snapshot_force, &
-            snapshot_contacts, snapshot_fragments, checkpoint_interval, checkpoint_keep, overwrite
+            snapshot_contacts, snapshot_fragments, snapshot_contact_network, &
+            snapshot_wall_stress, checkpoint_interval, checkpoint_keep, overwrite
         type(group_io_t) :: io
         character(len=:), allocatable :: at
 
@@ -178,6 +183,8 @@ contains
         snapshot_force = .false.
         snapshot_contacts = .false.
         snapshot_fragments = .false.
+        snapshot_contact_network = .false.
+        snapshot_wall_stress = .false.
         checkpoint_interval = 0.0_wp
         checkpoint_keep = 2
         overwrite = .false.
@@ -220,6 +227,8 @@ contains
         c%snapshot_force = snapshot_force
         c%snapshot_contacts = snapshot_contacts
         c%snapshot_fragments = snapshot_fragments
+        c%snapshot_network = snapshot_contact_network
+        c%snapshot_wall_stress = snapshot_wall_stress
         c%checkpoint_interval = checkpoint_interval
         c%checkpoint_keep = checkpoint_keep
         c%output_overwrite = overwrite

@@ -2,9 +2,11 @@
 !> The XDMF index of the snapshots (doc/user/output.md): one XML file that ParaView opens
 !> directly, a time series whose every step holds the particles (points carrying radius,
 !> velocity and the other fields, to be drawn with a sphere glyph scaled by radius), the
-!> walls (a triangle surface) and the intact bonds (lines between the particles' centres,
-!> carrying their stress ratio), read from the snapshot files. It is rewritten whole after
-!> each snapshot, under a temporary name then renamed.
+!> walls (a triangle surface, carrying their loads when the snapshots hold them), the intact
+!> bonds (lines between the particles' centres, carrying their stress ratio) and the contact
+!> network (lines between the particles' centres, carrying their forces), read from the
+!> snapshot files. It is rewritten whole after each snapshot, under a temporary name then
+!> renamed.
 module dem_xdmf
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_io
@@ -23,22 +25,24 @@ contains
         name = step_file('snapshots/snapshot_', step)
     end function snapshot_file
 
-    !> Write `path` for the snapshots of steps `step` at times `time` holding `n` particles
-    !> and `bonds` intact bonds each (a step without bonds has no bonds grid), with `n_tri`
-    !> wall triangles; `force`, `contacts`, `clumps` and `fragments` say whether the
-    !> snapshots hold those fields (clumps: each particle's body and its orientation);
+    !> Write `path` for the snapshots of steps `step` at times `time` holding `n` particles,
+    !> `bonds` intact bonds and `network` contacts each (a step without bonds or contacts has
+    !> no bonds or contacts grid), with `n_tri` wall triangles; `force`, `contacts`,
+    !> `clumps`, `fragments` and `stress` say whether the snapshots hold those fields
+    !> (clumps: each particle's body and its orientation; stress: the walls' loads);
     !> `names` are the materials, whose indices the `material` attributes hold (an
-    !> Information element of the domain lists them: "1 name; 2 name; ...").
-    subroutine xdmf_write(path, step, time, n, bonds, n_tri, force, contacts, clumps, &
-                          fragments, names, err)
-        character(len=*), intent(in) :: path, names(:)
-        integer(i8), intent(in) :: step(:), n(:), bonds(:)
+    !> Information element of the domain lists them: "1 name; 2 name; ..."), and
+    !> `wall_names` the walls' (listed the same way when some wall has a name).
+    subroutine xdmf_write(path, step, time, n, bonds, network, n_tri, force, contacts, clumps, &
+                          fragments, stress, names, wall_names, err)
+        character(len=*), intent(in) :: path, names(:), wall_names(:)
+        integer(i8), intent(in) :: step(:), n(:), bonds(:), network(:)
         real(wp), intent(in) :: time(:)
         integer(ip), intent(in) :: n_tri
-        logical, intent(in) :: force, contacts, clumps, fragments
+        logical, intent(in) :: force, contacts, clumps, fragments, stress
         type(error_t), intent(inout) :: err
         integer :: u, ios, k
-        character(len=:), allocatable :: h5, table
+        character(len=:), allocatable :: h5
 
         open(newunit=u, file=path // '.part', status='replace', action='write', iostat=ios)
         if (ios /= 0) then
@@ -46,13 +50,10 @@ contains
             return
         end if
         write(u, '(a)') '<?xml version="1.0" ?>', '<Xdmf Version="3.0">', ' <Domain>'
-        table = ''
-        do k = 1, size(names)
-            if (k > 1) table = table // '; '
-            table = table // itoa(int(k, i8)) // ' ' // escaped(trim(names(k)))
-        end do
-        write(u, '(a)') '  <Information Name="materials" Value="' // table // '"/>', &
-            '  <Grid Name="dem" GridType="Collection" CollectionType="Temporal">'
+        write(u, '(a)') '  <Information Name="materials" Value="' // name_table(names) // '"/>'
+        if (any(wall_names /= '')) write(u, '(a)') '  <Information Name="walls" Value="' // &
+                                                   name_table(wall_names) // '"/>'
+        write(u, '(a)') '  <Grid Name="dem" GridType="Collection" CollectionType="Temporal">'
         do k = 1, size(step)
             h5 = snapshot_file(step(k))
             write(u, '(a)') '   <Grid Name="step ' // itoa(step(k)) // &
@@ -86,15 +87,20 @@ contains
             if (fragments) call attribute('fragment', 'Scalar', 'Node', '/particles/fragment', &
                                           itoa(n(k)), 'Int', 8)
             write(u, '(a)') '    </Grid>'
-            if (bonds(k) > 0) then         ! lines between the particles' centres
-                write(u, '(a)') '    <Grid Name="bonds" GridType="Uniform">', &
-                    '     <Topology TopologyType="Polyline" NumberOfElements="' // &
-                    itoa(bonds(k)) // '" NodesPerElement="2">', &
-                    '      ' // item(h5, '/bonds/pairs', itoa(bonds(k)) // ' 2', 'Int', 8), &
-                    '     </Topology>'
-                call geometry()
+            if (bonds(k) > 0) then
+                call lines('bonds', bonds(k))
                 call attribute('stress_ratio', 'Scalar', 'Cell', '/bonds/stress_ratio', &
                                itoa(bonds(k)), 'Float', 8)
+                write(u, '(a)') '    </Grid>'
+            end if
+            if (network(k) > 0) then
+                call lines('contacts', network(k))
+                call attribute('normal_force', 'Scalar', 'Cell', '/contacts/normal_force', &
+                               itoa(network(k)), 'Float', 8)
+                call attribute('force', 'Vector', 'Cell', '/contacts/force', &
+                               itoa(network(k)) // ' 3', 'Float', 8)
+                call attribute('tangential_force', 'Vector', 'Cell', &
+                               '/contacts/tangential_force', itoa(network(k)) // ' 3', 'Float', 8)
                 write(u, '(a)') '    </Grid>'
             end if
             if (n_tri > 0) then
@@ -111,6 +117,14 @@ contains
                                'Int', 4)
                 call attribute('material', 'Scalar', 'Cell', '/walls/material', &
                                itoa(int(n_tri, i8)), 'Int', 4)
+                if (stress) then
+                    call attribute('force', 'Vector', 'Cell', '/walls/force', &
+                                   itoa(int(n_tri, i8)) // ' 3', 'Float', 8)
+                    call attribute('pressure', 'Scalar', 'Cell', '/walls/pressure', &
+                                   itoa(int(n_tri, i8)), 'Float', 8)
+                    call attribute('shear', 'Scalar', 'Cell', '/walls/shear', &
+                                   itoa(int(n_tri, i8)), 'Float', 8)
+                end if
                 write(u, '(a)') '    </Grid>'
             end if
             write(u, '(a)') '   </Grid>'
@@ -123,7 +137,21 @@ contains
         end if
         call file_rename(path // '.part', path, err)
     contains
-        !> The particles' centres, the points of the particles and of the bonds.
+        !> The opening of a grid of `count` lines between the particles' centres, their pairs
+        !> /<name>/pairs (the bonds, the contacts); the caller adds its attributes and closes
+        !> it.
+        subroutine lines(name, count)
+            character(len=*), intent(in) :: name
+            integer(i8), intent(in) :: count
+            write(u, '(a)') '    <Grid Name="' // name // '" GridType="Uniform">', &
+                '     <Topology TopologyType="Polyline" NumberOfElements="' // &
+                itoa(count) // '" NodesPerElement="2">', &
+                '      ' // item(h5, '/' // name // '/pairs', itoa(count) // ' 2', 'Int', 8), &
+                '     </Topology>'
+            call geometry()
+        end subroutine lines
+
+        !> The particles' centres, the points of the particles, bonds and contacts.
         subroutine geometry()
             write(u, '(a)') '     <Geometry GeometryType="XYZ">', &
                 '      ' // item(h5, '/particles/position', itoa(n(k)) // ' 3', 'Float', 8), &
@@ -139,6 +167,18 @@ contains
                 '     </Attribute>'
         end subroutine attribute
     end subroutine xdmf_write
+
+    !> A table of names for an Information element: "1 name; 2 name; ..." (XML-escaped).
+    function name_table(names) result(table)
+        character(len=*), intent(in) :: names(:)
+        character(len=:), allocatable :: table
+        integer :: k
+        table = ''
+        do k = 1, size(names)
+            if (k > 1) table = table // '; '
+            table = table // itoa(int(k, i8)) // ' ' // escaped(trim(names(k)))
+        end do
+    end function name_table
 
     !> Text as an XML attribute value: &, <, > and " escaped.
     function escaped(text) result(s)

@@ -22,12 +22,15 @@ Under pvpython or pvbatch it builds a ParaView pipeline (XDMFReader, ExtractBloc
 Calculator for the speed, a sphere Glyph scaled by `radius` with factor 2); under any other
 Python it uses VTK (vtkXdmfReader, vtkGlyph3D) with off-screen rendering (EGL or OSMesa, no
 X server needed). Both draw the same scene from the same camera. Debian's pvpython needs an X
-server: run it under `xvfb-run -a -s "-screen 0 1280x1024x24"` (with xvfb-run's default 8-bit
-screen it fails now and then), and so does the vtk module Debian's python3-paraview puts into
-the system's Python. doc/user/output.md, section ParaView."""
+server: without a display (DISPLAY not set) the script runs itself again under
+`xvfb-run -a -s "-screen 0 1280x1024x24"` (with xvfb-run's default 8-bit screen it fails now
+and then; scripts/install/install-deps installs xvfb beside ParaView), and the vtk module
+Debian's python3-paraview puts into the system's Python needs one too. doc/user/output.md,
+sections ParaView and Pictures without a display."""
 import argparse
 import math
 import os
+import shutil
 import sys
 import xml.etree.ElementTree as ET
 
@@ -315,6 +318,20 @@ def with_vtk(a, t, names):
     return n
 
 
+def under_xvfb():
+    """ParaView renders through an X server (it stops with SIGSEGV without one): the same
+    command again under xvfb-run, once."""
+    xvfb, pv = shutil.which("xvfb-run"), shutil.which("pvpython")
+    if os.environ.get("DEM_UNDER_XVFB") or xvfb is None or pv is None:
+        sys.exit("paraview-snapshot: ParaView renders through an X server and there is no "
+                 "display (DISPLAY is not set) and no xvfb-run: install xvfb "
+                 "(scripts/install/install-deps), or run .venv/bin/python "
+                 "scripts/post/paraview-snapshot.py (VTK's off-screen rendering)")
+    os.environ["DEM_UNDER_XVFB"] = "1"
+    os.execv(xvfb, [xvfb, "-a", "-s", "-screen 0 1280x1024x24", pv, os.path.abspath(__file__),
+                    *sys.argv[1:]])
+
+
 def main():
     a = parse()
     times, names = index(a.xmf)
@@ -324,6 +341,8 @@ def main():
     if a.backend == "paraview" and pvs is None:
         sys.exit("paraview-snapshot: no paraview.simple here (run it with pvpython)")
     paraview = pvs is not None and a.backend != "vtk"
+    if paraview and not os.environ.get("DISPLAY"):
+        under_xvfb()
     n = (with_paraview if paraview else with_vtk)(a, t, names)
     print(f"paraview-snapshot: {a.png}: t = {t:g} s, {n} particles "
           f"({'ParaView' if paraview else 'VTK'})")

@@ -112,6 +112,8 @@ module dem_case
         logical :: snapshot_force = .false.           !< snapshots hold forces
         logical :: snapshot_contacts = .false.        !< and contact counts
         logical :: snapshot_fragments = .false.       !< and fragments (dem_bond_graph)
+        logical :: snapshot_network = .false.         !< and the contact network
+        logical :: snapshot_wall_stress = .false.     !< and the wall triangles' loads
         real(wp) :: checkpoint_interval = 0.0_wp      !< [s], 0: at the end and at stops only
         integer(ip) :: checkpoint_keep = 2            !< checkpoints kept on disk
         logical :: output_overwrite = .false.         !< a fresh run replaces another's outputs

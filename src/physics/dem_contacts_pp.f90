@@ -20,7 +20,12 @@ module dem_contacts_pp
     use dem_contact_store, only: contact_store_t, n_pair_history
     implicit none
     private
-    public :: pp_forces, pp_scales, fixed_scale
+    public :: pp_forces, pp_scales, fixed_scale, record_rows
+
+    !> the rows of a pair's record (pp_forces with `record`): its normal force fn [N] (> 0
+    !> pushes the two apart), the unit normal n from its first particle to its second and the
+    !> tangential force on its first particle [N]
+    integer, parameter :: record_rows = 7
 
     !> one-word fixed point (fixed_scale): terms within the bound take at most 57 bits; terms
     !> are clipped at 16 times the bound, so that sums of up to 4 clipped terms still fit
@@ -70,7 +75,10 @@ contains
     !> (LIGGGHTS 3.8.0) and continued by its next contact. In a case whose pairs resist
     !> rolling or cohere, the rolling torque and the sJKR force of the pair's model
     !> (contact_extra) follow the contact law; the EPSD2 spring is hist(4:6, slot).
-    subroutine pp_forces(particles, nb, cm, cs, dt, gravity)
+    !> With `record` (a step whose snapshot holds the contact network), the force of each
+    !> pair in contact goes to its column of rec (record_rows), the force on its first
+    !> particle being -fn n + F_t.
+    subroutine pp_forces(particles, nb, cm, cs, dt, gravity, record, rec)
         type(particles_t), intent(inout) :: particles  !! owned particles, then ghosts: x, v,
                                                        !! w, radius, mass, mat; f, t set
         type(neighbors_t), intent(inout) :: nb      !! the pairs (n_pairs, pair, reach2), the
@@ -79,12 +87,16 @@ contains
         type(contact_store_t), intent(inout) :: cs  !! the pairs' slots and history
         real(wp), intent(in) :: dt                  !! [s]
         real(wp), intent(in) :: gravity(3)          !! [m/s^2]
+        logical, intent(in) :: record               !! each contact's force into rec
+        real(wp), contiguous, intent(inout) :: rec(:, :)  !! (record_rows, pair), room for
+                                                          !! n_pairs with record
         associate (p => particles)
             call pair_kernel(p%n_own, p%n_own + p%n_ghost, nb%n_pairs, size(cm%kn, 1, ip), &
                              p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%scale, nb%pair, &
                              nb%reach2, cm%opts, cm%kn, cm%st, cm%gn, cm%gt, cm%mu, &
                              cm%rolling .or. cm%cohesion, cm%rmodel, cm%mur, cm%kcoh, dt, &
-                             gravity, cs%slot, cs%hist, cs%n_hist, nb%acc, p%f, p%t)
+                             gravity, cs%slot, cs%hist, cs%n_hist, nb%acc, p%f, p%t, record, &
+                             size(rec, 2, ip), rec)
         end associate
     end subroutine pp_forces
 
@@ -93,7 +105,8 @@ contains
     !> which the pair loop took about 1.6 times as long).
     subroutine pair_kernel(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
                            reach2, opts, kn_ab, st_ab, gn_ab, gt_ab, mu_ab, extra, rmodel_ab, &
-                           mur_ab, kcoh_ab, dt, gravity, slot, hist, n_hist, acc, f, t)
+                           mur_ab, kcoh_ab, dt, gravity, slot, hist, n_hist, acc, f, t, &
+                           record, n_rec, rec)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
         integer(ip), intent(in) :: nm             !! materials
@@ -120,6 +133,9 @@ contains
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
                                                      !! (zero between calls)
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m] (the owned set)
+        logical, intent(in) :: record                !! the contacts' forces into rec
+        integer(ip), intent(in) :: n_rec             !! columns of rec (>= n_pairs: record)
+        real(wp), intent(inout) :: rec(record_rows, n_rec)  !! fn [N], n, F_t [N] per pair
         integer(ip) :: c, side, a, b, normal, tangential
         integer(i8) :: i, j, p, p0, s, l, m     ! (64-bit: addresses without sign extensions)
         integer(i8) :: lp(tile + 1)
@@ -285,6 +301,11 @@ contains
                 hist(3, s) = lane(l, lane_x3)
                 fp = -lane(l, lane_fn) * lane(l, lane_n1:lane_n3) + lane(l, lane_f1:lane_f3)
                 cp = normal_cross_ft(lane, l)        ! n x F_t (the sums are over R)
+                if (record) then
+                    rec(1, p) = lane(l, lane_fn)
+                    rec(2:4, p) = lane(l, lane_n1:lane_n3)
+                    rec(5:7, p) = lane(l, lane_f1:lane_f3)
+                end if
                 si = scale(i)
                 do c = 1, 3
                     kf(c) = to_fixed(fp(c) * si)

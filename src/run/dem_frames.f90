@@ -75,6 +75,7 @@ contains
         s%snap_time = fr%snap_time
         s%snap_n = fr%snap_n
         s%snap_bonds = fr%snap_bonds
+        s%snap_contacts = fr%snap_contacts
         s%ckpt_step = fr%ckpt_step
         s%restart_file = path
         if (s%mesh%moving) call mesh_move(s%mesh, fr%time)
@@ -140,6 +141,7 @@ contains
         fr%snap_time = s%snap_time
         fr%snap_n = s%snap_n
         fr%snap_bonds = s%snap_bonds
+        fr%snap_contacts = s%snap_contacts
     end subroutine capture
 
     !> Forces, torques and contact history of the owned particles `order` (by id) into

@@ -20,6 +20,8 @@ module dem_run_output
     use dem_frame, only: frame_t
     use dem_checkpoint, only: frame_write
     use dem_bond_graph, only: bond_graph
+    use dem_force_network, only: network_rows, triangle_stress
+    use dem_mesh, only: mesh_t
     use dem_folder, only: checkpoint_file, folder_point_latest, folder_prune
     use dem_xdmf, only: xdmf_write, snapshot_file
     use dem_files, only: make_directory
@@ -167,14 +169,17 @@ contains
     end subroutine write_trace
 
     !> A snapshot of the state now (in a case with bonds with its intact bonds, and with the
-    !> fragments when asked: dem_bond_graph), and the XDMF index updated.
+    !> fragments when asked: dem_bond_graph; when asked, with the contact network and the
+    !> wall triangles' loads of the force evaluation before it: dem_force_network), and the
+    !> XDMF index updated.
     subroutine write_snapshot(s, c, err)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
         type(frame_t) :: fr
         type(output_t) :: none
-        integer(i8) :: n_total(2)
+        type(mesh_t) :: walls
+        integer(i8) :: n_total(3)
         if (err%failed()) return
         call make_directory(c%output_dir // '/snapshots', err)
         if (err%failed()) return
@@ -183,17 +188,26 @@ contains
         call capture(s, c, none, fr)
         if (c%bond_reals > 0 .or. c%snapshot_fragments) &
             call bond_graph(fr, s%bm, c%snapshot_fragments, s%comm)
+        if (c%snapshot_network) call network_rows(fr, s%net_ids, s%net_vals, s%comm)
+        walls = mesh_at(s, fr%time)
+        if (c%snapshot_wall_stress .and. walls%n_tri > 0) then
+            fr%wall_force = s%tri_loads(1:3, :)
+            allocate(fr%wall_pressure(walls%n_tri), fr%wall_shear(walls%n_tri))
+            call triangle_stress(walls%vert, s%tri_loads, fr%wall_pressure, fr%wall_shear)
+        end if
         n_total = 0
         n_total(1) = fr%n
         if (allocated(fr%bond_pair)) n_total(2) = size(fr%bond_pair, 2)
+        if (allocated(fr%contact_pair)) n_total(3) = size(fr%contact_pair, 2)
         call comm_sum(s%comm, n_total)
-        call frame_write(fr, c, mesh_at(s, fr%time), c%output_dir // '/' // &
-                         snapshot_file(s%step), .false., s%comm, err)
+        call frame_write(fr, c, walls, c%output_dir // '/' // snapshot_file(s%step), .false., &
+                         s%comm, err)
         if (err%failed()) return
         s%snap_step = [pack(s%snap_step, s%snap_step < s%step), s%step]
         s%snap_time = [s%snap_time(1:size(s%snap_step) - 1), fr%time]
         s%snap_n = [s%snap_n(1:size(s%snap_step) - 1), n_total(1)]
         s%snap_bonds = [s%snap_bonds(1:size(s%snap_step) - 1), n_total(2)]
+        s%snap_contacts = [s%snap_contacts(1:size(s%snap_step) - 1), n_total(3)]
         call write_xdmf(s, c, err)
     end subroutine write_snapshot
 
@@ -201,10 +215,14 @@ contains
         type(solver_t), intent(in) :: s
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
+        character(len=32), allocatable :: walls(:)
         if (s%comm%rank /= 0) return
+        walls = [character(len=32) ::]                 ! (the walls' names: none without walls)
+        if (allocated(s%mesh%name)) walls = s%mesh%name
         call xdmf_write(c%output_dir // '/snapshots.xmf', s%snap_step, s%snap_time, s%snap_n, &
-                        s%snap_bonds, s%mesh%n_tri, c%snapshot_force, c%snapshot_contacts, &
-                        c%has_clumps, c%snapshot_fragments, c%mats%name, err)
+                        s%snap_bonds, s%snap_contacts, s%mesh%n_tri, c%snapshot_force, &
+                        c%snapshot_contacts, c%has_clumps, c%snapshot_fragments, &
+                        c%snapshot_wall_stress, c%mats%name, walls, err)
     end subroutine write_xdmf
 
     !> A checkpoint of the state now.

@@ -121,11 +121,21 @@ module dem_run_state
         real(wp), allocatable :: wload(:, :, :)  !< at that evaluation, per wall contact slot
                                                  !< of an owned particle: the force on it and
                                                  !< the contact point (6, slot, particle)
+        logical :: network_due = .false.  !< the next force evaluation records the contact
+                                          !< network (for the snapshot after it)
+        logical :: stress_due = .false.   !< and the wall triangles' loads
+        real(wp), allocatable :: net_rec(:, :)   !< the pairs' record (record_rows, pair) at
+                                                 !< that evaluation (dem_contacts_pp)
+        integer(i8), allocatable :: net_ids(:, :)  !< its contacts by ids (2, contact) ...
+        real(wp), allocatable :: net_vals(:, :)    !< ... and their forces (dem_force_network)
+        real(wp), allocatable :: tri_loads(:, :)   !< (4, triangle): the wall triangles' loads
+                                                   !< at that evaluation (dem_force_network)
         logical, allocatable :: gone(:)  !< outlet flags of the owned particles, on the device
         logical, allocatable :: fresh(:) !< those flagged at the last step
         type(frame_t) :: good          !< the last state that passed the instability guard
         integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
         integer(i8), allocatable :: snap_bonds(:)  !< their intact bonds
+        integer(i8), allocatable :: snap_contacts(:)  !< their contacts (with the network)
         real(wp), allocatable :: snap_time(:)
         integer(i8), allocatable :: ckpt_step(:)             !< checkpoints kept
         character(len=:), allocatable :: restart_file  !< the checkpoint restored
@@ -230,6 +240,7 @@ contains
         integer, intent(in) :: op
         call particle_data(s, op)
         call acc_data(s%wload, op)
+        call acc_data(s%net_rec, op)
         call acc_data(s%pc%kn, op)
         call acc_data(s%pc%st, op)
         call acc_data(s%pc%mu, op)

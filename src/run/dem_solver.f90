@@ -13,6 +13,7 @@ module dem_solver
     use dem_domain, only: domain_imbalance, sorted_by_rank
     use dem_contact_model, only: contact_model_build
     use dem_contact_store, only: store_init, max_wall_contacts, store_history_widths
+    use dem_contacts_pp, only: record_rows
     use dem_integrate, only: integrator_verlet
     use dem_output, only: output_open, output_check, output_final, output_close
     use dem_probes, only: probe_header, probe_wall_load
@@ -30,7 +31,7 @@ module dem_solver
     use dem_run_output, only: write_trace, write_snapshot, write_xdmf
     use dem_run_control, only: unstable, deep_pair, deep_wall, smallest, overlap_warn, &
                                wall_overlap_start, wall_overlap_text
-    use dem_step, only: time_step, forces, write_row
+    use dem_step, only: time_step, forces, write_row, records_due
     use dem_inflow, only: inflow_particles
     implicit none
     private
@@ -82,6 +83,10 @@ contains
         allocate(s%wall_loads(7, size(c%probes)), s%wload(6, max_wall_contacts, 1))
         s%wall_loads = 0.0_wp
         s%wload = 0.0_wp
+        allocate(s%net_rec(record_rows, 1), s%net_ids(2, 0), s%net_vals(record_rows, 0), &
+                 s%tri_loads(4, s%mesh%n_tri))
+        s%net_rec = 0.0_wp
+        s%tri_loads = 0.0_wp
         s%nb%skin = c%skin
         s%imbalance_limit = c%imbalance_limit
         s%halo = comm%size > 1 .or. c%periodic%on
@@ -101,7 +106,8 @@ contains
             s%inflow_count = 0
             s%inflow_mass = 0.0_wp
         end if
-        allocate(s%snap_step(0), s%snap_n(0), s%snap_bonds(0), s%snap_time(0), s%ckpt_step(0))
+        allocate(s%snap_step(0), s%snap_n(0), s%snap_bonds(0), s%snap_contacts(0), &
+                 s%snap_time(0), s%ckpt_step(0))
     end subroutine solver_init
 
     !> Run to t_end (or until a stop), writing series.csv, contact.csv (when tracing),
@@ -165,7 +171,8 @@ contains
             if (failed_anywhere(s, err)) return
             if (.not. s%restarted) then
                 if (c%integrator == integrator_verlet) then
-                    s%loads_due = s%load_probes
+                    call records_due(s, c, s%step)         ! (the first snapshot's forces)
+                    s%loads_due = s%loads_due .or. s%load_probes   ! (the first row's)
                     call forces(s, c, time_of(s, c, s%step), err)
                     bad = .false.
                     call write_trace(s, c, r%out, time_of(s, c, s%step), err, bad)

@@ -14,7 +14,9 @@ module dem_step
     use dem_rebuild, only: lists_refresh, settle_outlets
     use dem_inflow, only: insert_inflow, inflow_to_come, inflow_particles
     use dem_forces, only: external_forces, local_damping
-    use dem_contacts_pp, only: pp_forces
+    use dem_contacts_pp, only: pp_forces, record_rows
+    use dem_force_network, only: network_contacts, triangle_loads
+    use dem_neighbors, only: neighbors_data
     use dem_contacts_pw, only: pw_forces
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, kick_drift
     use dem_clumps, only: clumps_move, sphere_gravity, clump_reach, clump_index_build, &
@@ -29,11 +31,12 @@ module dem_step
                           phase_integrate, phase_output, wall_seconds
     use dem_acc, only: acc_data, acc_enter, acc_create, acc_exit, acc_to_host, acc_to_device
     use dem_probes, only: probe_wall_load, probe_load_values
-    use dem_contact_store, only: max_wall_contacts, bond_rows
+    use dem_contact_store, only: max_wall_contacts, bond_rows, store_pairs_data, &
+                                 store_walls_data
     use dem_bonds, only: bond_forces
     implicit none
     private
-    public :: time_step, forces, write_row
+    public :: time_step, forces, write_row, records_due
 
 contains
 
@@ -48,7 +51,7 @@ contains
         logical :: verlet, bad
         verlet = c%integrator == integrator_verlet
         bad = .false.
-        s%loads_due = s%load_probes .and. row_due(s, s%step + 1)    ! (wall-load probes)
+        call records_due(s, c, s%step + 1)    ! (wall-load probes, the snapshot's forces)
         if (verlet) call verlet_first_half(s, c)               ! v(t + dt/2), x(t + dt)
         call forces(s, c, time_of(s, c, merge(s%step + 1, s%step, verlet)), err)
         if (.not. err%failed()) call integrate(s, c, verlet, err, bad)  ! the trace, the guard
@@ -163,16 +166,31 @@ contains
     end subroutine walls_move
 
     !> Gravity and the particle-particle contacts of the lists (the forces and torques set);
-    !> with clumps, the members' forces without gravity (their bodies take M g).
+    !> with clumps, the members' forces without gravity (their bodies take M g). At an
+    !> evaluation that records the contact network, its contacts by ids (dem_force_network).
     subroutine particle_contacts(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
+        if (s%network_due .and. size(s%net_rec, 2) < s%nb%n_pairs) then   ! room for every pair
+            call acc_data(s%net_rec, acc_exit)
+            deallocate(s%net_rec)
+            allocate(s%net_rec(record_rows, s%nb%n_pairs))
+            call acc_data(s%net_rec, acc_create)
+        end if
         if (.not. allocated(s%p%body)) then
-            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, c%gravity)
+            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, c%gravity, s%network_due, s%net_rec)
         else                          ! gravity: on the spheres here, on bodies when they move
-            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, [0.0_wp, 0.0_wp, 0.0_wp])
+            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, [0.0_wp, 0.0_wp, 0.0_wp], &
+                           s%network_due, s%net_rec)
             call sphere_gravity(s%p%n_own, s%p%body, s%p%mass, c%gravity, s%p%f)
         end if
+        if (.not. s%network_due) return
+        call acc_data(s%net_rec, acc_to_host)
+        call acc_data(s%p%gid, acc_to_host)
+        call neighbors_data(s%nb, acc_to_host)
+        call store_pairs_data(s%cs, acc_to_host)
+        call network_contacts(s%p%n_own, s%nb%n_pairs, s%p%gid, s%nb%pair, s%cs%slot, &
+                              s%net_rec, s%net_ids, s%net_vals)
     end subroutine particle_contacts
 
     !> The bonds' forces and torques added to the contacts' (dem_bonds); a bond that broke
@@ -207,6 +225,12 @@ contains
         end if
         associate (m => s%mesh, n => s%p%n_own)
             call pw_forces(s%p, s%nb, m, s%pc, s%cs, c%dt, s%loads_due, s%wload, overflow)
+            if (s%stress_due) then                 ! (the snapshot's wall stress)
+                call acc_data(s%wload, acc_to_host)
+                call acc_data(s%p%x, acc_to_host)
+                call store_walls_data(s%cs, acc_to_host)
+                s%tri_loads = triangle_loads(s%comm, n, m%n_tri, s%p%x, s%cs%wall_tri, s%wload)
+            end if
             if (s%loads_due) then
                 do k = 1, size(c%probes)
                     if (c%probes(k)%kind /= probe_wall_load) cycle
@@ -327,7 +351,7 @@ contains
         logical :: row, snap, written, show
         associate (r => s%run)
             row = row_due(s, s%step) .or. s%emptied
-            snap = due(r%every_snap) .or. (r%every_snap > 0 .and. s%step == r%n_end)
+            snap = snap_due(s, s%step)
             if (row) then
                 call write_row(s, c, err)            ! (it tells whether the run has settled)
                 if (failed_anywhere(s, err)) return
@@ -378,4 +402,28 @@ contains
         due = step == s%run%n_end
         if (s%run%every > 0) due = due .or. mod(step - s%run%out0, s%run%every) == 0
     end function row_due
+
+    !> Whether a snapshot is written after step `step`: every snapshot interval, and at the
+    !> run's last step.
+    pure logical function snap_due(s, step) result(due)
+        type(solver_t), intent(in) :: s
+        integer(i8), intent(in) :: step
+        due = .false.
+        if (s%run%every_snap > 0) due = mod(step - s%run%out0, s%run%every_snap) == 0 .or. &
+                                        step == s%run%n_end
+    end function snap_due
+
+    !> What the force evaluation that leads to step `step` records: the wall contacts' loads
+    !> for the wall-load probes of a row due then, and the contact network and the wall
+    !> triangles' loads for a snapshot due then that holds them.
+    subroutine records_due(s, c, step)
+        type(solver_t), intent(inout) :: s
+        type(case_t), intent(in) :: c
+        integer(i8), intent(in) :: step
+        logical :: snap
+        snap = snap_due(s, step)
+        s%network_due = c%snapshot_network .and. snap
+        s%stress_due = c%snapshot_wall_stress .and. snap .and. s%mesh%n_tri > 0
+        s%loads_due = (s%load_probes .and. row_due(s, step)) .or. s%stress_due
+    end subroutine records_due
 end module dem_step

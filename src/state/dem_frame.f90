@@ -32,6 +32,17 @@ module dem_frame
         real(wp), allocatable :: bond_ratio(:)        !< their stress ratios [-]
         integer(i8), allocatable :: fragment(:)       !< each particle's fragment: the
                                                       !< smallest id of its bonded body
+        ! the contact network and the wall triangles' loads (snapshots that hold them;
+        ! dem_force_network)
+        integer(i8), allocatable :: contact_pair(:, :)  !< (2, contacts of this rank's block):
+                                                        !< rows of the two particles, as
+                                                        !< bond_pair
+        real(wp), allocatable :: contact_fn(:)          !< normal force [N]
+        real(wp), allocatable :: contact_force(:, :)    !< (3, contact): on the first [N]
+        real(wp), allocatable :: contact_ft(:, :)       !< (3, contact): its tangential part
+        real(wp), allocatable :: wall_force(:, :)       !< (3, triangle): on it [N]
+        real(wp), allocatable :: wall_pressure(:)       !< [Pa]
+        real(wp), allocatable :: wall_shear(:)          !< [Pa]
         ! contact history
         integer(ip), allocatable :: wall_tri(:, :)    !< (slot, particle)
         real(wp), allocatable :: wall_xi(:, :, :)     !< (n_wall_history, column, particle)
@@ -57,6 +68,7 @@ module dem_frame
         real(wp), allocatable :: snap_time(:)     !< [s]
         integer(i8), allocatable :: snap_n(:)     !< their particle counts
         integer(i8), allocatable :: snap_bonds(:) !< and intact bonds (a case with bonds)
+        integer(i8), allocatable :: snap_contacts(:)  !< and contacts (with the network)
         integer(i8), allocatable :: ckpt_step(:)  !< the checkpoints kept so far
         ! inflow (allocated only in a run with inflow)
         integer(i8) :: next_id = 0                !< the id of the next inserted particle

@@ -10,7 +10,7 @@ module dem_test_kernels
     use dem_contact_model, only: contact_model_t
     use dem_contact_store, only: contact_store_t
     use dem_mesh, only: mesh_t
-    use dem_contacts_pp, only: pp_forces
+    use dem_contacts_pp, only: pp_forces, record_rows
     use dem_contacts_pw, only: pw_forces
     implicit none
     private
@@ -83,6 +83,7 @@ contains
         type(particles_t) :: p
         type(neighbors_t) :: nb
         type(contact_store_t) :: cs
+        real(wp) :: none(record_rows, 1)
         p = particles_of(n_own, x, v, w, radius, mass, mat, f, t)
         nb%n_pairs = n_pairs
         nb%pair = pair
@@ -94,7 +95,8 @@ contains
         cs%n_hist = n_hist
         call pp_forces(p, nb, model_of(nm, normal, tangential, kn, st, gn, gt, mu, &
                                        clamp_normal, keep_length, shift_v, shift_t, reset, &
-                                       extra, rmodel, mur, kcoh), cs, dt, gravity)
+                                       extra, rmodel, mur, kcoh), cs, dt, gravity, &
+                      .false., none)
         slot = cs%slot
         hist = cs%hist
         n_hist = cs%n_hist
