@@ -70,7 +70,9 @@ contains
     !> (LIGGGHTS 3.8.0) and continued by its next contact. In a case whose pairs resist
     !> rolling or cohere, the rolling torque and the sJKR force of the pair's model
     !> (contact_extra) follow the contact law; the EPSD2 spring is hist(4:6, slot).
-    subroutine pp_forces(particles, nb, cm, cs, dt, gravity)
+    !> With `pforce` (a step whose contacts a coarse-grained field samples), each pair's
+    !> contact force on its first particle goes to pforce(:, p), zero where it does not touch.
+    subroutine pp_forces(particles, nb, cm, cs, dt, gravity, pforce)
         type(particles_t), intent(inout) :: particles  !! owned particles, then ghosts: x, v,
                                                        !! w, radius, mass, mat; f, t set
         type(neighbors_t), intent(inout) :: nb      !! the pairs (n_pairs, pair, reach2), the
@@ -79,13 +81,26 @@ contains
         type(contact_store_t), intent(inout) :: cs  !! the pairs' slots and history
         real(wp), intent(in) :: dt                  !! [s]
         real(wp), intent(in) :: gravity(3)          !! [m/s^2]
-        associate (p => particles)
-            call pair_kernel(p%n_own, p%n_own + p%n_ghost, nb%n_pairs, size(cm%kn, 1, ip), &
-                             p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%scale, nb%pair, &
-                             nb%reach2, cm%opts, cm%kn, cm%st, cm%gn, cm%gt, cm%mu, &
-                             cm%rolling .or. cm%cohesion, cm%rmodel, cm%mur, cm%kcoh, dt, &
-                             gravity, cs%slot, cs%hist, cs%n_hist, nb%acc, p%f, p%t)
-        end associate
+        real(wp), contiguous, intent(inout), optional :: pforce(:, :)  !! (3, >= n_pairs) [N]
+        real(wp) :: none(3, 1)
+        if (present(pforce)) then
+            call kernel(.true., pforce)
+        else
+            call kernel(.false., none)
+        end if
+    contains
+        subroutine kernel(record, pf)
+            logical, intent(in) :: record
+            real(wp), contiguous, intent(inout) :: pf(:, :)
+            associate (p => particles)
+                call pair_kernel(p%n_own, p%n_own + p%n_ghost, nb%n_pairs, size(cm%kn, 1, ip), &
+                                 p%x, p%v, p%w, p%radius, p%mass, p%mat, nb%scale, nb%pair, &
+                                 nb%reach2, cm%opts, cm%kn, cm%st, cm%gn, cm%gt, cm%mu, &
+                                 cm%rolling .or. cm%cohesion, cm%rmodel, cm%mur, cm%kcoh, dt, &
+                                 gravity, cs%slot, cs%hist, cs%n_hist, nb%acc, p%f, p%t, record, &
+                                 size(pf, 2, ip), pf)
+            end associate
+        end subroutine kernel
     end subroutine pp_forces
 
     !> pp_forces over plain arrays (explicit-shape dummies: gfortran 12 indexes them from their
@@ -93,7 +108,8 @@ contains
     !> which the pair loop took about 1.6 times as long).
     subroutine pair_kernel(n_own, n_all, n_pairs, nm, x, v, w, radius, mass, mat, scale, pair, &
                            reach2, opts, kn_ab, st_ab, gn_ab, gt_ab, mu_ab, extra, rmodel_ab, &
-                           mur_ab, kcoh_ab, dt, gravity, slot, hist, n_hist, acc, f, t)
+                           mur_ab, kcoh_ab, dt, gravity, slot, hist, n_hist, acc, f, t, &
+                           record, n_rec, pforce)
         integer(ip), intent(in) :: n_own, n_all   !! owned particles; owned plus ghosts
         integer(ip), intent(in) :: n_pairs        !! pairs evaluated here
         integer(ip), intent(in) :: nm             !! materials
@@ -120,6 +136,9 @@ contains
         integer(i8), intent(inout) :: acc(6, n_own)  !! sums of F and n x F_t, fixed point
                                                      !! (zero between calls)
         real(wp), intent(inout) :: f(3, n_all), t(3, n_all)  !! [N], [N m] (the owned set)
+        logical, intent(in) :: record                !! each pair's force into pforce
+        integer(ip), intent(in) :: n_rec             !! n_pairs or more when recording
+        real(wp), intent(inout) :: pforce(3, n_rec)  !! the force on the first particle [N]
         integer(ip) :: c, side, a, b, normal, tangential
         integer(i8) :: i, j, p, p0, s, l, m     ! (64-bit: addresses without sign extensions)
         integer(i8) :: lp(tile + 1)
@@ -140,6 +159,12 @@ contains
         shifted_v = sv /= 0.0_wp
         shifted_t = st_ /= 0.0_wp
         extra_ = extra
+        if (record) then
+            !$acc parallel loop gang vector default(present)
+            do p = 1, n_pairs
+                pforce(:, p) = 0.0_wp
+            end do
+        end if
         ! every pair once; its force and n x F_t go to both particles' sums, those of a
         ! ghost partner to its own rank, which evaluates the pair too
         !$acc parallel loop gang vector default(present) private(i, j, p, c, l, m, lp, kf, kc, s) &
@@ -284,6 +309,7 @@ contains
                 hist(2, s) = lane(l, lane_x2)
                 hist(3, s) = lane(l, lane_x3)
                 fp = -lane(l, lane_fn) * lane(l, lane_n1:lane_n3) + lane(l, lane_f1:lane_f3)
+                if (record) pforce(:, p) = fp
                 cp = normal_cross_ft(lane, l)        ! n x F_t (the sums are over R)
                 si = scale(i)
                 do c = 1, 3

@@ -18,6 +18,7 @@ module dem_run_state
     use dem_diagnostics, only: energies
     use dem_contact_store, only: contact_store_t, store_pairs_drop, store_walls_data, bond_rows
     use dem_mesh, only: mesh_t
+    use dem_coarse_grain, only: cg_window_t
     use dem_output, only: output_t
     use dem_frame, only: frame_t
     use dem_timers, only: timers_t
@@ -121,6 +122,10 @@ module dem_run_state
         real(wp), allocatable :: wload(:, :, :)  !< at that evaluation, per wall contact slot
                                                  !< of an owned particle: the force on it and
                                                  !< the contact point (6, slot, particle)
+        type(cg_window_t), allocatable :: fields(:)  !< the &coarse_grain windows' sums
+        logical :: fields_due = .false.   !< the next force evaluation is sampled by one
+        real(wp), allocatable :: pforce(:, :)  !< at that evaluation, each pair's contact
+                                               !< force on its first particle (3, pair) [N]
         logical, allocatable :: gone(:)  !< outlet flags of the owned particles, on the device
         logical, allocatable :: fresh(:) !< those flagged at the last step
         type(frame_t) :: good          !< the last state that passed the instability guard
@@ -230,6 +235,7 @@ contains
         integer, intent(in) :: op
         call particle_data(s, op)
         call acc_data(s%wload, op)
+        call acc_data(s%pforce, op)
         call acc_data(s%pc%kn, op)
         call acc_data(s%pc%st, op)
         call acc_data(s%pc%mu, op)

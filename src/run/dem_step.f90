@@ -31,6 +31,7 @@ module dem_step
     use dem_probes, only: probe_wall_load, probe_load_values
     use dem_contact_store, only: max_wall_contacts, bond_rows
     use dem_bonds, only: bond_forces
+    use dem_run_fields, only: fields_due, fields_sample
     implicit none
     private
     public :: time_step, forces, write_row
@@ -46,11 +47,15 @@ contains
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
         logical :: verlet, bad
+        real(wp) :: t_forces
         verlet = c%integrator == integrator_verlet
         bad = .false.
+        t_forces = time_of(s, c, merge(s%step + 1, s%step, verlet))
         s%loads_due = s%load_probes .and. row_due(s, s%step + 1)    ! (wall-load probes)
+        if (size(s%fields) > 0) s%fields_due = fields_due(s, c, s%step + 1, t_forces)
         if (verlet) call verlet_first_half(s, c)               ! v(t + dt/2), x(t + dt)
-        call forces(s, c, time_of(s, c, merge(s%step + 1, s%step, verlet)), err)
+        call forces(s, c, t_forces, err)
+        if (s%fields_due .and. .not. err%failed()) call fields_sample(s, c, t_forces, err)
         if (.not. err%failed()) call integrate(s, c, verlet, err, bad)  ! the trace, the guard
         if (failed_anywhere(s, err, bad)) then
             if (.not. err%failed()) then                       ! unstable on some rank
@@ -167,12 +172,22 @@ contains
     subroutine particle_contacts(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        if (.not. allocated(s%p%body)) then
-            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, c%gravity)
-        else                          ! gravity: on the spheres here, on bodies when they move
-            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, [0.0_wp, 0.0_wp, 0.0_wp])
-            call sphere_gravity(s%p%n_own, s%p%body, s%p%mass, c%gravity, s%p%f)
+        real(wp) :: g(3)
+        g = c%gravity
+        if (allocated(s%p%body)) g = 0.0_wp   ! (on the spheres here, on bodies when they move)
+        if (s%fields_due) then                ! each pair's force, for the fields' sample
+            if (size(s%pforce, 2) < s%nb%n_pairs) then
+                call acc_data(s%pforce, acc_exit)
+                deallocate(s%pforce)
+                allocate(s%pforce(3, size(s%nb%pair, 2)))
+                call acc_data(s%pforce, acc_create)
+            end if
+            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, g, s%pforce)
+        else
+            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, g)
         end if
+        if (allocated(s%p%body)) call sphere_gravity(s%p%n_own, s%p%body, s%p%mass, &
+                                                     c%gravity, s%p%f)
     end subroutine particle_contacts
 
     !> The bonds' forces and torques added to the contacts' (dem_bonds); a bond that broke
@@ -199,14 +214,16 @@ contains
         type(error_t), intent(inout) :: err
         integer(ip) :: overflow
         integer :: k
-        if (s%loads_due .and. size(s%wload, 3) < s%p%n_own) then   ! room for every particle
+        logical :: record
+        record = s%loads_due .or. s%fields_due     ! (wall-load probes, the fields' sample)
+        if (record .and. size(s%wload, 3) < s%p%n_own) then   ! room for every particle
             call acc_data(s%wload, acc_exit)
             deallocate(s%wload)
             allocate(s%wload(6, max_wall_contacts, size(s%p%x, 2)))
             call acc_data(s%wload, acc_create)
         end if
         associate (m => s%mesh, n => s%p%n_own)
-            call pw_forces(s%p, s%nb, m, s%pc, s%cs, c%dt, s%loads_due, s%wload, overflow)
+            call pw_forces(s%p, s%nb, m, s%pc, s%cs, c%dt, record, s%wload, overflow)
             if (s%loads_due) then
                 do k = 1, size(c%probes)
                     if (c%probes(k)%kind /= probe_wall_load) cycle
