@@ -1,5 +1,5 @@
 ! SPDX-License-Identifier: BSD-3-Clause
-!> Coarse-grained continuum fields (doc/theory.md, section 20; Goldhirsch 2010, Weinhart et
+!> Coarse-grained continuum fields (doc/theory.md, section 19; Goldhirsch 2010, Weinhart et
 !> al. 2012): density, momentum, momentum flux and contact stress on the nodes of a grid,
 !> from the owned particles of each rank and their contacts (a particle pair counted by one
 !> rank, a wall contact by the particle's), each a term of a fixed-point sum (dem_fixed_sum),

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""Coarse-grained fields (&coarse_grain; doc/theory.md, section 20):
+"""Coarse-grained fields (&coarse_grain; doc/theory.md, section 19):
 
 1. A column of ten spheres (radius r = 1 mm) at rest on a floor, the fields averaged over x
    and y on a box of area A = 4 r^2 and resolved along z (Gaussian w = r; Lucy c = 3 r): in
