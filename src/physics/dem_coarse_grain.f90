@@ -75,11 +75,12 @@ contains
 
     !> The kernel at offset dx from a node [1/m^3]: radial in the axes of more than one cell,
     !> normalised to one over them (the cut-off Gaussian included), times 1/L on an averaged
-    !> axis of length L where the point is within the box along it (0 outside).
+    !> axis of length L where x (the particle's or contact's) is within the box along it
+    !> (0 outside).
     pure real(wp) function coarse_grain_phi(g, dx, x) result(phi)
         type(coarse_grain_t), intent(in) :: g
         real(wp), intent(in) :: dx(3)      !! the point less the node [m]
-        real(wp), intent(in) :: x(3)       !! the point [m]
+        real(wp), intent(in) :: x(3)       !! where the item is [m]
         real(wp), parameter :: pi = acos(-1.0_wp)
         real(wp) :: r2, rho, w2, norm
         integer :: d, dims
@@ -269,7 +270,9 @@ contains
         end subroutine add_particle
 
         !> A contact's stress, -f (a - b) times the kernel's mean along the branch from a to
-        !> b (g%points midpoints), into the nodes it reaches; f is the force at a.
+        !> b (g%points midpoints), into the nodes it reaches; f is the force at a. On an
+        !> averaged axis, the contact is in the box where a is (a periodic image's branch
+        !> may leave it).
         subroutine add_branch(f, a, b)
             real(wp), intent(in) :: f(3), a(3), b(3)
             integer :: lo(3), hi(3), kx, ky, kz, j, al
@@ -284,7 +287,7 @@ contains
                         mean = 0.0_wp
                         do j = 1, g%points
                             y = a - (real(j, wp) - 0.5_wp) / real(g%points, wp) * r
-                            mean = mean + coarse_grain_phi(g, y - node, y)
+                            mean = mean + coarse_grain_phi(g, y - node, a)
                         end do
                         if (mean == 0.0_wp) cycle
                         mean = mean / real(g%points, wp)
