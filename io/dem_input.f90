@@ -18,6 +18,7 @@ module dem_input
     use dem_input_bonds, only: read_bonds
     use dem_input_walls, only: read_walls, read_meshes, read_primitives, read_periodic
     use dem_input_probes, only: read_outlets, read_probes
+    use dem_input_coarse_grain, only: read_coarse_grains
     use dem_case, only: case_t
     use dem_comm, only: comm_t
     implicit none
@@ -26,7 +27,7 @@ module dem_input
 
     !> The groups a case file may hold, in the order an unknown group's message lists them,
     !> each beside the module that reads it (and declares its keys).
-    character(len=*), parameter :: input_groups(18) = [character(len=14) :: &
+    character(len=*), parameter :: input_groups(19) = [character(len=14) :: &
         'run', 'output', &                          ! dem_input_run
         'contact_model', 'material', 'pair', &      ! dem_input_materials
         'particle', 'particle_file', &              ! dem_input_particles
@@ -34,6 +35,7 @@ module dem_input
         'bond', &                                   ! dem_input_bonds
         'insert', &                                 ! dem_input_inserts
         'outlet', 'probe', &                        ! dem_input_probes
+        'coarse_grain', &                           ! dem_input_coarse_grain
         'wall_plane', 'periodic', 'wall_mesh', 'wall_primitive']  ! dem_input_walls
 
 contains
@@ -110,6 +112,8 @@ contains
         call read_outlets(nf, c, err)
         if (err%failed()) return
         call read_probes(nf, c, err)
+        if (err%failed()) return
+        call read_coarse_grains(nf, c, err)
     contains
         subroutine fail(msg)
             character(len=*), intent(in) :: msg

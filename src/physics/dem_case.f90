@@ -7,6 +7,7 @@ module dem_case
     use dem_mesh, only: mesh_t, mesh_speed_bound
     use dem_outlets, only: outlet_t
     use dem_probes, only: probe_t
+    use dem_coarse_grain, only: coarse_grain_t
     use dem_insert, only: region_t, size_dist_t, region_bounds
     use dem_timestep, only: rayleigh_time
     use dem_contact_model, only: contact_model_t, contact_model_build, pair_contact_time, &
@@ -153,6 +154,7 @@ module dem_case
         character(len=256) :: periodic_at(3) = ''     !< the place of each axis's group
         type(outlet_t), allocatable :: outlets(:)
         type(probe_t), allocatable :: probes(:)
+        type(coarse_grain_t), allocatable :: coarse_grains(:)  !< the &coarse_grain grids
         type(summary_t) :: summary                    !< of the particles of all ranks
         type(insert_t), allocatable :: inserts(:)     !< placed after the reading
         type(id_check_t), allocatable :: id_checks(:) !< ids the case names

@@ -15,9 +15,23 @@ module dem_force_network
     use dem_vector, only: cross
     implicit none
     private
-    public :: network_contacts, network_rows, triangle_loads, triangle_stress
+    public :: network_contacts, network_rows, triangle_loads, triangle_stress, pair_forces
 
 contains
+
+    !> The force on the first particle of each pair, -fn n + F_t, from the record of the
+    !> evaluation that filled rec (pp_forces with `record`); zero for a pair not in contact.
+    function pair_forces(n_pairs, slot, rec) result(f)
+        integer(ip), intent(in) :: n_pairs
+        integer(ip), intent(in) :: slot(:)
+        real(wp), intent(in) :: rec(:, :)            !! (record_rows, pair)
+        real(wp) :: f(3, n_pairs)                    !! [N]
+        integer(ip) :: p
+        do p = 1, n_pairs
+            f(:, p) = 0.0_wp
+            if (slot(p) > 0) f(:, p) = -rec(1, p) * rec(2:4, p) + rec(5:7, p)
+        end do
+    end function pair_forces
 
     !> The pairs in contact at the evaluation that filled rec (pp_forces with `record`), by
     !> ids: ids(:, k) the two ids, the smaller first, and vals(:, k) its record turned to

@@ -18,6 +18,7 @@ module dem_run_state
     use dem_diagnostics, only: energies
     use dem_contact_store, only: contact_store_t, store_pairs_drop, store_walls_data, bond_rows
     use dem_mesh, only: mesh_t
+    use dem_coarse_grain, only: cg_window_t
     use dem_output, only: output_t
     use dem_frame, only: frame_t
     use dem_timers, only: timers_t
@@ -130,6 +131,8 @@ module dem_run_state
         real(wp), allocatable :: net_vals(:, :)    !< ... and their forces (dem_force_network)
         real(wp), allocatable :: tri_loads(:, :)   !< (4, triangle): the wall triangles' loads
                                                    !< at that evaluation (dem_force_network)
+        type(cg_window_t), allocatable :: fields(:)  !< the &coarse_grain windows' sums
+        logical :: fields_due = .false.   !< the next force evaluation is sampled by one
         logical, allocatable :: gone(:)  !< outlet flags of the owned particles, on the device
         logical, allocatable :: fresh(:) !< those flagged at the last step
         type(frame_t) :: good          !< the last state that passed the instability guard

@@ -33,6 +33,8 @@ module dem_solver
                                wall_overlap_start, wall_overlap_text
     use dem_step, only: time_step, forces, write_row, records_due
     use dem_inflow, only: inflow_particles
+    use dem_run_fields, only: fields_finish
+    use dem_coarse_grain, only: n_cg_sums, coarse_grain_nodes
     implicit none
     private
     public :: solver_t, solver_init, solver_prepare, solver_restore, solver_run, solver_start, &
@@ -52,6 +54,7 @@ contains
         type(comm_t), intent(in) :: comm
         integer(ip) :: i, n_mine, fixed
         real(wp) :: bonds(c%bond_reals)
+        integer :: k
         s%comm = comm
         n_mine = c%n_held
         call particles_init(s%p, n_mine, c%has_clumps, c%has_fixed, c%bond_reals)
@@ -87,6 +90,15 @@ contains
                  s%tri_loads(4, s%mesh%n_tri))
         s%net_rec = 0.0_wp
         s%tri_loads = 0.0_wp
+        allocate(s%fields(0))
+        if (allocated(c%coarse_grains)) then
+            deallocate(s%fields)
+            allocate(s%fields(size(c%coarse_grains)))
+            do k = 1, size(s%fields)
+                allocate(s%fields(k)%sums(n_cg_sums, coarse_grain_nodes(c%coarse_grains(k))))
+                s%fields(k)%sums = 0.0_wp
+            end do
+        end if
         s%nb%skin = c%skin
         s%imbalance_limit = c%imbalance_limit
         s%halo = comm%size > 1 .or. c%periodic%on
@@ -345,6 +357,8 @@ contains
                                   p%radius(1:n), p%x(:, 1:n), p%v(:, 1:n), p%w(:, 1:n), err, &
                                   p%body)             ! (the frame's n; absent without clumps)
             end associate
+            bad = failed_anywhere(s, err)
+            call fields_finish(s, c, err)
             bad = failed_anywhere(s, err)
         end if
         if (s%comm%rank == 0) then

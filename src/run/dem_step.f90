@@ -34,6 +34,7 @@ module dem_step
     use dem_contact_store, only: max_wall_contacts, bond_rows, store_pairs_data, &
                                  store_walls_data
     use dem_bonds, only: bond_forces
+    use dem_run_fields, only: fields_due, fields_sample
     implicit none
     private
     public :: time_step, forces, write_row, records_due
@@ -49,11 +50,15 @@ contains
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
         logical :: verlet, bad
+        real(wp) :: t_forces
         verlet = c%integrator == integrator_verlet
         bad = .false.
+        t_forces = time_of(s, c, merge(s%step + 1, s%step, verlet))
         call records_due(s, c, s%step + 1)    ! (wall-load probes, the snapshot's forces)
+        if (size(s%fields) > 0) s%fields_due = fields_due(s, c, s%step + 1, t_forces)
         if (verlet) call verlet_first_half(s, c)               ! v(t + dt/2), x(t + dt)
-        call forces(s, c, time_of(s, c, merge(s%step + 1, s%step, verlet)), err)
+        call forces(s, c, t_forces, err)
+        if (s%fields_due .and. .not. err%failed()) call fields_sample(s, c, t_forces, err)
         if (.not. err%failed()) call integrate(s, c, verlet, err, bad)  ! the trace, the guard
         if (failed_anywhere(s, err, bad)) then
             if (.not. err%failed()) then                       ! unstable on some rank
@@ -171,19 +176,20 @@ contains
     subroutine particle_contacts(s, c)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
-        if (s%network_due .and. size(s%net_rec, 2) < s%nb%n_pairs) then   ! room for every pair
+        logical :: record
+        real(wp) :: g(3)
+        record = s%network_due .or. s%fields_due   ! (the snapshot's network, the fields)
+        if (record .and. size(s%net_rec, 2) < s%nb%n_pairs) then   ! room for every pair
             call acc_data(s%net_rec, acc_exit)
             deallocate(s%net_rec)
             allocate(s%net_rec(record_rows, s%nb%n_pairs))
             call acc_data(s%net_rec, acc_create)
         end if
-        if (.not. allocated(s%p%body)) then
-            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, c%gravity, s%network_due, s%net_rec)
-        else                          ! gravity: on the spheres here, on bodies when they move
-            call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, [0.0_wp, 0.0_wp, 0.0_wp], &
-                           s%network_due, s%net_rec)
-            call sphere_gravity(s%p%n_own, s%p%body, s%p%mass, c%gravity, s%p%f)
-        end if
+        g = c%gravity
+        if (allocated(s%p%body)) g = 0.0_wp   ! (on the spheres here, on bodies when they move)
+        call pp_forces(s%p, s%nb, s%pc, s%cs, c%dt, g, record, s%net_rec)
+        if (allocated(s%p%body)) call sphere_gravity(s%p%n_own, s%p%body, s%p%mass, &
+                                                     c%gravity, s%p%f)
         if (.not. s%network_due) return
         call acc_data(s%net_rec, acc_to_host)
         call acc_data(s%p%gid, acc_to_host)
@@ -217,14 +223,16 @@ contains
         type(error_t), intent(inout) :: err
         integer(ip) :: overflow
         integer :: k
-        if (s%loads_due .and. size(s%wload, 3) < s%p%n_own) then   ! room for every particle
+        logical :: record
+        record = s%loads_due .or. s%fields_due     ! (wall-load probes, the fields' sample)
+        if (record .and. size(s%wload, 3) < s%p%n_own) then   ! room for every particle
             call acc_data(s%wload, acc_exit)
             deallocate(s%wload)
             allocate(s%wload(6, max_wall_contacts, size(s%p%x, 2)))
             call acc_data(s%wload, acc_create)
         end if
         associate (m => s%mesh, n => s%p%n_own)
-            call pw_forces(s%p, s%nb, m, s%pc, s%cs, c%dt, s%loads_due, s%wload, overflow)
+            call pw_forces(s%p, s%nb, m, s%pc, s%cs, c%dt, record, s%wload, overflow)
             if (s%stress_due) then                 ! (the snapshot's wall stress)
                 call acc_data(s%wload, acc_to_host)
                 call acc_data(s%p%x, acc_to_host)
