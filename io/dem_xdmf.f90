@@ -41,7 +41,7 @@ contains
         integer(ip), intent(in) :: n_tri
         logical, intent(in) :: force, contacts, clumps, fragments, stress
         type(error_t), intent(inout) :: err
-        integer :: u, ios, k
+        integer :: u, ios, k, q
         character(len=:), allocatable :: h5
 
         open(newunit=u, file=path // '.part', status='replace', action='write', iostat=ios)
@@ -79,10 +79,13 @@ contains
             if (clumps) then
                 call attribute('body', 'Scalar', 'Node', '/particles/body', itoa(n(k)), 'Int', &
                                8)
-                ! four components a node: as a 'Vector' VTK's XDMF reader (ParaView's)
-                ! takes them per node ('Matrix' made it fail to allocate and stop)
-                call attribute('orientation', 'Vector', 'Node', '/particles/orientation', &
-                               itoa(n(k)) // ' 4', 'Float', 8)
+                ! the quaternion as four scalars, columns of the (n, 4) dataset: VTK 9.1's
+                ! XDMF reader (ParaView 5.11's) takes a 4-component 'Vector' as 3
+                ! components, and a 'Matrix' as one matrix
+                do q = 0, 3
+                    call column('orientation_q' // achar(iachar('0') + q), &
+                                '/particles/orientation', itoa(n(k)), q, 4)
+                end do
             end if
             if (fragments) call attribute('fragment', 'Scalar', 'Node', '/particles/fragment', &
                                           itoa(n(k)), 'Int', 8)
@@ -157,6 +160,22 @@ contains
                 '      ' // item(h5, '/particles/position', itoa(n(k)) // ' 3', 'Float', 8), &
                 '     </Geometry>'
         end subroutine geometry
+
+        !> Column `col` (from 0) of the (rows, cols) float dataset as a scalar node attribute
+        !> (an XDMF HyperSlab: start, stride and count of each dimension).
+        subroutine column(name, dataset, rows, col, cols)
+            character(len=*), intent(in) :: name, dataset, rows
+            integer, intent(in) :: col, cols
+            write(u, '(a)') '     <Attribute Name="' // name // &
+                '" AttributeType="Scalar" Center="Node">', &
+                '      <DataItem ItemType="HyperSlab" Dimensions="' // rows // ' 1" ' // &
+                'Type="HyperSlab">', &
+                '       <DataItem Dimensions="3 2" Format="XML">0 ' // &
+                achar(iachar('0') + col) // ' 1 1 ' // rows // ' 1</DataItem>', &
+                '       ' // item(h5, dataset, rows // ' ' // achar(iachar('0') + cols), &
+                                  'Float', 8), &
+                '      </DataItem>', '     </Attribute>'
+        end subroutine column
 
         subroutine attribute(name, kind, center, dataset, dims, number, precision)
             character(len=*), intent(in) :: name, kind, center, dataset, dims, number

@@ -10,8 +10,10 @@ material table: its Information element names the materials of the snapshot's
 /materials/name, in order, and the walls carry their material as a cell attribute. Exits 77
 (CTest's SKIP_RETURN_CODE) when neither backend is found.
 The run holds two clumps of three spheres too (66 particles): each Python's VTK XDMF reader
-must take the orientation as four components a particle (an XDMF 'Matrix' it took as one
-matrix, and for a few thousand particles failed to allocate it).
+must give the orientation as four scalars a particle, orientation_q0 .. orientation_q3, equal
+to the snapshot's /particles/orientation (VTK 9.1's reader took a 4-component 'Vector' as 3
+components, and a 'Matrix' as one matrix that it failed to allocate for a few thousand
+particles).
 usage: test_paraview_snapshot.py DEM WORKDIR"""
 import os
 import shutil
@@ -20,6 +22,7 @@ import sys
 import time
 import xml.etree.ElementTree as ET
 
+import h5py
 import numpy as np
 
 from regression_util import ROOT, check, finish
@@ -51,6 +54,9 @@ with open(os.path.join(work, "small.nml"), "w") as f:
 r = subprocess.run([dem, "small.nml"], cwd=work, capture_output=True, text=True, timeout=300)
 check(r.returncode == 0, f"dem small.nml: exit {r.returncode}: {r.stderr[-2000:]}")
 out = os.path.join(work, "out")
+snaps = sorted(os.listdir(os.path.join(out, "snapshots")))
+with h5py.File(os.path.join(out, "snapshots", snaps[-1]), "r") as h5:   # t = 0.05 s
+    last_orientation = h5["particles/orientation"][()]
 
 # the material table of the index (names with XML's special characters, escaped)
 root = ET.parse(os.path.join(out, "snapshots.xmf")).getroot()
@@ -146,8 +152,11 @@ r.UpdateInformation()
 r.UpdateTimeStep(0.05)
 it = r.GetOutputDataObject(0).NewIterator()
 it.InitTraversal()
-a = it.GetCurrentDataObject().GetPointData().GetArray("orientation")
-print(a.GetNumberOfComponents(), a.GetNumberOfTuples())
+d = it.GetCurrentDataObject().GetPointData()
+for q in range(4):
+    a = d.GetArray(f"orientation_q{q}")
+    print(a.GetNumberOfComponents(), a.GetNumberOfTuples(),
+          *(repr(a.GetValue(i)) for i in range(a.GetNumberOfTuples())))
 """
 
 
@@ -188,8 +197,14 @@ for k, (name, cmd, fallback) in enumerate(found):
     if cmd is not None:               # a Python with vtk: how its XDMF reader takes the index
         q = subprocess.run([cmd[0], "-c", READ_ORIENTATION, os.path.join(out, "snapshots.xmf")],
                            capture_output=True, text=True, timeout=300)
-        check(q.stdout.split() == ["4", "66"], f"{name}: the reader takes the orientation as "
-              f"4 components a particle, 66 particles: {q.stdout!r} {q.stderr[-500:]!r}")
+        got = [line.split() for line in q.stdout.splitlines()]
+        ok = len(got) == 4 and all(g[:2] == ["1", "66"] and len(g) == 68 for g in got)
+        check(ok, f"{name}: the reader gives orientation_q0 .. q3, one component and 66 "
+              f"particles each: {q.stdout[:300]!r} {q.stderr[-500:]!r}")
+        if ok:
+            read = np.array([[float(v) for v in g[2:]] for g in got]).T
+            check(np.array_equal(read, last_orientation),
+                  f"{name}: the reader's orientation is the snapshot's /particles/orientation")
     w, h, img = png_pixels(png)
     check((w, h) == (640, 480), f"{name}: {w} x {h} pixels, 640 x 480 asked")
     flat = img.reshape(-1, 3)
