@@ -34,9 +34,10 @@ module dem_run_control
     !> against a wall) is reported once (deeper than &run max_overlap stops the run; doc/
     !> theory.md, section 6); a run's pairs of particles start within it.
     real(wp), parameter :: overlap_warn = 0.5_wp
-    !> The largest overlap with a wall, of the radius, that a starting state may hold: a
-    !> settled bed's elastic overlaps are well below it, and a deeper one sets free at the
-    !> first step more energy than the case holds (doc/theory.md, section 13).
+    !> A starting state's overlap with a wall, of the radius, beyond which it is reported: a
+    !> bed at rest presses into a wall less, and a deeper overlap can set free at the first
+    !> step more energy than the case holds (doc/theory.md, section 13); beyond overlap_warn
+    !> it is an input error.
     real(wp), parameter :: wall_overlap_start = 0.01_wp
     !> The energy balance's room, a fraction of the energy a closed case can set free
     !> (balance_guard; doc/theory.md, section 6).
@@ -261,13 +262,15 @@ contains
             s%p%gid, s%p%x, s%p%radius, s%nb%wstart, s%nb%wlist, s%mesh%vert, depth))
     end function deep_wall
 
-    !> The start's error for particle `id`, which overlaps a wall by more than
-    !> wall_overlap_start of its radius: where the particle was given (case_t's origins), the
-    !> wall (its name and group), the overlap and what to do. Collective.
-    function wall_overlap_text(s, c, id) result(text)
+    !> The start's report for particle `id`, which overlaps a wall by more than
+    !> wall_overlap_start of its radius (an error when `error`: more than overlap_warn; else a
+    !> warning): where the particle was given (case_t's origins), the wall (its name and
+    !> group), the overlap and what to do. Collective.
+    function wall_overlap_text(s, c, id, error) result(text)
         type(solver_t), intent(in) :: s
         type(case_t), intent(in) :: c
         integer(i8), intent(in) :: id
+        logical, intent(in) :: error
         character(len=:), allocatable :: text, wall, origin
         character(len=16) :: share
         real(wp) :: deep(3)
@@ -297,9 +300,16 @@ contains
         write(share, '(f16.1)') 100.0_wp * deep(1) / deep(2)
         text = c%source // ': particle ' // itoa(id) // origin // ' overlaps ' // wall // &
             ' by ' // real_text(deep(1)) // ' m, ' // trim(adjustl(share)) // ' % of its ' // &
-            'radius, at the start (more than ' // itoa(nint(100 * wall_overlap_start)) // &
-            ' % is taken for a mistake: a sound contact is shallower): move or shrink the ' // &
-            'particles, or move the wall'
+            'radius, at the start'
+        if (error) then
+            text = text // ' (more than half the radius is no contact): move or shrink the ' // &
+                'particles, or move the wall'
+        else
+            text = text // ' (a bed at rest presses in less than ' // &
+                itoa(nint(100 * wall_overlap_start)) // ' %; a deeper overlap can throw ' // &
+                'the particle off at the first step): if the run stops as unstable, move or ' // &
+                'shrink the particles, or move the wall'
+        end if
     end function wall_overlap_text
 
     !> The smallest of the ranks' ids > 0 (0 if none has one). Collective.
