@@ -49,7 +49,7 @@ step("install", ["cmake", "--install", build, "--prefix", prefix])
 for f in ("lib/cmake/dem/demConfig.cmake", "include/dem/dem_coupling.mod",
           "include/dem/dem_coupling.h", "share/doc/dem/README.md", "share/doc/dem/theory.md",
           "share/doc/dem/user/input.md", "share/dem/cases/silo/README.md",
-          "share/dem/examples/drum/drum.nml", "share/dem/examples/clumps/plug.stl"):
+          "share/dem/examples/drum/drum.nml", "share/dem/examples/chute/base.stl"):
     check(os.path.exists(os.path.join(prefix, f)), f"installed {f}")
 # relocatable: the exported targets name imported targets (found again by demConfig.cmake
 # where the package is used), not absolute paths of this machine's libraries
