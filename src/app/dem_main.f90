@@ -79,6 +79,8 @@ program dem_main
     if (check_only) then               ! the checks of a run's start: ids, overlaps
         call solver_prepare(s, c, err)
         if (err%failed()) call fail(err)
+        if (comm%rank == 0 .and. len(s%start_overlap) > 0) write(output_unit, '(a)') &
+            '  note: ' // s%start_overlap
         if (comm_any(comm, len(signal_received()) > 0)) then   ! (a long start: honoured)
             call set_error(err, dem_err_stopped, trim(signal_received()) // ' received while ' &
                            // 'the case was checked: stopped before the end of the check')

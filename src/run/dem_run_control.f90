@@ -263,9 +263,10 @@ contains
     end function deep_wall
 
     !> The start's report for particle `id`, which overlaps a wall by more than
-    !> wall_overlap_start of its radius (an error when `error`: more than overlap_warn; else a
-    !> warning): where the particle was given (case_t's origins), the wall (its name and
-    !> group), the overlap and what to do. Collective.
+    !> wall_overlap_start of its radius (an error when `error`: more than overlap_warn; else
+    !> the note that --check prints and that an instability follows with): where the
+    !> particle was given (case_t's origins), the wall (its name and group), the overlap and
+    !> what to do. Collective.
     function wall_overlap_text(s, c, id, error) result(text)
         type(solver_t), intent(in) :: s
         type(case_t), intent(in) :: c
@@ -298,7 +299,7 @@ contains
             if (allocated(c%wall_groups)) wall = wall // ' of the ' // trim(c%wall_groups(i))
         end if
         write(share, '(f16.1)') 100.0_wp * deep(1) / deep(2)
-        text = c%source // ': particle ' // itoa(id) // origin // ' overlaps ' // wall // &
+        text = 'particle ' // itoa(id) // origin // ' overlaps ' // wall // &
             ' by ' // real_text(deep(1)) // ' m, ' // trim(adjustl(share)) // ' % of its ' // &
             'radius, at the start'
         if (error) then
@@ -306,9 +307,9 @@ contains
                 'particles, or move the wall'
         else
             text = text // ' (a bed at rest presses in less than ' // &
-                itoa(nint(100 * wall_overlap_start)) // ' %; a deeper overlap can throw ' // &
-                'the particle off at the first step): if the run stops as unstable, move or ' // &
-                'shrink the particles, or move the wall'
+                itoa(nint(100 * wall_overlap_start)) // ' %; the energy of a deeper overlap ' // &
+                'can throw the particle off at the first steps): if the run stops as ' // &
+                'unstable, move or shrink the particles, or move the wall'
         end if
     end function wall_overlap_text
 
@@ -419,6 +420,7 @@ contains
             if (write_err%failed()) saved = '; the last good state could not be written: ' // &
                                             write_err%message
         end if
+        if (len(s%start_overlap) > 0) saved = saved // '; at the start, ' // s%start_overlap
         call set_error(err, dem_err_runtime, what // ' at t = ' // &
             real_text(time_of(s, c, s%step)) // ' s; dt is ' // &
             real_text(c%dt / s%scales%rayleigh) // ' of the Rayleigh time (' // &

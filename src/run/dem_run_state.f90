@@ -82,6 +82,9 @@ module dem_run_state
         real(wp) :: settled_energy = 0.0_wp  !< the kinetic energy then [J]
         logical :: emptied = .false.   !< the outlets took every particle out
         logical :: deep_warned = .false.  !< an overlap beyond overlap_warn was reported
+        character(len=:), allocatable :: start_overlap  !< the starting state's deepest wall
+                                          !< overlap beyond 1 % of the radius, in words
+                                          !< (dem_solver's solver_prepare); empty if none
         real(wp) :: balance_total = 0.0_wp   !< the energy at the run's first check [J]
         real(wp) :: balance_time = 0.0_wp    !< its time [s]
         real(wp) :: balance_room = -1.0_wp   !< the rise allowed [J]; < 0: not yet checked

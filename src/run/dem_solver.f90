@@ -3,7 +3,6 @@
 !> step (dem_step) until t_end, a settled state or a stop, and finished with the final
 !> state (doc/theory.md, section 5; doc/user/output.md). The public procedures of the run layer.
 module dem_solver
-    use, intrinsic :: iso_fortran_env, only: error_unit
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t, set_error, dem_err_input
     use dem_comm, only: comm_t, comm_sum, comm_max, comm_node_rank, comm_counts, comm_exchange, &
@@ -57,6 +56,7 @@ contains
         real(wp) :: bonds(c%bond_reals)
         integer :: k
         s%comm = comm
+        s%start_overlap = ''
         n_mine = c%n_held
         call particles_init(s%p, n_mine, c%has_clumps, c%has_fixed, c%bond_reals)
         do i = 1, n_mine
@@ -211,7 +211,7 @@ contains
     !> run that does not continue a checkpoint checks its particles first: ids unique, then,
     !> from the lists, none overlapping a wall by more than half its radius (an input error
     !> naming the particle of smallest id, where it was given and the wall; beyond
-    !> wall_overlap_start of its radius, a warning naming the same) and no two overlapping by
+    !> wall_overlap_start of its radius, the same in s%start_overlap) and no two overlapping by
     !> more than half the smaller radius (an input error naming the smallest ids).
     !> Collective: on failure, err is set on every rank.
     subroutine solver_prepare(s, c, err)
@@ -219,7 +219,6 @@ contains
         type(case_t), intent(in) :: c
         type(error_t), intent(inout) :: err
         integer(i8) :: ids(2)
-        character(len=:), allocatable :: warning
         if (.not. s%restarted) then
             ids(1) = smallest(s, repeated_id(s))
             if (ids(1) > 0) call set_error(err, dem_err_input, c%source // ': particle id ' // &
@@ -233,13 +232,11 @@ contains
         if (err%failed() .or. s%restarted) return
         ids(1) = deep_wall(s, overlap_warn)
         if (ids(1) > 0) then
-            call set_error(err, dem_err_input, wall_overlap_text(s, c, ids(1), .true.))
+            call set_error(err, dem_err_input, c%source // ': ' // &
+                           wall_overlap_text(s, c, ids(1), .true.))
         else
             ids(1) = deep_wall(s, wall_overlap_start)
-            if (ids(1) > 0) then                      ! (collective)
-                warning = wall_overlap_text(s, c, ids(1), .false.)
-                if (s%comm%rank == 0) write(error_unit, '(a)') 'dem: warning: ' // warning
-            end if
+            if (ids(1) > 0) s%start_overlap = wall_overlap_text(s, c, ids(1), .false.)
         end if
         if (failed_anywhere(s, err)) return
         ids = deep_pair(s, overlap_warn)

@@ -364,9 +364,12 @@ check(finals[0] is not None and finals[0] == finals[1],
 
 # a sphere centred on a wall (no normal: NaN at the first step before, issue 30, item 7), or
 # overlapping it by more than half its radius, is bad input naming where the particle and
-# the wall were given; beyond 1 % of the radius (a bed at rest presses in less; a deeper
-# overlap can throw the particle off at the first step) --check and the run name the same in
-# a warning, and at 0.5 % (a settled bed's elastic contact) say nothing
+# the wall were given; beyond 1 % of the radius (a bed at rest presses in less; the energy of
+# a deeper overlap can throw the particle off at the first step) --check names the same in a
+# note, and a run that then stops as unstable in its message; at 0.5 % (a settled bed's
+# elastic contact) neither says anything
+named = "particle 1 (the &particle group 1) overlaps the wall of the &wall_plane group 1 by " \
+    "1.5000E-05 m, 1.5 % of its radius, at the start (a bed at rest"
 for name, z, ok in (("on_plane", "0", False), ("deep_in_plane", "4.9e-4", False),
                     ("in_plane_1.5", "9.85e-4", True), ("in_plane_0.5", "9.95e-4", True)):
     text = PLANE.format(nz="1").replace("position = 0, 0, 0.0011", f"position = 0, 0, {z}")
@@ -374,16 +377,19 @@ for name, z, ok in (("on_plane", "0", False), ("deep_in_plane", "4.9e-4", False)
         path = os.path.join(work, name + ".nml")
         with open(path, "w") as f:
             f.write(text)
-        warned = "particle 1 (the &particle group 1) overlaps the wall of the &wall_plane " \
-            "group 1 by 1.5000E-05 m, 1.5 % of its radius, at the start (a bed at rest"
-        # (the run at 1.5 % stops as unstable at its first step: that is what the warning
-        # tells; the run at 0.5 % ends)
-        for args in (["--check", path], [path])[:1 if name == "in_plane_1.5" else 2]:
-            r, _ = run(args, name + args[0][-5:])
-            check(r.returncode == 0, f"{name}: {args[0]} exit {r.returncode}: {r.stderr.strip()}")
-            check((warned in r.stderr) == (name == "in_plane_1.5"),
-                  f"{name}: {args[0]}: the warning naming the particle and the wall "
-                  f"{'missing' if name == 'in_plane_1.5' else 'given'}: {r.stderr.strip()}")
+        deep = name == "in_plane_1.5"
+        r, _ = run(["--check", path], name + "check")
+        check(r.returncode == 0 and (named in r.stdout) == deep,
+              f"{name}: --check exit {r.returncode}, the note naming the particle and the wall "
+              f"{'missing' if deep else 'given'}: {r.stdout.strip()} {r.stderr.strip()}")
+        r, _ = run([path], name)
+        if deep:        # (1.6e-7 J set free, the energy guard's room 2.5e-8 J)
+            check(r.returncode == 3 and "unstable" in r.stderr and named in r.stderr,
+                  f"{name}: the run stops as unstable naming the start's overlap: exit "
+                  f"{r.returncode}: {r.stderr.strip()}")
+        else:
+            check(r.returncode == 0 and "overlaps the wall" not in r.stderr,
+                  f"{name}: the run ends, silent: exit {r.returncode}: {r.stderr.strip()}")
     else:
         share = "100.0" if z == "0" else "51.0"
         bad(name, text, None, None, "particle 1 (the &particle group 1) overlaps the wall of "
