@@ -290,6 +290,14 @@ contains
                     end if
                 end do
             end if
+            if (record) then        ! each contact's forces, for the snapshot or the fields
+                do l = 1, m
+                    p = lp(l)
+                    rec(1, p) = lane(l, lane_fn)
+                    rec(2:4, p) = lane(l, lane_n1:lane_n3)
+                    rec(5:7, p) = lane(l, lane_f1:lane_f3)
+                end do
+            end if
             ! the history back, and F and n x F_t into both particles' sums
             do l = 1, m
                 p = lp(l)
@@ -301,11 +309,6 @@ contains
                 hist(3, s) = lane(l, lane_x3)
                 fp = -lane(l, lane_fn) * lane(l, lane_n1:lane_n3) + lane(l, lane_f1:lane_f3)
                 cp = normal_cross_ft(lane, l)        ! n x F_t (the sums are over R)
-                if (record) then
-                    rec(1, p) = lane(l, lane_fn)
-                    rec(2:4, p) = lane(l, lane_n1:lane_n3)
-                    rec(5:7, p) = lane(l, lane_f1:lane_f3)
-                end if
                 si = scale(i)
                 do c = 1, 3
                     kf(c) = to_fixed(fp(c) * si)
