@@ -2,9 +2,9 @@
 """The chute's coarse-grained fields (fields.nml: &coarse_grain averaged over x and y) against
 z: velocity, density, and the shear and normal stress beside those of the momentum balance of
 a steady uniform flow, sigma_xz(z) = g_x int_z^inf rho dz', sigma_zz(z) = g_z int_z^inf rho dz'.
-usage: fields_plot.py OUTPUT_DIR [PICTURE]   (default picture: fields.png beside this script)"""
+usage: fields_plot.py OUTPUT_DIR [--png PICTURE]   (default: fields.png beside this script)"""
+import argparse
 import os
-import sys
 
 import h5py
 import matplotlib
@@ -14,9 +14,12 @@ import numpy as np  # noqa: E402
 
 G = np.array([3.990, 0.0, -8.962])      # fields.nml's gravity [m/s^2]
 
-out = sys.argv[1]
-picture = sys.argv[2] if len(sys.argv) > 2 else os.path.join(os.path.dirname(
-    os.path.abspath(__file__)), "fields.png")
+ap = argparse.ArgumentParser(description="the chute's coarse-grained fields against z")
+ap.add_argument("output", help="the output folder of fields.nml")
+ap.add_argument("--png", default=os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                              "fields.png"))
+args = ap.parse_args()
+out, picture = args.output, args.png
 with h5py.File(os.path.join(out, "fields_chute.h5"), "r") as f:
     z = f["grid/z"][()]
     rho = f["fields/density"][:, 0, 0]
