@@ -9,10 +9,10 @@ libdem.so (src/api/dem_coupling.h; doc/user/python.md).
         p = run.views()                       # NumPy arrays over the solver's memory
 """
 from ._library import library_path, library_version, load_library
-from .run import Deposit, DemError, Particles, Run
+from .run import Bodies, Deposit, DemError, Particles, Run
 from .sweep import set_values, sweep, write_case
 
 __version__ = "0.1.0"   # the solver's (src/base/dem_version.f90)
-__all__ = ["Run", "Particles", "Deposit", "DemError", "load_library", "library_path",
+__all__ = ["Run", "Particles", "Bodies", "Deposit", "DemError", "load_library", "library_path",
            "library_version",
            "sweep", "set_values", "write_case"]

@@ -43,6 +43,8 @@ _PROTOTYPES = {
     "dem_coupling_count": (ctypes.c_int, [_handle]),
     "dem_coupling_get": (ctypes.c_int, [_handle, _int64_p, _int_p, _double_p, _double_p,
                                         _double_p, _double_p]),
+    "dem_coupling_body_count": (ctypes.c_int, [_handle]),
+    "dem_coupling_bodies": (ctypes.c_int, [_handle, _int64_p] + [_double_p] * 5),
     "dem_coupling_views": (ctypes.c_int, [_handle] + [ctypes.POINTER(ctypes.c_void_p)] * 5),
     "dem_coupling_device_views": (ctypes.c_int,
                                   [_handle] + [ctypes.POINTER(ctypes.c_void_p)] * 3),

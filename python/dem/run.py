@@ -20,6 +20,12 @@ _serials = itertools.count()
 #: velocities (n x 3), SI units, in the local order of the last advance.
 Particles = namedtuple("Particles", "gid material radius x v w")
 
+#: The owned clumps (rigid bodies of member spheres): ids (int64, nb; a body's id is its first
+#: member's), masses (nb), centres of mass, their velocities (nb x 3), orientations (nb x 4,
+#: the unit quaternions q0..q3 from the body's principal frame to the lab's) and angular
+#: velocities (nb x 3, lab frame), SI units, in increasing order of the ids.
+Bodies = namedtuple("Bodies", "id mass x v q w")
+
 #: A deposit onto cells: the solids volume fraction eps, and per cell the sums of the
 #: particles' momentum [kg m/s], drag coefficients beta [kg/s] and beta v [N]. On a grid,
 #: eps[i, j, k] and momentum[i, j, k, :] (views of the C layout, x fastest); on a list of
@@ -161,6 +167,25 @@ class Run:
                 self._live(), P(gid, ctypes.c_int64), P(material, ctypes.c_int), P(radius),
                 P(x), P(v), P(w)), "dem_coupling_get: an array is NULL")
         return Particles(gid, material, radius, x, v, w)
+
+    @property
+    def body_count(self):
+        """The clumps (rigid bodies) this rank owns: those whose members it owns (0 in a case
+        without clumps)."""
+        return self._lib.dem_coupling_body_count(self._handle)
+
+    def bodies(self):
+        """Copies of the owned clumps (Bodies); their members are among particles()."""
+        n = self.body_count
+        ids = np.empty(n, np.int64)
+        mass = np.empty(n)
+        x, v, q, w = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 4)), np.empty((n, 3))
+        if n > 0:
+            P = _library.as_pointer
+            self._check_plain(self._lib.dem_coupling_bodies(
+                self._live(), P(ids, ctypes.c_int64), P(mass), P(x), P(v), P(q), P(w)),
+                "dem_coupling_bodies: an array is NULL")
+        return Bodies(ids, mass, x, v, q, w)
 
     def views(self):
         """The owned particles' ids, radii, positions, velocities and angular velocities as

@@ -27,6 +27,7 @@ module dem_coupling
     use dem_particles, only: particles_external, order_by_id, index_of_id, ext_force, &
                              ext_torque, ext_beta, ext_fluid_v, ext_impulse
     use dem_acc, only: acc_data, acc_to_host, acc_to_device, acc_device_address
+    use dem_clumps, only: clump_deposit_mass
     use dem_deposit, only: deposit_grid, deposit_cells, kernel_cell, kernel_trilinear, &
                            kernel_dpvm, n_deposit
     use dem_timers, only: wall_seconds
@@ -38,14 +39,15 @@ module dem_coupling
               coupling_count, coupling_get, coupling_set_force, coupling_set_drag, &
               coupling_impulse, coupling_deposit, coupling_removed_count, coupling_removed, &
               coupling_set_force_by_id, coupling_set_drag_by_id, coupling_views, &
-              coupling_deposit_cells, coupling_status
+              coupling_deposit_cells, coupling_status, coupling_body_count, coupling_bodies
     public :: dem_coupling_init, dem_coupling_finalize, dem_coupling_advance, dem_coupling_time, &
               dem_coupling_count, dem_coupling_get, dem_coupling_set_force, &
               dem_coupling_set_drag, dem_coupling_impulse, dem_coupling_deposit, &
               dem_coupling_removed_count, dem_coupling_removed, dem_coupling_set_force_by_id, &
               dem_coupling_set_drag_by_id, dem_coupling_views, dem_coupling_device_views, &
               dem_coupling_deposit_cells, dem_coupling_mpi_world, dem_coupling_mpi_finalize, &
-              dem_coupling_status, dem_coupling_version
+              dem_coupling_status, dem_coupling_version, dem_coupling_body_count, &
+              dem_coupling_bodies
 
     !> A coupled run between coupling_init and coupling_finalize.
     type :: run_t
@@ -172,6 +174,13 @@ contains
             call acc_data(s%p%x, acc_to_host)
             call acc_data(s%p%v, acc_to_host)
             call acc_data(s%p%w, acc_to_host)
+            if (allocated(s%p%body)) then        ! (the bodies' state: dem_coupling_bodies)
+                call acc_data(s%p%body, acc_to_host)
+                call acc_data(s%p%body_x, acc_to_host)
+                call acc_data(s%p%body_v, acc_to_host)
+                call acc_data(s%p%body_q, acc_to_host)
+                call acc_data(s%p%body_mass, acc_to_host)
+            end if
             if (.not. err%failed() .and. s%stopped /= stop_end) &
                 call set_error(err, dem_err_runtime, s%stop_message)
             if (err%failed()) then
@@ -266,6 +275,40 @@ contains
             w(:, 1:n) = p%w(:, 1:n)
         end associate
     end subroutine coupling_get
+
+    !> The clumps (rigid bodies, doc/user/input.md) this rank owns: those whose members it
+    !> owns (all of a body's members are on one rank, that of its centre of mass), not those
+    !> an outlet removed during the last advance; 0 in a case without clumps.
+    integer function coupling_body_count(self) result(n)
+        type(coupling_t), intent(in) :: self
+        n = 0
+        if (.not. allocated(self%run)) return
+        if (allocated(self%run%s%p%body)) n = self%run%s%bodies%n
+    end function coupling_body_count
+
+    !> Copies of the owned bodies, in increasing order of their ids (a body's id is its first
+    !> member's), into arrays of at least coupling_body_count(self) columns: ids, masses [kg],
+    !> centres of mass [m], their velocities [m/s], orientations (the unit quaternions q0, q1,
+    !> q2, q3 that turn the body's principal frame into the lab's) and angular velocities
+    !> (lab frame) [rad/s].
+    subroutine coupling_bodies(self, id, mass, x, v, q, w)
+        type(coupling_t), intent(in) :: self
+        integer(i8), intent(out) :: id(:)
+        real(wp), intent(out) :: mass(:), x(:, :), v(:, :), q(:, :), w(:, :)
+        integer(ip) :: k, i
+        if (.not. allocated(self%run)) return     ! (nothing to do before init)
+        associate (p => self%run%s%p, b => self%run%s%bodies)
+            do k = 1, coupling_body_count(self)
+                i = b%member(b%first(k))               ! the body's first member
+                id(k) = p%body(i)
+                mass(k) = p%body_mass(i)
+                x(:, k) = p%body_x(:, i)
+                v(:, k) = p%body_v(:, i)
+                q(:, k) = p%body_q(:, i)
+                w(:, k) = p%w(:, i)
+            end do
+        end associate
+    end subroutine coupling_bodies
 
     !> The external force [N] and torque [N m] on each owned particle (local index), for
     !> the next advances until set again. Values that are not all finite are refused
@@ -529,8 +572,9 @@ contains
             ! periodic along an axis where the grid spans the case's period (to 1e-9 of it)
             wrap = pb%axis .and. abs(origin - pb%lo) <= 1.0e-9_wp * pb%length .and. &
                    abs(nc * h - pb%length) <= 1.0e-9_wp * pb%length
-            call deposit_grid(self%run%comm, n, p%x(:, 1:n), p%radius(1:n), p%mass(1:n), &
-                              p%v(:, 1:n), beta, k, origin, h, nc, wrap, sums, n_outside)
+            call deposit_grid(self%run%comm, n, p%x(:, 1:n), p%radius(1:n), &
+                              deposit_mass(self), p%v(:, 1:n), beta, k, origin, h, nc, wrap, &
+                              sums, n_outside)
         end associate
         eps(1:m) = sums(1, :) / product(h)
         momentum(:, 1:m) = sums(2:4, :)
@@ -624,8 +668,8 @@ contains
         allocate(sums(n_deposit, m))
         associate (p => self%run%s%p, n => self%run%s%p%n_own)
             beta = p%ext(ext_beta, 1:n)
-            call deposit_cells(self%run%comm, n, p%x(:, 1:n), p%radius(1:n), p%mass(1:n), &
-                               p%v(:, 1:n), beta, centres, sums)
+            call deposit_cells(self%run%comm, n, p%x(:, 1:n), p%radius(1:n), &
+                               deposit_mass(self), p%v(:, 1:n), beta, centres, sums)
         end associate
         eps(1:m) = sums(1, :) / volumes
         momentum(:, 1:m) = sums(2:4, :)
@@ -711,6 +755,18 @@ contains
             call set_error(err, dem_err_input, call_name // ': refused on another rank ' // &
                            '(its arguments)')
     end subroutine agree
+
+    !> The masses the owned particles deposit [kg]: a sphere's own; a clump's member its share
+    !> of its body's mass (clump_deposit_mass), so that a body deposits its momentum once.
+    function deposit_mass(self) result(mass)
+        type(coupling_t), intent(in) :: self
+        real(wp), allocatable :: mass(:)
+        associate (p => self%run%s%p)
+            mass = p%mass(1:p%n_own)
+            if (allocated(p%body)) call clump_deposit_mass(self%run%s%bodies, p%radius, &
+                                                           p%body_mass, mass)
+        end associate
+    end function deposit_mass
 
     !> The largest particle radius of the run over all ranks (0 with no particles) [m].
     real(wp) function largest_radius(self) result(r_max)
@@ -886,6 +942,34 @@ contains
         if (n > 0) call coupling_get(self, gid(1:n), mat(1:n), radius(1:n), x(:, 1:n), &
                                      v(:, 1:n), w(:, 1:n))
     end function dem_coupling_get
+
+    integer(c_int) function dem_coupling_body_count(handle) result(n) &
+            bind(C, name='dem_coupling_body_count')
+        type(c_ptr), value :: handle
+        type(coupling_t), pointer :: self
+        n = 0
+        self => from_c(handle)
+        if (associated(self)) n = coupling_body_count(self)
+    end function dem_coupling_body_count
+
+    integer(c_int) function dem_coupling_bodies(handle, id, mass, x, v, q, w) result(status) &
+            bind(C, name='dem_coupling_bodies')
+        type(c_ptr), value :: handle
+        integer(c_int64_t), intent(out), optional :: id(*)
+        real(c_double), intent(out), optional :: mass(*), x(3, *), v(3, *), q(4, *), w(3, *)
+        type(coupling_t), pointer :: self
+        integer :: n
+        self => from_c(handle)
+        status = dem_err_runtime
+        if (.not. associated(self)) return
+        n = coupling_body_count(self)
+        status = dem_err_input
+        if (n > 0 .and. .not. (present(id) .and. present(mass) .and. present(x) .and. &
+                               present(v) .and. present(q) .and. present(w))) return
+        status = 0
+        if (n > 0) call coupling_bodies(self, id(1:n), mass(1:n), x(:, 1:n), v(:, 1:n), &
+                                        q(:, 1:n), w(:, 1:n))
+    end function dem_coupling_bodies
 
     integer(c_int) function dem_coupling_set_force(handle, f, t) result(status) &
             bind(C, name='dem_coupling_set_force')

@@ -84,6 +84,20 @@ int dem_coupling_count(const dem_coupling *run);     /* particles owned by this 
 int dem_coupling_get(const dem_coupling *run, int64_t *gid, int *material, double *radius,
                      double *x, double *v, double *w);
 
+/* The clumps (rigid bodies of member spheres, doc/user/input.md) this rank owns: a body is
+ * owned where its members are (all on the rank of its centre of mass); the particles above
+ * are its members, each with its own id. 0 in a case without clumps. */
+int dem_coupling_body_count(const dem_coupling *run);
+
+/* Copies of the owned bodies, nb = dem_coupling_body_count(run), in increasing order of their
+ * ids (a body's id is that of its first member): ids, masses [kg], centres of mass [m], their
+ * velocities [m/s], orientations (4 doubles per body: the unit quaternion q0 q1 q2 q3 that
+ * turns the body's principal frame into the lab's) and angular velocities (lab frame)
+ * [rad/s] (also after a failure: the state it stopped in). A member's velocity is
+ * v + w x (x_member - x). The arrays may be NULL when nb is 0. Status 2: an array NULL. */
+int dem_coupling_bodies(const dem_coupling *run, int64_t *id, double *mass, double *x,
+                        double *v, double *q, double *w);
+
 /* Read-only views (no copy) of the owned particles' ids, radii, positions, velocities and
  * angular velocities: the first dem_coupling_count(run) entries (vectors: 3 doubles each),
  * valid until the run's next advance or its finalize (NULL, status 3, for no run). Do not

@@ -22,7 +22,7 @@ module dem_clumps
     private
     public :: clump_template_t, clump_t, clump_index_t, clump_members, clump_index_build, &
               clump_index_free, clumps_move, clump_energy_terms, sphere_gravity, clump_reach, &
-              clump_probe_view, clumps_in_spheres
+              clump_probe_view, clumps_in_spheres, clump_deposit_mass
 
     !> A clump template: its member spheres and its mass properties.
     type :: clump_template_t
@@ -349,6 +349,29 @@ contains
             end if
         end do
     end subroutine clump_probe_view
+
+    !> The masses the members of the index's bodies deposit onto a fluid's cells (dem_deposit,
+    !> doc/theory.md, section 14): each member its body's mass M in proportion to its sphere's
+    !> volume, M r_i^3 / sum_j r_j^3 over the body's members (summed in the order of their ids),
+    !> so that a body's members deposit its mass once; the other particles keep `mass` (a
+    !> member's own is its body's, dem_particles).
+    subroutine clump_deposit_mass(idx, radius, body_mass, mass)
+        type(clump_index_t), intent(in) :: idx
+        real(wp), intent(in) :: radius(:), body_mass(:)    !! [m], [kg]
+        real(wp), intent(inout) :: mass(:)                 !! [kg]
+        real(wp) :: volume
+        integer(ip) :: k, m, i
+        do k = 1, idx%n
+            volume = 0.0_wp
+            do m = idx%first(k), idx%first(k + 1) - 1
+                volume = volume + radius(idx%member(m))**3
+            end do
+            do m = idx%first(k), idx%first(k + 1) - 1
+                i = idx%member(m)
+                mass(i) = body_mass(i) * (radius(i)**3 / volume)
+            end do
+        end do
+    end subroutine clump_deposit_mass
 
     !> f += m g for the spheres among particles 1..n (body 0) of a case with clumps, whose
     !> particle contacts are summed without gravity (the bodies take M g in clumps_move).

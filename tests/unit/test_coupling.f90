@@ -17,7 +17,8 @@ program test_coupling
     use dem_kinds, only: wp, i8
     use dem_coupling, only: coupling_t, coupling_init, coupling_finalize, coupling_advance, &
                             coupling_time, coupling_count, coupling_get, coupling_set_force, &
-                            coupling_set_drag, coupling_impulse, coupling_views
+                            coupling_set_drag, coupling_impulse, coupling_views, &
+                            coupling_body_count
     use dem_assert, only: assert_true, assert_close, assert_finish
     implicit none
     real(wp), parameter :: pi = acos(-1.0_wp), g = 9.81_wp
@@ -99,6 +100,7 @@ program test_coupling
     n_all = coupling_count(sphere)
     call MPI_Allreduce(coupling_count(sphere), n_all, 1, MPI_INTEGER, MPI_SUM, MPI_COMM_WORLD)
     call assert_true(n_all == 1, 'one particle over the ranks')
+    call assert_true(coupling_body_count(sphere) == 0, 'a sphere: no clump')
     call coupling_finalize(sphere, status, message)
     call assert_true(status == 0, 'finalize: ' // trim(message))
     call MPI_Barrier(MPI_COMM_WORLD)

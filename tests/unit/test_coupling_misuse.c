@@ -4,7 +4,7 @@
  * - NULL pointers (the handle's address, the case file, a message with a length, the data
  *   arrays, the views' addresses) give status 2, and NULL as the handle gives 3;
  * - a finalised handle, and a copy of it kept by the caller, hold no run (status 3, count
- *   0, time 0, NULL views), as does a made-up handle; finalize(NULL) is status 2;
+ *   0, body count 0, time 0, NULL views), as does a made-up handle; finalize(NULL) is status 2;
  * - communicators that are none (MPI_COMM_NULL, a freed one, a made-up number) give status
  *   2 and leave MPI_COMM_WORLD's error handler as it was (errors fatal);
  * - non-finite reals (dt, forces, drag, deposit origin and spacing, cell centres) give 2,
@@ -129,6 +129,9 @@ static void null_pointers(const char *file, int fc, int rank)
     check(dem_coupling_set_force(run, NULL, NULL) == (n > 0 ? 2 : 0), "set_force NULL", NULL);
     check(dem_coupling_set_drag(run, NULL, NULL) == (n > 0 ? 2 : 0), "set_drag NULL", NULL);
     check(dem_coupling_impulse(run, NULL) == (n > 0 ? 2 : 0), "impulse into NULL", NULL);
+    check(dem_coupling_body_count(run) == 0 &&
+          dem_coupling_bodies(run, NULL, NULL, NULL, NULL, NULL, NULL) == 0,
+          "no clumps: no bodies, NULL arrays taken", NULL);
     check(dem_coupling_views(run, NULL, NULL, NULL, NULL, NULL) == 2, "views into NULL",
           NULL);
     check(dem_coupling_device_views(run, NULL, NULL, NULL) == 2, "device views into NULL",
@@ -170,6 +173,9 @@ static void null_pointers(const char *file, int fc, int rank)
     check(st == 3 && gv == NULL && xv == NULL, "a finalised handle: NULL views", NULL);
     check(dem_coupling_get(copy, NULL, NULL, NULL, NULL, NULL, NULL) == 3,
           "get on a finalised handle", NULL);
+    check(dem_coupling_body_count(copy) == 0 &&
+          dem_coupling_bodies(copy, NULL, NULL, NULL, NULL, NULL, NULL) == 3,
+          "bodies of a finalised handle: count 0, status 3", NULL);
     check(dem_coupling_set_force(copy, force, torque) == 3, "set_force on it", NULL);
     dem_coupling *made_up = (dem_coupling *)(&msg[1]);
     st = dem_coupling_advance(made_up, 1e-4, msg, (int)sizeof msg);
