@@ -9,7 +9,7 @@ module dem_input_coarse_grain
     use dem_namelist_scan, only: nml_file_t
     use dem_input_group, only: group_io_t, group_reading, group_count
     use dem_input_values, only: unset, name_len, in_range, check_vector, check_memory, &
-                                check_positive
+                                check_positive, is_identifier
     use dem_case, only: case_t
     use dem_coarse_grain, only: coarse_grain_t, kernel_gaussian, kernel_lucy, n_cg_sums
     implicit none
@@ -63,8 +63,7 @@ contains
             end do
             if (err%failed()) return
             g = coarse_grain_t()
-            if (len_trim(name) == 0 .or. verify(trim(name), 'abcdefghijklmnopqrstuvwxyz' // &
-                'ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_') /= 0) then
+            if (.not. is_identifier(name)) then
                 call fail("key 'name': required, letters, digits and _ only")
                 return
             end if

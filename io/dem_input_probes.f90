@@ -9,7 +9,7 @@ module dem_input_probes
     use dem_namelist_scan, only: nml_file_t
     use dem_input_group, only: group_io_t, group_reading, group_count
     use dem_input_values, only: unset, name_len, in_range, check_vector, check_direction, &
-                                check_memory, check_positive
+                                check_memory, check_positive, is_identifier
     use dem_case, only: case_t, id_check_t
     use dem_outlets, only: outlet_t, outlet_plane, outlet_box
     use dem_probes, only: probe_t, probe_count, probe_center_of_mass, probe_track, &
@@ -129,8 +129,7 @@ contains
             end do
             if (err%failed()) return
             p = probe_t()
-            if (len_trim(name) == 0 .or. verify(trim(name), 'abcdefghijklmnopqrstuvwxyz' // &
-                'ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_') /= 0) then
+            if (.not. is_identifier(name)) then
                 call fail("key 'name': required, letters, digits and _ only")
                 return
             end if

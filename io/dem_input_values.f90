@@ -11,8 +11,8 @@ module dem_input_values
     implicit none
     private
     public :: unset, name_len, check_positive, check_nonnegative, in_range, check_vector, &
-              check_direction, find_material, material_index, relative_to, check_steps, &
-              max_steps, check_memory
+              is_identifier, check_direction, find_material, material_index, relative_to, &
+              check_steps, max_steps, check_memory
 
     !> The default of a key that has none: "not given".
     real(wp), parameter :: unset = huge(1.0_wp)
@@ -73,6 +73,14 @@ contains
         end if
         in_range = .true.
     end function in_range
+
+    !> Whether a name is not empty and of letters, digits and _ only (a column or dataset
+    !> name: probes, coarse-grained fields).
+    pure logical function is_identifier(name)
+        character(len=*), intent(in) :: name
+        is_identifier = len_trim(name) > 0 .and. verify(trim(name), &
+            'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_') == 0
+    end function is_identifier
 
     !> Check that a vector key is finite and, if required, was given.
     logical function check_vector(at, val, key, required, err) result(ok)

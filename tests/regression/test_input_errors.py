@@ -512,6 +512,11 @@ bad("cylinder_height", CYL + "cylinder_base = 0, 0, 0, cylinder_radius = 1, "
     "cylinder_height = 0 /\n", "probe", "cylinder_height", "must be > 0")
 bad("probe_region", GOOD + "&probe name = 'c', kind = 'count', region = 'sphere' /\n", "probe",
     "region", "all, box, cylinder")
+bad("probe_name", GOOD + "&probe name = 'a b', kind = 'count' /\n", "probe", "name",
+    "letters, digits and _ only")
+bad("coarse_grain_name", GOOD + "&coarse_grain name = 'x-y', box_min = 0, 0, 0, "
+    "box_max = 1, 1, 1, cells = 2, 2, 2, width = 0.1 /\n", "coarse_grain", "name",
+    "letters, digits and _ only")
 bad("probe_outflow_name", GOOD + "&outlet region = 'plane', point = 0, 0, -1, "
     "normal = 0, 0, -1 /\n&probe name = 'outflow', kind = 'count' /\n", "probe", "name",
     "outflow_<material>")
