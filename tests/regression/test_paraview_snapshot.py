@@ -174,6 +174,9 @@ for k, (name, cmd, fallback) in enumerate(found):
     png = os.path.join(work, f"picture_{k}.png")
     if cmd is not None:
         r = draw(cmd, png)
+        if r.returncode < 0:            # killed by a signal: pvpython under a new Xvfb can
+            time.sleep(2.0)             # abort while the server starts (a loaded machine)
+            r = draw(cmd, png)
     if (cmd is None or r.returncode != 0) and fallback:
         if cmd is not None:
             print(f"{name}: failed without a display (exit {r.returncode}); again with Xvfb")
