@@ -9,6 +9,7 @@ module dem_fields_file
     use dem_text, only: itoa
     use dem_files, only: file_rename
     use dem_h5, only: h5_file_t, h5_create, h5_close, h5_group, h5_write
+    use dem_xdmf, only: xdmf_item
     use dem_coarse_grain, only: coarse_grain_t, cg_window_t, kernel_gaussian, &
                                 coarse_grain_nodes, coarse_grain_node_position, &
                                 coarse_grain_fields
@@ -109,9 +110,9 @@ contains
             integer, intent(in) :: u
             character(len=*), intent(in) :: name, kind, dataset, dims_
             write(u, '(a)') '   <Attribute Name="' // name // '" AttributeType="' // &
-                kind // '" Center="Node">', '    <DataItem Format="HDF" NumberType="Float" ' &
-                // 'Precision="8" Dimensions="' // dims_ // '">' // stem // '.h5:' // &
-                dataset // '</DataItem>', '   </Attribute>'
+                kind // '" Center="Node">', &
+                '    ' // xdmf_item(stem // '.h5', dataset, dims_, 'Float', 8), &
+                '   </Attribute>'
         end subroutine attribute
     end subroutine fields_write
 end module dem_fields_file

@@ -14,7 +14,7 @@ module dem_xdmf
     use dem_files, only: file_rename
     implicit none
     private
-    public :: xdmf_write, snapshot_file
+    public :: xdmf_write, snapshot_file, xdmf_item
 
 contains
 
@@ -110,10 +110,10 @@ contains
                 write(u, '(a)') '    <Grid Name="walls" GridType="Uniform">', &
                     '     <Topology TopologyType="Triangle" NumberOfElements="' // &
                     itoa(int(n_tri, i8)) // '">', &
-                    '      ' // item(h5, '/walls/triangles', itoa(int(n_tri, i8)) // ' 3', &
+                    '      ' // xdmf_item(h5, '/walls/triangles', itoa(int(n_tri, i8)) // ' 3', &
                                      'Int', 4), &
                     '     </Topology>', '     <Geometry GeometryType="XYZ">', &
-                    '      ' // item(h5, '/walls/vertices', itoa(3_i8 * n_tri) // ' 3', &
+                    '      ' // xdmf_item(h5, '/walls/vertices', itoa(3_i8 * n_tri) // ' 3', &
                                      'Float', 8), &
                     '     </Geometry>'
                 call attribute('wall', 'Scalar', 'Cell', '/walls/wall', itoa(int(n_tri, i8)), &
@@ -149,7 +149,7 @@ contains
             write(u, '(a)') '    <Grid Name="' // name // '" GridType="Uniform">', &
                 '     <Topology TopologyType="Polyline" NumberOfElements="' // &
                 itoa(count) // '" NodesPerElement="2">', &
-                '      ' // item(h5, '/' // name // '/pairs', itoa(count) // ' 2', 'Int', 8), &
+                '      ' // xdmf_item(h5, '/' // name // '/pairs', itoa(count) // ' 2', 'Int', 8), &
                 '     </Topology>'
             call geometry()
         end subroutine lines
@@ -157,7 +157,7 @@ contains
         !> The particles' centres, the points of the particles, bonds and contacts.
         subroutine geometry()
             write(u, '(a)') '     <Geometry GeometryType="XYZ">', &
-                '      ' // item(h5, '/particles/position', itoa(n(k)) // ' 3', 'Float', 8), &
+                '      ' // xdmf_item(h5, '/particles/position', itoa(n(k)) // ' 3', 'Float', 8), &
                 '     </Geometry>'
         end subroutine geometry
 
@@ -172,7 +172,7 @@ contains
                 'Type="HyperSlab">', &
                 '       <DataItem Dimensions="3 2" Format="XML">0 ' // &
                 achar(iachar('0') + col) // ' 1 1 ' // rows // ' 1</DataItem>', &
-                '       ' // item(h5, dataset, rows // ' ' // achar(iachar('0') + cols), &
+                '       ' // xdmf_item(h5, dataset, rows // ' ' // achar(iachar('0') + cols), &
                                   'Float', 8), &
                 '      </DataItem>', '     </Attribute>'
         end subroutine column
@@ -182,7 +182,7 @@ contains
             integer, intent(in) :: precision
             write(u, '(a)') '     <Attribute Name="' // name // '" AttributeType="' // kind // &
                 '" Center="' // center // '">', &
-                '      ' // item(h5, dataset, dims, number, precision), &
+                '      ' // xdmf_item(h5, dataset, dims, number, precision), &
                 '     </Attribute>'
         end subroutine attribute
     end subroutine xdmf_write
@@ -217,12 +217,12 @@ contains
     end function escaped
 
     !> A DataItem that points at an HDF5 dataset.
-    function item(file, dataset, dims, number, precision) result(s)
+    function xdmf_item(file, dataset, dims, number, precision) result(s)
         character(len=*), intent(in) :: file, dataset, dims, number
         integer, intent(in) :: precision
         character(len=:), allocatable :: s
         s = '<DataItem Dimensions="' // dims // '" NumberType="' // number // &
             '" Precision="' // achar(iachar('0') + precision) // '" Format="HDF">' // file // &
             ':' // dataset // '</DataItem>'
-    end function item
+    end function xdmf_item
 end module dem_xdmf
