@@ -12,7 +12,7 @@
 module dem_clumps
     use dem_kinds, only: wp, ip, i8
     use dem_vector, only: cross
-    use dem_rigid, only: rigid_free_rotation, rigid_omega, quat_product, quat_to_lab, &
+    use dem_rigid, only: rigid_rotate, rigid_room, rigid_omega, quat_product, quat_to_lab, &
                          quat_to_body, quat_from_matrix, quat_normalise, rotation_matrix
     use dem_clump_mass, only: clump_mass_t
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host, acc_to_device
@@ -22,7 +22,7 @@ module dem_clumps
     private
     public :: clump_template_t, clump_t, clump_index_t, clump_members, clump_index_build, &
               clump_index_free, clumps_move, clump_energy_terms, sphere_gravity, clump_reach, &
-              clump_probe_view, clumps_in_spheres, clump_deposit_mass
+              clump_probe_view, clumps_in_spheres, clump_deposit_mass, work_cols
 
     !> A clump template: its member spheres and its mass properties.
     type :: clump_template_t
@@ -50,12 +50,19 @@ module dem_clumps
     end type clump_t
 
     !> The bodies a rank owns: body k's members are member(first(k) .. first(k + 1) - 1), in
-    !> the order of their ids (on the device too, when the particles are there).
+    !> the order of their ids; work(k, :) is clumps_move's room for body k (on the device too,
+    !> when the particles are there).
     type :: clump_index_t
         integer(ip) :: n = 0
         integer(ip), allocatable :: first(:)
         integer(ip), allocatable :: member(:)
+        real(wp), allocatable :: work(:, :)
     end type clump_index_t
+
+    !> The columns of clump_index_t's work: the lab-frame L, the inverse principal moments, the
+    !> orientation, the body-frame L, then dem_rigid's rigid_rotate's room.
+    integer, parameter :: w_l = 1, w_inv = 4, w_q = 7, w_lb = 11, w_room = 14, &
+                          work_cols = w_room - 1 + rigid_room
 
 contains
 
@@ -164,8 +171,10 @@ contains
             end if
         end do
         idx%first(idx%n + 1) = m + 1
+        allocate(idx%work(max(1_ip, idx%n), work_cols))
         call acc_data(idx%member, acc_create)
         call acc_data(idx%first, acc_create)
+        call acc_data(idx%work, acc_create)
         call acc_data(idx%member, acc_to_device)
         call acc_data(idx%first, acc_to_device)
     end subroutine clump_index_build
@@ -176,7 +185,8 @@ contains
         if (.not. allocated(idx%first)) return
         call acc_data(idx%member, acc_exit)
         call acc_data(idx%first, acc_exit)
-        deallocate(idx%member, idx%first)
+        call acc_data(idx%work, acc_exit)
+        deallocate(idx%member, idx%first, idx%work)
         idx%n = 0
     end subroutine clump_index_free
 
@@ -215,16 +225,17 @@ contains
     !> The bodies of the index kicked by their forces and torques over h, and, with h_drift >
     !> 0, moved and turned over h_drift (dem_integrate's kick and kick_drift, for bodies):
     !> F = M g + sum of the members' forces, T = sum of (x_m - X) x f_m + t_m, each summed in
-    !> the order of the members' ids; V += h F / M, L += h T, then the free rotation of
-    !> (q, L) over h_drift (dem_rigid) and X += h_drift V; the members then take the body's
-    !> state, their centres X + R(q) b_m, their velocities V + w x R(q) b_m and angular
-    !> velocity w = R(q) I^-1 R(q)^T L. n_fast counts the members whose new speed or rim speed
-    !> is not below `bound` (the speed guard, as dem_integrate's). The vector algebra is
-    !> written out (a call into another module is not inlined). Explicit-shape arrays of the
-    !> store's np places.
+    !> the order of the members' ids; V += h F / M, L += h T, X += h_drift V, then the free
+    !> rotation of (q, L) over h_drift (dem_rigid's rigid_rotate, all bodies in one call, on
+    !> the columns of `work`); the members then take the body's state, their centres
+    !> X + R(q) b_m, their velocities V + w x R(q) b_m and angular velocity
+    !> w = R(q) I^-1 R(q)^T L. n_fast counts the members whose new speed or rim speed is not
+    !> below `bound`, or not finite (the speed guard, as dem_integrate's). The vector algebra
+    !> is written out (a call into another module is not inlined). Explicit-shape arrays of
+    !> the store's np places.
     subroutine clumps_move(nb, first, member, h, h_drift, gravity, bound, np, f, t, radius, &
                            body_x, body_v, body_q, body_l, body_inv_i, body_mass, body_offset, &
-                           x, v, w, n_fast)
+                           x, v, w, work, n_fast)
         integer(ip), intent(in) :: nb, np
         integer(ip), intent(in) :: first(nb + 1), member(first(nb + 1) - 1)
         real(wp), intent(in) :: h, h_drift              !! [s]
@@ -235,6 +246,7 @@ contains
         real(wp), intent(inout) :: body_x(3, np), body_v(3, np), body_q(4, np), body_l(3, np)
         real(wp), intent(in) :: body_inv_i(3, np), body_mass(np), body_offset(3, np)
         real(wp), intent(inout) :: x(3, np), v(3, np), w(3, np)
+        real(wp), intent(inout) :: work(nb, work_cols)  !! clump_index_t's
         integer(i8), intent(out) :: n_fast
         real(wp) :: fb(3), tb(3), xb(3), vb(3), qb(4), lb(3), wb(3), r(3), d(3), rm(3, 3), &
                     a(3), b2, mb, w2
@@ -242,8 +254,7 @@ contains
         b2 = bound**2
         n_fast = 0
         !$acc parallel loop gang vector default(present) copyin(gravity) &
-        !$acc reduction(+:n_fast) &
-        !$acc private(fb, tb, xb, vb, qb, lb, wb, r, d, rm, a, mb, w2, m, i, i0)
+        !$acc private(fb, tb, xb, vb, lb, d, mb, m, i, i0)
         do k = 1, nb
             i0 = member(first(k))
             xb = body_x(:, i0)
@@ -260,12 +271,30 @@ contains
             mb = body_mass(i0)
             vb = body_v(:, i0) + (h / mb) * (mb * gravity + fb)
             lb = body_l(:, i0) + h * tb
-            qb = body_q(:, i0)
+            if (h_drift > 0.0_wp) xb = xb + h_drift * vb
+            body_x(:, i0) = xb
+            body_v(:, i0) = vb
+            body_l(:, i0) = lb
+            work(k, w_l:w_l + 2) = lb
+            work(k, w_inv:w_inv + 2) = body_inv_i(:, i0)
+            work(k, w_q:w_q + 3) = body_q(:, i0)
+        end do
+        if (h_drift > 0.0_wp) call rigid_rotate(nb, h_drift, work(:, w_inv:w_inv + 2), &
+                                                work(:, w_l:w_l + 2), work(:, w_q:w_q + 3), &
+                                                work(:, w_lb:w_lb + 2), work(:, w_room:))
+        !$acc parallel loop gang vector default(present) reduction(+:n_fast) &
+        !$acc private(xb, vb, qb, lb, wb, r, rm, a, w2, m, i, i0)
+        do k = 1, nb
+            i0 = member(first(k))
+            xb = body_x(:, i0)
+            vb = body_v(:, i0)
+            lb = body_l(:, i0)
             if (h_drift > 0.0_wp) then
-                call rigid_free_rotation(h_drift, body_inv_i(:, i0), lb, qb, a)
-                xb = xb + h_drift * vb
+                qb = work(k, w_q:w_q + 3)
+                a = work(k, w_lb:w_lb + 2)
                 rm = rotation_matrix(qb)
             else
+                qb = body_q(:, i0)
                 rm = rotation_matrix(qb)
                 a = [rm(1, 1) * lb(1) + rm(2, 1) * lb(2) + rm(3, 1) * lb(3), &
                      rm(1, 2) * lb(1) + rm(2, 2) * lb(2) + rm(3, 2) * lb(3), &
@@ -287,8 +316,8 @@ contains
                 body_v(:, i) = vb
                 body_q(:, i) = qb
                 body_l(:, i) = lb
-                if (v(1, i)**2 + v(2, i)**2 + v(3, i)**2 >= b2 .or. w2 * radius(i)**2 >= b2) &
-                    n_fast = n_fast + 1
+                if (.not. (v(1, i)**2 + v(2, i)**2 + v(3, i)**2 < b2 &
+                           .and. w2 * radius(i)**2 < b2)) n_fast = n_fast + 1   ! (or not finite)
             end do
         end do
     end subroutine clumps_move

@@ -13,118 +13,171 @@ module dem_rigid
     use dem_vector, only: cross
     implicit none
     private
-    public :: rigid_kick, rigid_kick_drift
-    public :: rigid_free_rotation, rigid_omega
+    real(wp), parameter :: series_limit = 0.015625_wp    !< |x| below which cos x, sin x are
+                                                         !< their series (rigid_turns)
+    real(wp), parameter :: max_sub = 1024.0_wp           !< the most sub-steps of a free rotation
+    integer, parameter, public :: rigid_room = 9         !< rigid_rotate's room per body
+    public :: rigid_rotate, rigid_omega
     public :: quat_product, quat_conjugate, quat_to_lab, quat_to_body, quat_normalise, &
               rotation_matrix, &
               quat_from_matrix
 
 contains
 
-    !> L += h T, then w from the new L, for n bodies.
-    subroutine rigid_kick(n, h, inv_inertia, t, q, l, w)
+    !> The free rotation of n bodies over h, on plain per-body arrays: (q, L) to (q, L_b), L_b
+    !> the body-frame angular momentum the turns leave (rigid_turns). A body for which
+    !> 0.5 h |L| max_k(1/I_k), a bound on the half angle of each of its turns, is not below 1/64
+    !> is turned in m = 2, 4, 8, ... sub-steps of h/m (at most max_sub), so that every half
+    !> angle is within the series' range; m is 1 for nearly every body, and pass 1 is all
+    !> most steps need. Each pass (turn_pass) turns every body and is taken by those with
+    !> j <= m, so that a body's bits do not depend on the bodies beside it.
+    subroutine rigid_rotate(n, h, inv_inertia, l, q, lb, room)
         integer(ip), intent(in) :: n
         real(wp), intent(in) :: h                        !! time increment [s]
-        real(wp), intent(in) :: inv_inertia(3, n)        !! inverse principal moments [1/(kg m2)]
-        real(wp), intent(in) :: t(3, n)                  !! torque, lab frame [N m]
-        real(wp), intent(in) :: q(4, n)                  !! orientation (unit quaternion)
-        real(wp), intent(inout) :: l(3, n)               !! angular momentum, lab frame [kg m2/s]
-        real(wp), intent(out) :: w(3, n)                 !! angular velocity, lab frame [rad/s]
-        integer(ip) :: i
-        !$acc parallel loop default(present)
-        do i = 1, n
-            l(:, i) = l(:, i) + h * t(:, i)
-            w(:, i) = rigid_omega(q(:, i), inv_inertia(:, i), l(:, i))
+        real(wp), intent(in) :: inv_inertia(n, 3)        !! inverse principal moments [1/(kg m2)]
+        real(wp), intent(in) :: l(n, 3)                  !! angular momentum, lab frame
+        real(wp), intent(inout) :: q(n, 4)               !! orientation
+        real(wp), intent(out) :: lb(n, 3)                !! angular momentum, body frame
+        real(wp), intent(out) :: room(n, rigid_room)     !! a pass's q and L_b, h/m and m
+        real(wp) :: bound, m, passes
+        integer(ip) :: k
+        integer :: j
+        passes = 1.0_wp
+        !$acc parallel loop default(present) reduction(max:passes) private(bound, m)
+        do k = 1, n
+            bound = 0.5_wp * h * sqrt(l(k, 1)**2 + l(k, 2)**2 + l(k, 3)**2) &
+                    * max(inv_inertia(k, 1), inv_inertia(k, 2), inv_inertia(k, 3))
+            m = 1.0_wp
+            do while (bound >= series_limit * m .and. m < max_sub)
+                m = 2.0_wp * m
+            end do
+            room(k, 8) = h / m
+            room(k, 9) = m
+            passes = max(passes, m)
         end do
-    end subroutine rigid_kick
+        call turn_pass(n, 1.0_wp, room(:, 8), room(:, 9), inv_inertia, l, q, lb, &
+                       room(:, 1:4), room(:, 5:7))
+        do j = 2, nint(passes)
+            call turn_pass(n, real(j, wp), room(:, 8), room(:, 9), inv_inertia, l, q, lb, &
+                           room(:, 1:4), room(:, 5:7))
+        end do
+    end subroutine rigid_rotate
 
-    !> The kick L += h T, then the free rotation over h_drift and w = R(q) I^-1 L_body from the
-    !> body-frame L it leaves, for n bodies in one pass.
-    subroutine rigid_kick_drift(n, h, h_drift, inv_inertia, t, q, l, w)
+    !> Pass j of rigid_rotate: every body turned over its sub-step hs, from q, into qn and lbn
+    !> (a loop without branches, which the compiler vectorises); then the bodies with j <= m
+    !> take them as q and L_b.
+    subroutine turn_pass(n, j, hs, m, inv_inertia, l, q, lb, qn, lbn)
         integer(ip), intent(in) :: n
-        real(wp), intent(in) :: h, h_drift               !! time increments [s]
-        real(wp), intent(in) :: inv_inertia(3, n)        !! inverse principal moments [1/(kg m2)]
-        real(wp), intent(in) :: t(3, n)                  !! torque, lab frame [N m]
-        real(wp), intent(inout) :: q(4, n)               !! orientation (unit quaternion)
-        real(wp), intent(inout) :: l(3, n)               !! angular momentum, lab frame [kg m2/s]
-        real(wp), intent(out) :: w(3, n)                 !! angular velocity, lab frame [rad/s]
-        real(wp) :: lb(3)
-        integer(ip) :: i
-        !$acc parallel loop default(present) private(lb)
-        do i = 1, n
-            l(:, i) = l(:, i) + h * t(:, i)
-            call rigid_free_rotation(h_drift, inv_inertia(:, i), l(:, i), q(:, i), lb)
-            w(:, i) = quat_to_lab(q(:, i), inv_inertia(:, i) * lb)
+        real(wp), intent(in) :: j, hs(n), m(n), inv_inertia(n, 3), l(n, 3)
+        real(wp), intent(inout) :: q(n, 4), lb(n, 3)
+        real(wp), intent(out) :: qn(n, 4), lbn(n, 3)
+        real(wp) :: q0, q1, q2, q3, b1, b2, b3
+        integer(ip) :: k
+        !$acc parallel loop default(present) private(q0, q1, q2, q3, b1, b2, b3)
+        do k = 1, n
+            q0 = q(k, 1)
+            q1 = q(k, 2)
+            q2 = q(k, 3)
+            q3 = q(k, 4)
+            call rigid_turns(hs(k), inv_inertia(k, 1), inv_inertia(k, 2), inv_inertia(k, 3), &
+                             l(k, 1), l(k, 2), l(k, 3), q0, q1, q2, q3, b1, b2, b3)
+            qn(k, 1) = q0
+            qn(k, 2) = q1
+            qn(k, 3) = q2
+            qn(k, 4) = q3
+            lbn(k, 1) = b1
+            lbn(k, 2) = b2
+            lbn(k, 3) = b3
         end do
-    end subroutine rigid_kick_drift
+        !$acc parallel loop default(present)
+        do k = 1, n
+            if (j > m(k)) cycle
+            q(k, 1) = qn(k, 1)
+            q(k, 2) = qn(k, 2)
+            q(k, 3) = qn(k, 3)
+            q(k, 4) = qn(k, 4)
+            lb(k, 1) = lbn(k, 1)
+            lb(k, 2) = lbn(k, 2)
+            lb(k, 3) = lbn(k, 3)
+        end do
+    end subroutine turn_pass
 
     !> The free rotation of one body over h: the symmetric splitting into exact rotations about
-    !> the principal axes 1 (h/2), 2 (h/2), 3 (h), 2 (h/2), 1 (h/2). Each is the exact flow of
-    !> the kinetic energy of axis k alone, L_k^2 / (2 I_k), over its h_k: with the angle
-    !> phi = h_k L_k / I_k, the body-frame L turns by -phi about axis k and the body by +phi
-    !> about it, q = q (cos(phi/2), sin(phi/2) e_k) (the product written out for the axis: with
-    !> i, j the axes after k in cyclic order, q0' = q0 c - qk s, qk' = qk c + q0 s,
-    !> qi' = qi c + qj s, qj' = qj c - qi s, c and s of phi/2); the lab-frame L is left as it
-    !> is (it is a constant of the free rotation). q is normalised at the end; lb is the
-    !> body-frame angular momentum the turns leave, R(q)^T L.
-    pure subroutine rigid_free_rotation(h, inv_inertia, l, q, lb)
+    !> the principal axes 1 (h/2), 2 (h/2), 3 (h), 2 (h/2), 1 (h/2), from the body-frame
+    !> L_b = R(q)^T L. Each is the exact flow of the kinetic energy of axis k alone,
+    !> L_k^2 / (2 I_k), over its h_k: with the angle phi = h_k L_k / I_k, L_b turns by -phi about
+    !> axis k and the body by +phi about it (turn), with cos and sin of phi/2 by their series
+    !> (rigid_rotate keeps |phi/2| below 1/64). q is normalised at the end; L_b is left as the
+    !> turns leave it. Scalars, so that the loop over bodies that calls it is vectorised.
+    pure subroutine rigid_turns(h, i1, i2, i3, l1, l2, l3, q0, q1, q2, q3, b1, b2, b3)
         !$acc routine seq
         real(wp), intent(in) :: h                        !! time increment [s]
-        real(wp), intent(in) :: inv_inertia(3)           !! inverse principal moments [1/(kg m2)]
-        real(wp), intent(in) :: l(3)                     !! angular momentum, lab frame
-        real(wp), intent(inout) :: q(4)                  !! orientation (unit quaternion)
-        real(wp), intent(out) :: lb(3)                   !! angular momentum, body frame
-        integer, parameter :: axis(5) = [1, 2, 3, 2, 1], after(3) = [2, 3, 1]
-        real(wp), parameter :: part(5) = [0.5_wp, 0.5_wp, 1.0_wp, 0.5_wp, 0.5_wp]
-        real(wp) :: r(3, 3), c, s, ch, sh, li, lj, q0, qk, qi, qj
-        integer :: n, k, i, j
-        r = rotation_matrix(q)
-        lb = [r(1, 1) * l(1) + r(2, 1) * l(2) + r(3, 1) * l(3), &
-              r(1, 2) * l(1) + r(2, 2) * l(2) + r(3, 2) * l(3), &
-              r(1, 3) * l(1) + r(2, 3) * l(2) + r(3, 3) * l(3)]     ! R(q)^T L
-        do n = 1, 5
-            k = axis(n)
-            i = after(k)
-            j = after(i)
-            call half_angle(0.5_wp * (part(n) * h) * lb(k) * inv_inertia(k), ch, sh)
-            c = (ch - sh) * (ch + sh)           ! cos(phi), sin(phi) from the half angle's
-            s = 2.0_wp * sh * ch
-            li = lb(i)
-            lj = lb(j)
-            lb(i) = c * li + s * lj
-            lb(j) = c * lj - s * li
-            q0 = q(1)
-            qk = q(k + 1)
-            qi = q(i + 1)
-            qj = q(j + 1)
-            q(1) = q0 * ch - qk * sh
-            q(k + 1) = qk * ch + q0 * sh
-            q(i + 1) = qi * ch + qj * sh
-            q(j + 1) = qj * ch - qi * sh
-        end do
-        q = quat_normalise(q)
-    end subroutine rigid_free_rotation
+        real(wp), intent(in) :: i1, i2, i3               !! inverse principal moments
+        real(wp), intent(in) :: l1, l2, l3               !! angular momentum, lab frame
+        real(wp), intent(inout) :: q0, q1, q2, q3        !! orientation (unit quaternion)
+        real(wp), intent(out) :: b1, b2, b3              !! angular momentum, body frame
+        real(wp) :: hh, hf, ch, sh, nq
+        hh = 0.5_wp * (0.5_wp * h)                       ! phi/2 per L_k/I_k: h/2 and h
+        hf = 0.5_wp * h
+        b1 = (1.0_wp - 2.0_wp * (q2**2 + q3**2)) * l1 + 2.0_wp * (q1 * q2 + q0 * q3) * l2 &
+             + 2.0_wp * (q1 * q3 - q0 * q2) * l3         ! R(q)^T L
+        b2 = 2.0_wp * (q1 * q2 - q0 * q3) * l1 + (1.0_wp - 2.0_wp * (q1**2 + q3**2)) * l2 &
+             + 2.0_wp * (q2 * q3 + q0 * q1) * l3
+        b3 = 2.0_wp * (q1 * q3 + q0 * q2) * l1 + 2.0_wp * (q2 * q3 - q0 * q1) * l2 &
+             + (1.0_wp - 2.0_wp * (q1**2 + q2**2)) * l3
+        call series(hh * b1 * i1, ch, sh)                ! axis 1, h/2
+        call turn(ch, sh, b2, b3, q0, q1, q2, q3)
+        call series(hh * b2 * i2, ch, sh)                ! axis 2, h/2
+        call turn(ch, sh, b3, b1, q0, q2, q3, q1)
+        call series(hf * b3 * i3, ch, sh)                ! axis 3, h
+        call turn(ch, sh, b1, b2, q0, q3, q1, q2)
+        call series(hh * b2 * i2, ch, sh)                ! axis 2, h/2
+        call turn(ch, sh, b3, b1, q0, q2, q3, q1)
+        call series(hh * b1 * i1, ch, sh)                ! axis 1, h/2
+        call turn(ch, sh, b2, b3, q0, q1, q2, q3)
+        nq = sqrt(q0**2 + q1**2 + q2**2 + q3**2)
+        q0 = q0 / nq
+        q1 = q1 / nq
+        q2 = q2 / nq
+        q3 = q3 / nq
+    end subroutine rigid_turns
 
-    !> cos x and sin x; below |x| = 1/64 (a turn of about 2 degrees in a step) by their Taylor
-    !> series to x^6 and x^7, whose first omitted terms, x^8/8! and x^9/9!, are below 2^-62 of
-    !> the result there (under a thousandth of a unit in its last place), without a call into
-    !> libm.
-    pure subroutine half_angle(x, c, s)
+    !> One exact turn about principal axis k by phi, given c and s of phi/2: with i, j the axes
+    !> after k in cyclic order, L_i' = cos(phi) L_i + sin(phi) L_j, L_j' = cos(phi) L_j -
+    !> sin(phi) L_i, and q' = q (c, s e_k): q0' = q0 c - qk s, qk' = qk c + q0 s,
+    !> qi' = qi c + qj s, qj' = qj c - qi s.
+    pure subroutine turn(c, s, li, lj, q0, qk, qi, qj)
+        !$acc routine seq
+        real(wp), intent(in) :: c, s
+        real(wp), intent(inout) :: li, lj, q0, qk, qi, qj
+        real(wp) :: cp, sp, a
+        cp = (c - s) * (c + s)                          ! cos(phi), sin(phi) from the half angle's
+        sp = 2.0_wp * s * c
+        a = li
+        li = cp * a + sp * lj
+        lj = cp * lj - sp * a
+        a = q0
+        q0 = a * c - qk * s
+        qk = qk * c + a * s
+        a = qi
+        qi = a * c + qj * s
+        qj = qj * c - a * s
+    end subroutine turn
+
+    !> cos x and sin x by their Taylor series to x^6 and x^7, whose first omitted terms,
+    !> x^8/8! and x^9/9!, are below 2^-62 of the result for |x| < 1/64 (under a thousandth of
+    !> a unit in its last place).
+    pure subroutine series(x, c, s)
         !$acc routine seq
         real(wp), intent(in) :: x
         real(wp), intent(out) :: c, s
         real(wp), parameter :: c2 = -1.0_wp / 2, c4 = 1.0_wp / 24, c6 = -1.0_wp / 720, &
                                s3 = -1.0_wp / 6, s5 = 1.0_wp / 120, s7 = -1.0_wp / 5040
         real(wp) :: x2
-        if (abs(x) < 0.015625_wp) then
-            x2 = x * x
-            c = 1.0_wp + x2 * (c2 + x2 * (c4 + x2 * c6))
-            s = x + x * x2 * (s3 + x2 * (s5 + x2 * s7))
-        else
-            c = cos(x)
-            s = sin(x)
-        end if
-    end subroutine half_angle
+        x2 = x * x
+        c = 1.0_wp + x2 * (c2 + x2 * (c4 + x2 * c6))
+        s = x + x * x2 * (s3 + x2 * (s5 + x2 * s7))
+    end subroutine series
 
     !> The lab-frame angular velocity w = R(q) (I^-1 R(q)^T L) of one body.
     pure function rigid_omega(q, inv_inertia, l) result(w)

@@ -157,7 +157,7 @@ contains
             call clumps_move(b%n, b%first, b%member, h, h_drift, c%gravity, c%max_speed, &
                              size(p%x, 2, ip), p%f, p%t, p%radius, p%body_x, p%body_v, &
                              p%body_q, p%body_l, p%body_inv_i, p%body_mass, p%body_offset, &
-                             p%x, p%v, p%w, n_bodies_fast)
+                             p%x, p%v, p%w, b%work, n_bodies_fast)
         end associate
         n_fast = n_fast + n_bodies_fast
     end subroutine move_bodies

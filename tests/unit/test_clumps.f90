@@ -19,7 +19,8 @@ program test_clumps
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t
     use dem_clumps, only: clump_template_t, clump_t, clump_index_t, clump_members, &
-                          clump_index_build, clumps_move, sphere_gravity, clump_energy_terms
+                          clump_index_build, clumps_move, sphere_gravity, clump_energy_terms, &
+                          work_cols
     use dem_clump_mass, only: clump_mass_compute
     use dem_particles, only: bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset, &
                              body_state_rows
@@ -143,6 +144,7 @@ contains
         real(wp), parameter :: h = 1e-4_wp, g(3) = [0.0_wp, 0.0_wp, -9.81_wp]
         real(wp), allocatable :: bx(:, :), bv(:, :), bq(:, :), bl(:, :), bi(:, :), bm(:), bo(:, :)
         real(wp) :: xs(3, m), vs(3, m), ws(3, m), f(3, m), t(3, m), d0, want
+        real(wp) :: wk(1, work_cols)
         integer(i8) :: n_fast
         integer :: step, j
         integer, parameter :: n = 1000
@@ -156,7 +158,7 @@ contains
         do step = 1, n
             call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, g, fast, &
                              3_ip, f, &
-                             t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
+                             t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, wk, n_fast)
         end do
         do j = 1, 3
             want = state(bs_x + j - 1, 1) + n * h * cl%velocity(j) + 0.5_wp * n * (n + 1) * &
@@ -175,6 +177,7 @@ contains
         real(wp), parameter :: h = 1e-3_wp, zero(3) = 0.0_wp
         real(wp), allocatable :: bx(:, :), bv(:, :), bq(:, :), bl(:, :), bi(:, :), bm(:), bo(:, :)
         real(wp) :: xs(3, m), vs(3, m), ws(3, m), f(3, m), t(3, m), fk(3), tk(3), want(3)
+        real(wp) :: wk(1, work_cols), bound_fast, bound_slow
         integer(i8) :: n_fast
         integer :: j
         call unpack(state, bx, bv, bq, bl, bi, bm, bo)
@@ -188,7 +191,7 @@ contains
         f(:, 3) = fk
         t(:, 3) = tk
         call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, fast, &
-                          3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
+                          3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, wk, n_fast)
         want = state(bs_l:bs_l + 2, 1) + h * (cross(x(:, 3) - state(bs_x:bs_x + 2, 1), fk) + tk)
         do j = 1, 3
             call assert_close(bv(j, 1), cl%velocity(j) + h * fk(j) / tpl%props%mass, 1e-13_wp, &
@@ -203,18 +206,33 @@ contains
         f(:, 1) = 5.0_wp * (x(:, 2) - x(:, 1))
         f(:, 2) = -f(:, 1)
         call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, fast, &
-                          3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
+                          3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, wk, n_fast)
         do j = 1, 3
             call assert_close(bv(j, 1), cl%velocity(j), 1e-14_wp, 'internal forces: V kept')
             call assert_close(bl(j, 1), state(bs_l + j - 1, 1), 1e-12_wp, &
                               'internal forces: L kept', atol=1e-12_wp * norm2(bl(:, 1)))
         end do
+        ! the speed guard: a bound just below, then just above, each member's speed and rim
+        ! speed after the step
+        bound_fast = minval([(max(norm2(vs(:, j)), norm2(ws(:, j)) * radius(j)), j = 1, 3)])
+        bound_slow = maxval([(max(norm2(vs(:, j)), norm2(ws(:, j)) * radius(j)), j = 1, 3)])
+        call unpack(state, bx, bv, bq, bl, bi, bm, bo)
+        call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, &
+                         0.999_wp * bound_fast, 3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, &
+                         xs, vs, ws, wk, n_fast)
+        call assert_true(n_fast == 3, 'the guard: every member at or above the bound counted')
+        call unpack(state, bx, bv, bq, bl, bi, bm, bo)
+        call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, &
+                         1.001_wp * bound_slow, 3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, &
+                         xs, vs, ws, wk, n_fast)
+        call assert_true(n_fast == 0, 'the guard: no member below the bound counted')
     end subroutine lever_kick
 
     subroutine free_rotation()
         real(wp), parameter :: h = 1e-7_wp, zero(3) = 0.0_wp
         real(wp), allocatable :: bx(:, :), bv(:, :), bq(:, :), bl(:, :), bi(:, :), bm(:), bo(:, :)
         real(wp) :: xs(3, m), vs(3, m), ws(3, m), f(3, m), t(3, m), l0(3), e0, e, worst, d0
+        real(wp) :: wk(1, work_cols)
         integer(i8) :: n_fast
         integer :: step
         call unpack(state, bx, bv, bq, bl, bi, bm, bo)
@@ -230,7 +248,7 @@ contains
         do step = 1, 100000
             call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, zero, fast, &
                              3_ip, f, &
-                             t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, n_fast)
+                             t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, wk, n_fast)
             e = 0.5_wp * dot_product(ws(:, 1), bl(:, 1))
             worst = max(worst, abs(e - e0) / e0)
         end do

@@ -3,6 +3,9 @@
 !> (doc/theory.md, section 5.1):
 !> - the quaternion helpers: a rotation and its inverse, the product as composition, the
 !>   quaternion of a rotation matrix;
+!> - a body turning too fast for the half angle's series in one step: turned in m sub-steps,
+!>   the same bits as m steps of h/m, whichever bodies are turned beside it; its energy within
+!>   the bound of the modified energy for h/m;
 !> - free rotation of an asymmetric top (I = 1, 2, 3): the lab-frame angular momentum kept to
 !>   the bit, the energy within the bound of the modified energy and without drift, and the
 !>   period of the body-frame motion that of the Jacobi elliptic solution (Landau & Lifshitz,
@@ -17,7 +20,7 @@
 !>   order 2, symplectic Euler at order 1, against a fine Runge-Kutta solution.
 program test_rigid
     use dem_kinds, only: wp, ip, i8
-    use dem_rigid, only: rigid_kick, rigid_kick_drift, rigid_omega, quat_product, &
+    use dem_rigid, only: rigid_rotate, rigid_room, rigid_omega, quat_product, &
                          quat_conjugate, quat_to_lab, quat_to_body, quat_normalise, &
                          quat_from_matrix
     use dem_integrate, only: kick
@@ -36,6 +39,7 @@ program test_rigid
     call helpers()
     call from_matrix()
     call asymmetric_top()
+    call sub_steps()
     call jacobi_period([1.0_wp, 0.5_wp, 0.8_wp], 'asymmetric top')
     call jacobi_period([0.1_wp, 1.0_wp, 0.1_wp], 'near the intermediate axis (flips)')
     call symmetric_top()
@@ -108,6 +112,29 @@ contains
         end do
     end subroutine helpers
 
+    !> One body's L += h T, its free rotation over h_drift (rigid_rotate), and w = R I^-1 L_b,
+    !> as dem_clumps' clumps_move does them (dem_integrate's kick_drift, for a body).
+    subroutine kick_drift(h, h_drift, inv_inertia, t, q, l, w)
+        real(wp), intent(in) :: h, h_drift, inv_inertia(3, 1), t(3, 1)
+        real(wp), intent(inout) :: q(4, 1), l(3, 1)
+        real(wp), intent(out) :: w(3, 1)
+        real(wp) :: qr(1, 4), lb(1, 3), room(1, rigid_room)
+        l = l + h * t
+        qr(1, :) = q(:, 1)
+        call rigid_rotate(1_ip, h_drift, transpose(inv_inertia), transpose(l), qr, lb, room)
+        q(:, 1) = qr(1, :)
+        w(:, 1) = quat_to_lab(q(:, 1), inv_inertia(:, 1) * lb(1, :))
+    end subroutine kick_drift
+
+    !> One body's L += h T and w = R(q) I^-1 R(q)^T L (dem_integrate's kick, for a body).
+    subroutine kick_body(h, inv_inertia, t, q, l, w)
+        real(wp), intent(in) :: h, inv_inertia(3, 1), t(3, 1), q(4, 1)
+        real(wp), intent(inout) :: l(3, 1)
+        real(wp), intent(out) :: w(3, 1)
+        l = l + h * t
+        w(:, 1) = rigid_omega(q(:, 1), inv_inertia(:, 1), l(:, 1))
+    end subroutine kick_body
+
     !> n steps of free rotation (no torque) of one body.
     subroutine free_steps(n, h, inv_inertia, q, l, w)
         integer(i8), intent(in) :: n
@@ -115,7 +142,7 @@ contains
         real(wp), intent(inout) :: q(4, 1), l(3, 1), w(3, 1)
         integer(i8) :: step
         do step = 1, n
-            call rigid_kick_drift(1_ip, h, h, inv_inertia, zero3, q, l, w)
+            call kick_drift(h, h, inv_inertia, zero3, q, l, w)
         end do
     end subroutine free_steps
 
@@ -148,6 +175,50 @@ contains
                           'asymmetric top: energy error of second order')
     end subroutine asymmetric_top
 
+    !> rigid_rotate's sub-steps (doc/theory.md, section 5.1). Bodies of I = (1, 2, 3) at
+    !> h = 0.01 s: |L| = 40 (bound 0.5 h |L| / I_1 = 0.2, so m = 16 sub-steps), |L| = 6 (0.03,
+    !> m = 2) and |L| = 1 (0.005, m = 1: one pass). In one call, each body gets the bits of m
+    !> calls of h/m for it alone (each of those one pass); the fast body's energy over 2000 steps
+    !> stays within the bound of the modified energy for h/16.
+    subroutine sub_steps()
+        integer, parameter :: nb = 3
+        integer, parameter :: subs(nb) = [16, 2, 1]
+        real(wp), parameter :: h = 0.01_wp, inertia(3) = [1.0_wp, 2.0_wp, 3.0_wp]
+        real(wp), parameter :: l_size(nb) = [40.0_wp, 6.0_wp, 1.0_wp]
+        real(wp) :: inv(nb, 3), l(nb, 3), q(nb, 4), lb(nb, 3), room(nb, rigid_room)
+        real(wp) :: q1(1, 4), lb1(1, 3), room1(1, rigid_room), e, e0, bound, dev
+        integer :: k, j
+        do k = 1, nb
+            inv(k, :) = 1.0_wp / inertia
+            l(k, :) = l_size(k) * quat_to_lab(q_general, [0.3_wp, 0.9_wp, 0.316_wp]) &
+                      / norm2([0.3_wp, 0.9_wp, 0.316_wp])
+            q(k, :) = q_general
+        end do
+        call rigid_rotate(int(nb, ip), h, inv, l, q, lb, room)
+        do k = 1, nb
+            q1(1, :) = q_general
+            do j = 1, subs(k)
+                call rigid_rotate(1_ip, h / subs(k), inv(k:k, :), l(k:k, :), q1, lb1, room1)
+                call assert_true(room1(1, 9) == 1.0_wp, 'sub-steps: h/m in one pass')
+            end do
+            call assert_true(room(k, 9) == subs(k), 'sub-steps: m from the bound')
+            call assert_true(all(q(k, :) == q1(1, :)) .and. all(lb(k, :) == lb1(1, :)), &
+                             'sub-steps: the bits of m steps of h/m, beside other bodies')
+        end do
+        q1(1, :) = q_general
+        e0 = 0.5_wp * sum(quat_to_body(q_general, l(1, :))**2 / inertia)
+        dev = 0.0_wp
+        do j = 1, 2000
+            call rigid_rotate(1_ip, h, inv(1:1, :), l(1:1, :), q1, lb1, room1)
+            e = 0.5_wp * sum(lb1(1, :)**2 / inertia)
+            dev = max(dev, abs(e - e0))
+        end do
+        bound = 13.0_wp / (12.0_wp * sqrt(3.0_wp)) * (h / subs(1))**2 * l_size(1)**4 &
+                / minval(inertia)**3 + 1.0e-13_wp * e0
+        call assert_true(dev <= bound, 'sub-steps: energy within the bound for h/m')
+        print '(a,es10.3,a,es10.3)', 'sub-steps: energy deviation ', dev, ', bound ', bound
+    end subroutine sub_steps
+
     !> The range of the energy of the asymmetric top over t_end with step h, its bounds asserted.
     real(wp) function energy_range(h, t_end)
         real(wp), intent(in) :: h, t_end
@@ -165,7 +236,7 @@ contains
         e_max = e0
         mean = 0.0_wp
         do step = 1, n
-            call rigid_kick_drift(1_ip, h, h, inv_inertia, zero3, q, l, w)
+            call kick_drift(h, h, inv_inertia, zero3, q, l, w)
             e = energy(q(:, 1), inv_inertia(:, 1), l(:, 1))
             e_min = min(e_min, e)
             e_max = max(e_max, e)
@@ -218,7 +289,7 @@ contains
         t_first = 0.0_wp
         t_last = 0.0_wp
         do step = 1, nint(t_end / h, i8)
-            call rigid_kick_drift(1_ip, h, h, inv_inertia, zero3, q, l, w)
+            call kick_drift(h, h, inv_inertia, zero3, q, l, w)
             lb_new = lb2(q(:, 1), l(:, 1))
             if (lb_old < 0.0_wp .and. lb_new >= 0.0_wp) then
                 t_cross = h * (step - 1 + lb_old / (lb_old - lb_new))
@@ -277,7 +348,7 @@ contains
         precession = 0.0_wp
         angle_old = 0.0_wp
         do step = 1, nint(t_end / h, i8)
-            call rigid_kick_drift(1_ip, h, h, inv_inertia, zero3, q, l, w)
+            call kick_drift(h, h, inv_inertia, zero3, q, l, w)
             wb = quat_to_body(q(:, 1), w(:, 1))
             angle = atan2(wb(2), wb(1))
             precession = precession + modulo(angle - angle_old + pi, 2.0_wp * pi) - pi
@@ -370,7 +441,7 @@ contains
         v_unused = 0.0_wp
         do step = 1, 100
             t(:, 1) = [sin(real(step, wp)), cos(2.0_wp * step), 0.3_wp]
-            call rigid_kick_drift(1_ip, h, h, inv_inertia, t, q, l, w)
+            call kick_drift(h, h, inv_inertia, t, q, l, w)
             call kick(1_ip, h, [1.0_wp], [1.0_wp / inertia], zero3, t, [1.0_wp], 1.0e100_wp, &
                       v_unused, ws, n_fast)
         end do
@@ -400,10 +471,10 @@ contains
             l = 0.0_wp
             do step = 1, n
                 if (scheme == 1) then
-                    call rigid_kick_drift(1_ip, h, h, inv_inertia, t, q, l, w)
+                    call kick_drift(h, h, inv_inertia, t, q, l, w)
                 else
-                    call rigid_kick_drift(1_ip, 0.5_wp * h, h, inv_inertia, t, q, l, w)
-                    call rigid_kick(1_ip, 0.5_wp * h, inv_inertia, t, q, l, w)
+                    call kick_drift(0.5_wp * h, h, inv_inertia, t, q, l, w)
+                    call kick_body(0.5_wp * h, inv_inertia, t, q, l, w)
                 end if
             end do
             r = quat_product(quat_conjugate(q_general), q(:, 1))
@@ -471,11 +542,11 @@ contains
         do step = 1, nint(pend_t_end / h)
             if (scheme == 1) then
                 t(:, 1) = torque(q(:, 1))
-                call rigid_kick_drift(1_ip, h, h, inv_inertia, t, q, l, w)
+                call kick_drift(h, h, inv_inertia, t, q, l, w)
             else
-                call rigid_kick_drift(1_ip, 0.5_wp * h, h, inv_inertia, t, q, l, w)
+                call kick_drift(0.5_wp * h, h, inv_inertia, t, q, l, w)
                 t(:, 1) = torque(q(:, 1))
-                call rigid_kick(1_ip, 0.5_wp * h, inv_inertia, t, q, l, w)
+                call kick_body(0.5_wp * h, inv_inertia, t, q, l, w)
             end if
         end do
         state = [angle(q(:, 1)), dot_product(w(:, 1), a)]
