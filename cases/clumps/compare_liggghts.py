@@ -16,7 +16,7 @@ to doc/figures/clumps_liggghts_impact.png and doc/figures/clumps_liggghts_bin.pn
    velocity (fitted to the three members' positions and velocities, the same way for both
    codes) and compared over 20 ms.
 2. bin.liggghts / bin.nml: for each seed, LIGGGHTS fills the bin with 3000 clumps and
-   empties it; its state at the opening (fill.txt) is converted to &clump groups and dem
+   empties it; its state at the opening (fill.txt) is converted to an &clump_file and dem
    empties the same bin from it. The discharge rate (clumps per second) is the slope of the
    count of members above the floor, over the steady window, divided by three.
 
@@ -260,12 +260,14 @@ def plot_impact(ours, theirs):
 # ---- 2. a bin emptied ---------------------------------------------------------------------
 
 def clumps_from_fill(path):
-    """&clump groups of the bodies of a LIGGGHTS fill (members of a body: consecutive ids)."""
+    """The bodies of a LIGGGHTS fill (members of a body: consecutive ids) as the lines of an
+    &clump_file (template, centre of mass, orientation, velocity, angular velocity), and
+    their number."""
     members = vee(0.75)[0]
     rows = list(dump_snapshots(path))[-1][1]
     if rows.shape[0] % 3 or not np.array_equal(rows[:, 0], np.arange(1, rows.shape[0] + 1)):
         sys.exit(f"{path}: the members are not three consecutive ids a body")
-    lines = []
+    lines = ["template,x,y,z,q0,q1,q2,q3,vx,vy,vz,wx,wy,wz\n"]
     for b in range(rows.shape[0] // 3):
         member_rows = rows[3 * b:3 * b + 3]
         w = member_rows[0, 7:10]
@@ -273,12 +275,22 @@ def clumps_from_fill(path):
                                             w)
         if misfit > 1e-9:
             sys.exit(f"{path}: body {b + 1}'s members are not the template's ({misfit:.1e} m)")
-        q = quaternion(rot)
-        fmt = lambda a: ", ".join(repr(float(t)) for t in a)
-        lines.append(f"&clump template = 'vee', position = {fmt(centre)},\n"
-                     f"    orientation = {fmt(q)},\n"
-                     f"    velocity = {fmt(vel)}, angular_velocity = {fmt(w)} /\n")
+        values = np.concatenate([centre, quaternion(rot), vel, w])
+        lines.append("vee," + ",".join(repr(float(t)) for t in values) + "\n")
     return "".join(lines), rows.shape[0] // 3
+
+
+def bin_case(work, fill):
+    """bin.nml in `work`, its output there, with the clumps of LIGGGHTS's fill (clumps.csv);
+    the case's path and the number of clumps."""
+    table, n_bodies = clumps_from_fill(fill)
+    open(os.path.join(work, "clumps.csv"), "w").write(table)
+    head = open(os.path.join(HERE, "bin.nml")).read().replace(
+        "'bin_floor.stl'", f"'{os.path.join(HERE, 'bin_floor.stl')}'").replace(
+        "&output interval", f"&output dir = '{work}', interval")
+    case = os.path.join(work, "bin.nml")
+    open(case, "w").write(head + "&clump_file file = 'clumps.csv' /\n")
+    return case, n_bodies
 
 
 def rate(t, members_above):
@@ -297,12 +309,7 @@ def emptying(dem, seeds, log, summary):
         count = np.loadtxt(os.path.join(work_l, "count.txt"), comments="#")
         t_l, n_l = count[:, 0] * 2e-5, count[:, 1]
         work_d = fresh(os.path.join(OUT, f"bin_{seed}"))
-        groups, n_bodies = clumps_from_fill(os.path.join(work_l, "fill.txt"))
-        head = open(os.path.join(HERE, "bin.nml")).read().replace(
-            "'bin_floor.stl'", f"'{os.path.join(HERE, 'bin_floor.stl')}'").replace(
-            "&output interval", f"&output dir = '{work_d}', interval")
-        case = os.path.join(work_d, "bin.nml")
-        open(case, "w").write(head + groups)
+        case, n_bodies = bin_case(work_d, os.path.join(work_l, "fill.txt"))
         run_dem(dem, case, work_d, log)
         probes = np.genfromtxt(os.path.join(work_d, "probes.csv"), delimiter=",", names=True)
         t_d, n_d = probes["time"], probes["above_grain"]

@@ -307,14 +307,16 @@ contains
                 i = member(m)
                 r = rm(:, 1) * body_offset(1, i) + rm(:, 2) * body_offset(2, i) &
                     + rm(:, 3) * body_offset(3, i)
-                if (h_drift > 0.0_wp) x(:, i) = xb + r
+                if (h_drift > 0.0_wp) then               ! (a kick alone moves nothing)
+                    x(:, i) = xb + r
+                    body_x(:, i) = xb
+                    body_q(:, i) = qb
+                end if
                 v(1, i) = vb(1) + (wb(2) * r(3) - wb(3) * r(2))
                 v(2, i) = vb(2) + (wb(3) * r(1) - wb(1) * r(3))
                 v(3, i) = vb(3) + (wb(1) * r(2) - wb(2) * r(1))
                 w(:, i) = wb
-                body_x(:, i) = xb
                 body_v(:, i) = vb
-                body_q(:, i) = qb
                 body_l(:, i) = lb
                 if (.not. (v(1, i)**2 + v(2, i)**2 + v(3, i)**2 < b2 &
                            .and. w2 * radius(i)**2 < b2)) n_fast = n_fast + 1   ! (or not finite)
