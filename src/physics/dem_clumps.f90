@@ -22,7 +22,7 @@ module dem_clumps
     private
     public :: clump_template_t, clump_t, clump_index_t, clump_members, clump_index_build, &
               clump_index_free, clumps_move, clump_energy_terms, sphere_gravity, clump_reach, &
-              clump_probe_view, clumps_in_spheres, clump_deposit_mass, work_cols
+              clump_centres, clump_probe_view, clumps_in_spheres, clump_deposit_mass, work_cols
 
     !> A clump template: its member spheres and its mass properties.
     type :: clump_template_t
@@ -326,30 +326,52 @@ contains
 
 
     !> Where the particles 1..n are for the domain (dem_domain: blocks, ranks and ghosts) and
-    !> how far they reach: a sphere at x with its radius; a member at its body's centre, with
-    !> the radius of the sphere about it that holds the member, |b_m| + R, so that all of a
-    !> body's members go to the rank of its centre and every pair that can touch is on the
-    !> ranks of both. On the device (xd and rd created there).
+    !> how far they reach: a sphere at x with its radius; a member at its body's centre
+    !> (clump_centres), with the radius of the sphere about it that holds the member,
+    !> |b_m| + R, so that all of a body's members go to the rank of its centre and every pair
+    !> that can touch is on the ranks of both. On the device (xd and rd created there).
     subroutine clump_reach(n, body, x, radius, body_x, body_offset, xd, rd)
         integer(ip), intent(in) :: n
         integer(i8), intent(in) :: body(:)
         real(wp), intent(in) :: x(:, :), radius(:), body_x(:, :), body_offset(:, :)
         real(wp), allocatable, intent(out) :: xd(:, :), rd(:)
         integer(ip) :: i
-        allocate(xd(3, max(1, n)), rd(max(1, n)))
-        call acc_data(xd, acc_create)
+        call clump_centres(n, body, x, body_x, xd)
+        allocate(rd(max(1, n)))
         call acc_data(rd, acc_create)
         !$acc parallel loop gang vector default(present)
         do i = 1, n
             if (body(i) == 0) then
-                xd(:, i) = x(:, i)
                 rd(i) = radius(i)
             else
-                xd(:, i) = body_x(:, i)
                 rd(i) = radius(i) + norm2(body_offset(:, i))
             end if
         end do
     end subroutine clump_reach
+
+    !> The centres of the particles 1..n: a sphere's x, a member's body's centre (what an
+    !> outlet tests). On the device (xd created there).
+    subroutine clump_centres(n, body, x, body_x, xd)
+        integer(ip), intent(in) :: n
+        integer(i8), intent(in) :: body(:)
+        real(wp), intent(in) :: x(:, :), body_x(:, :)
+        real(wp), allocatable, intent(out) :: xd(:, :)
+        integer(ip) :: i
+        allocate(xd(3, max(1, n)))
+        call acc_data(xd, acc_create)
+        !$acc parallel loop gang vector default(present)
+        do i = 1, n
+            if (body(i) == 0) then
+                xd(1, i) = x(1, i)
+                xd(2, i) = x(2, i)
+                xd(3, i) = x(3, i)
+            else
+                xd(1, i) = body_x(1, i)
+                xd(2, i) = body_x(2, i)
+                xd(3, i) = body_x(3, i)
+            end if
+        end do
+    end subroutine clump_centres
 
     !> The masses and positions the probes weigh particles 1..n by (dem_probes): a sphere's
     !> own; a clump's first member (its id the body's) the body's mass at its centre of mass,

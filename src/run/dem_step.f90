@@ -19,7 +19,7 @@ module dem_step
     use dem_neighbors, only: neighbors_data
     use dem_contacts_pw, only: pw_forces
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, kick_drift
-    use dem_clumps, only: clumps_move, sphere_gravity, clump_reach, clump_index_build, &
+    use dem_clumps, only: clumps_move, sphere_gravity, clump_centres, clump_index_build, &
                           clump_probe_view
     use dem_mesh, only: mesh_move
     use dem_outlets, only: outlets_mark, outlets_mass
@@ -272,7 +272,7 @@ contains
         type(case_t), intent(in) :: c
         integer(i8) :: n_fresh(1)
         integer :: mine
-        real(wp), allocatable :: xd(:, :), rd(:), pm(:), px(:, :)
+        real(wp), allocatable :: xd(:, :), pm(:), px(:, :)
         if (.not. allocated(s%gone)) then
             allocate(s%gone(s%p%n_own), s%fresh(s%p%n_own))
             s%gone = .false.
@@ -281,10 +281,9 @@ contains
         end if
         associate (p => s%p, n => s%p%n_own)
             if (allocated(p%body)) then       ! a clump leaves whole, with its centre
-                call clump_reach(n, p%body, p%x, p%radius, p%body_x, p%body_offset, xd, rd)
+                call clump_centres(n, p%body, p%x, p%body_x, xd)
                 n_fresh = outlets_mark(n, xd, c%outlets, s%gone, s%fresh)
                 call acc_data(xd, acc_exit)
-                call acc_data(rd, acc_exit)
             else
                 n_fresh = outlets_mark(n, p%x, c%outlets, s%gone, s%fresh)
             end if
