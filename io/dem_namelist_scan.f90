@@ -52,10 +52,10 @@ contains
         character(len=*), intent(in) :: path
         type(nml_file_t), intent(out) :: nf
         type(error_t), intent(inout) :: err
-        character(len=:), allocatable :: line, body
+        character(len=:), allocatable :: line, body, text
         character(len=16) :: num
         character :: quote, ch
-        integer :: u, ios, lineno, k, start_line, n
+        integer :: u, ios, lineno, k, start_line, n_blocks, n_text
         logical :: in_group
         type(nml_block_t), allocatable :: tmp(:)
         integer, allocatable :: breaks(:)
@@ -63,6 +63,9 @@ contains
         nf%path = path
         nf%text = ''
         allocate(nf%blocks(0))
+        n_blocks = 0          ! (nf%blocks and text grow by doubling; finish() trims them)
+        n_text = 0
+        allocate(character(len=4096) :: text)
         if (input_file_problem(path) /= '') then
             call set_error(err, dem_err_input, path // ': the namelist file ' // &
                            input_file_problem(path))
@@ -83,7 +86,7 @@ contains
             call read_line(u, line, ios)
             if (ios /= 0) exit
             if (lineno == 0) line = without_bom(line)
-            nf%text = nf%text // line // new_line('a')
+            call add_text(line // new_line('a'))
             lineno = lineno + 1
             write(num, '(i0)') lineno
             k = 0
@@ -102,6 +105,7 @@ contains
                         call set_error(err, dem_err_input, path // ':' // trim(num) // &
                             ': text outside a namelist group (groups start with &name)')
                         close(u)
+                        call finish()
                         return
                     end if
                     in_group = .true.
@@ -120,6 +124,7 @@ contains
                 else if (ch == '&' .or. ch == '$') then     ! a group opens: this one is open
                     call not_closed(line(k:))
                     close(u)
+                    call finish()
                     return
                 else if (ch == achar(9) .or. ch == achar(13)) then
                     body = body // ' '
@@ -133,22 +138,45 @@ contains
             end if
         end do
         close(u)
+        call finish()
         if (in_group) then
             write(num, '(i0)') start_line
             call set_error(err, dem_err_input, path // ':' // trim(num) // ': group &' // &
                            group_name(body) // " is not closed with '/'")
         end if
     contains
+        !> The group in `body` as the next block.
         subroutine add_block()
-            n = size(nf%blocks)
-            allocate(tmp(n + 1))
-            tmp(1:n) = nf%blocks
-            tmp(n + 1)%group = group_name(body)
-            tmp(n + 1)%text = body
-            tmp(n + 1)%line = start_line
-            tmp(n + 1)%breaks = breaks
-            call move_alloc(tmp, nf%blocks)
+            if (n_blocks == size(nf%blocks)) then
+                allocate(tmp(max(16, 2 * n_blocks)))
+                tmp(1:n_blocks) = nf%blocks
+                call move_alloc(tmp, nf%blocks)
+            end if
+            n_blocks = n_blocks + 1
+            nf%blocks(n_blocks)%group = group_name(body)
+            nf%blocks(n_blocks)%text = body
+            nf%blocks(n_blocks)%line = start_line
+            nf%blocks(n_blocks)%breaks = breaks
         end subroutine add_block
+
+        !> `piece` appended to the file's text.
+        subroutine add_text(piece)
+            character(len=*), intent(in) :: piece
+            character(len=:), allocatable :: grown
+            if (n_text + len(piece) > len(text)) then
+                allocate(character(len=max(2 * len(text), n_text + len(piece))) :: grown)
+                grown(1:n_text) = text(1:n_text)
+                call move_alloc(grown, text)
+            end if
+            text(n_text + 1:n_text + len(piece)) = piece
+            n_text = n_text + len(piece)
+        end subroutine add_text
+
+        !> nf's text and blocks at their lengths.
+        subroutine finish()
+            nf%text = text(1:n_text)
+            nf%blocks = nf%blocks(1:n_blocks)
+        end subroutine finish
 
         !> The error for the group in `body`, open where `rest` (from '&' or '$') starts.
         subroutine not_closed(rest)
