@@ -217,6 +217,14 @@ check(all(a < b for a, b in zip([0] + steps[:-1], steps[:-1])) and steps and
       f"run-chain: checkpoint steps {steps} do not increase to {N_END}")
 check(r.stdout.count("dem: the wall-time limit is near") == len(runs) - 1,
       "run-chain: every stop but the last is dem's wall-time stop")
+# each run's CPU time: the runs together do at least the reference's time loop (its CPU
+# time less dem's start and end, which every run pays again), and no run takes more CPU time
+# than its wall time (one rank) and a second
+times = [(float(w), float(c)) for w, c in
+         re.findall(r"^run-chain: times of run \d+: wall (\d+) s, CPU ([\d.]+) s", r.stdout, re.M)]
+check(len(times) == len(runs) and sum(c for _, c in times) >= 0.5 * cpu and
+      all(c <= w + 1.0 for w, c in times),
+      f"run-chain: CPU times {times} against the reference's {cpu:.2f} s")
 check_same_end("chain", "run-chain")
 snaps = sorted(os.listdir(out("ref", "snapshots")))
 check(snaps == sorted(os.listdir(out("chain", "snapshots"))) and
