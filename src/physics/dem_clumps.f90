@@ -336,9 +336,10 @@ contains
         real(wp), intent(in) :: x(:, :), radius(:), body_x(:, :), body_offset(:, :)
         real(wp), allocatable, intent(out) :: xd(:, :), rd(:)
         integer(ip) :: i
-        call clump_centres(n, body, x, body_x, xd)
-        allocate(rd(max(1, n)))
+        allocate(xd(3, max(1, n)), rd(max(1, n)))
+        call acc_data(xd, acc_create)
         call acc_data(rd, acc_create)
+        call clump_centres(n, body, x, body_x, xd)
         !$acc parallel loop gang vector default(present)
         do i = 1, n
             if (body(i) == 0) then
@@ -349,16 +350,14 @@ contains
         end do
     end subroutine clump_reach
 
-    !> The centres of the particles 1..n: a sphere's x, a member's body's centre (what an
-    !> outlet tests). On the device (xd created there).
+    !> xd(:, i): the centre of particle i = 1..n, a sphere's x, a member's body's centre (what
+    !> an outlet tests). On the device.
     subroutine clump_centres(n, body, x, body_x, xd)
         integer(ip), intent(in) :: n
         integer(i8), intent(in) :: body(:)
         real(wp), intent(in) :: x(:, :), body_x(:, :)
-        real(wp), allocatable, intent(out) :: xd(:, :)
+        real(wp), intent(inout) :: xd(:, :)
         integer(ip) :: i
-        allocate(xd(3, max(1, n)))
-        call acc_data(xd, acc_create)
         !$acc parallel loop gang vector default(present)
         do i = 1, n
             if (body(i) == 0) then

@@ -138,6 +138,8 @@ module dem_run_state
         logical :: fields_due = .false.   !< the next force evaluation is sampled by one
         logical, allocatable :: gone(:)  !< outlet flags of the owned particles, on the device
         logical, allocatable :: fresh(:) !< those flagged at the last step
+        real(wp), allocatable :: centres(:, :)  !< with clumps: where the outlets test the
+                                         !< owned particles (dem_clumps' clump_centres)
         type(frame_t) :: good          !< the last state that passed the instability guard
         integer(i8), allocatable :: snap_step(:), snap_n(:)  !< snapshots written
         integer(i8), allocatable :: snap_bonds(:)  !< their intact bonds
@@ -305,11 +307,15 @@ contains
         call acc_data(m%wall_c, op)
     end subroutine wall_motion_data
 
-    !> Take the outlet flags off the device and free them.
+    !> Take the outlet flags (and the clumps' centres) off the device and free them.
     subroutine release_gone(s)
         type(solver_t), intent(inout) :: s
         call acc_data(s%fresh, acc_exit)
         call acc_data(s%gone, acc_exit)
         deallocate(s%gone, s%fresh)
+        if (allocated(s%centres)) then
+            call acc_data(s%centres, acc_exit)
+            deallocate(s%centres)
+        end if
     end subroutine release_gone
 end module dem_run_state

@@ -272,18 +272,21 @@ contains
         type(case_t), intent(in) :: c
         integer(i8) :: n_fresh(1)
         integer :: mine
-        real(wp), allocatable :: xd(:, :), pm(:), px(:, :)
+        real(wp), allocatable :: pm(:), px(:, :)
         if (.not. allocated(s%gone)) then
             allocate(s%gone(s%p%n_own), s%fresh(s%p%n_own))
             s%gone = .false.
             call acc_data(s%gone, acc_enter)
             call acc_data(s%fresh, acc_create)
+            if (allocated(s%p%body)) then
+                allocate(s%centres(3, max(1, s%p%n_own)))
+                call acc_data(s%centres, acc_create)
+            end if
         end if
         associate (p => s%p, n => s%p%n_own)
             if (allocated(p%body)) then       ! a clump leaves whole, with its centre
-                call clump_centres(n, p%body, p%x, p%body_x, xd)
-                n_fresh = outlets_mark(n, xd, c%outlets, s%gone, s%fresh)
-                call acc_data(xd, acc_exit)
+                call clump_centres(n, p%body, p%x, p%body_x, s%centres)
+                n_fresh = outlets_mark(n, s%centres, c%outlets, s%gone, s%fresh)
             else
                 n_fresh = outlets_mark(n, p%x, c%outlets, s%gone, s%fresh)
             end if
