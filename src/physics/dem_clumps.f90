@@ -21,8 +21,9 @@ module dem_clumps
     implicit none
     private
     public :: clump_template_t, clump_t, clump_index_t, clump_members, clump_index_build, &
-              clump_index_free, clumps_move, clump_energy_terms, sphere_gravity, clump_reach, &
-              clump_centres, clump_probe_view, clumps_in_spheres, clump_deposit_mass, work_cols
+              clump_index_free, clumps_kick, clumps_move, clump_energy_terms, sphere_gravity, &
+              clump_reach, clump_centres, clump_probe_view, clumps_in_spheres, &
+              clump_deposit_mass, work_cols
 
     !> A clump template: its member spheres and its mass properties.
     type :: clump_template_t
@@ -50,8 +51,8 @@ module dem_clumps
     end type clump_t
 
     !> The bodies a rank owns: body k's members are member(first(k) .. first(k + 1) - 1), in
-    !> the order of their ids; work(k, :) is clumps_move's room for body k (on the device too,
-    !> when the particles are there).
+    !> the order of their ids; work(k, :) is clumps_kick's and clumps_move's room for
+    !> body k (on the device too, when the particles are there).
     type :: clump_index_t
         integer(ip) :: n = 0
         integer(ip), allocatable :: first(:)
@@ -222,37 +223,27 @@ contains
         end do
     end function sort_order
 
-    !> The bodies of the index kicked by their forces and torques over h, and, with h_drift >
-    !> 0, moved and turned over h_drift (dem_integrate's kick and kick_drift, for bodies):
-    !> F = M g + sum of the members' forces, T = sum of (x_m - X) x f_m + t_m, each summed in
-    !> the order of the members' ids; V += h F / M, L += h T, X += h_drift V, then the free
-    !> rotation of (q, L) over h_drift (dem_rigid's rigid_rotate, all bodies in one call, on
-    !> the columns of `work`); the members then take the body's state, their centres
-    !> X + R(q) b_m, their velocities V + w x R(q) b_m and angular velocity
-    !> w = R(q) I^-1 R(q)^T L. n_fast counts the members whose new speed or rim speed is not
-    !> below `bound`, or not finite (the speed guard, as dem_integrate's). The vector algebra
-    !> is written out (a call into another module is not inlined). Explicit-shape arrays of
-    !> the store's np places.
-    subroutine clumps_move(nb, first, member, h, h_drift, gravity, bound, np, f, t, radius, &
-                           body_x, body_v, body_q, body_l, body_inv_i, body_mass, body_offset, &
-                           x, v, w, work, n_fast)
+    !> The bodies of the index kicked by their forces and torques over h and, with h_drift >
+    !> 0, their centres moved over h_drift (dem_integrate's kick and kick_drift, for bodies;
+    !> clumps_move then turns them and places their members): F = M g + sum of the members'
+    !> forces, T = sum of (x_m - X) x f_m + t_m, each summed in the order of the members'
+    !> ids, with the members where the bodies' state puts them (so before any drift of the
+    !> step); V += h F / M, L += h T, X += h_drift V. The columns w_l, w_inv and w_q of `work`
+    !> take each body's L, inverse moments and q. The vector algebra is written out (a call
+    !> into another module is not inlined). Explicit-shape arrays of the store's np places.
+    subroutine clumps_kick(nb, first, member, h, h_drift, gravity, np, f, t, x, body_x, &
+                           body_v, body_q, body_l, body_inv_i, body_mass, work)
         integer(ip), intent(in) :: nb, np
         integer(ip), intent(in) :: first(nb + 1), member(first(nb + 1) - 1)
         real(wp), intent(in) :: h, h_drift              !! [s]
         real(wp), intent(in) :: gravity(3)              !! [m/s^2]
-        real(wp), intent(in) :: bound                   !! [m/s]
         real(wp), intent(in) :: f(3, np), t(3, np)      !! the members' [N], [N m]
-        real(wp), intent(in) :: radius(np)              !! [m]
-        real(wp), intent(inout) :: body_x(3, np), body_v(3, np), body_q(4, np), body_l(3, np)
-        real(wp), intent(in) :: body_inv_i(3, np), body_mass(np), body_offset(3, np)
-        real(wp), intent(inout) :: x(3, np), v(3, np), w(3, np)
+        real(wp), intent(in) :: x(3, np)                !! [m]
+        real(wp), intent(inout) :: body_x(3, np), body_v(3, np), body_l(3, np)
+        real(wp), intent(in) :: body_q(4, np), body_inv_i(3, np), body_mass(np)
         real(wp), intent(inout) :: work(nb, work_cols)  !! clump_index_t's
-        integer(i8), intent(out) :: n_fast
-        real(wp) :: fb(3), tb(3), xb(3), vb(3), qb(4), lb(3), wb(3), r(3), d(3), rm(3, 3), &
-                    a(3), b2, mb, w2
+        real(wp) :: fb(3), tb(3), xb(3), vb(3), lb(3), d(3), mb
         integer(ip) :: k, m, i, i0
-        b2 = bound**2
-        n_fast = 0
         !$acc parallel loop gang vector default(present) copyin(gravity) &
         !$acc private(fb, tb, xb, vb, lb, d, mb, m, i, i0)
         do k = 1, nb
@@ -279,6 +270,31 @@ contains
             work(k, w_inv:w_inv + 2) = body_inv_i(:, i0)
             work(k, w_q:w_q + 3) = body_q(:, i0)
         end do
+    end subroutine clumps_kick
+
+    !> After clumps_kick, with h_drift > 0, the free rotation of the bodies' (q, L) over
+    !> h_drift (dem_rigid's rigid_rotate, all bodies in one call, on the columns of `work`);
+    !> then the members take their body's state: their centres X + R(q) b_m (with h_drift >
+    !> 0; a kick alone moves nothing), their velocities V + w x R(q) b_m and angular velocity
+    !> w = R(q) I^-1 R(q)^T L. n_fast counts the members whose new speed or rim speed is not
+    !> below `bound`, or not finite (the speed guard, as dem_integrate's). Explicit-shape
+    !> arrays of the store's np places.
+    subroutine clumps_move(nb, first, member, h_drift, bound, np, radius, body_x, body_v, &
+                           body_q, body_l, body_inv_i, body_offset, x, v, w, work, n_fast)
+        integer(ip), intent(in) :: nb, np
+        integer(ip), intent(in) :: first(nb + 1), member(first(nb + 1) - 1)
+        real(wp), intent(in) :: h_drift                 !! [s]
+        real(wp), intent(in) :: bound                   !! [m/s]
+        real(wp), intent(in) :: radius(np)              !! [m]
+        real(wp), intent(inout) :: body_x(3, np), body_v(3, np), body_q(4, np), body_l(3, np)
+        real(wp), intent(in) :: body_inv_i(3, np), body_offset(3, np)
+        real(wp), intent(inout) :: x(3, np), v(3, np), w(3, np)
+        real(wp), intent(inout) :: work(nb, work_cols)  !! clump_index_t's
+        integer(i8), intent(out) :: n_fast
+        real(wp) :: xb(3), vb(3), qb(4), lb(3), wb(3), r(3), rm(3, 3), a(3), b2, w2
+        integer(ip) :: k, m, i, i0
+        b2 = bound**2
+        n_fast = 0
         if (h_drift > 0.0_wp) call rigid_rotate(nb, h_drift, work(:, w_inv:w_inv + 2), &
                                                 work(:, w_l:w_l + 2), work(:, w_q:w_q + 3), &
                                                 work(:, w_lb:w_lb + 2), work(:, w_room:))
@@ -426,7 +442,7 @@ contains
     end subroutine clump_deposit_mass
 
     !> f += m g for the spheres among particles 1..n (body 0) of a case with clumps, whose
-    !> particle contacts are summed without gravity (the bodies take M g in clumps_move).
+    !> particle contacts are summed without gravity (the bodies take M g in clumps_kick).
     subroutine sphere_gravity(n, body, mass, gravity, f)
         integer(ip), intent(in) :: n
         integer(i8), intent(in) :: body(:)

@@ -5,10 +5,10 @@
 !> the lab frame; the principal axes are the body frame's axes. The angular velocity w in the
 !> lab frame is R(q) I^-1 L_b, with L_b the body-frame L that the free rotation leaves, or
 !> R(q)^T L (rigid_omega).
-!> dem_clumps' clumps_move kicks the bodies (L += h T) and calls rigid_rotate for the free
-!> rotation of Dullweber, Leimkuhler & McLachlan (1997), arranged as dem_integrate's kick and
-!> kick_drift: symplectic Euler kicks over h and turns over h, velocity Verlet kicks over h/2
-!> and turns over h, then the torques, then kicks over h/2.
+!> dem_clumps' clumps_kick kicks the bodies (L += h T), and its clumps_move calls rigid_rotate
+!> for the free rotation of Dullweber, Leimkuhler & McLachlan (1997), arranged as
+!> dem_integrate's kick and kick_drift: symplectic Euler kicks over h and turns over h,
+!> velocity Verlet kicks over h/2 and turns over h, then the torques, then kicks over h/2.
 module dem_rigid
     use dem_kinds, only: wp, ip
     use dem_vector, only: cross

@@ -19,8 +19,8 @@ module dem_step
     use dem_neighbors, only: neighbors_data
     use dem_contacts_pw, only: pw_forces
     use dem_integrate, only: integrator_euler, integrator_verlet, kick, kick_drift
-    use dem_clumps, only: clumps_move, sphere_gravity, clump_centres, clump_index_build, &
-                          clump_probe_view
+    use dem_clumps, only: clumps_kick, clumps_move, sphere_gravity, clump_centres, &
+                          clump_index_build, clump_probe_view
     use dem_mesh, only: mesh_move
     use dem_outlets, only: outlets_mark, outlets_mass
     use dem_particles, only: particles_park
@@ -108,9 +108,10 @@ contains
         integer(i8) :: n_fast
         associate (p => s%p, n => s%p%n_own)
             ! (the guard's count: after the second half)
+            if (allocated(p%body)) call kick_bodies(s, c, 0.5_wp * c%dt, c%dt)
             call kick_drift(n, 0.5_wp * c%dt, c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, &
                             p%radius, c%max_speed, p%v, p%w, p%x, n_fast)
-            if (allocated(p%body)) call move_bodies(s, c, 0.5_wp * c%dt, c%dt, n_fast)
+            if (allocated(p%body)) call move_bodies(s, c%dt, c%max_speed, n_fast)
         end associate
         call timer_stop(s%timers, phase_integrate)
     end subroutine verlet_first_half
@@ -130,14 +131,16 @@ contains
             if (.not. verlet) then
                 call write_trace(s, c, s%run%out, time_of(s, c, s%step), err, bad)
                 call timer_stop(s%timers, phase_output)
+                if (allocated(p%body)) call kick_bodies(s, c, c%dt, c%dt)
                 call kick_drift(n, c%dt, c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%radius, &
                                 c%max_speed, p%v, p%w, p%x, n_fast)
-                if (allocated(p%body)) call move_bodies(s, c, c%dt, c%dt, n_fast)
+                if (allocated(p%body)) call move_bodies(s, c%dt, c%max_speed, n_fast)
                 call timer_stop(s%timers, phase_integrate)
             else
+                if (allocated(p%body)) call kick_bodies(s, c, 0.5_wp * c%dt, 0.0_wp)
                 call kick(n, 0.5_wp * c%dt, p%inv_mass, p%inv_inertia, p%f, p%t, p%radius, &
                           c%max_speed, p%v, p%w, n_fast)
-                if (allocated(p%body)) call move_bodies(s, c, 0.5_wp * c%dt, 0.0_wp, n_fast)
+                if (allocated(p%body)) call move_bodies(s, 0.0_wp, c%max_speed, n_fast)
                 call timer_stop(s%timers, phase_integrate)
                 call write_trace(s, c, s%run%out, time_of(s, c, s%step + 1), err, bad)
             end if
@@ -145,19 +148,32 @@ contains
         bad = bad .or. n_fast > 0
     end subroutine integrate
 
-    !> The clumps kicked over h and moved over h_drift (dem_clumps, after the spheres'
-    !> kick), their fast members added to n_fast.
-    subroutine move_bodies(s, c, h, h_drift, n_fast)
+    !> The clumps kicked over h, their centres moved over h_drift (dem_clumps' clumps_kick:
+    !> before the spheres' kick and drift, which move the members too, as the torques' levers
+    !> are the members' places at the start of the step).
+    subroutine kick_bodies(s, c, h, h_drift)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         real(wp), intent(in) :: h, h_drift
+        associate (p => s%p, b => s%bodies)
+            call clumps_kick(b%n, b%first, b%member, h, h_drift, c%gravity, size(p%x, 2, ip), &
+                             p%f, p%t, p%x, p%body_x, p%body_v, p%body_q, p%body_l, &
+                             p%body_inv_i, p%body_mass, b%work)
+        end associate
+    end subroutine kick_bodies
+
+    !> After kick_bodies and the spheres' kick: the clumps turned over h_drift and their
+    !> members given the bodies' state (dem_clumps' clumps_move), the fast members (above
+    !> `bound`) added to n_fast.
+    subroutine move_bodies(s, h_drift, bound, n_fast)
+        type(solver_t), intent(inout) :: s
+        real(wp), intent(in) :: h_drift, bound
         integer(i8), intent(inout) :: n_fast
         integer(i8) :: n_bodies_fast
         associate (p => s%p, b => s%bodies)
-            call clumps_move(b%n, b%first, b%member, h, h_drift, c%gravity, c%max_speed, &
-                             size(p%x, 2, ip), p%f, p%t, p%radius, p%body_x, p%body_v, &
-                             p%body_q, p%body_l, p%body_inv_i, p%body_mass, p%body_offset, &
-                             p%x, p%v, p%w, b%work, n_bodies_fast)
+            call clumps_move(b%n, b%first, b%member, h_drift, bound, size(p%x, 2, ip), &
+                             p%radius, p%body_x, p%body_v, p%body_q, p%body_l, p%body_inv_i, &
+                             p%body_offset, p%x, p%v, p%w, b%work, n_bodies_fast)
         end associate
         n_fast = n_fast + n_bodies_fast
     end subroutine move_bodies

@@ -6,8 +6,9 @@
 !>   body's angular momentum R I R^T w from the template's inertia tensor, the body frame
 !>   principal (R(q_body)^T L / moments = R(q_body)^T w);
 !> - the index: members grouped by body, in id order, spheres left out, whatever the places;
-!> - clumps_move under gravity alone: symplectic Euler's closed form X_n = X_0 + n h V_0 +
-!>   n (n + 1) / 2 h^2 g, V_n = V_0 + n h g, the members rigidly with it (their distances kept);
+!> - clumps_kick and clumps_move under gravity alone: symplectic Euler's closed form
+!>   X_n = X_0 + n h V_0 + n (n + 1) / 2 h^2 g, V_n = V_0 + n h g, the members rigidly with it
+!>   (their distances kept);
 !> - a force F on one member at lever r, one kick (no drift): V += h F / M, L += h (r x F + t);
 !>   the forces of the other members cancelling: no change;
 !> - torque-free rotation of an asymmetric body (w = 37 rad/s, h = 0.1 us): the lab-frame L
@@ -19,8 +20,8 @@ program test_clumps
     use dem_kinds, only: wp, ip, i8
     use dem_error, only: error_t
     use dem_clumps, only: clump_template_t, clump_t, clump_index_t, clump_members, &
-                          clump_index_build, clumps_move, sphere_gravity, clump_energy_terms, &
-                          work_cols
+                          clump_index_build, clumps_kick, clumps_move, sphere_gravity, &
+                          clump_energy_terms, work_cols
     use dem_clump_mass, only: clump_mass_compute
     use dem_particles, only: bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset, &
                              body_state_rows
@@ -140,6 +141,21 @@ contains
         bo = s(bs_offset:bs_offset + 2, :)
     end subroutine unpack
 
+    !> One body's step as dem_step makes it: clumps_kick, then clumps_move.
+    subroutine kick_and_move(nb, first, member, h, h_drift, g, bound, np, f, t, r, bx, bv, &
+                             bq, bl, bi, bm, bo, xs, vs, ws, wk, n_fast)
+        integer(ip), intent(in) :: nb, np, first(nb + 1), member(first(nb + 1) - 1)
+        real(wp), intent(in) :: h, h_drift, g(3), bound, f(3, np), t(3, np), r(np)
+        real(wp), intent(inout) :: bx(3, np), bv(3, np), bq(4, np), bl(3, np)
+        real(wp), intent(in) :: bi(3, np), bm(np), bo(3, np)
+        real(wp), intent(inout) :: xs(3, np), vs(3, np), ws(3, np), wk(nb, work_cols)
+        integer(i8), intent(out) :: n_fast
+        call clumps_kick(nb, first, member, h, h_drift, g, np, f, t, xs, bx, bv, bq, bl, bi, &
+                         bm, wk)
+        call clumps_move(nb, first, member, h_drift, bound, np, r, bx, bv, bq, bl, bi, bo, xs, &
+                         vs, ws, wk, n_fast)
+    end subroutine kick_and_move
+
     subroutine free_fall()
         real(wp), parameter :: h = 1e-4_wp, g(3) = [0.0_wp, 0.0_wp, -9.81_wp]
         real(wp), allocatable :: bx(:, :), bv(:, :), bq(:, :), bl(:, :), bi(:, :), bm(:), bo(:, :)
@@ -156,7 +172,7 @@ contains
         t = 0.0_wp
         d0 = norm2(xs(:, 1) - xs(:, 3))
         do step = 1, n
-            call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, g, fast, &
+            call kick_and_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, g, fast, &
                              3_ip, f, &
                              t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, wk, n_fast)
         end do
@@ -190,7 +206,7 @@ contains
         t = 0.0_wp
         f(:, 3) = fk
         t(:, 3) = tk
-        call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, fast, &
+        call kick_and_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, fast, &
                           3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, wk, n_fast)
         want = state(bs_l:bs_l + 2, 1) + h * (cross(x(:, 3) - state(bs_x:bs_x + 2, 1), fk) + tk)
         do j = 1, 3
@@ -205,7 +221,7 @@ contains
         t = 0.0_wp
         f(:, 1) = 5.0_wp * (x(:, 2) - x(:, 1))
         f(:, 2) = -f(:, 1)
-        call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, fast, &
+        call kick_and_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, fast, &
                           3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, wk, n_fast)
         do j = 1, 3
             call assert_close(bv(j, 1), cl%velocity(j), 1e-14_wp, 'internal forces: V kept')
@@ -217,12 +233,12 @@ contains
         bound_fast = minval([(max(norm2(vs(:, j)), norm2(ws(:, j)) * radius(j)), j = 1, 3)])
         bound_slow = maxval([(max(norm2(vs(:, j)), norm2(ws(:, j)) * radius(j)), j = 1, 3)])
         call unpack(state, bx, bv, bq, bl, bi, bm, bo)
-        call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, &
+        call kick_and_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, &
                          0.999_wp * bound_fast, 3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, &
                          xs, vs, ws, wk, n_fast)
         call assert_true(n_fast == 3, 'the guard: every member at or above the bound counted')
         call unpack(state, bx, bv, bq, bl, bi, bm, bo)
-        call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, &
+        call kick_and_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, 0.0_wp, zero, &
                          1.001_wp * bound_slow, 3_ip, f, t, radius, bx, bv, bq, bl, bi, bm, bo, &
                          xs, vs, ws, wk, n_fast)
         call assert_true(n_fast == 0, 'the guard: no member below the bound counted')
@@ -246,7 +262,7 @@ contains
         d0 = norm2(x(:, 2) - x(:, 3))
         worst = 0.0_wp
         do step = 1, 100000
-            call clumps_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, zero, fast, &
+            call kick_and_move(1_ip, [1_ip, 4_ip], [1_ip, 2_ip, 3_ip], h, h, zero, fast, &
                              3_ip, f, &
                              t, radius, bx, bv, bq, bl, bi, bm, bo, xs, vs, ws, wk, n_fast)
             e = 0.5_wp * dot_product(ws(:, 1), bl(:, 1))

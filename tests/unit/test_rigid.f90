@@ -113,7 +113,7 @@ contains
     end subroutine helpers
 
     !> One body's L += h T, its free rotation over h_drift (rigid_rotate), and w = R I^-1 L_b,
-    !> as dem_clumps' clumps_move does them (dem_integrate's kick_drift, for a body).
+    !> as dem_clumps' clumps_kick and clumps_move do them (dem_integrate's kick_drift, for a body).
     subroutine kick_drift(h, h_drift, inv_inertia, t, q, l, w)
         real(wp), intent(in) :: h, h_drift, inv_inertia(3, 1), t(3, 1)
         real(wp), intent(inout) :: q(4, 1), l(3, 1)
