@@ -16,7 +16,8 @@ module dem_run_output
     use dem_output, only: output_t, output_series, output_contact, output_sizes, &
                           output_probes, output_histogram
     use dem_clumps, only: clump_probe_view
-    use dem_probes, only: probe_values, probe_histogram_counts, probe_histogram, probe_wall_load
+    use dem_probes, only: probe_values, probe_histogram_counts, probe_histogram, probe_wall_load, &
+                          probe_track
     use dem_frame, only: frame_t
     use dem_checkpoint, only: frame_write
     use dem_bond_graph, only: bond_graph
@@ -110,7 +111,8 @@ contains
             do k = 1, size(c%probes)
                 if (c%probes(k)%kind == probe_wall_load) then      ! (from the wall contacts)
                     values = [values, s%wall_loads(:, k)]
-                else if (allocated(p%body)) then        ! (a clump by its centre, once)
+                else if (allocated(p%body) .and. c%probes(k)%kind /= probe_track) then
+                    ! (a clump by its centre, once; a track follows the particle itself)
                     call clump_probe_view(n, p%gid, p%body, p%mass, p%x, p%body_mass, &
                                           p%body_x, pm, px)
                     values = [values, probe_values(s%comm, c%probes(k), s%run%probed, n, &

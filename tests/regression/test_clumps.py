@@ -29,7 +29,8 @@
    checkpoint at 20 ms on 1 and on 2 ranks ends with the same final.csv; a snapshot holds
    each particle's body id and its body's orientation (unit quaternions). The probes, against
    the final checkpoint's bodies: a centre-of-mass probe weighs each clump once at its centre
-   (to 1e-12 m), a count probe counts a clump's members where its centre is.
+   (to 1e-12 m), a count probe counts a clump's members where its centre is, and a track
+   probe of a member gives that member's own position and velocity (to the bit).
 4. &insert of 120 clumps of a three-sphere template (random orientations, reach from 1.5 to
    2.5 mm) among 30 spheres: the same final.csv on 1 and 2 ranks; at the start each body's
    radii and member distances are the template's times one scale, the scaled reach (that
@@ -184,7 +185,8 @@ lines = [head("pour", 0.05, g=-9.81, every=0.005, extra=", checkpoint_interval =
          "&particle material = 'glass', radius = 0.0012, position = 0, 0, 0.03 /\n",
          "&probe name = 'all', kind = 'center_of_mass' /\n",
          "&probe name = 'low', kind = 'count', region = 'box', box_min = -1, -1, -1, "
-         "box_max = 1, 1, 0.01 /\n"]
+         "box_max = 1, 1, 0.01 /\n",
+         "&probe name = 'member', kind = 'track', id = 7 /\n"]
 for i in range(6):
     for j in range(6):
         for k in range(6):
@@ -223,8 +225,9 @@ with h5py.File(os.path.join(work, "pour_1", "checkpoints", last), "r") as h:
     rs = h["particles/radius"][...]
     bx = h["particles/body_position"][...]
     bm = h["particles/body_mass"][...]
+    vs = h["particles/velocity"][...]
 if xs.shape[0] == 3:
-    xs, bx = xs.T, bx.T
+    xs, bx, vs = xs.T, bx.T, vs.T
 sphere = body == 0
 lead = (body != 0) & (ids == body)
 m = np.concatenate([4.0 / 3.0 * math.pi * rs[sphere] ** 3 * RHO, bm[lead]])
@@ -236,6 +239,12 @@ check(np.allclose(got, com, rtol=0, atol=1e-12),
 low = np.concatenate([xs[sphere][:, 2], np.repeat(bx[lead][:, 2], 2)])
 check(int(probes["low_glass"][-1]) == int(np.count_nonzero(low <= 0.01)),
       "the count probe counts a clump's members where its centre of mass is")
+tracked = np.flatnonzero(ids == 7)[0]
+check(body[tracked] != 0 and ids[tracked] != body[tracked],
+      "particle 7 is a clump's second member")
+got = [float(probes[f"member_{a}"][-1]) for a in ("x", "y", "z", "vx", "vy", "vz")]
+check(np.array_equal(got, np.concatenate([xs[tracked], vs[tracked]])),
+      f"a track probe follows the member itself, not its body: {got}")
 snaps = sorted(f for f in os.listdir(os.path.join(work, "pour_1", "snapshots"))
                if f.endswith(".h5"))
 check(len(snaps) > 0, "the pour wrote snapshots")
