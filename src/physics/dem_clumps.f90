@@ -16,7 +16,7 @@ module dem_clumps
                          quat_to_body, quat_from_matrix, quat_normalise, rotation_matrix
     use dem_clump_mass, only: clump_mass_t
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host, acc_to_device
-    use dem_particles, only: bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset
+    use dem_particles, only: bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset, order_by_id
     use dem_random, only: rng_t, rng_uniform
     implicit none
     private
@@ -157,7 +157,7 @@ contains
             at = pack([(i, i = 1, n)], body(1:n) /= 0)
         end if
         key = gid(at)
-        order = sort_order(key)
+        order = order_by_id(key)
         m = size(at, kind=ip)
         allocate(idx%member(max(1, m)), idx%first(m + 1))
         idx%n = 0
@@ -190,38 +190,6 @@ contains
         deallocate(idx%member, idx%first, idx%work)
         idx%n = 0
     end subroutine clump_index_free
-
-    !> The indices 1..size(key) in increasing order of key (merge sort).
-    pure function sort_order(key) result(idx)
-        integer(i8), intent(in) :: key(:)
-        integer(ip) :: idx(size(key)), tmp(size(key))
-        integer(ip) :: width, lo, mid, hi, a, b, k, n
-        logical :: take_a
-        n = size(key)
-        idx = [(k, k = 1, n)]
-        width = 1
-        do while (width < n)
-            do lo = 1, n, 2 * width
-                mid = min(lo + width, n + 1)
-                hi = min(lo + 2 * width, n + 1)
-                a = lo
-                b = mid
-                do k = lo, hi - 1
-                    take_a = a < mid
-                    if (take_a .and. b < hi) take_a = key(idx(a)) <= key(idx(b))
-                    if (take_a) then
-                        tmp(k) = idx(a)
-                        a = a + 1
-                    else
-                        tmp(k) = idx(b)
-                        b = b + 1
-                    end if
-                end do
-            end do
-            idx = tmp
-            width = 2 * width
-        end do
-    end function sort_order
 
     !> The bodies of the index kicked by their forces and torques over h and, with h_drift >
     !> 0, their centres moved over h_drift (dem_integrate's kick and kick_drift, for bodies;

@@ -53,6 +53,28 @@ def same_file(a, b, what):
         check(fa.read() == fb.read(), f"{what}: {b} differs from {a}")
 
 
+def same_snapshots(a, b, what):
+    """The snapshot files a[k] and b[k] hold the same datasets, byte for byte, with the same
+    attributes, and so do the snapshots.xmf beside them."""
+    import h5py
+    import numpy as np
+    for pa, pb in zip(a, b):
+        with h5py.File(pa, "r") as fa, h5py.File(pb, "r") as fb:
+            names = []
+            fa.visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset) else None)
+            other = []
+            fb.visititems(lambda n, o: other.append(n) if isinstance(o, h5py.Dataset) else None)
+            check(names == other, f"{what}: {os.path.basename(pb)} has the datasets {other}")
+            for n in names:
+                da, db = fa[n], fb[n]
+                check(da.dtype == db.dtype and da.shape == db.shape and
+                      np.asarray(da[()]).tobytes() == np.asarray(db[()]).tobytes() and
+                      dict(da.attrs) == dict(db.attrs),
+                      f"{what}: {os.path.basename(pb)}: {n} differs")
+    xmf = [os.path.join(os.path.dirname(os.path.dirname(p[0])), "snapshots.xmf") for p in (a, b)]
+    same_file(xmf[0], xmf[1], f"{what}: snapshots.xmf")
+
+
 def finish():
     print(f"{checks} checks, {len(failures)} failed")
     sys.exit(1 if failures else 0)

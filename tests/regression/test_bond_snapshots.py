@@ -40,7 +40,7 @@ from collections import deque
 import h5py
 import numpy as np
 
-from regression_util import ROOT, check, check_close, finish, run_ranks
+from regression_util import ROOT, check, check_close, finish, run_ranks, same_snapshots
 
 dem, work, mpiexec = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2]), sys.argv[3]
 shutil.rmtree(work, ignore_errors=True)
@@ -154,33 +154,14 @@ for step, path in zip(STEPS, snapshots("r1")):
 
 
 # 4. the same bits on 1 and 3 ranks, and continued from a checkpoint
-def same_snapshots(a, b, what):
-    for pa, pb in zip(snapshots(a), snapshots(b)):
-        with h5py.File(pa, "r") as fa, h5py.File(pb, "r") as fb:
-            names = []
-            fa.visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset) else None)
-            other = []
-            fb.visititems(lambda n, o: other.append(n) if isinstance(o, h5py.Dataset) else None)
-            check(names == other, f"{what}: {os.path.basename(pb)} has the datasets {other}")
-            for n in names:
-                da, db = fa[n], fb[n]
-                check(da.dtype == db.dtype and da.shape == db.shape and
-                      np.asarray(da[()]).tobytes() == np.asarray(db[()]).tobytes() and
-                      dict(da.attrs) == dict(db.attrs),
-                      f"{what}: {os.path.basename(pb)}: {n} differs")
-    with open(os.path.join(work, f"out_{a}", "snapshots.xmf"), "rb") as fa, \
-            open(os.path.join(work, f"out_{b}", "snapshots.xmf"), "rb") as fb:
-        check(fa.read() == fb.read(), f"{what}: snapshots.xmf differs")
-
-
-same_snapshots("r1", "r3", "3 ranks")
+same_snapshots(snapshots("r1"), snapshots("r3"), "3 ranks")
 run_ranks(mpiexec, dem, case("c", 0.008, checkpoint=0.008), 2, work)
 with h5py.File(os.path.join(work, "out_c", "checkpoints", "checkpoint_000000008000.h5")) as f:
     check(list(f["state/snapshot_bonds"][()]) == [12, 12, 12],
           f"checkpoint: /state/snapshot_bonds {list(f['state/snapshot_bonds'][()])}")
 run_ranks(mpiexec, dem, case("c", 0.012), 3, work, "--restart",
           os.path.join("out_c", "checkpoints", "checkpoint_000000008000.h5"))
-same_snapshots("r1", "c", "continued on 3 ranks from 2")
+same_snapshots(snapshots("r1"), snapshots("c"), "continued on 3 ranks from 2")
 
 # 5. the XDMF index
 xmf = os.path.join(work, "out_r1", "snapshots.xmf")

@@ -40,7 +40,7 @@ import xml.etree.ElementTree as ET
 import h5py
 import numpy as np
 
-from regression_util import ROOT, check, check_close, finish, run_ranks
+from regression_util import ROOT, check, check_close, finish, run_ranks, same_snapshots
 
 dem, work, mpiexec = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2]), sys.argv[3]
 shutil.rmtree(work, ignore_errors=True)
@@ -165,26 +165,7 @@ check(wall_names == ["floor", "side"] and side.sum() == 2 and
 
 
 # 5. the same bits on 1 and 2 ranks, and continued from a checkpoint
-def same_snapshots(a, b, what):
-    for pa, pb in zip(snapshots(a), snapshots(b)):
-        with h5py.File(pa, "r") as fa, h5py.File(pb, "r") as fb:
-            names = []
-            fa.visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset) else None)
-            other = []
-            fb.visititems(lambda n, o: other.append(n) if isinstance(o, h5py.Dataset) else None)
-            check(names == other, f"{what}: {os.path.basename(pb)} has the datasets {other}")
-            for n in names:
-                da, db = fa[n], fb[n]
-                check(da.dtype == db.dtype and da.shape == db.shape and
-                      np.asarray(da[()]).tobytes() == np.asarray(db[()]).tobytes() and
-                      dict(da.attrs) == dict(db.attrs),
-                      f"{what}: {os.path.basename(pb)}: {n} differs")
-    with open(os.path.join(work, f"out_{a}", "snapshots.xmf"), "rb") as fa, \
-            open(os.path.join(work, f"out_{b}", "snapshots.xmf"), "rb") as fb:
-        check(fa.read() == fb.read(), f"{what}: snapshots.xmf differs")
-
-
-same_snapshots("r1", "r2", "2 ranks")
+same_snapshots(snapshots("r1"), snapshots("r2"), "2 ranks")
 run_ranks(mpiexec, dem, case("c", 0.1, checkpoint=0.1), 2, work)
 with h5py.File(os.path.join(work, "out_c", "checkpoints", "checkpoint_000000005000.h5")) as f:
     counts = list(f["state/snapshot_contacts"][()])
@@ -193,7 +174,7 @@ with h5py.File(snapshots("r1")[1], "r") as f:
           f"{counts}")
 run_ranks(mpiexec, dem, case("c", 0.2), 1, work, "--restart",
           os.path.join("out_c", "checkpoints", "checkpoint_000000005000.h5"))
-same_snapshots("r1", "c", "continued on 1 rank from 2")
+same_snapshots(snapshots("r1"), snapshots("c"), "continued on 1 rank from 2")
 
 # 6. the XDMF index
 xmf = os.path.join(work, "out_r1", "snapshots.xmf")
