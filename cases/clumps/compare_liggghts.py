@@ -3,11 +3,11 @@
 """Clumps side by side with LIGGGHTS 3.8.0's multisphere (fix particletemplate/multisphere,
 fix multisphere), from the same initial states and walls. Run from the repository root:
 
-    .venv/bin/python cases/clumps/compare_liggghts.py [--dem build/dem] [--seeds 10007,20011,30011]
-                                                      [--only impact|bin]
+    .venv/bin/python cases/clumps/compare_liggghts.py [--dem build/dem] [--only impact|bin]
+                                        [--seeds 10007,20011,30011,40009,50021]
 
 (`build/dem` from `scripts/install/build plain`; `liggghts` and `mpirun` on the PATH; each
-code runs on one core: about 15 minutes in all for three seeds). Outputs go to
+code runs on one core: about 30 minutes in all for five seeds). Outputs go to
 output/clumps/; the numbers to output/clumps/summary.txt (and standard output), the figures
 to doc/figures/clumps_liggghts_impact.png and doc/figures/clumps_liggghts_bin.png.
 
@@ -357,7 +357,7 @@ def plot_bin(curves, seeds):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--dem", default=os.path.join(ROOT, "build", "dem"))
-    parser.add_argument("--seeds", default="10007,20011,30011")
+    parser.add_argument("--seeds", default="10007,20011,30011,40009,50021")
     parser.add_argument("--only", choices=("impact", "bin"))
     args = parser.parse_args()
     dem = os.path.abspath(args.dem)
