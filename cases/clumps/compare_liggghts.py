@@ -4,7 +4,7 @@
 fix multisphere), from the same initial states and walls. Run from the repository root:
 
     .venv/bin/python cases/clumps/compare_liggghts.py [--dem build/dem] [--only impact|bin]
-                                        [--seeds 10007,20011,30011,40009,50021]
+                                        [--seeds 10007,20011,30011,40009,50021] [--reuse]
 
 (`build/dem` from `scripts/install/build plain`; `liggghts` and `mpirun` on the PATH; each
 code runs on one core: about 30 minutes in all for five seeds). Outputs go to
@@ -18,7 +18,9 @@ to doc/figures/clumps_liggghts_impact.png and doc/figures/clumps_liggghts_bin.pn
 2. bin.liggghts / bin.nml: for each seed, LIGGGHTS fills the bin with 3000 clumps and
    empties it; its state at the opening (fill.txt) is converted to an &clump_file and dem
    empties the same bin from it. The discharge rate (clumps per second) is the slope of the
-   count of members above the floor, over the steady window, divided by three.
+   count of members above the floor, over the steady window, divided by three; a fill
+   whose orifice clogged (no member left over the window) is counted apart. With --reuse,
+   the bin's runs whose outputs are in output/clumps/ are not run again.
 
 The mass properties written into the decks (the template about its centre of mass, its mass
 and principal moments) are checked here against the closed form of the union of the three
@@ -294,23 +296,32 @@ def bin_case(work, fill):
 
 
 def rate(t, members_above):
-    """Clumps per second: the slope of the members above the floor over WINDOW, over 3."""
+    """Clumps per second: the slope of the members above the floor over WINDOW, over 3; None
+    when the orifice clogged (no member left over the window)."""
     k = (t >= WINDOW[0] - 1e-12) & (t <= WINDOW[1] + 1e-12)
+    if members_above[k][0] == members_above[k][-1]:
+        return None
     return -np.polyfit(t[k], members_above[k], 1)[0] / 3.0
 
 
-def emptying(dem, seeds, log, summary):
+def emptying(dem, seeds, log, summary, reuse):
     curves = {}
     rates = {"dem": [], "LIGGGHTS": []}
     for seed in seeds:
-        work_l = fresh(os.path.join(OUT, f"bin_liggghts_{seed}"))
-        shutil.copy(os.path.join(HERE, "bin_floor.stl"), work_l)
-        run_liggghts("bin.liggghts", work_l, log, (("seed", seed),))
+        work_l = os.path.join(OUT, f"bin_liggghts_{seed}")
+        if not (reuse and os.path.exists(os.path.join(work_l, "count.txt"))):
+            fresh(work_l)
+            shutil.copy(os.path.join(HERE, "bin_floor.stl"), work_l)
+            run_liggghts("bin.liggghts", work_l, log, (("seed", seed),))
         count = np.loadtxt(os.path.join(work_l, "count.txt"), comments="#")
         t_l, n_l = count[:, 0] * 2e-5, count[:, 1]
-        work_d = fresh(os.path.join(OUT, f"bin_{seed}"))
-        case, n_bodies = bin_case(work_d, os.path.join(work_l, "fill.txt"))
-        run_dem(dem, case, work_d, log)
+        work_d = os.path.join(OUT, f"bin_{seed}")
+        if reuse and os.path.exists(os.path.join(work_d, "probes.csv")):
+            n_bodies = clumps_from_fill(os.path.join(work_l, "fill.txt"))[1]
+        else:
+            fresh(work_d)
+            case, n_bodies = bin_case(work_d, os.path.join(work_l, "fill.txt"))
+            run_dem(dem, case, work_d, log)
         probes = np.genfromtxt(os.path.join(work_d, "probes.csv"), delimiter=",", names=True)
         t_d, n_d = probes["time"], probes["above_grain"]
         curves[seed] = (t_d, n_d, t_l, n_l)
@@ -319,18 +330,24 @@ def emptying(dem, seeds, log, summary):
         if n_d[0] != 3 * n_bodies:
             sys.exit(f"seed {seed}: not all {n_bodies} clumps above the floor at the opening")
     summary.append(f"2. a bin emptied (bin.liggghts, bin.nml; 3000 clumps; rate over "
-                   f"{WINDOW[0]}-{WINDOW[1]} s, clumps per second)")
+                   f"{WINDOW[0]}-{WINDOW[1]} s, clumps per second; clogged: no clump left "
+                   "over it)")
     summary.append("   seed      dem        LIGGGHTS   dem / LIGGGHTS")
     for k, seed in enumerate(seeds):
         a, b = rates["dem"][k], rates["LIGGGHTS"][k]
-        summary.append(f"   {seed:6d} {a:10.1f} {b:10.1f}   {a / b:.4f}")
+        shown = [f"{r:10.1f}" if r is not None else "   clogged" for r in (a, b)]
+        ratio = f"{a / b:.4f}" if a is not None and b is not None else "-"
+        summary.append(f"   {seed:6d} {shown[0]} {shown[1]}   {ratio}")
+    means = {}
     for code in ("dem", "LIGGGHTS"):
-        r = np.array(rates[code])
+        r = np.array([x for x in rates[code] if x is not None])
         sd = r.std(ddof=1) if r.size > 1 else float("nan")
-        summary.append(f"   {code:8s} mean {r.mean():.1f}, standard deviation over seeds "
-                       f"{sd:.1f} ({sd / r.mean():.2%})")
-    a, b = np.array(rates["dem"]), np.array(rates["LIGGGHTS"])
-    summary.append(f"   mean rate dem / LIGGGHTS {a.mean() / b.mean():.4f}")
+        means[code] = r.mean()
+        summary.append(f"   {code:8s} clogged {len(seeds) - r.size} of {len(seeds)}; the "
+                       f"flowing fills: mean {r.mean():.1f}, standard deviation {sd:.1f} "
+                       f"({sd / r.mean():.2%})")
+    summary.append(f"   mean rate of the flowing fills, dem / LIGGGHTS "
+                   f"{means['dem'] / means['LIGGGHTS']:.4f}")
     plot_bin(curves, seeds)
 
 
@@ -358,6 +375,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--dem", default=os.path.join(ROOT, "build", "dem"))
     parser.add_argument("--seeds", default="10007,20011,30011,40009,50021")
+    parser.add_argument("--reuse", action="store_true",
+                        help="the bin: keep the runs whose outputs are there (summary, figure)")
     parser.add_argument("--only", choices=("impact", "bin"))
     args = parser.parse_args()
     dem = os.path.abspath(args.dem)
@@ -368,7 +387,7 @@ def main():
     if args.only in (None, "impact"):
         impact(dem, log, summary)
     if args.only in (None, "bin"):
-        emptying(dem, seeds, log, summary)
+        emptying(dem, seeds, log, summary, args.reuse)
     summary.append("wall time of each run (one core, nice 19; not a timing comparison):")
     summary += [f"   {name:32s} {seconds:8.1f} s" for name, seconds in log]
     text = "\n".join(summary) + "\n"
