@@ -8,8 +8,9 @@ fix multisphere), from the same initial states and walls. Run from the repositor
 
 (`build/dem` from `scripts/install/build plain`; `liggghts` and `mpirun` on the PATH; each
 code runs on one core: about 30 minutes in all for five seeds). Outputs go to
-output/clumps/; the numbers to output/clumps/summary.txt (and standard output), the figures
-to doc/figures/clumps_liggghts_impact.png and doc/figures/clumps_liggghts_bin.png.
+output/clumps_liggghts/ (apart from the clumps example's output/clumps/); the numbers to
+output/clumps_liggghts/summary.txt (and standard output), the figures to
+doc/figures/clumps_liggghts_impact.png and doc/figures/clumps_liggghts_bin.png.
 
 1. impact.nml / impact.liggghts: one three-sphere clump falling at an angle onto a plane.
    Both trajectories are reduced to the body's centre of mass, its velocity and its angular
@@ -20,7 +21,7 @@ to doc/figures/clumps_liggghts_impact.png and doc/figures/clumps_liggghts_bin.pn
    empties the same bin from it. The discharge rate (clumps per second) is the slope of the
    count of members above the floor, over the steady window, divided by three; a fill
    whose orifice clogged (no member left over the window) is counted apart. With --reuse,
-   the bin's runs whose outputs are in output/clumps/ are not run again.
+   the bin's runs whose outputs are in output/clumps_liggghts/ are not run again.
 
 The mass properties written into the decks (the template about its centre of mass, its mass
 and principal moments) are checked here against the closed form of the union of the three
@@ -38,7 +39,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-OUT = os.path.join(ROOT, "output", "clumps")
+OUT = os.path.join(ROOT, "output", "clumps_liggghts")
 FIGURES = os.path.join(ROOT, "doc", "figures")
 RHO = 2500.0
 WINDOW = (0.2, 0.6)    # the steady part of the discharge [s]
@@ -197,7 +198,7 @@ def impact(dem, log, summary):
                                                                            "impact_liggghts"))
     case = os.path.join(work_d, "impact.nml")
     text = open(os.path.join(HERE, "impact.nml")).read()
-    open(case, "w").write(text.replace("'../../output/clumps/impact'", f"'{work_d}'"))
+    open(case, "w").write(text.replace("'../../output/clumps_liggghts/impact'", f"'{work_d}'"))
     run_dem(dem, case, work_d, log)
     run_liggghts("impact.liggghts", work_l, log)
     probes = np.genfromtxt(os.path.join(work_d, "probes.csv"), delimiter=",", names=True)
