@@ -295,11 +295,14 @@ contains
         type(coupling_t), intent(in) :: self
         integer(i8), intent(out) :: id(:)
         real(wp), intent(out) :: mass(:), x(:, :), v(:, :), q(:, :), w(:, :)
+        integer(ip), allocatable :: head(:), order(:)
         integer(ip) :: k, i
         if (.not. allocated(self%run)) return     ! (nothing to do before init)
         associate (p => self%run%s%p, b => self%run%s%bodies)
-            do k = 1, coupling_body_count(self)
-                i = b%member(b%first(k))               ! the body's first member
+            head = b%member(b%first(1:coupling_body_count(self)))   ! the bodies' first members
+            order = order_by_id(p%gid(head))
+            do k = 1, size(head)
+                i = head(order(k))
                 id(k) = p%body(i)
                 mass(k) = p%body_mass(i)
                 x(:, k) = p%body_x(:, i)

@@ -52,18 +52,21 @@ module dem_clumps
 
     !> The bodies a rank owns: body k's members are member(first(k) .. first(k + 1) - 1), in
     !> the order of their ids; work(k, :) is clumps_kick's and clumps_move's room for
-    !> body k (on the device too, when the particles are there).
+    !> body k (on the device too, when the particles are there). `sums`: work's columns w_f
+    !> and w_t hold the sums of the members' forces and torques as they are now (clumps_kick).
     type :: clump_index_t
         integer(ip) :: n = 0
         integer(ip), allocatable :: first(:)
         integer(ip), allocatable :: member(:)
         real(wp), allocatable :: work(:, :)
+        logical :: sums = .false.
     end type clump_index_t
 
     !> The columns of clump_index_t's work: the lab-frame L, the inverse principal moments, the
-    !> orientation, the body-frame L, then dem_rigid's rigid_rotate's room.
-    integer, parameter :: w_l = 1, w_inv = 4, w_q = 7, w_lb = 11, w_room = 14, &
-                          work_cols = w_room - 1 + rigid_room
+    !> orientation, the body-frame L, the sums of the members' forces and torques, then
+    !> dem_rigid's rigid_rotate's room.
+    integer, parameter :: w_l = 1, w_inv = 4, w_q = 7, w_lb = 11, w_f = 14, w_t = 17, &
+                          w_room = 20, work_cols = w_room - 1 + rigid_room
 
 contains
 
@@ -136,18 +139,21 @@ contains
     end function clumps_in_spheres
 
     !> The index of the bodies among the owned particles 1..n (body(i) /= 0: a member; not
-    !> those `gone`, out of the run through an outlet): the members in the order of their
-    !> ids, which groups each body's (a body's members have consecutive ids, the first the
-    !> body's). Built on the host, then on the device.
+    !> those `gone`, out of the run through an outlet): each body's members in the order of
+    !> their ids (a body's members have consecutive ids, the first the body's), the bodies in
+    !> the order of their first members' places in the store, which dem_rebuild sorts in
+    !> space, so that the loops over bodies walk the store forwards. Built on the host, then
+    !> on the device.
     subroutine clump_index_build(idx, n, gid, body, gone)
         type(clump_index_t), intent(inout) :: idx
         integer(ip), intent(in) :: n
         integer(i8), intent(inout) :: gid(:), body(:)
         logical, intent(inout), optional :: gone(:)
         integer(i8), allocatable :: key(:)
-        integer(ip), allocatable :: at(:), order(:)
-        integer(ip) :: i, k, m
+        integer(ip), allocatable :: at(:), order(:), by_id(:), start_at(:)
+        integer(ip) :: i, k, m, j
         call clump_index_free(idx)
+        idx%sums = .false.
         call acc_data(gid, acc_to_host)
         call acc_data(body, acc_to_host)
         if (present(gone)) then
@@ -159,17 +165,30 @@ contains
         key = gid(at)
         order = order_by_id(key)
         m = size(at, kind=ip)
-        allocate(idx%member(max(1, m)), idx%first(m + 1))
-        idx%n = 0
+        allocate(by_id(m), start_at(n))     ! the members by id; where a body starts in by_id
+        start_at = 0
         do k = 1, m
-            idx%member(k) = at(order(k))
+            by_id(k) = at(order(k))
             if (k == 1) then
-                idx%n = 1
-                idx%first(1) = 1
-            else if (body(at(order(k))) /= body(at(order(k - 1)))) then
-                idx%n = idx%n + 1
-                idx%first(idx%n) = k
+                start_at(by_id(k)) = k
+            else if (body(by_id(k)) /= body(by_id(k - 1))) then
+                start_at(by_id(k)) = k
             end if
+        end do
+        allocate(idx%member(max(1, m)), idx%first(count(start_at > 0) + 1))
+        idx%n = 0
+        j = 0
+        do i = 1, n                         ! the bodies by the place of their first member
+            if (start_at(i) == 0) cycle
+            idx%n = idx%n + 1
+            idx%first(idx%n) = j + 1
+            k = start_at(i)
+            do while (k <= m)
+                if (body(by_id(k)) /= body(i)) exit
+                j = j + 1
+                idx%member(j) = by_id(k)
+                k = k + 1
+            end do
         end do
         idx%first(idx%n + 1) = m + 1
         allocate(idx%work(max(1_ip, idx%n), work_cols))
@@ -196,14 +215,18 @@ contains
     !> clumps_move then turns them and places their members): F = M g + sum of the members'
     !> forces, T = sum of (x_m - X) x f_m + t_m, each summed in the order of the members'
     !> ids, with the members where the bodies' state puts them (so before any drift of the
-    !> step); V += h F / M, L += h T, X += h_drift V. The columns w_l, w_inv and w_q of `work`
-    !> take each body's L, inverse moments and q. The vector algebra is written out (a call
-    !> into another module is not inlined). Explicit-shape arrays of the store's np places.
-    subroutine clumps_kick(nb, first, member, h, h_drift, gravity, np, f, t, x, body_x, &
-                           body_v, body_q, body_l, body_inv_i, body_mass, work)
+    !> step); V += h F / M, L += h T, X += h_drift V. With `summed`, the sums of the members'
+    !> forces and torques are taken from the columns w_f and w_t of `work` (those of the last
+    !> call, on the same forces and levers: velocity Verlet's second half-kick of a step and
+    !> the first of the next), which every call fills. The columns w_l, w_inv and w_q take
+    !> each body's L, inverse moments and q. The vector algebra is written out (a call into
+    !> another module is not inlined). Explicit-shape arrays of the store's np places.
+    subroutine clumps_kick(nb, first, member, h, h_drift, summed, gravity, np, f, t, x, &
+                           body_x, body_v, body_q, body_l, body_inv_i, body_mass, work)
         integer(ip), intent(in) :: nb, np
         integer(ip), intent(in) :: first(nb + 1), member(first(nb + 1) - 1)
         real(wp), intent(in) :: h, h_drift              !! [s]
+        logical, intent(in) :: summed
         real(wp), intent(in) :: gravity(3)              !! [m/s^2]
         real(wp), intent(in) :: f(3, np), t(3, np)      !! the members' [N], [N m]
         real(wp), intent(in) :: x(3, np)                !! [m]
@@ -217,16 +240,23 @@ contains
         do k = 1, nb
             i0 = member(first(k))
             xb = body_x(:, i0)
-            fb = 0.0_wp
-            tb = 0.0_wp
-            do m = first(k), first(k + 1) - 1
-                i = member(m)
-                d = x(:, i) - xb
-                fb = fb + f(:, i)
-                tb(1) = tb(1) + ((d(2) * f(3, i) - d(3) * f(2, i)) + t(1, i))
-                tb(2) = tb(2) + ((d(3) * f(1, i) - d(1) * f(3, i)) + t(2, i))
-                tb(3) = tb(3) + ((d(1) * f(2, i) - d(2) * f(1, i)) + t(3, i))
-            end do
+            if (summed) then
+                fb = work(k, w_f:w_f + 2)
+                tb = work(k, w_t:w_t + 2)
+            else
+                fb = 0.0_wp
+                tb = 0.0_wp
+                do m = first(k), first(k + 1) - 1
+                    i = member(m)
+                    d = x(:, i) - xb
+                    fb = fb + f(:, i)
+                    tb(1) = tb(1) + ((d(2) * f(3, i) - d(3) * f(2, i)) + t(1, i))
+                    tb(2) = tb(2) + ((d(3) * f(1, i) - d(1) * f(3, i)) + t(2, i))
+                    tb(3) = tb(3) + ((d(1) * f(2, i) - d(2) * f(1, i)) + t(3, i))
+                end do
+                work(k, w_f:w_f + 2) = fb
+                work(k, w_t:w_t + 2) = tb
+            end if
             mb = body_mass(i0)
             vb = body_v(:, i0) + (h / mb) * (mb * gravity + fb)
             lb = body_l(:, i0) + h * tb

@@ -151,7 +151,14 @@ contains
         allocate(order(max(1, m)))
         call acc_data(order, acc_create)
         if (resort_due(s, outlets, present(added))) then
-            call neighbors_spatial_order(m, kept, s%p%x, s%sort_cell, order)
+            if (allocated(s%p%body)) then    ! a clump's members in the cell of its centre
+                call clump_reach(s%p%n_own, s%p%body, s%p%x, s%p%radius, s%p%body_x, &
+                                 s%p%body_offset, xd, rd)
+                call neighbors_spatial_order(m, kept, xd, s%sort_cell, order)
+                call release_reach(xd, rd)
+            else
+                call neighbors_spatial_order(m, kept, s%p%x, s%sort_cell, order)
+            end if
             call particles_permute(s%p, order(1:m))
             call store_walls_permute(s%cs, order(1:m))
             s%sorted_step = s%step

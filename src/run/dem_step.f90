@@ -84,6 +84,7 @@ contains
         type(case_t), intent(in) :: c
         real(wp), intent(in) :: time       !! [s]
         type(error_t), intent(inout) :: err
+        s%bodies%sums = .false.              ! (kick_bodies)
         if (s%mesh%moving) call walls_move(s, time)
         call lists_refresh(s, err)
         call timer_stop(s%timers, phase_neighbors)
@@ -150,15 +151,19 @@ contains
 
     !> The clumps kicked over h, their centres moved over h_drift (dem_clumps' clumps_kick:
     !> before the spheres' kick and drift, which move the members too, as the torques' levers
-    !> are the members' places at the start of the step).
+    !> are the members' places at the start of the step). The sums of the members' forces and
+    !> torques it makes are kept until the members move (h_drift > 0) or the forces are
+    !> computed again (`forces`): velocity Verlet's first half-kick takes those of the last
+    !> step's second.
     subroutine kick_bodies(s, c, h, h_drift)
         type(solver_t), intent(inout) :: s
         type(case_t), intent(in) :: c
         real(wp), intent(in) :: h, h_drift
         associate (p => s%p, b => s%bodies)
-            call clumps_kick(b%n, b%first, b%member, h, h_drift, c%gravity, size(p%x, 2, ip), &
-                             p%f, p%t, p%x, p%body_x, p%body_v, p%body_q, p%body_l, &
-                             p%body_inv_i, p%body_mass, b%work)
+            call clumps_kick(b%n, b%first, b%member, h, h_drift, b%sums, c%gravity, &
+                             size(p%x, 2, ip), p%f, p%t, p%x, p%body_x, p%body_v, p%body_q, &
+                             p%body_l, p%body_inv_i, p%body_mass, b%work)
+            b%sums = h_drift == 0.0_wp
         end associate
     end subroutine kick_bodies
 
