@@ -12,8 +12,9 @@
 module dem_clumps
     use dem_kinds, only: wp, ip, i8
     use dem_vector, only: cross
-    use dem_rigid, only: rigid_rotate, rigid_room, rigid_omega, quat_product, quat_to_lab, &
-                         quat_to_body, quat_from_matrix, quat_normalise, rotation_matrix
+    use dem_rigid, only: rigid_rotate, rigid_frames, rigid_room, rigid_omega, quat_product, &
+                         quat_to_lab, &
+                         quat_to_body, quat_from_matrix, quat_normalise
     use dem_clump_mass, only: clump_mass_t
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host, acc_to_device
     use dem_particles, only: bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset, order_by_id
@@ -63,10 +64,11 @@ module dem_clumps
     end type clump_index_t
 
     !> The columns of clump_index_t's work: the lab-frame L, the inverse principal moments, the
-    !> orientation, the body-frame L, the sums of the members' forces and torques, then
-    !> dem_rigid's rigid_rotate's room.
+    !> orientation, the body-frame L, the sums of the members' forces and torques, the
+    !> rotation matrix and the angular velocity (dem_rigid's rigid_frames), then dem_rigid's
+    !> rigid_rotate's room.
     integer, parameter :: w_l = 1, w_inv = 4, w_q = 7, w_lb = 11, w_f = 14, w_t = 17, &
-                          w_room = 20, work_cols = w_room - 1 + rigid_room
+                          w_r = 20, w_w = 29, w_room = 32, work_cols = w_room - 1 + rigid_room
 
 contains
 
@@ -272,11 +274,12 @@ contains
 
     !> After clumps_kick, with h_drift > 0, the free rotation of the bodies' (q, L) over
     !> h_drift (dem_rigid's rigid_rotate, all bodies in one call, on the columns of `work`);
-    !> then the members take their body's state: their centres X + R(q) b_m (with h_drift >
-    !> 0; a kick alone moves nothing), their velocities V + w x R(q) b_m and angular velocity
-    !> w = R(q) I^-1 R(q)^T L. n_fast counts the members whose new speed or rim speed is not
-    !> below `bound`, or not finite (the speed guard, as dem_integrate's). Explicit-shape
-    !> arrays of the store's np places.
+    !> then each body's R(q) and w = R(q) I^-1 L_b (dem_rigid's rigid_frames; L_b = R(q)^T L
+    !> after a kick alone), and the members take their body's state: their centres
+    !> X + R(q) b_m (with h_drift > 0; a kick alone moves nothing), their velocities
+    !> V + w x R(q) b_m and angular velocity w. n_fast counts the members whose new speed or
+    !> rim speed is not below `bound`, or not finite (the speed guard, as dem_integrate's).
+    !> Explicit-shape arrays of the store's np places.
     subroutine clumps_move(nb, first, member, h_drift, bound, np, radius, body_x, body_v, &
                            body_q, body_l, body_inv_i, body_offset, x, v, w, work, n_fast)
         integer(ip), intent(in) :: nb, np
@@ -289,33 +292,28 @@ contains
         real(wp), intent(inout) :: x(3, np), v(3, np), w(3, np)
         real(wp), intent(inout) :: work(nb, work_cols)  !! clump_index_t's
         integer(i8), intent(out) :: n_fast
-        real(wp) :: xb(3), vb(3), qb(4), lb(3), wb(3), r(3), rm(3, 3), a(3), b2, w2
+        real(wp) :: xb(3), vb(3), qb(4), lb(3), wb(3), r(3), rm(3, 3), b2, w2
         integer(ip) :: k, m, i, i0
         b2 = bound**2
         n_fast = 0
         if (h_drift > 0.0_wp) call rigid_rotate(nb, h_drift, work(:, w_inv:w_inv + 2), &
                                                 work(:, w_l:w_l + 2), work(:, w_q:w_q + 3), &
                                                 work(:, w_lb:w_lb + 2), work(:, w_room:))
+        call rigid_frames(nb, .not. h_drift > 0.0_wp, work(:, w_q:w_q + 3), &
+                          work(:, w_inv:w_inv + 2), work(:, w_l:w_l + 2), &
+                          work(:, w_lb:w_lb + 2), work(:, w_r:w_r + 8), work(:, w_w:w_w + 2))
         !$acc parallel loop gang vector default(present) reduction(+:n_fast) &
-        !$acc private(xb, vb, qb, lb, wb, r, rm, a, w2, m, i, i0)
+        !$acc private(xb, vb, qb, lb, wb, r, rm, w2, m, i, i0)
         do k = 1, nb
             i0 = member(first(k))
             xb = body_x(:, i0)
             vb = body_v(:, i0)
             lb = body_l(:, i0)
-            if (h_drift > 0.0_wp) then
-                qb = work(k, w_q:w_q + 3)
-                a = work(k, w_lb:w_lb + 2)
-                rm = rotation_matrix(qb)
-            else
-                qb = body_q(:, i0)
-                rm = rotation_matrix(qb)
-                a = [rm(1, 1) * lb(1) + rm(2, 1) * lb(2) + rm(3, 1) * lb(3), &
-                     rm(1, 2) * lb(1) + rm(2, 2) * lb(2) + rm(3, 2) * lb(3), &
-                     rm(1, 3) * lb(1) + rm(2, 3) * lb(2) + rm(3, 3) * lb(3)]   ! R^T L
-            end if
-            a = body_inv_i(:, i0) * a
-            wb = rm(:, 1) * a(1) + rm(:, 2) * a(2) + rm(:, 3) * a(3)  ! w = R I^-1 L_body
+            qb = work(k, w_q:w_q + 3)
+            rm(:, 1) = work(k, w_r:w_r + 2)
+            rm(:, 2) = work(k, w_r + 3:w_r + 5)
+            rm(:, 3) = work(k, w_r + 6:w_r + 8)
+            wb = work(k, w_w:w_w + 2)
             w2 = wb(1)**2 + wb(2)**2 + wb(3)**2
             do m = first(k), first(k + 1) - 1
                 i = member(m)

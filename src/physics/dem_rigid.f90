@@ -18,9 +18,8 @@ module dem_rigid
                                                          !< their series (rigid_turns)
     real(wp), parameter :: max_sub = 1024.0_wp           !< the most sub-steps of a free rotation
     integer, parameter, public :: rigid_room = 9         !< rigid_rotate's room per body
-    public :: rigid_rotate, rigid_omega
+    public :: rigid_rotate, rigid_frames, rigid_omega
     public :: quat_product, quat_conjugate, quat_to_lab, quat_to_body, quat_normalise, &
-              rotation_matrix, &
               quat_from_matrix
 
 contains
@@ -63,6 +62,44 @@ contains
                            room(:, 1:4), room(:, 5:7))
         end do
     end subroutine rigid_rotate
+
+    !> Each of n bodies' rotation matrix R(q) (v_lab = R v_body; r(k, :): its columns one after
+    !> the other) and
+    !> angular velocity w = R I^-1 L_b, on plain per-body arrays; with `lab`, L_b is first made
+    !> from the lab-frame L as R^T L (a body only kicked), else it is rigid_rotate's. One loop
+    !> without calls.
+    subroutine rigid_frames(n, lab, q, inv_inertia, l, lb, r, w)
+        integer(ip), intent(in) :: n
+        logical, intent(in) :: lab
+        real(wp), intent(in) :: q(n, 4), inv_inertia(n, 3), l(n, 3)
+        real(wp), intent(inout) :: lb(n, 3)               !! body frame: in, or with lab out
+        real(wp), intent(out) :: r(n, 9), w(n, 3)
+        real(wp) :: a1, a2, a3
+        integer(ip) :: k
+        !$acc parallel loop default(present) private(a1, a2, a3)
+        do k = 1, n
+            r(k, 1) = 1.0_wp - 2.0_wp * (q(k, 3)**2 + q(k, 4)**2)
+            r(k, 2) = 2.0_wp * (q(k, 2) * q(k, 3) + q(k, 1) * q(k, 4))
+            r(k, 3) = 2.0_wp * (q(k, 2) * q(k, 4) - q(k, 1) * q(k, 3))
+            r(k, 4) = 2.0_wp * (q(k, 2) * q(k, 3) - q(k, 1) * q(k, 4))
+            r(k, 5) = 1.0_wp - 2.0_wp * (q(k, 2)**2 + q(k, 4)**2)
+            r(k, 6) = 2.0_wp * (q(k, 3) * q(k, 4) + q(k, 1) * q(k, 2))
+            r(k, 7) = 2.0_wp * (q(k, 2) * q(k, 4) + q(k, 1) * q(k, 3))
+            r(k, 8) = 2.0_wp * (q(k, 3) * q(k, 4) - q(k, 1) * q(k, 2))
+            r(k, 9) = 1.0_wp - 2.0_wp * (q(k, 2)**2 + q(k, 3)**2)
+            if (lab) then
+                lb(k, 1) = r(k, 1) * l(k, 1) + r(k, 2) * l(k, 2) + r(k, 3) * l(k, 3)
+                lb(k, 2) = r(k, 4) * l(k, 1) + r(k, 5) * l(k, 2) + r(k, 6) * l(k, 3)
+                lb(k, 3) = r(k, 7) * l(k, 1) + r(k, 8) * l(k, 2) + r(k, 9) * l(k, 3)
+            end if
+            a1 = inv_inertia(k, 1) * lb(k, 1)
+            a2 = inv_inertia(k, 2) * lb(k, 2)
+            a3 = inv_inertia(k, 3) * lb(k, 3)
+            w(k, 1) = r(k, 1) * a1 + r(k, 4) * a2 + r(k, 7) * a3
+            w(k, 2) = r(k, 2) * a1 + r(k, 5) * a2 + r(k, 8) * a3
+            w(k, 3) = r(k, 3) * a1 + r(k, 6) * a2 + r(k, 9) * a3
+        end do
+    end subroutine rigid_frames
 
     !> Pass j of rigid_rotate: every body turned over its sub-step hs, from q, into qn and lbn
     !> (a loop without branches, which the compiler vectorises); then the bodies with j <= m
@@ -234,22 +271,6 @@ contains
         c = cross(u, v)
         r = v + 2.0_wp * (q0 * c + cross(u, c))
     end function rotate
-
-    !> The rotation matrix R(q) of a unit quaternion (v_lab = R v_body).
-    pure function rotation_matrix(q) result(r)
-        !$acc routine seq
-        real(wp), intent(in) :: q(4)
-        real(wp) :: r(3, 3)
-        r(1, 1) = 1.0_wp - 2.0_wp * (q(3)**2 + q(4)**2)
-        r(2, 1) = 2.0_wp * (q(2) * q(3) + q(1) * q(4))
-        r(3, 1) = 2.0_wp * (q(2) * q(4) - q(1) * q(3))
-        r(1, 2) = 2.0_wp * (q(2) * q(3) - q(1) * q(4))
-        r(2, 2) = 1.0_wp - 2.0_wp * (q(2)**2 + q(4)**2)
-        r(3, 2) = 2.0_wp * (q(3) * q(4) + q(1) * q(2))
-        r(1, 3) = 2.0_wp * (q(2) * q(4) + q(1) * q(3))
-        r(2, 3) = 2.0_wp * (q(3) * q(4) - q(1) * q(2))
-        r(3, 3) = 1.0_wp - 2.0_wp * (q(2)**2 + q(3)**2)
-    end function rotation_matrix
 
     !> q / |q|.
     pure function quat_normalise(q) result(r)
