@@ -13,8 +13,7 @@ module dem_clumps
     use dem_kinds, only: wp, ip, i8
     use dem_vector, only: cross
     use dem_rigid, only: rigid_rotate, rigid_frames, rigid_room, rigid_omega, quat_product, &
-                         quat_to_lab, &
-                         quat_to_body, quat_from_matrix, quat_normalise
+                         quat_to_lab, quat_to_body, quat_from_matrix, quat_normalise
     use dem_clump_mass, only: clump_mass_t
     use dem_acc, only: acc_data, acc_create, acc_exit, acc_to_host, acc_to_device
     use dem_particles, only: bs_x, bs_v, bs_q, bs_l, bs_inv_i, bs_mass, bs_offset, order_by_id

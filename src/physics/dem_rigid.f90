@@ -63,11 +63,10 @@ contains
         end do
     end subroutine rigid_rotate
 
-    !> Each of n bodies' rotation matrix R(q) (v_lab = R v_body; r(k, :): its columns one after
-    !> the other) and
-    !> angular velocity w = R I^-1 L_b, on plain per-body arrays; with `lab`, L_b is first made
-    !> from the lab-frame L as R^T L (a body only kicked), else it is rigid_rotate's. One loop
-    !> without calls.
+    !> Each of n bodies' rotation matrix R(q) (v_lab = R v_body; r(k, :) its columns one after
+    !> the other) and angular velocity w = R I^-1 L_b, on plain per-body arrays; with `lab`,
+    !> L_b is first made from the lab-frame L as R^T L (a body only kicked), else it is
+    !> rigid_rotate's. One loop without calls.
     subroutine rigid_frames(n, lab, q, inv_inertia, l, lb, r, w)
         integer(ip), intent(in) :: n
         logical, intent(in) :: lab
