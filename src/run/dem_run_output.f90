@@ -108,13 +108,13 @@ contains
         t = time_of(s, c, s%step)
         values = [real(wp) ::]
         associate (p => s%p, n => s%p%n_own)
+            if (allocated(p%body)) call clump_probe_view(n, p%gid, p%body, p%mass, p%x, &
+                                                         p%body_mass, p%body_x, pm, px)
             do k = 1, size(c%probes)
                 if (c%probes(k)%kind == probe_wall_load) then      ! (from the wall contacts)
                     values = [values, s%wall_loads(:, k)]
                 else if (allocated(p%body) .and. c%probes(k)%kind /= probe_track) then
                     ! (a clump by its centre, once; a track follows the particle itself)
-                    call clump_probe_view(n, p%gid, p%body, p%mass, p%x, p%body_mass, &
-                                          p%body_x, pm, px)
                     values = [values, probe_values(s%comm, c%probes(k), s%run%probed, n, &
                                                    p%gid, p%mat, pm, px, p%v, p%w)]
                 else
